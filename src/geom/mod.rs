@@ -1,0 +1,17 @@
+//! Shared vocabulary of every stage: meshes, 2D regions, toolpaths, tolerances.
+//!
+//! Conventions: millimetres everywhere, Z up, the build plate at Z = 0. 2D regions are
+//! outer loops counter-clockwise and holes clockwise. Coordinates are `f64` (glam's
+//! `DVec2`/`DVec3`, scalar on every target) so that native and wasm builds compute
+//! bit-identical results; 2D booleans run in integer micrometres (see [`tolerance`]).
+
+mod mesh;
+mod polygon;
+pub mod shapes;
+pub mod tolerance;
+mod toolpath;
+
+pub use glam::{DVec2, DVec3};
+pub use mesh::{Aabb, Mesh};
+pub use polygon::{Polygon, signed_area};
+pub use toolpath::{Feature, Path, Toolpath, ToolpathLayer};

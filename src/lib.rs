@@ -1,0 +1,26 @@
+//! # weft — a slicer for architected lattices and research toolpaths
+//!
+//! The pure-Rust core behind the browser app (through a thin wasm binding) and the `weft` CLI.
+//!
+//! ```text
+//!  Design (JSON, versioned) ──► pipeline::run
+//!      │ job = slice
+//!      ▼
+//!  import::read_mesh ─► slice::slice ─► gcode::write_gcode ─► analyze::analyze
+//!   STL/OBJ/3MF          regions,         Marlin text,           report + preview
+//!   → Mesh (mm)          perimeters,      equation-4 E           buffers
+//!                        infill → Toolpath
+//! ```
+//!
+//! Every stage is a module with one entry function, an `Options` struct with documented
+//! defaults, its output type and its own `Error` enum; stages share only the types in
+//! [`geom`]. Units: millimetres, seconds, degrees Celsius. Output is deterministic: the same
+//! design gives byte-identical G-code on native and wasm builds.
+
+#![warn(missing_docs)]
+
+pub mod analyze;
+pub mod gcode;
+pub mod geom;
+pub mod import;
+pub mod slice;

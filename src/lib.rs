@@ -24,3 +24,11 @@ pub mod gcode;
 pub mod geom;
 pub mod import;
 pub mod slice;
+pub mod design;
+pub mod pipeline;
+
+pub use design::Design;
+pub use pipeline::{run, RunOptions, RunOutput};
+pub mod bench;
+#[cfg(target_arch = "wasm32")]
+mod wasm;

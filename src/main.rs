@@ -1,1 +1,222 @@
-fn main() {}
+//! `weft` — the command-line front end of the weft core.
+
+use clap::{Parser, Subcommand};
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use weft::design::{share, Design, Input};
+use weft::pipeline::{self, Files, RunOptions, Stage};
+
+#[derive(Parser)]
+#[command(
+    name = "weft",
+    version,
+    about = "Slicer for architected lattices and research toolpaths (the CLI of the weft web app)",
+    after_help = "Examples:
+  weft new > cube.json                               write a default design (20 mm cube)
+  weft run cube.json --out cube.gcode                slice it
+  weft run cube.json --input part.stl --out part.gcode --report part.json
+  weft run cube.json --out dense.gcode --set job.slice.infill_density=0.5 --set name=dense
+  weft analyze part.gcode --json                     measure any slicer's G-code
+  weft share cube.json                               print a share-link fragment
+  weft bench                                         run the benchmarks of BENCHMARKS.md"
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Run a design and write its G-code.
+    Run {
+        /// The design (JSON), or a share link / fragment (`#d=…`).
+        design: String,
+        /// Output G-code file (default: <design name>.gcode).
+        #[arg(long, short)]
+        out: Option<PathBuf>,
+        /// Also write the run report (JSON) here.
+        #[arg(long)]
+        report: Option<PathBuf>,
+        /// Mesh file replacing the design's main input.
+        #[arg(long)]
+        input: Option<PathBuf>,
+        /// Override a design field: PATH=VALUE (repeatable), e.g. job.slice.layer_height_mm=0.1.
+        #[arg(long = "set", value_name = "PATH=VALUE")]
+        set: Vec<String>,
+        /// No progress on stderr.
+        #[arg(long, short)]
+        quiet: bool,
+    },
+    /// Analyse a G-code file (weft's or any other slicer's).
+    Analyze {
+        /// The G-code file.
+        file: PathBuf,
+        /// Print the full report as JSON.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Print a default design (pretty JSON) to stdout.
+    New,
+    /// Print the share-link fragment of a design.
+    Share {
+        /// The design (JSON).
+        design: PathBuf,
+        /// The mesh the design slices (embedded when small enough).
+        #[arg(long)]
+        input: Option<PathBuf>,
+    },
+    /// Run the benchmarks (release build recommended).
+    Bench {
+        /// Triangles in the slicing benchmark mesh.
+        #[arg(long, default_value_t = 1_000_000)]
+        triangles: usize,
+        /// Size of the analyzer benchmark's G-code, MB.
+        #[arg(long, default_value_t = 100)]
+        gcode_mb: usize,
+    },
+}
+
+fn read(path: &Path) -> Result<Vec<u8>, String> {
+    std::fs::read(path).map_err(|e| format!("{}: {e}", path.display()))
+}
+
+fn write(path: &Path, bytes: &[u8]) -> Result<(), String> {
+    std::fs::write(path, bytes).map_err(|e| format!("{}: {e}", path.display()))
+}
+
+fn file_name(path: &Path) -> String {
+    path.file_name().map_or_else(|| path.display().to_string(), |n| n.to_string_lossy().into_owned())
+}
+
+fn load_design(arg: &str) -> Result<Design, String> {
+    if arg.contains("#d=") || arg.starts_with("d=") {
+        return share::decode(arg).map_err(|e| e.to_string());
+    }
+    let path = Path::new(arg);
+    let bytes = read(path)?;
+    let text = String::from_utf8(bytes).map_err(|_| format!("{arg}: not UTF-8 text; a design is a JSON file"))?;
+    Design::from_json(&file_name(path), &text).map_err(|e| e.to_string())
+}
+
+fn cmd_run(
+    design: &str,
+    out: Option<PathBuf>,
+    report: Option<PathBuf>,
+    input: Option<PathBuf>,
+    set: &[String],
+    quiet: bool,
+) -> Result<(), String> {
+    let mut design = load_design(design)?;
+    if !set.is_empty() {
+        design = design.with_overrides(set).map_err(|e| e.to_string())?;
+    }
+    let mut files = Files::new();
+    if let Some(path) = input {
+        let name = file_name(&path);
+        files.insert(name.clone(), read(&path)?);
+        let kind = design.job.kind();
+        let slot = design.job.input_mut().ok_or_else(|| format!("--input: a {kind} job takes no input file"))?;
+        *slot = Input::File { name, embedded: None };
+    }
+    let show = !quiet && std::io::stderr().is_terminal();
+    let mut last = (Stage::Import, -1i32);
+    let mut progress = |stage: Stage, f: f32| {
+        let pct = (f * 100.0) as i32;
+        if show && (stage != last.0 || pct / 10 != last.1 / 10) {
+            eprint!("\r{:<8} {:>3}%", stage.name(), pct);
+            last = (stage, pct);
+        }
+    };
+    let result = pipeline::run(&design, &files, &RunOptions::default(), &mut progress);
+    if show {
+        eprint!("\r              \r");
+    }
+    let output = result.map_err(|e| e.to_string())?;
+    let out = out.unwrap_or_else(|| PathBuf::from(format!("{}.gcode", design.name)));
+    write(&out, output.gcode.as_bytes())?;
+    if let Some(path) = report {
+        let json = serde_json::to_string_pretty(&output.report).unwrap_or_default();
+        write(&path, json.as_bytes())?;
+    }
+    if !quiet {
+        let a = &output.report.analysis;
+        eprintln!(
+            "{}: {} layers, {} paths, {:.1} mm extruded, {:.1} mm filament, {} retractions, ~{}",
+            out.display(),
+            a.layers,
+            a.extrusion_paths,
+            a.extruded_mm,
+            a.filament_mm,
+            a.retractions,
+            hms(a.estimated_time_s)
+        );
+    }
+    Ok(())
+}
+
+fn hms(s: f64) -> String {
+    let s = s.max(0.0).round() as u64;
+    format!("{}h {:02}m {:02}s", s / 3600, s / 60 % 60, s % 60)
+}
+
+fn cmd_analyze(file: &Path, json: bool) -> Result<(), String> {
+    let bytes = read(file)?;
+    let analysis = weft::analyze::analyze(&file_name(file), &bytes, &Default::default()).map_err(|e| e.to_string())?;
+    let r = &analysis.report;
+    if json {
+        println!("{}", serde_json::to_string_pretty(r).unwrap_or_default());
+    } else {
+        println!("layers            {}", r.layers);
+        println!("extrusion paths   {}", r.extrusion_paths);
+        println!("extruded          {:.3} mm", r.extruded_mm);
+        println!("travel            {:.3} mm", r.travel_mm);
+        println!("retractions       {}", r.retractions);
+        println!("overlap           {:.3} mm", r.overlap_mm);
+        println!("GIPPO score       {:.4}", r.gippo_score);
+        println!("estimated time    {} ({:.0} s)", hms(r.estimated_time_s), r.estimated_time_s);
+        println!("filament          {:.3} mm", r.filament_mm);
+    }
+    Ok(())
+}
+
+fn cmd_share(design: &Path, input: Option<PathBuf>) -> Result<(), String> {
+    let mut d = load_design(&design.display().to_string())?;
+    let bytes = match input {
+        Some(p) => {
+            let b = read(&p)?;
+            if let Some(slot) = d.job.input_mut() {
+                *slot = Input::File { name: file_name(&p), embedded: None };
+            }
+            Some(b)
+        }
+        None => None,
+    };
+    let link = share::encode(&d, bytes.as_deref());
+    println!("{}", link.fragment);
+    if !link.note.is_empty() {
+        eprintln!("note: {}", link.note);
+    }
+    Ok(())
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Run { design, out, report, input, set, quiet } => cmd_run(&design, out, report, input, &set, quiet),
+        Command::Analyze { file, json } => cmd_analyze(&file, json),
+        Command::New => {
+            print!("{}", Design::default().to_json_pretty());
+            Ok(())
+        }
+        Command::Share { design, input } => cmd_share(&design, input),
+        Command::Bench { triangles, gcode_mb } => weft::bench::run_all(triangles, gcode_mb).map(|report| println!("{report}")),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("weft: error: {}", e.replace('\n', "; "));
+            ExitCode::FAILURE
+        }
+    }
+}

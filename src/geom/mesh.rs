@@ -58,6 +58,29 @@ impl Mesh {
         }
     }
 
+    /// Binary STL bytes (80-byte header, facet normals computed, little-endian).
+    pub fn to_stl_binary(&self) -> Vec<u8> {
+        let mut out = Vec::with_capacity(84 + 50 * self.triangles.len());
+        let mut header = [b' '; 80];
+        header[..12].copy_from_slice(b"weft binary ");
+        out.extend_from_slice(&header);
+        out.extend_from_slice(&(self.triangles.len() as u32).to_le_bytes());
+        for t in &self.triangles {
+            let [a, b, c] = [self.vertex(t[0]), self.vertex(t[1]), self.vertex(t[2])];
+            let n = (b - a).cross(c - a).normalize_or_zero();
+            for x in [n.x, n.y, n.z] {
+                out.extend_from_slice(&(x as f32).to_le_bytes());
+            }
+            for &i in t {
+                for x in self.vertices[i as usize] {
+                    out.extend_from_slice(&x.to_le_bytes());
+                }
+            }
+            out.extend_from_slice(&[0, 0]);
+        }
+        out
+    }
+
     /// Appends another mesh (indices shifted).
     pub fn append(&mut self, other: &Mesh) {
         let base = self.vertices.len() as u32;

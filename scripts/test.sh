@@ -1,0 +1,16 @@
+#!/usr/bin/env bash
+# Runs every test: Rust unit + integration tests (with the parser fuzz smoke tests),
+# the wasm build, and the browser end-to-end test in headless Chromium.
+# Installs whatever is missing (idempotent).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+export CARGO_TERM_COLOR=never
+
+echo "== Rust tests"
+cargo test --release 2>&1 | tee /tmp/weft-cargo-test.log
+echo "== CLI (release)"
+cargo build --release --bin weft
+echo "== wasm + page"
+bash scripts/build-www.sh
+echo "== browser end-to-end (headless Chromium)"
+WEFT_BIN="$PWD/target/release/weft" node tests/e2e/run.mjs

@@ -1,0 +1,207 @@
+//! The field table: one row per editable design field with its unit, range and help.
+//! The page builds its form from it ([`schema_json`]) and [`validate`] checks ranges with it,
+//! so the two can never disagree.
+
+use super::{Design, Job, Problem};
+use serde::Serialize;
+use serde_json::Value;
+
+/// How a field is edited.
+#[derive(Clone, Copy, Debug, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Kind {
+    /// A real number.
+    Number,
+    /// A whole number.
+    Integer,
+    /// On/off.
+    Bool,
+    /// Free text (multi-line for G-code templates).
+    Text,
+    /// One of `choices`.
+    Choice,
+    /// Three numbers (X, Y, Z).
+    Vec3,
+}
+
+/// One editable field.
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct Field {
+    /// Dotted path in the design JSON.
+    pub path: &'static str,
+    /// Form section.
+    pub section: &'static str,
+    /// Label shown in the form.
+    pub label: &'static str,
+    /// Unit shown after the input ("" when none).
+    pub unit: &'static str,
+    /// Editor kind.
+    pub kind: Kind,
+    /// Smallest allowed value (numbers, each Vec3 component).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub min: Option<f64>,
+    /// Largest allowed value.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub max: Option<f64>,
+    /// Form step.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub step: Option<f64>,
+    /// Allowed values of a choice.
+    #[serde(skip_serializing_if = "<[_]>::is_empty")]
+    pub choices: &'static [&'static str],
+    /// Help text.
+    pub doc: &'static str,
+    /// Only for this job kind.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub job: Option<&'static str>,
+}
+
+const fn num(path: &'static str, section: &'static str, label: &'static str, unit: &'static str, min: f64, max: f64, step: f64, doc: &'static str) -> Field {
+    Field { path, section, label, unit, kind: Kind::Number, min: Some(min), max: Some(max), step: Some(step), choices: &[], doc, job: None }
+}
+const fn int(path: &'static str, section: &'static str, label: &'static str, min: f64, max: f64, doc: &'static str) -> Field {
+    Field { path, section, label, unit: "", kind: Kind::Integer, min: Some(min), max: Some(max), step: Some(1.0), choices: &[], doc, job: None }
+}
+const fn other(path: &'static str, section: &'static str, label: &'static str, kind: Kind, choices: &'static [&'static str], doc: &'static str) -> Field {
+    Field { path, section, label, unit: "", kind, min: None, max: None, step: None, choices, doc, job: None }
+}
+const fn for_job(mut f: Field, job: &'static str) -> Field {
+    f.job = Some(job);
+    f
+}
+
+/// Every editable field, in form order.
+pub const FIELDS: &[Field] = &[
+    other("name", "Design", "Name", Kind::Text, &[], "Used for the downloaded file name."),
+    int("seed", "Design", "Random seed", 0.0, 9.007199254740991e15, "Seeds every random choice: the same seed gives the same G-code."),
+    other("printer.name", "Printer", "Profile name", Kind::Text, &[], "Shown in the G-code header."),
+    Field { unit: "mm", min: Some(10.0), max: Some(2000.0), step: Some(1.0), ..other("printer.bed_size_mm", "Printer", "Bed size X, Y, Z", Kind::Vec3, &[], "Printable volume.") },
+    other("printer.origin", "Printer", "Origin", Kind::Choice, &["corner", "center"], "Where X = Y = 0 is: front-left corner (Cartesian) or bed centre (delta)."),
+    num("printer.nozzle_diameter_mm", "Printer", "Nozzle diameter", "mm", 0.05, 3.0, 0.01, "d_n in GIPPO equation 4."),
+    num("printer.filament_diameter_mm", "Printer", "Filament diameter", "mm", 0.5, 5.0, 0.01, "f_d in GIPPO equation 4."),
+    other("printer.flavor", "Printer", "G-code flavour", Kind::Choice, &["marlin"], "Dialect of the output."),
+    other("printer.relative_e", "Printer", "Relative extrusion (M83)", Kind::Bool, &[], "Off: absolute E (M82)."),
+    num("printer.retraction.length_mm", "Printer", "Retraction length", "mm", 0.0, 20.0, 0.05, "0 disables retraction."),
+    num("printer.retraction.speed_mm_s", "Printer", "Retraction speed", "mm/s", 1.0, 200.0, 1.0, ""),
+    num("printer.retraction.z_hop_mm", "Printer", "Z-hop", "mm", 0.0, 10.0, 0.05, "Lift during retracted travels."),
+    num("printer.retraction.min_travel_mm", "Printer", "Retract only above", "mm", 0.0, 100.0, 0.1, "Shorter travels are not retracted."),
+    num("printer.travel_speed_mm_s", "Printer", "Travel speed", "mm/s", 1.0, 1000.0, 1.0, ""),
+    num("printer.z_speed_mm_s", "Printer", "Z speed", "mm/s", 0.1, 100.0, 0.1, ""),
+    num("printer.acceleration_mm_s2", "Printer", "Acceleration", "mm/s²", 10.0, 50000.0, 10.0, "Used for time estimates."),
+    other("printer.start_gcode", "Printer", "Start G-code", Kind::Text, &[], "Placeholders: {nozzle_temp_c} {first_layer_nozzle_temp_c} {bed_temp_c} {bed_x_mm} {bed_y_mm} {fan_pwm} {design_name}."),
+    other("printer.end_gcode", "Printer", "End G-code", Kind::Text, &[], "Same placeholders as the start G-code."),
+    other("material.name", "Material", "Material", Kind::Text, &[], ""),
+    num("material.nozzle_temp_c", "Material", "Nozzle temperature", "°C", 0.0, 500.0, 1.0, ""),
+    num("material.first_layer_nozzle_temp_c", "Material", "First-layer nozzle temperature", "°C", 0.0, 500.0, 1.0, ""),
+    num("material.bed_temp_c", "Material", "Bed temperature", "°C", 0.0, 150.0, 1.0, ""),
+    num("material.fan_percent", "Material", "Fan", "%", 0.0, 100.0, 1.0, ""),
+    int("material.fan_start_layer", "Material", "Fan from layer", 0.0, 1000.0, "0-based layer index."),
+    num("material.extrusion_multiplier", "Material", "Extrusion multiplier EM", "", 0.1, 3.0, 0.01, "EM in GIPPO equation 4."),
+    num("material.k", "Material", "Cross-section correction k", "", 0.1, 3.0, 0.01, "k in GIPPO equation 4 (elliptical rather than rectangular strands)."),
+    num("speeds.external_perimeter_mm_s", "Speeds", "External perimeter", "mm/s", 1.0, 500.0, 1.0, ""),
+    num("speeds.perimeter_mm_s", "Speeds", "Perimeters", "mm/s", 1.0, 500.0, 1.0, ""),
+    num("speeds.infill_mm_s", "Speeds", "Infill", "mm/s", 1.0, 500.0, 1.0, ""),
+    num("speeds.solid_infill_mm_s", "Speeds", "Solid infill", "mm/s", 1.0, 500.0, 1.0, ""),
+    num("speeds.lattice_mm_s", "Speeds", "Lattice", "mm/s", 1.0, 500.0, 1.0, ""),
+    num("speeds.first_layer_mm_s", "Speeds", "First layer", "mm/s", 1.0, 500.0, 1.0, ""),
+    for_job(num("job.slice.first_layer_height_mm", "Slicing", "First layer height", "mm", 0.01, 2.0, 0.01, ""), "slice"),
+    for_job(num("job.slice.layer_height_mm", "Slicing", "Layer height", "mm", 0.01, 2.0, 0.01, "LT in GIPPO equation 4."), "slice"),
+    for_job(int("job.slice.perimeters", "Slicing", "Perimeters", 0.0, 50.0, "Loops around each region."), "slice"),
+    for_job(num("job.slice.line_width_mm", "Slicing", "Line width", "mm", 0.05, 5.0, 0.01, "Width of perimeters and infill."), "slice"),
+    for_job(num("job.slice.infill_density", "Slicing", "Infill density", "", 0.0, 1.0, 0.05, "0 = hollow, 1 = solid."), "slice"),
+    for_job(num("job.slice.infill_angle_deg", "Slicing", "Infill angle", "°", -360.0, 360.0, 1.0, "Odd layers add 90°."), "slice"),
+    for_job(int("job.slice.solid_layers", "Slicing", "Solid layers (top and bottom)", 0.0, 1000.0, ""), "slice"),
+    for_job(num("job.slice.gap_closing_mm", "Slicing", "Gap closing", "mm", 0.0, 5.0, 0.01, "Open contour ends closer than this are joined."), "slice"),
+    Field { unit: "mm", min: Some(0.01), max: Some(2000.0), step: Some(0.1), ..other("job.input.builtin.size", "Input", "Cube size X, Y, Z", Kind::Vec3, &[], "") },
+    Field { unit: "mm", min: Some(0.01), max: Some(1000.0), step: Some(0.1), ..other("job.input.builtin.radius", "Input", "Radius", Kind::Number, &[], "") },
+    Field { unit: "mm", min: Some(0.01), max: Some(2000.0), step: Some(0.1), ..other("job.input.builtin.height", "Input", "Height", Kind::Number, &[], "") },
+    Field { min: Some(8.0), max: Some(512.0), step: Some(1.0), ..other("job.input.builtin.segments", "Input", "Facets around", Kind::Integer, &[], "") },
+];
+
+/// Built-in shapes offered in the form.
+pub const BUILTIN_SHAPES: &[&str] = &["cube", "sphere", "cylinder"];
+
+/// The schema as JSON for the page.
+pub fn schema_json() -> String {
+    #[derive(Serialize)]
+    struct Schema {
+        version: u32,
+        fields: &'static [Field],
+        job_kinds: &'static [&'static str],
+        builtin_shapes: &'static [&'static str],
+    }
+    serde_json::to_string(&Schema { version: super::DESIGN_VERSION, fields: FIELDS, job_kinds: &["slice"], builtin_shapes: BUILTIN_SHAPES })
+        .unwrap_or_default()
+}
+
+fn lookup<'a>(root: &'a Value, path: &str) -> Option<&'a Value> {
+    path.split('.').try_fold(root, |v, key| v.get(key))
+}
+
+fn fmt(x: f64) -> String {
+    if x.abs() >= 1e15 { format!("{x:e}") } else { format!("{x}") }
+}
+
+fn check_number(path: &str, v: f64, f: &Field, out: &mut Vec<Problem>) {
+    let (lo, hi) = (f.min.unwrap_or(f64::MIN), f.max.unwrap_or(f64::MAX));
+    if !v.is_finite() || v < lo || v > hi {
+        let unit = if f.unit.is_empty() { String::new() } else { format!(" {}", f.unit) };
+        out.push(Problem {
+            path: path.to_string(),
+            message: format!("{} is out of range: allowed {} to {}{unit}", fmt(v), fmt(lo), fmt(hi)),
+        });
+    }
+}
+
+/// Range checks from [`FIELDS`] plus the rules that tie fields together.
+pub fn validate(design: &Design) -> Vec<Problem> {
+    let mut out = Vec::new();
+    let Ok(root) = serde_json::to_value(design) else { return out };
+    let kind = design.job.kind();
+    for f in FIELDS {
+        if f.job.is_some_and(|j| j != kind) {
+            continue;
+        }
+        let Some(v) = lookup(&root, f.path) else { continue };
+        match f.kind {
+            Kind::Number | Kind::Integer => {
+                if let Some(x) = v.as_f64() {
+                    check_number(f.path, x, f, &mut out);
+                }
+            }
+            Kind::Vec3 => {
+                if let Some(items) = v.as_array() {
+                    for (i, x) in items.iter().enumerate() {
+                        if let Some(x) = x.as_f64() {
+                            check_number(&format!("{}.{i}", f.path), x, f, &mut out);
+                        }
+                    }
+                }
+            }
+            _ => {}
+        }
+    }
+    if design.name.trim().is_empty() {
+        out.push(Problem { path: "name".into(), message: "is empty: give the design a name".into() });
+    }
+    let nozzle = design.printer.nozzle_diameter_mm;
+    match &design.job {
+        Job::Slice(j) => {
+            let s = &j.slice;
+            for (path, h) in [("job.slice.layer_height_mm", s.layer_height_mm), ("job.slice.first_layer_height_mm", s.first_layer_height_mm)] {
+                if h > nozzle {
+                    out.push(Problem {
+                        path: path.into(),
+                        message: format!("{} mm is thicker than the {} mm nozzle: use at most the nozzle diameter", fmt(h), fmt(nozzle)),
+                    });
+                }
+            }
+            if let super::Input::File { name, .. } = &j.input {
+                if name.trim().is_empty() {
+                    out.push(Problem { path: "job.input.file.name".into(), message: "is empty: name the mesh file to slice".into() });
+                }
+            }
+        }
+    }
+    out
+}

@@ -1,0 +1,177 @@
+//! Share links: the whole design in the URL fragment, `#d=` + base64url(deflate(JSON)).
+//!
+//! A design that slices an uploaded mesh carries the mesh too when the file is at most
+//! [`MAX_EMBED_BYTES`]; larger meshes stay out of the link and the note says so.
+
+use super::{Design, Input};
+use base64::Engine;
+use base64::engine::general_purpose::URL_SAFE_NO_PAD;
+
+/// Largest mesh file embedded in a share link, bytes (256 KiB).
+pub const MAX_EMBED_BYTES: usize = 256 * 1024;
+/// Longest fragment accepted when opening a link, characters (2 MiB, Chromium's URL limit).
+pub const MAX_FRAGMENT_CHARS: usize = 2 * 1024 * 1024;
+/// Largest inflated size accepted (design JSON or embedded mesh), bytes.
+pub const MAX_INFLATED_BYTES: usize = 16 * 1024 * 1024;
+/// Fragment key.
+pub const FRAGMENT_KEY: &str = "d=";
+
+/// A share link's fragment and what it holds.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct ShareLink {
+    /// `#d=…`, to put after the page URL.
+    pub fragment: String,
+    /// Whether the mesh file is inside the link.
+    pub embedded: bool,
+    /// Plain-language note for the user ("" when nothing to say).
+    pub note: String,
+}
+
+/// Why a link could not be opened.
+#[derive(Debug, thiserror::Error, Clone, PartialEq)]
+pub enum Error {
+    /// No `d=` in the fragment.
+    #[error("the link has no design in it (expected '#d=…' after the address); ask for the link again")]
+    Missing,
+    /// Over [`MAX_FRAGMENT_CHARS`].
+    #[error("the link is {chars} characters long, over the {MAX_FRAGMENT_CHARS}-character limit; share the design file instead")]
+    TooLong {
+        /// Its length.
+        chars: usize,
+    },
+    /// Not base64url.
+    #[error("the link is damaged: character {position} is not base64url; copy the whole link again")]
+    NotBase64 {
+        /// 1-based character position within the data.
+        position: usize,
+    },
+    /// Not deflate data, or too large when inflated.
+    #[error("the link is damaged ({detail}); copy the whole link again")]
+    Corrupt {
+        /// What failed.
+        detail: String,
+    },
+    /// The design inside is not valid.
+    #[error("the link's design cannot be used: {0}")]
+    Design(#[from] super::Error),
+}
+
+/// base64url(deflate(bytes)), as used in links and for embedded meshes.
+pub fn pack(bytes: &[u8]) -> String {
+    URL_SAFE_NO_PAD.encode(miniz_oxide::deflate::compress_to_vec(bytes, 9))
+}
+
+/// Inverse of [`pack`], bounded by [`MAX_INFLATED_BYTES`].
+pub fn unpack(text: &str) -> Result<Vec<u8>, Error> {
+    if let Some(i) = text.bytes().position(|b| !(b.is_ascii_alphanumeric() || b == b'-' || b == b'_')) {
+        return Err(Error::NotBase64 { position: i + 1 });
+    }
+    let raw = URL_SAFE_NO_PAD
+        .decode(text.as_bytes())
+        .map_err(|e| Error::Corrupt { detail: format!("base64: {e}") })?;
+    miniz_oxide::inflate::decompress_to_vec_with_limit(&raw, MAX_INFLATED_BYTES).map_err(|e| Error::Corrupt {
+        detail: match e.status {
+            miniz_oxide::inflate::TINFLStatus::HasMoreOutput => format!("it unpacks to more than {MAX_INFLATED_BYTES} bytes"),
+            _ => "the compressed data is cut short or altered".into(),
+        },
+    })
+}
+
+/// Makes a link fragment for `design`. `file` is the loaded mesh the design's input names, if any.
+pub fn encode(design: &Design, file: Option<&[u8]>) -> ShareLink {
+    let mut d = design.clone();
+    let mut embedded = false;
+    let mut note = String::new();
+    if let Some(Input::File { name, embedded: slot }) = d.job.input_mut() {
+        match file {
+            Some(bytes) if bytes.len() <= MAX_EMBED_BYTES => {
+                *slot = Some(pack(bytes));
+                embedded = true;
+            }
+            Some(bytes) => {
+                *slot = None;
+                note = format!(
+                    "the mesh {name} ({}) is larger than the {} KiB share limit and is not in the link; whoever opens it must load {name}",
+                    human_bytes(bytes.len()),
+                    MAX_EMBED_BYTES / 1024
+                );
+            }
+            None => {
+                embedded = slot.is_some();
+                if !embedded {
+                    note = format!("the mesh {name} is not in the link; whoever opens it must load {name}");
+                }
+            }
+        }
+    }
+    let json = serde_json::to_string(&d).unwrap_or_default();
+    ShareLink { fragment: format!("#{FRAGMENT_KEY}{}", pack(json.as_bytes())), embedded, note }
+}
+
+/// Reads a design from a link fragment (with or without the leading `#`, or a whole URL).
+pub fn decode(fragment: &str) -> Result<Design, Error> {
+    let frag = fragment.rsplit_once('#').map_or(fragment, |(_, f)| f).trim();
+    if frag.len() > MAX_FRAGMENT_CHARS {
+        return Err(Error::TooLong { chars: frag.len() });
+    }
+    let data = frag
+        .split('&')
+        .find_map(|kv| kv.strip_prefix(FRAGMENT_KEY))
+        .ok_or(Error::Missing)?;
+    let bytes = unpack(data)?;
+    let text = std::str::from_utf8(&bytes).map_err(|_| Error::Corrupt { detail: "the design is not UTF-8 text".into() })?;
+    Ok(Design::from_json("share link", text)?)
+}
+
+fn human_bytes(n: usize) -> String {
+    if n >= 1 << 20 {
+        format!("{:.1} MB", n as f64 / (1u64 << 20) as f64)
+    } else {
+        format!("{} KiB", n.div_ceil(1024))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn round_trip() {
+        let d = Design::default();
+        let link = encode(&d, None);
+        assert!(link.fragment.starts_with("#d="));
+        assert_eq!(decode(&link.fragment).unwrap(), d);
+        assert_eq!(decode(&format!("http://localhost/www/{}", link.fragment)).unwrap(), d);
+    }
+
+    #[test]
+    fn small_mesh_is_embedded_and_large_is_not() {
+        let mut d = Design::default();
+        *d.job.input_mut().unwrap() = Input::File { name: "part.stl".into(), embedded: None };
+        let small = vec![7u8; 1000];
+        let link = encode(&d, Some(&small));
+        assert!(link.embedded && link.note.is_empty());
+        let back = decode(&link.fragment).unwrap();
+        let Some(Input::File { embedded: Some(e), .. }) = back.job.input() else { panic!() };
+        assert_eq!(unpack(e).unwrap(), small);
+        let big = vec![1u8; MAX_EMBED_BYTES + 1];
+        let link = encode(&d, Some(&big));
+        assert!(!link.embedded);
+        assert!(link.note.contains("part.stl") && link.note.contains("256 KiB"), "{}", link.note);
+    }
+
+    #[test]
+    fn damaged_links_say_so() {
+        assert!(matches!(decode("#d=!!!!"), Err(Error::NotBase64 { position: 1 })));
+        assert!(matches!(decode("#x=abc"), Err(Error::Missing)));
+        assert!(matches!(decode("#d=AAAA"), Err(Error::Corrupt { .. })));
+        let link = encode(&Design::default(), None);
+        let cut = &link.fragment[..link.fragment.len() / 2];
+        assert!(decode(cut).is_err());
+        let long = format!("#d={}", "A".repeat(MAX_FRAGMENT_CHARS + 1));
+        assert!(matches!(decode(&long), Err(Error::TooLong { .. })));
+        // A deflate bomb is refused, not inflated.
+        let bomb = pack(&vec![b' '; MAX_INFLATED_BYTES + 10]);
+        assert!(matches!(decode(&format!("#d={bomb}")), Err(Error::Corrupt { .. })));
+    }
+}

@@ -1,0 +1,428 @@
+// 3D toolpath preview: three.js LineSegments over the preview buffers of a result.
+//
+// Built for millions of segments: the transferred Float32Array is the position attribute
+// as is; colours are Uint8 normalized attributes computed once per colour mode and cached;
+// the layer range is a drawRange (two array lookups per change); nothing is allocated per
+// frame and a frame is drawn only when something changed (no animation loop).
+import * as THREE from "./vendor/three.module.js";
+import { OrbitControls } from "./vendor/OrbitControls.js";
+import { FEATURES, FEATURE_UNKNOWN } from "./protocol.js";
+
+// Colours are given in sRGB and drawn as they are: no colour management.
+THREE.ColorManagement.enabled = false;
+
+const BACKGROUND = 0x1f232a;
+const DEFAULT_BED = [200, 200, 200];
+/** Feature colours (PrusaSlicer's where it has the feature), sRGB bytes; index = code. */
+export const FEATURE_COLORS = [
+  [255, 125, 56], // External perimeter
+  [255, 230, 77], // Perimeter
+  [176, 48, 41], // Internal infill
+  [150, 84, 204], // Solid infill
+  [41, 163, 214], // Lattice
+  [31, 176, 76], // Contour
+  [160, 160, 160], // Handle
+  [0, 135, 110], // Skirt/Brim
+];
+const UNKNOWN_COLOR = [190, 190, 190];
+const TRAVEL_COLOR = 0x5aa0ff;
+
+/** 256-entry "turbo"-like ramp (blue → green → yellow → red), sRGB bytes. */
+const RAMP = buildRamp();
+
+export class Preview {
+  /**
+   * @param {HTMLCanvasElement} canvas
+   * @param {{colorBy: HTMLSelectElement, showTravel: HTMLInputElement,
+   *          layerMin: HTMLInputElement, layerMax: HTMLInputElement,
+   *          layerLabel: HTMLElement, legend: HTMLElement}} ui
+   */
+  constructor(canvas, ui) {
+    this.canvas = canvas;
+    this.ui = ui;
+    this.renderer = new THREE.WebGLRenderer({ canvas, antialias: true, preserveDrawingBuffer: true });
+    this.renderer.outputColorSpace = THREE.LinearSRGBColorSpace;
+    this.renderer.setPixelRatio(Math.min(window.devicePixelRatio || 1, 2));
+    this.renderer.setClearColor(BACKGROUND, 1);
+
+    this.scene = new THREE.Scene();
+    this.camera = new THREE.PerspectiveCamera(35, 1, 0.1, 10000);
+    this.camera.up.set(0, 0, 1);
+    this.controls = new OrbitControls(this.camera, canvas);
+    this.controls.enableDamping = false; // damping needs a continuous loop
+    this.controls.screenSpacePanning = true;
+    this.controls.addEventListener("change", () => this.requestRender());
+
+    this.plate = new THREE.Group();
+    this.scene.add(this.plate);
+
+    this.extrusion = new THREE.LineSegments(
+      new THREE.BufferGeometry(),
+      new THREE.LineBasicMaterial({ vertexColors: true }),
+    );
+    this.extrusion.frustumCulled = false;
+    this.travel = new THREE.LineSegments(
+      new THREE.BufferGeometry(),
+      new THREE.LineBasicMaterial({ color: TRAVEL_COLOR, transparent: true, opacity: 0.35 }),
+    );
+    this.travel.frustumCulled = false;
+    this.scene.add(this.extrusion, this.travel);
+
+    /** @type {import("./protocol.js").PreviewBuffers|null} */
+    this.data = null;
+    /** @type {Map<string, THREE.BufferAttribute>} colour attribute per mode, built on demand */
+    this.colorCache = new Map();
+    this.layers = 0;
+    this.bedKey = "";
+    this.frameRequested = false;
+    this.drawFrame = () => {
+      this.frameRequested = false;
+      this.renderer.render(this.scene, this.camera);
+    };
+
+    ui.colorBy.addEventListener("change", () => this.applyColors());
+    ui.showTravel.addEventListener("change", () => {
+      this.travel.visible = ui.showTravel.checked;
+      this.requestRender();
+    });
+    const onRange = (moved) => () => {
+      let lo = ui.layerMin.valueAsNumber;
+      let hi = ui.layerMax.valueAsNumber;
+      if (lo > hi) {
+        if (moved === "min") ui.layerMax.value = String((hi = lo));
+        else ui.layerMin.value = String((lo = hi));
+      }
+      this.setLayerRange(lo, hi);
+    };
+    ui.layerMin.addEventListener("input", onRange("min"));
+    ui.layerMax.addEventListener("input", onRange("max"));
+
+    new ResizeObserver(() => this.resize()).observe(canvas.parentElement);
+    this.setBed(DEFAULT_BED, "corner");
+    this.fit();
+    this.setResult(null);
+  }
+
+  /** Draws one frame at the next animation frame (coalesced). */
+  requestRender() {
+    if (this.frameRequested) return;
+    this.frameRequested = true;
+    requestAnimationFrame(this.drawFrame);
+  }
+
+  resize() {
+    const { clientWidth: w, clientHeight: h } = this.canvas.parentElement;
+    if (w === 0 || h === 0) return;
+    this.renderer.setSize(w, h, false);
+    this.camera.aspect = w / h;
+    this.camera.updateProjectionMatrix();
+    this.requestRender();
+  }
+
+  /**
+   * Shows a result's preview buffers (kept by reference, never copied).
+   * @param {import("./protocol.js").PreviewBuffers|null} data
+   * @param {{origin?: string}} [options]  printer origin: "corner" (default) or "center"
+   */
+  setResult(data, options = {}) {
+    const geometry = this.extrusion.geometry;
+    const travelGeometry = this.travel.geometry;
+    geometry.dispose();
+    travelGeometry.dispose();
+    this.colorCache.clear(); // their GPU buffers go with the disposed geometry / GC
+    this.data = data;
+    this.featureCounts = null;
+    this.flowRange = null;
+
+    const segments = data ? data.positions.length / 6 : 0;
+    const empty = new Float32Array(0);
+    this.extrusion.geometry = new THREE.BufferGeometry();
+    this.extrusion.geometry.setAttribute("position", new THREE.BufferAttribute(data?.positions ?? empty, 3));
+    this.travel.geometry = new THREE.BufferGeometry();
+    this.travel.geometry.setAttribute("position", new THREE.BufferAttribute(data?.travel ?? empty, 3));
+
+    const layerStart = data?.layerStart ?? new Uint32Array(0);
+    this.layers = Math.max(0, layerStart.length - 1);
+    if (segments > 0 && this.layers === 0) {
+      // No layer table: treat everything as one layer.
+      data.layerStart = Uint32Array.of(0, segments);
+      this.layers = 1;
+    }
+    const { layerMin, layerMax } = this.ui;
+    for (const input of [layerMin, layerMax]) {
+      input.min = "0";
+      input.max = String(Math.max(0, this.layers - 1));
+      input.disabled = this.layers === 0;
+    }
+    layerMin.value = "0";
+    layerMax.value = String(Math.max(0, this.layers - 1));
+
+    const bed = data?.bedSize && data.bedSize.length >= 2 && data.bedSize[0] > 0 ? data.bedSize : DEFAULT_BED;
+    this.setBed(bed, options.origin ?? "corner");
+    this.applyColors(false);
+    this.setLayerRange(0, this.layers - 1);
+    if (segments > 0) this.fit(boundsOf(data.positions));
+    else this.fit();
+    this.requestRender();
+  }
+
+  /** Shows layers lo..hi (0-based, inclusive): O(1). */
+  setLayerRange(lo, hi) {
+    const d = this.data;
+    const label = this.ui.layerLabel;
+    if (!d || this.layers === 0) {
+      this.extrusion.geometry.setDrawRange(0, 0);
+      this.travel.geometry.setDrawRange(0, 0);
+      label.textContent = "no layers";
+      this.requestRender();
+      return;
+    }
+    const start = d.layerStart[lo];
+    const end = d.layerStart[hi + 1];
+    this.extrusion.geometry.setDrawRange(start * 2, (end - start) * 2);
+    const ts = d.travelLayerStart;
+    if (ts && ts.length > hi + 1) {
+      this.travel.geometry.setDrawRange(ts[lo] * 2, (ts[hi + 1] - ts[lo]) * 2);
+    } else {
+      this.travel.geometry.setDrawRange(0, Infinity);
+    }
+    const z = d.layerZ;
+    const zText = z && z.length > hi ? ` · z ${z[lo].toFixed(2)}–${z[hi].toFixed(2)} mm` : "";
+    label.textContent = `layers ${lo + 1}–${hi + 1} of ${this.layers}${zText}`;
+    this.requestRender();
+  }
+
+  /** Sets (or reuses) the colour attribute for the selected mode and updates the legend. */
+  applyColors(render = true) {
+    const mode = this.ui.colorBy.value;
+    const d = this.data;
+    const segments = d ? d.positions.length / 6 : 0;
+    if (segments > 0) {
+      let attr = this.colorCache.get(mode);
+      if (!attr) {
+        attr = new THREE.BufferAttribute(this.computeColors(mode, segments), 3, true);
+        this.colorCache.set(mode, attr);
+      }
+      this.extrusion.geometry.setAttribute("color", attr);
+    }
+    this.updateLegend(mode, segments);
+    if (render) this.requestRender();
+  }
+
+  /** @returns {Uint8Array} 2 vertices × RGB per segment */
+  computeColors(mode, segments) {
+    const d = this.data;
+    const out = new Uint8Array(segments * 6);
+    const put = (i, r, g, b) => {
+      const o = i * 6;
+      out[o] = out[o + 3] = r;
+      out[o + 1] = out[o + 4] = g;
+      out[o + 2] = out[o + 5] = b;
+    };
+    if (mode === "feature" && d.feature.length >= segments) {
+      for (let i = 0; i < segments; i++) {
+        const c = FEATURE_COLORS[d.feature[i]] ?? UNKNOWN_COLOR;
+        put(i, c[0], c[1], c[2]);
+      }
+    } else if (mode === "flow" && d.flow.length >= segments) {
+      const [lo, hi] = this.getFlowRange();
+      const scale = hi > lo ? 255 / (hi - lo) : 0;
+      for (let i = 0; i < segments; i++) {
+        const k = Math.max(0, Math.min(255, Math.round((d.flow[i] - lo) * scale))) * 3;
+        put(i, RAMP[k], RAMP[k + 1], RAMP[k + 2]);
+      }
+    } else if (mode === "path" && d.path.length >= segments) {
+      const palette = PATH_PALETTE;
+      const n = palette.length / 3;
+      for (let i = 0; i < segments; i++) {
+        // Multiplicative hash so neighbouring paths get distant colours.
+        const k = (Math.imul(d.path[i], 2654435761) >>> 0) % n * 3;
+        put(i, palette[k], palette[k + 1], palette[k + 2]);
+      }
+    } else {
+      out.fill(200);
+    }
+    return out;
+  }
+
+  getFlowRange() {
+    if (this.flowRange) return this.flowRange;
+    const flow = this.data.flow;
+    let lo = Infinity;
+    let hi = -Infinity;
+    for (let i = 0; i < flow.length; i++) {
+      const f = flow[i];
+      if (f < lo) lo = f;
+      if (f > hi) hi = f;
+    }
+    if (!(lo <= hi)) lo = hi = 0;
+    this.flowRange = [lo, hi];
+    return this.flowRange;
+  }
+
+  getFeatureCounts() {
+    if (this.featureCounts) return this.featureCounts;
+    const counts = new Uint32Array(256);
+    const f = this.data.feature;
+    for (let i = 0; i < f.length; i++) counts[f[i]]++;
+    this.featureCounts = counts;
+    return counts;
+  }
+
+  updateLegend(mode, segments) {
+    const legend = this.ui.legend;
+    legend.replaceChildren();
+    if (segments === 0) {
+      legend.append(item(null, "no toolpath yet: slice a design or drop a file"));
+      return;
+    }
+    if (mode === "feature") {
+      const counts = this.getFeatureCounts();
+      FEATURES.forEach((name, code) => {
+        if (counts[code] > 0) legend.append(item(FEATURE_COLORS[code], name));
+      });
+      if (counts[FEATURE_UNKNOWN] > 0) legend.append(item(UNKNOWN_COLOR, "unknown"));
+    } else if (mode === "flow") {
+      const [lo, hi] = this.getFlowRange();
+      const bar = document.createElement("span");
+      bar.className = "ramp";
+      const stops = [];
+      for (let k = 0; k <= 8; k++) {
+        const j = Math.round((k / 8) * 255) * 3;
+        stops.push(`rgb(${RAMP[j]},${RAMP[j + 1]},${RAMP[j + 2]})`);
+      }
+      bar.style.background = `linear-gradient(to right, ${stops.join(",")})`;
+      const text = (v) => `${v.toFixed(v < 10 ? 2 : 1)}`;
+      const low = document.createElement("span");
+      low.textContent = text(lo);
+      const high = document.createElement("span");
+      high.textContent = `${text(hi)} mm³/s`;
+      const wrap = document.createElement("span");
+      wrap.className = "legend-item flow-legend";
+      wrap.title = "volumetric flow, mm³/s";
+      wrap.append("flow ", low, bar, high);
+      legend.append(wrap);
+    } else {
+      const paths = this.data.path.length ? this.data.path[this.data.path.length - 1] + 1 : 0;
+      legend.append(item(null, `one colour per extrusion path (${paths.toLocaleString()} paths)`));
+    }
+    legend.append(item(null, `${segments.toLocaleString()} segments`));
+  }
+
+  /** Draws the build plate: outline, 10 mm grid, origin axes. */
+  setBed(bed, origin) {
+    const [bx, by] = bed;
+    const key = `${bx}x${by}:${origin}`;
+    if (key === this.bedKey) return;
+    this.bedKey = key;
+    for (const child of this.plate.children) child.geometry.dispose();
+    this.plate.clear();
+    const x0 = origin === "center" ? -bx / 2 : 0;
+    const y0 = origin === "center" ? -by / 2 : 0;
+    this.bedBox = new THREE.Box3(new THREE.Vector3(x0, y0, 0), new THREE.Vector3(x0 + bx, y0 + by, Math.min(bx, by) * 0.25));
+
+    const grid = [];
+    for (let x = Math.ceil(x0 / 10) * 10; x <= x0 + bx; x += 10) grid.push(x, y0, 0, x, y0 + by, 0);
+    for (let y = Math.ceil(y0 / 10) * 10; y <= y0 + by; y += 10) grid.push(x0, y, 0, x0 + bx, y, 0);
+    this.plate.add(lines(grid, 0x3a414d));
+    this.plate.add(lines([x0, y0, 0, x0 + bx, y0, 0, x0 + bx, y0, 0, x0 + bx, y0 + by, 0,
+      x0 + bx, y0 + by, 0, x0, y0 + by, 0, x0, y0 + by, 0, x0, y0, 0], 0x8a93a3));
+    const a = Math.max(5, Math.min(bx, by) * 0.08);
+    this.plate.add(lines([0, 0, 0, a, 0, 0], 0xe5484d));
+    this.plate.add(lines([0, 0, 0, 0, a, 0], 0x46a758));
+    this.plate.add(lines([0, 0, 0, 0, 0, a], 0x3e63dd));
+    const plane = new THREE.Mesh(
+      new THREE.PlaneGeometry(bx, by),
+      new THREE.MeshBasicMaterial({ color: 0x262b33, side: THREE.DoubleSide, polygonOffset: true, polygonOffsetFactor: 1, polygonOffsetUnits: 1 }),
+    );
+    plane.position.set(x0 + bx / 2, y0 + by / 2, -0.01);
+    this.plate.add(plane);
+  }
+
+  /** Points the camera at a box (default: the plate) from the front left, above. */
+  fit(box = null) {
+    const b = box ?? this.bedBox;
+    const center = b.getCenter(new THREE.Vector3());
+    const radius = Math.max(1, b.getSize(new THREE.Vector3()).length() / 2);
+    const fov = (this.camera.fov * Math.PI) / 180;
+    const dist = (radius / Math.sin(fov / 2)) * 1.05;
+    const dir = new THREE.Vector3(-0.55, -1, 0.75).normalize();
+    this.camera.position.copy(center).addScaledVector(dir, dist);
+    this.camera.near = Math.max(0.01, dist / 1000);
+    this.camera.far = dist * 20 + 2000;
+    this.camera.updateProjectionMatrix();
+    this.controls.target.copy(center);
+    this.controls.update();
+    this.requestRender();
+  }
+}
+
+function lines(flat, color) {
+  const g = new THREE.BufferGeometry();
+  g.setAttribute("position", new THREE.Float32BufferAttribute(flat, 3));
+  return new THREE.LineSegments(g, new THREE.LineBasicMaterial({ color }));
+}
+
+function item(rgb, text) {
+  const el = document.createElement("span");
+  el.className = "legend-item";
+  if (rgb) {
+    const sw = document.createElement("span");
+    sw.className = "swatch";
+    sw.style.background = `rgb(${rgb[0]},${rgb[1]},${rgb[2]})`;
+    el.append(sw);
+  }
+  el.append(text);
+  return el;
+}
+
+/** Bounding box of x0 y0 z0 x1 y1 z1 segments. */
+function boundsOf(p) {
+  let minX = Infinity, minY = Infinity, minZ = Infinity;
+  let maxX = -Infinity, maxY = -Infinity, maxZ = -Infinity;
+  for (let i = 0; i < p.length; i += 3) {
+    const x = p[i], y = p[i + 1], z = p[i + 2];
+    if (x < minX) minX = x;
+    if (x > maxX) maxX = x;
+    if (y < minY) minY = y;
+    if (y > maxY) maxY = y;
+    if (z < minZ) minZ = z;
+    if (z > maxZ) maxZ = z;
+  }
+  return new THREE.Box3(new THREE.Vector3(minX, minY, minZ), new THREE.Vector3(maxX, maxY, maxZ));
+}
+
+function buildRamp() {
+  // Piecewise-linear through a few "turbo" colour-map stops.
+  const stops = [
+    [0.0, 48, 18, 59], [0.15, 70, 107, 227], [0.3, 41, 187, 236], [0.45, 49, 241, 153],
+    [0.6, 163, 253, 61], [0.75, 237, 208, 58], [0.88, 251, 128, 34], [1.0, 180, 20, 10],
+  ];
+  const out = new Uint8Array(256 * 3);
+  for (let i = 0; i < 256; i++) {
+    const t = i / 255;
+    let s = 0;
+    while (s < stops.length - 2 && t > stops[s + 1][0]) s++;
+    const [t0, r0, g0, b0] = stops[s];
+    const [t1, r1, g1, b1] = stops[s + 1];
+    const u = (t - t0) / (t1 - t0);
+    out[i * 3] = Math.round(r0 + (r1 - r0) * u);
+    out[i * 3 + 1] = Math.round(g0 + (g1 - g0) * u);
+    out[i * 3 + 2] = Math.round(b0 + (b1 - b0) * u);
+  }
+  return out;
+}
+
+/** 37 well-spread hues for colouring by path. */
+const PATH_PALETTE = (() => {
+  const n = 37;
+  const out = new Uint8Array(n * 3);
+  const c = new THREE.Color();
+  for (let i = 0; i < n; i++) {
+    c.setHSL((i * 0.618034) % 1, 0.75, i % 2 ? 0.55 : 0.65);
+    out[i * 3] = Math.round(c.r * 255);
+    out[i * 3 + 1] = Math.round(c.g * 255);
+    out[i * 3 + 2] = Math.round(c.b * 255);
+  }
+  return out;
+})();

@@ -1,0 +1,115 @@
+// Module worker holding the wasm Session. Requests are queued until the module is
+// initialised, then handled one at a time (every wasm call is synchronous). Cancel is done by
+// the page terminating this worker; see main.js.
+import init, { Session } from "../pkg/weft.js";
+import { MSG, PREVIEW_BUFFERS, transferList } from "./protocol.js";
+
+/** @type {Session|null} */
+let session = null;
+/** @type {Array<Object>|null} requests waiting for init; null once ready */
+let queue = [];
+/** @type {WebAssembly.Memory|null} */
+let memory = null;
+
+self.onmessage = ({ data }) => {
+  if (queue) queue.push(data);
+  else handle(data);
+};
+
+init()
+  .then((exports) => {
+    memory = exports?.memory ?? null;
+    session = new Session();
+    const waiting = queue;
+    queue = null;
+    self.postMessage({ type: MSG.READY });
+    for (const msg of waiting) handle(msg);
+  })
+  .catch((err) => {
+    self.postMessage({
+      type: MSG.ERROR, id: null, request: "init", fatal: true,
+      message: `the WebAssembly module could not start: ${messageOf(err)}`,
+    });
+  });
+
+function handle(msg) {
+  try {
+    switch (msg.type) {
+      case MSG.LOAD: {
+        const report = JSON.parse(session.addFile(msg.name, new Uint8Array(msg.bytes)));
+        self.postMessage({ type: MSG.LOADED, id: msg.id, name: msg.name, report });
+        break;
+      }
+      case MSG.RUN: {
+        const t0 = performance.now();
+        const report = JSON.parse(session.run(msg.design, progressReporter(msg.id)));
+        postResult(msg.id, "run", report, t0);
+        break;
+      }
+      case MSG.ANALYZE: {
+        const t0 = performance.now();
+        self.postMessage({ type: MSG.PROGRESS, id: msg.id, stage: "analyze", fraction: 0 });
+        const report = JSON.parse(session.analyzeGcode(msg.name, new Uint8Array(msg.bytes)));
+        postResult(msg.id, "analyze", report, t0);
+        break;
+      }
+      case MSG.CANCEL:
+        // Nothing to do: a request that is running cannot see this message (the thread is
+        // busy in wasm); the page terminates the worker instead.
+        break;
+      default:
+        throw new Error(`unknown message type ${JSON.stringify(msg.type)}`);
+    }
+  } catch (err) {
+    // A trap (panic → unreachable, stack overflow) or a failed memory.grow leaves the wasm
+    // instance unusable: ask the page to replace this worker.
+    const fatal = err instanceof WebAssembly.RuntimeError || err instanceof RangeError;
+    self.postMessage({
+      type: MSG.ERROR, id: msg.id ?? null, request: msg.type, name: msg.name,
+      message: messageOf(err), fatal,
+    });
+  }
+}
+
+/** Progress callback for Session.run, posting at most ~100 messages per stage. */
+function progressReporter(id) {
+  let lastStage = "";
+  let lastFraction = -1;
+  return (stage, fraction) => {
+    if (stage === lastStage && fraction < 1 && fraction - lastFraction < 0.01) return;
+    lastStage = stage;
+    lastFraction = fraction;
+    self.postMessage({ type: MSG.PROGRESS, id, stage, fraction });
+  };
+}
+
+function postResult(id, request, report, t0) {
+  const preview = {};
+  for (const [key, [method, Type]] of Object.entries(PREVIEW_BUFFERS)) {
+    preview[key] = owned(session[method](), Type);
+  }
+  const gcode = owned(session.gcode(), Uint8Array);
+  self.postMessage(
+    { type: MSG.RESULT, id, request, report, preview, gcode, ms: performance.now() - t0 },
+    transferList([...Object.values(preview), gcode]),
+  );
+}
+
+/**
+ * A typed array that owns its whole buffer, so the buffer can be transferred. wasm-bindgen
+ * already copies Vec<T> results out of wasm memory; a view into the wasm memory (or any
+ * other shared buffer) is copied here so the memory is never detached.
+ */
+function owned(array, Type) {
+  if (!array) return new Type(0);
+  if (!(array instanceof Type)) array = Type.from(array);
+  const whole = array.byteOffset === 0 && array.byteLength === array.buffer.byteLength;
+  const shared = typeof SharedArrayBuffer !== "undefined" && array.buffer instanceof SharedArrayBuffer;
+  const wasmMemory = memory !== null && array.buffer === memory.buffer;
+  return whole && !shared && !wasmMemory ? array : array.slice();
+}
+
+function messageOf(err) {
+  if (err instanceof Error) return err.message || String(err);
+  return typeof err === "string" ? err : JSON.stringify(err);
+}

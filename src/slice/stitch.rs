@@ -1,0 +1,209 @@
+//! Segments → closed loops.
+//!
+//! 1. Exact chaining: segment ends are integer micrometre points, so a segment continues the
+//!    one whose end equals its start. Lookup is by binary search in a sorted table (no hash
+//!    maps: the output order depends only on the input).
+//! 2. Gap closing: the remaining open chains are joined end → start, nearest pairs first,
+//!    when the ends are at most `gap_closing` apart (a chain may close on itself). Joins of
+//!    zero length only repair the chaining order and are not counted as gaps.
+//! 3. Chains still open are dropped and counted.
+
+use super::plane::{Pt, Seg};
+
+/// What stitching repaired.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub(crate) struct StitchStats {
+    pub gaps_closed: usize,
+    /// Largest gap closed, µm.
+    pub largest_gap_um: f64,
+    pub open_dropped: usize,
+}
+
+#[inline]
+fn dist2(a: Pt, b: Pt) -> i64 {
+    let dx = a[0] as i64 - b[0] as i64;
+    let dy = a[1] as i64 - b[1] as i64;
+    dx * dx + dy * dy
+}
+
+/// Chains `segs` into closed loops (points in µm, last point not repeated). `segs` is sorted
+/// and deduplicated in place (identical directed segments come from duplicate triangles).
+pub(crate) fn stitch(segs: &mut Vec<Seg>, gap_um: f64) -> (Vec<Vec<Pt>>, StitchStats) {
+    let mut stats = StitchStats::default();
+    segs.sort_unstable();
+    segs.dedup();
+    let n = segs.len();
+    // Segments sorted by start point: `segs` itself (sorted by (a, b)).
+    let mut used = vec![false; n];
+    // Per start point, the first candidate not yet tried (skips used ones quickly).
+    let find_next = |used: &[bool], p: Pt| -> Option<usize> {
+        let mut i = segs.partition_point(|s| s.a < p);
+        while i < n && segs[i].a == p {
+            if !used[i] {
+                return Some(i);
+            }
+            i += 1;
+        }
+        None
+    };
+
+    let mut loops: Vec<Vec<Pt>> = Vec::new();
+    let mut open: Vec<Vec<Pt>> = Vec::new();
+    for i in 0..n {
+        if used[i] {
+            continue;
+        }
+        used[i] = true;
+        let start = segs[i].a;
+        let mut chain = vec![start, segs[i].b];
+        let mut cur = segs[i].b;
+        let mut closed = false;
+        while let Some(j) = find_next(&used, cur) {
+            used[j] = true;
+            cur = segs[j].b;
+            if cur == start {
+                closed = true;
+                break;
+            }
+            chain.push(cur);
+        }
+        if closed {
+            if chain.len() >= 3 {
+                loops.push(chain);
+            }
+        } else {
+            open.push(chain);
+        }
+    }
+    if open.is_empty() {
+        return (loops, stats);
+    }
+
+    // Join open chains: candidate pairs (end of i, start of j) within the gap, nearest first.
+    let gap = gap_um.max(0.0);
+    let gap2 = (gap * gap).floor() as i64;
+    let reach = gap.ceil() as i64;
+    let mut starts: Vec<(Pt, usize)> = open.iter().enumerate().map(|(j, c)| (c[0], j)).collect();
+    starts.sort_unstable();
+    let mut cands: Vec<(i64, usize, usize)> = Vec::new();
+    for (i, c) in open.iter().enumerate() {
+        let e = *c.last().unwrap();
+        let lo = starts.partition_point(|(p, _)| (p[0] as i64) < e[0] as i64 - reach);
+        for &(p, j) in &starts[lo..] {
+            if p[0] as i64 > e[0] as i64 + reach {
+                break;
+            }
+            let d2 = dist2(e, p);
+            if d2 <= gap2 {
+                cands.push((d2, i, j));
+            }
+        }
+    }
+    cands.sort_unstable();
+    let m = open.len();
+    let mut next: Vec<Option<usize>> = vec![None; m];
+    let mut has_prev = vec![false; m];
+    // Groups (union-find) so that joining i→j when j already leads back to i closes a loop,
+    // which is allowed; any pair is allowed as long as both ends are free.
+    for &(d2, i, j) in &cands {
+        if next[i].is_some() || has_prev[j] {
+            continue;
+        }
+        next[i] = Some(j);
+        has_prev[j] = true;
+        if d2 > 0 {
+            stats.gaps_closed += 1;
+            let d = (d2 as f64).sqrt();
+            if d > stats.largest_gap_um {
+                stats.largest_gap_um = d;
+            }
+        }
+    }
+    // Walk: open paths start at chains without predecessor; what remains are cycles.
+    let mut visited = vec![false; m];
+    for s in 0..m {
+        if has_prev[s] || visited[s] {
+            continue;
+        }
+        let mut k = Some(s);
+        while let Some(c) = k {
+            visited[c] = true;
+            k = next[c];
+        }
+        stats.open_dropped += 1;
+    }
+    for s in 0..m {
+        if visited[s] {
+            continue;
+        }
+        let mut pts: Vec<Pt> = Vec::new();
+        let mut c = s;
+        while !visited[c] {
+            visited[c] = true;
+            for &p in &open[c] {
+                if pts.last() != Some(&p) {
+                    pts.push(p);
+                }
+            }
+            match next[c] {
+                Some(nc) => c = nc,
+                None => break,
+            }
+        }
+        while pts.len() > 1 && pts.first() == pts.last() {
+            pts.pop();
+        }
+        if pts.len() >= 3 {
+            loops.push(pts);
+        }
+    }
+    (loops, stats)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn square_segs(offset: i32) -> Vec<Seg> {
+        let p = [[0, 0], [1000, 0], [1000, 1000], [0, 1000]];
+        (0..4)
+            .map(|i| Seg { a: [p[i][0] + offset, p[i][1]], b: [p[(i + 1) % 4][0] + offset, p[(i + 1) % 4][1]] })
+            .collect()
+    }
+
+    #[test]
+    fn closes_exact_loop_and_ignores_duplicates() {
+        let mut segs = square_segs(0);
+        segs.extend(square_segs(0));
+        let (loops, st) = stitch(&mut segs, 50.0);
+        assert_eq!(loops.len(), 1);
+        assert_eq!(loops[0].len(), 4);
+        assert_eq!(st, StitchStats::default());
+    }
+
+    #[test]
+    fn closes_small_gap_and_drops_large() {
+        let mut segs = square_segs(0);
+        segs[1].a[0] += 20; // 20 µm gap between segment 0's end and segment 1's start
+        let (loops, st) = stitch(&mut segs, 50.0);
+        assert_eq!(loops.len(), 1);
+        assert_eq!(st.gaps_closed, 1);
+        assert!((st.largest_gap_um - 20.0).abs() < 1e-9);
+
+        let mut segs = square_segs(0);
+        segs.remove(2);
+        let (loops, st) = stitch(&mut segs, 50.0);
+        assert!(loops.is_empty());
+        assert_eq!(st.open_dropped, 1);
+    }
+
+    #[test]
+    fn chaining_from_the_middle_is_repaired() {
+        // Start point ordering makes the first chain begin mid-contour.
+        let mut segs = square_segs(0);
+        segs.reverse();
+        let (loops, st) = stitch(&mut segs, 0.0);
+        assert_eq!(loops.len(), 1);
+        assert_eq!(st.gaps_closed, 0);
+    }
+}

@@ -26,6 +26,45 @@ fn dist2(a: Pt, b: Pt) -> i64 {
     dx * dx + dy * dy
 }
 
+/// Removes points that deviate at most 2 µm from the line through their kept neighbours
+/// (the rounding of cut points to whole micrometres makes facets' collinear cuts jitter),
+/// and repeated points. Deterministic single pass plus a wrap-around fix-up.
+pub(crate) fn simplify(pts: &mut Vec<Pt>) {
+    // |cross(b − a, c − a)| <= 2 µm × |c − a| means b is within 2 µm of the line a–c.
+    fn keep(a: Pt, b: Pt, c: Pt) -> bool {
+        let (ax, ay) = (a[0] as i64, a[1] as i64);
+        let (ux, uy) = (b[0] as i64 - ax, b[1] as i64 - ay);
+        let (vx, vy) = (c[0] as i64 - ax, c[1] as i64 - ay);
+        let cross = (ux as i128) * (vy as i128) - (uy as i128) * (vx as i128);
+        let len2 = (vx as i128) * (vx as i128) + (vy as i128) * (vy as i128);
+        // Also keep b when it lies beyond the segment a–c (a spike doubling back).
+        let dot = (ux as i128) * (vx as i128) + (uy as i128) * (vy as i128);
+        cross * cross > 4 * len2 || dot < 0 || dot > len2
+    }
+    pts.dedup();
+    while pts.len() > 1 && pts.first() == pts.last() {
+        pts.pop();
+    }
+    if pts.len() < 4 {
+        return;
+    }
+    let mut out: Vec<Pt> = Vec::with_capacity(pts.len());
+    for &p in pts.iter() {
+        while out.len() >= 2 && !keep(out[out.len() - 2], out[out.len() - 1], p) {
+            out.pop();
+        }
+        out.push(p);
+    }
+    // Wrap-around: the last and first points against their cyclic neighbours.
+    while out.len() >= 4 && !keep(out[out.len() - 2], out[out.len() - 1], out[0]) {
+        out.pop();
+    }
+    while out.len() >= 4 && !keep(out[out.len() - 1], out[0], out[1]) {
+        out.remove(0);
+    }
+    *pts = out;
+}
+
 /// Chains `segs` into closed loops (points in µm, last point not repeated). `segs` is sorted
 /// and deduplicated in place (identical directed segments come from duplicate triangles).
 pub(crate) fn stitch(segs: &mut Vec<Seg>, gap_um: f64) -> (Vec<Vec<Pt>>, StitchStats) {
@@ -68,6 +107,7 @@ pub(crate) fn stitch(segs: &mut Vec<Seg>, gap_um: f64) -> (Vec<Vec<Pt>>, StitchS
             chain.push(cur);
         }
         if closed {
+            simplify(&mut chain);
             if chain.len() >= 3 {
                 loops.push(chain);
             }
@@ -150,9 +190,7 @@ pub(crate) fn stitch(segs: &mut Vec<Seg>, gap_um: f64) -> (Vec<Vec<Pt>>, StitchS
                 None => break,
             }
         }
-        while pts.len() > 1 && pts.first() == pts.last() {
-            pts.pop();
-        }
+        simplify(&mut pts);
         if pts.len() >= 3 {
             loops.push(pts);
         }
@@ -195,6 +233,16 @@ mod tests {
         let (loops, st) = stitch(&mut segs, 50.0);
         assert!(loops.is_empty());
         assert_eq!(st.open_dropped, 1);
+    }
+
+    #[test]
+    fn simplify_drops_jittered_collinear_points() {
+        let mut l = vec![[0, 0], [500, 1], [1000, 0], [1000, 1000], [500, 999], [0, 1000], [0, 500]];
+        simplify(&mut l);
+        assert_eq!(l, vec![[0, 0], [1000, 0], [1000, 1000], [0, 1000]]);
+        let mut t = vec![[0, 0], [1000, 0], [0, 1000]];
+        simplify(&mut t);
+        assert_eq!(t.len(), 3);
     }
 
     #[test]

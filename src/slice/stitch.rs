@@ -26,11 +26,11 @@ fn dist2(a: Pt, b: Pt) -> i64 {
     dx * dx + dy * dy
 }
 
-/// Removes points that deviate at most 2 µm from the line through their kept neighbours
+/// Removes points that deviate at most 1 µm from the line through their kept neighbours
 /// (the rounding of cut points to whole micrometres makes facets' collinear cuts jitter),
 /// and repeated points. Deterministic single pass plus a wrap-around fix-up.
 pub(crate) fn simplify(pts: &mut Vec<Pt>) {
-    // |cross(b − a, c − a)| <= 2 µm × |c − a| means b is within 2 µm of the line a–c.
+    // |cross(b − a, c − a)| <= 1 µm × |c − a| means b is within 1 µm of the line a–c.
     fn keep(a: Pt, b: Pt, c: Pt) -> bool {
         let (ax, ay) = (a[0] as i64, a[1] as i64);
         let (ux, uy) = (b[0] as i64 - ax, b[1] as i64 - ay);
@@ -39,7 +39,7 @@ pub(crate) fn simplify(pts: &mut Vec<Pt>) {
         let len2 = (vx as i128) * (vx as i128) + (vy as i128) * (vy as i128);
         // Also keep b when it lies beyond the segment a–c (a spike doubling back).
         let dot = (ux as i128) * (vx as i128) + (uy as i128) * (vy as i128);
-        cross * cross > 4 * len2 || dot < 0 || dot > len2
+        cross * cross > len2 || dot < 0 || dot > len2
     }
     pts.dedup();
     while pts.len() > 1 && pts.first() == pts.last() {

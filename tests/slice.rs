@@ -433,3 +433,18 @@ fn errors() {
     let e = slice::slice(&cube([1.0, 1.0, 2000.0]), &o, &mut |_| {}).unwrap_err();
     assert!(matches!(e, Error::TooManyLayers { limit: 100_000, .. }), "{e:?}");
 }
+
+#[test]
+fn inconsistently_oriented_triangles_are_tolerated() {
+    // Flip the +X face of a cube, and one triangle of the -Y face.
+    let mut m = cube([20.0, 20.0, 4.0]);
+    for k in [6, 7, 4] {
+        m.triangles[k].swap(1, 2);
+    }
+    let s = run(&m, &Options::default());
+    assert_eq!(s.report.open_contours_dropped, 0);
+    for l in &s.layers {
+        assert_eq!(l.regions.len(), 1);
+        assert!((l.regions[0].area() - 400.0).abs() < 1e-6);
+    }
+}

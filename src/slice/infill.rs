@@ -28,7 +28,7 @@ struct Hit {
 /// Infill polylines (mm) for `area` (µm shapes): lines at `angle_rad`, `spacing_um` apart,
 /// pieces shorter than `min_len_um` dropped.
 pub(crate) fn rectilinear(area: &[IntShape<i32>], spacing_um: f64, angle_rad: f64, min_len_um: f64) -> Vec<Vec<DVec2>> {
-    if area.is_empty() || !(spacing_um > 0.0) {
+    if area.is_empty() || spacing_um.is_nan() || spacing_um <= 0.0 {
         return Vec::new();
     }
     let (s, c) = (libm::sin(angle_rad), libm::cos(angle_rad));

@@ -325,17 +325,16 @@ pub fn slice(mesh: &Mesh, options: &Options, progress: &mut dyn FnMut(f32)) -> R
         } else {
             // Covered by every layer within `s` above and below.
             let mut cov: Option<IntShapes<i32>> = None;
-            let lo = i.checked_sub(s);
-            if lo.is_none() || i + s >= n {
+            if i < s || i + s >= n {
                 cov = Some(Vec::new());
             } else {
-                for j in (i - s)..=(i + s) {
+                for (j, other) in layer_shapes.iter().enumerate().take(i + s + 1).skip(i - s) {
                     if j == i {
                         continue;
                     }
                     let next = match &cov {
-                        None => layer_shapes[j].clone(),
-                        Some(c) => regions::intersect(c, &layer_shapes[j]),
+                        None => other.clone(),
+                        Some(c) => regions::intersect(c, other),
                     };
                     let done = next.is_empty();
                     cov = Some(next);

@@ -161,16 +161,26 @@ pub(crate) fn stitch(segs: &mut Vec<Seg>, gap_um: f64) -> (Vec<Vec<Pt>>, StitchS
     }
     // Walk: open paths start at chains without predecessor; what remains are cycles.
     let mut visited = vec![false; m];
+    let mut paths: Vec<Vec<Pt>> = Vec::new();
+    let concat = |pts: &mut Vec<Pt>, c: &[Pt]| {
+        for &p in c {
+            if pts.last() != Some(&p) {
+                pts.push(p);
+            }
+        }
+    };
     for s in 0..m {
         if has_prev[s] || visited[s] {
             continue;
         }
+        let mut pts = Vec::new();
         let mut k = Some(s);
         while let Some(c) = k {
             visited[c] = true;
+            concat(&mut pts, &open[c]);
             k = next[c];
         }
-        stats.open_dropped += 1;
+        paths.push(pts);
     }
     for s in 0..m {
         if visited[s] {
@@ -180,11 +190,7 @@ pub(crate) fn stitch(segs: &mut Vec<Seg>, gap_um: f64) -> (Vec<Vec<Pt>>, StitchS
         let mut c = s;
         while !visited[c] {
             visited[c] = true;
-            for &p in &open[c] {
-                if pts.last() != Some(&p) {
-                    pts.push(p);
-                }
-            }
+            concat(&mut pts, &open[c]);
             match next[c] {
                 Some(nc) => c = nc,
                 None => break,
@@ -195,7 +201,126 @@ pub(crate) fn stitch(segs: &mut Vec<Seg>, gap_um: f64) -> (Vec<Vec<Pt>>, StitchS
             loops.push(pts);
         }
     }
+    if !paths.is_empty() {
+        join_undirected(paths, gap2, reach, &mut loops, &mut stats);
+    }
     (loops, stats)
+}
+
+fn path_len(p: &[Pt]) -> f64 {
+    p.windows(2).map(|w| (dist2(w[0], w[1]) as f64).sqrt()).sum()
+}
+
+/// Last resort for inconsistently oriented triangles (a flipped triangle's segment runs
+/// backwards, so directed chaining stops at it): joins the remaining open paths end to end
+/// in either direction, nearest ends first, within the gap. A closed result is oriented like
+/// the majority (by length) of its pieces. Paths still open are dropped and counted.
+fn join_undirected(paths: Vec<Vec<Pt>>, gap2: i64, reach: i64, loops: &mut Vec<Vec<Pt>>, stats: &mut StitchStats) {
+    let m = paths.len();
+    // End e of path p has id 2p + e (e = 0: first point, e = 1: last point).
+    let end_pt = |id: usize| if id % 2 == 0 { paths[id / 2][0] } else { *paths[id / 2].last().unwrap() };
+    let mut ends: Vec<(Pt, usize)> = (0..2 * m).map(|id| (end_pt(id), id)).collect();
+    ends.sort_unstable();
+    let mut cands: Vec<(i64, usize, usize)> = Vec::new();
+    for (i, &(p, a)) in ends.iter().enumerate() {
+        for &(q, b) in &ends[i + 1..] {
+            if q[0] as i64 > p[0] as i64 + reach {
+                break;
+            }
+            let d2 = dist2(p, q);
+            if d2 <= gap2 {
+                cands.push((d2, a.min(b), a.max(b)));
+            }
+        }
+    }
+    cands.sort_unstable();
+    let mut link: Vec<Option<usize>> = vec![None; 2 * m];
+    for &(_, a, b) in &cands {
+        if link[a].is_some() || link[b].is_some() {
+            continue;
+        }
+        link[a] = Some(b);
+        link[b] = Some(a);
+    }
+    // Groups: follow path → its other end → link → next path.
+    let mut seen = vec![false; m];
+    let mut closed_joins = Vec::new();
+    for s in 0..m {
+        if seen[s] {
+            continue;
+        }
+        // Find one free end of the group, if any (open group), by walking from s's end 0.
+        let mut id = 2 * s;
+        let mut cycle = false;
+        loop {
+            match link[id] {
+                None => break,
+                Some(o) => {
+                    id = o ^ 1; // through the linked path to its far end
+                    if id / 2 == s {
+                        cycle = true;
+                        break;
+                    }
+                }
+            }
+        }
+        // Walk from `start` (an end id): enter the path at that end, leave by the other.
+        let start = if cycle { 2 * s } else { id };
+        let mut pts: Vec<Pt> = Vec::new();
+        let mut forward_len = 0.0;
+        let mut cur = start;
+        loop {
+            let p = cur / 2;
+            if seen[p] {
+                break;
+            }
+            seen[p] = true;
+            let piece = &paths[p];
+            let l = path_len(piece);
+            if cur % 2 == 0 {
+                forward_len += l;
+                for &q in piece {
+                    if pts.last() != Some(&q) {
+                        pts.push(q);
+                    }
+                }
+            } else {
+                forward_len -= l;
+                for &q in piece.iter().rev() {
+                    if pts.last() != Some(&q) {
+                        pts.push(q);
+                    }
+                }
+            }
+            match link[cur ^ 1] {
+                Some(o) => {
+                    if cycle || !seen[o / 2] {
+                        closed_joins.push(dist2(end_pt(cur ^ 1), end_pt(o)));
+                    }
+                    cur = o;
+                }
+                None => break,
+            }
+        }
+        if !cycle {
+            closed_joins.clear();
+            stats.open_dropped += 1;
+            continue;
+        }
+        for d2 in closed_joins.drain(..) {
+            if d2 > 0 {
+                stats.gaps_closed += 1;
+                stats.largest_gap_um = stats.largest_gap_um.max((d2 as f64).sqrt());
+            }
+        }
+        if forward_len < 0.0 {
+            pts.reverse();
+        }
+        simplify(&mut pts);
+        if pts.len() >= 3 {
+            loops.push(pts);
+        }
+    }
 }
 
 #[cfg(test)]
@@ -243,6 +368,23 @@ mod tests {
         let mut t = vec![[0, 0], [1000, 0], [0, 1000]];
         simplify(&mut t);
         assert_eq!(t.len(), 3);
+    }
+
+    #[test]
+    fn flipped_segment_is_joined_and_oriented_by_majority() {
+        let mut segs = square_segs(0);
+        segs[1] = Seg { a: segs[1].b, b: segs[1].a };
+        let (loops, st) = stitch(&mut segs, 50.0);
+        assert_eq!(loops.len(), 1);
+        assert_eq!(st, StitchStats::default());
+        let l = &loops[0];
+        let twice: i64 = (0..l.len())
+            .map(|i| {
+                let (a, b) = (l[i], l[(i + 1) % l.len()]);
+                a[0] as i64 * b[1] as i64 - b[0] as i64 * a[1] as i64
+            })
+            .sum();
+        assert_eq!(twice, 2_000_000, "counter-clockwise like three of its four pieces");
     }
 
     #[test]

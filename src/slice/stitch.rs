@@ -6,7 +6,13 @@
 //! 2. Gap closing: the remaining open chains are joined end → start, nearest pairs first,
 //!    when the ends are at most `gap_closing` apart (a chain may close on itself). Joins of
 //!    zero length only repair the chaining order and are not counted as gaps.
-//! 3. Chains still open are dropped and counted.
+//! 3. Flipped triangles: chains still open are joined end to end in either direction (nearest
+//!    ends first, same gap limit); a loop closed this way takes the orientation of the
+//!    majority (by length) of its pieces.
+//! 4. Chains still open are dropped and counted. Gaps are counted only in loops that closed.
+//!
+//! Closed loops lose points within 1 µm of the line through their neighbours (the collinear
+//! cut through a facet's two triangles), see [`simplify`].
 
 use super::plane::{Pt, Seg};
 
@@ -143,6 +149,7 @@ pub(crate) fn stitch(segs: &mut Vec<Seg>, gap_um: f64) -> (Vec<Vec<Pt>>, StitchS
     let m = open.len();
     let mut next: Vec<Option<usize>> = vec![None; m];
     let mut has_prev = vec![false; m];
+    let mut join_d2 = vec![0i64; m];
     // Groups (union-find) so that joining i→j when j already leads back to i closes a loop,
     // which is allowed; any pair is allowed as long as both ends are free.
     for &(d2, i, j) in &cands {
@@ -151,17 +158,19 @@ pub(crate) fn stitch(segs: &mut Vec<Seg>, gap_um: f64) -> (Vec<Vec<Pt>>, StitchS
         }
         next[i] = Some(j);
         has_prev[j] = true;
+        join_d2[i] = d2;
+    }
+    // Gaps are counted only once their loop is closed (a dropped chain repairs nothing).
+    let count_gap = |stats: &mut StitchStats, d2: i64| {
         if d2 > 0 {
             stats.gaps_closed += 1;
-            let d = (d2 as f64).sqrt();
-            if d > stats.largest_gap_um {
-                stats.largest_gap_um = d;
-            }
+            stats.largest_gap_um = stats.largest_gap_um.max((d2 as f64).sqrt());
         }
-    }
+    };
     // Walk: open paths start at chains without predecessor; what remains are cycles.
     let mut visited = vec![false; m];
-    let mut paths: Vec<Vec<Pt>> = Vec::new();
+    // Open paths with the lengths² of the joins inside them.
+    let mut paths: Vec<(Vec<Pt>, Vec<i64>)> = Vec::new();
     let concat = |pts: &mut Vec<Pt>, c: &[Pt]| {
         for &p in c {
             if pts.last() != Some(&p) {
@@ -174,13 +183,17 @@ pub(crate) fn stitch(segs: &mut Vec<Seg>, gap_um: f64) -> (Vec<Vec<Pt>>, StitchS
             continue;
         }
         let mut pts = Vec::new();
+        let mut gaps = Vec::new();
         let mut k = Some(s);
         while let Some(c) = k {
             visited[c] = true;
             concat(&mut pts, &open[c]);
             k = next[c];
+            if k.is_some() {
+                gaps.push(join_d2[c]);
+            }
         }
-        paths.push(pts);
+        paths.push((pts, gaps));
     }
     for s in 0..m {
         if visited[s] {
@@ -191,6 +204,7 @@ pub(crate) fn stitch(segs: &mut Vec<Seg>, gap_um: f64) -> (Vec<Vec<Pt>>, StitchS
         while !visited[c] {
             visited[c] = true;
             concat(&mut pts, &open[c]);
+            count_gap(&mut stats, join_d2[c]);
             match next[c] {
                 Some(nc) => c = nc,
                 None => break,
@@ -215,10 +229,10 @@ fn path_len(p: &[Pt]) -> f64 {
 /// backwards, so directed chaining stops at it): joins the remaining open paths end to end
 /// in either direction, nearest ends first, within the gap. A closed result is oriented like
 /// the majority (by length) of its pieces. Paths still open are dropped and counted.
-fn join_undirected(paths: Vec<Vec<Pt>>, gap2: i64, reach: i64, loops: &mut Vec<Vec<Pt>>, stats: &mut StitchStats) {
+fn join_undirected(paths: Vec<(Vec<Pt>, Vec<i64>)>, gap2: i64, reach: i64, loops: &mut Vec<Vec<Pt>>, stats: &mut StitchStats) {
     let m = paths.len();
     // End e of path p has id 2p + e (e = 0: first point, e = 1: last point).
-    let end_pt = |id: usize| if id % 2 == 0 { paths[id / 2][0] } else { *paths[id / 2].last().unwrap() };
+    let end_pt = |id: usize| if id % 2 == 0 { paths[id / 2].0[0] } else { *paths[id / 2].0.last().unwrap() };
     let mut ends: Vec<(Pt, usize)> = (0..2 * m).map(|id| (end_pt(id), id)).collect();
     ends.sort_unstable();
     let mut cands: Vec<(i64, usize, usize)> = Vec::new();
@@ -275,7 +289,8 @@ fn join_undirected(paths: Vec<Vec<Pt>>, gap2: i64, reach: i64, loops: &mut Vec<V
                 break;
             }
             seen[p] = true;
-            let piece = &paths[p];
+            let piece = &paths[p].0;
+            closed_joins.extend_from_slice(&paths[p].1);
             let l = path_len(piece);
             if cur % 2 == 0 {
                 forward_len += l;

@@ -4,15 +4,15 @@
 //! overlapping shells union and results are identical on every target.
 //!
 //! Pipeline (one file per step):
-//! - [`plane`]: a Z sweep over the triangles sorted by lowest Z hands each cutting plane only
+//! - `plane`: a Z sweep over the triangles sorted by lowest Z hands each cutting plane only
 //!   the triangles spanning it; each is cut into an oriented segment (solid on the left),
 //!   with vertices exactly on the plane treated as slightly above it.
-//! - [`stitch`]: segments → loops by exact micrometre endpoints, then open ends joined across
+//! - `stitch`: segments → loops by exact micrometre endpoints, then open ends joined across
 //!   gaps up to `gap_closing_mm`; what still cannot close is dropped and counted.
-//! - [`regions`]: loops → polygons with holes by a NonZero union (overlapping shells merge).
-//! - [`perimeters`]: inward offsets for the perimeter loops and the infill area.
-//! - [`infill`]: rectilinear lines on a global grid, linked zig-zag along the area boundary.
-//! - [`order`]: print order and seams.
+//! - `regions`: loops → polygons with holes by a NonZero union (overlapping shells merge).
+//! - `perimeters`: inward offsets for the perimeter loops and the infill area.
+//! - `infill`: rectilinear lines on a global grid, linked zig-zag along the area boundary.
+//! - `order`: print order and seams.
 //!
 //! Layers: the first layer's top is at `first_layer_height_mm`, then every `layer_height_mm`;
 //! each layer is cut at its middle, and layers are made while that middle is below the top

@@ -2,9 +2,36 @@
 //!
 //! Entry: [`slice`]. Regions are computed in integer micrometres with i_overlay, so
 //! overlapping shells union and results are identical on every target.
+//!
+//! Pipeline (one file per step):
+//! - `plane`: a Z sweep over the triangles sorted by lowest Z hands each cutting plane only
+//!   the triangles spanning it; each is cut into an oriented segment (solid on the left),
+//!   with vertices exactly on the plane treated as slightly above it.
+//! - `stitch`: segments → loops by exact micrometre endpoints, then open ends joined across
+//!   gaps up to `gap_closing_mm`; what still cannot close is dropped and counted.
+//! - `regions`: loops → polygons with holes by a NonZero union (overlapping shells merge).
+//! - `perimeters`: inward offsets for the perimeter loops and the infill area.
+//! - `infill`: rectilinear lines on a global grid, linked zig-zag along the area boundary.
+//! - `order`: print order and seams.
+//!
+//! Layers: the first layer's top is at `first_layer_height_mm`, then every `layer_height_mm`;
+//! each layer is cut at its middle, and layers are made while that middle is below the top
+//! of the mesh.
 
-use crate::geom::{Mesh, Polygon, Toolpath};
+mod infill;
+mod order;
+mod perimeters;
+mod plane;
+mod regions;
+mod stitch;
+
+use crate::geom::tolerance::UNITS_PER_MM;
+use crate::geom::{DVec2, Feature, Mesh, Polygon, Toolpath, ToolpathLayer};
+use i_overlay::i_shape::int::shape::{IntShape, IntShapes};
 use serde::{Deserialize, Serialize};
+
+/// Most layers a slice may have ([`Error::TooManyLayers`] beyond).
+pub const MAX_LAYERS: usize = 100_000;
 
 /// Default first layer height, mm.
 pub const DEFAULT_FIRST_LAYER_HEIGHT_MM: f64 = 0.2;
@@ -125,12 +152,267 @@ pub enum Error {
     },
 }
 
+/// Checks every option against its usable range.
+fn validate(o: &Options) -> Result<(), Error> {
+    fn range(field: &'static str, value: f64, lo: f64, hi: f64, lo_open: bool) -> Result<(), Error> {
+        let ok = value.is_finite() && value <= hi && if lo_open { value > lo } else { value >= lo };
+        if ok {
+            Ok(())
+        } else {
+            let fix = if lo_open {
+                format!("use a value greater than {lo} and at most {hi}")
+            } else {
+                format!("use a value from {lo} to {hi}")
+            };
+            Err(Error::BadOption { field, value, fix })
+        }
+    }
+    range("first_layer_height_mm", o.first_layer_height_mm, 0.01, 10.0, false)?;
+    range("layer_height_mm", o.layer_height_mm, 0.01, 10.0, false)?;
+    range("perimeters", o.perimeters as f64, 0.0, 100.0, false)?;
+    range("line_width_mm", o.line_width_mm, 0.05, 10.0, false)?;
+    range("infill_density", o.infill_density, 0.0, 1.0, false)?;
+    range("infill_angle_deg", o.infill_angle_deg, -360.0, 360.0, false)?;
+    range("solid_layers", o.solid_layers as f64, 0.0, 1000.0, false)?;
+    range("gap_closing_mm", o.gap_closing_mm, 0.0, 10.0, false)?;
+    Ok(())
+}
+
+/// Layer tops, heights and cutting heights for a mesh whose top is at `top` mm: layers are
+/// made while their middle is below `top`.
+fn layer_stack(o: &Options, top: f64) -> Result<Vec<(f64, f64, f64)>, Error> {
+    let estimate = ((top - o.first_layer_height_mm) / o.layer_height_mm).max(0.0) + 2.0;
+    if estimate > MAX_LAYERS as f64 + 1.0 {
+        return Err(Error::TooManyLayers { layers: estimate.min(usize::MAX as f64 / 2.0) as usize - 1, limit: MAX_LAYERS });
+    }
+    let mut out = Vec::new();
+    for i in 0usize.. {
+        let (z, h) = if i == 0 {
+            (o.first_layer_height_mm, o.first_layer_height_mm)
+        } else {
+            (o.first_layer_height_mm + i as f64 * o.layer_height_mm, o.layer_height_mm)
+        };
+        let slice_z = z - h / 2.0;
+        if slice_z >= top {
+            break;
+        }
+        out.push((z, h, slice_z));
+    }
+    if out.len() > MAX_LAYERS {
+        return Err(Error::TooManyLayers { layers: out.len(), limit: MAX_LAYERS });
+    }
+    Ok(out)
+}
+
+/// Even–odd point-in-region test (mm point, µm shape).
+fn contains(shape: &IntShape<i32>, p: DVec2) -> bool {
+    let (x, y) = (p.x * UNITS_PER_MM, p.y * UNITS_PER_MM);
+    let mut inside = false;
+    for c in shape {
+        let n = c.len();
+        for i in 0..n {
+            let a = c[i];
+            let b = c[(i + 1) % n];
+            let (ax, ay, bx, by) = (a.x as f64, a.y as f64, b.x as f64, b.y as f64);
+            if (ay > y) != (by > y) && x < ax + (y - ay) / (by - ay) * (bx - ax) {
+                inside = !inside;
+            }
+        }
+    }
+    inside
+}
+
+fn bbox_mm(shape: &IntShape<i32>) -> (DVec2, DVec2) {
+    let mut min = DVec2::splat(f64::INFINITY);
+    let mut max = DVec2::splat(f64::NEG_INFINITY);
+    for p in shape.iter().flat_map(|c| c.iter()) {
+        let q = DVec2::new(p.x as f64, p.y as f64) / UNITS_PER_MM;
+        min = min.min(q);
+        max = max.max(q);
+    }
+    (min, max)
+}
+
+fn to_mm_loop(c: &[i_overlay::i_float::int::point::IntPoint<i32>]) -> Vec<DVec2> {
+    c.iter().map(|p| DVec2::new(p.x as f64, p.y as f64) / UNITS_PER_MM).collect()
+}
+
 /// Slices `mesh` (already placed: its lowest point is the plate, Z = 0) into layers and fills them.
 /// `progress` receives the fraction done, 0–1.
+///
+/// Solid infill (`Feature::SolidInfill`, spacing = line width) is computed per area: the part
+/// of a layer's infill area that is not covered by every one of the `solid_layers` layers
+/// above and below it (layers outside the part count as empty, so the first and last
+/// `solid_layers` layers are entirely solid, and so are the top surfaces of steps and domes).
+/// The rest gets sparse infill (`Feature::Infill`, spacing = line width / density); with
+/// `infill_density` 0 there is no sparse infill but top and bottom skins are still printed
+/// (set `solid_layers` to 0 as well for no infill at all); with density 1 all infill is solid.
 pub fn slice(mesh: &Mesh, options: &Options, progress: &mut dyn FnMut(f32)) -> Result<Sliced, Error> {
-    let _ = (options, progress);
+    validate(options)?;
     if mesh.triangles.is_empty() {
         return Err(Error::EmptyMesh);
     }
-    Ok(Sliced::default())
+    let o = options;
+    let mut sweep = plane::Sweep::new(mesh);
+    let top = match sweep.top {
+        Some(t) if t > 0.0 => t,
+        _ => return Ok(Sliced::default()),
+    };
+    let stack = layer_stack(o, top)?;
+    let n = stack.len();
+    let mut report = SliceReport { layers: n, ..Default::default() };
+    let mut last_progress = -1.0f32;
+    let mut tick = |f: f32, progress: &mut dyn FnMut(f32)| {
+        if f - last_progress >= 0.02 || f >= 1.0 {
+            last_progress = f;
+            progress(f.min(1.0));
+        }
+    };
+    tick(0.0, progress);
+
+    // Pass 1: regions of every layer.
+    let gap_um = o.gap_closing_mm * UNITS_PER_MM;
+    let mut segs = Vec::new();
+    let mut layer_shapes: Vec<IntShapes<i32>> = Vec::with_capacity(n);
+    for (i, &(_, _, slice_z)) in stack.iter().enumerate() {
+        sweep.segments(slice_z, &mut segs);
+        let (loops, st) = stitch::stitch(&mut segs, gap_um);
+        report.gaps_closed += st.gaps_closed;
+        report.largest_gap_closed_mm = report.largest_gap_closed_mm.max(st.largest_gap_um / UNITS_PER_MM);
+        report.open_contours_dropped += st.open_dropped;
+        let (shapes, overlap) = regions::union_loops(&loops);
+        if overlap {
+            report.layers_with_overlaps += 1;
+        }
+        layer_shapes.push(shapes);
+        tick(0.4 * (i + 1) as f32 / n as f32, progress);
+    }
+
+    // Pass 2: perimeters, infill, order.
+    let w = o.line_width_mm;
+    let w_um = (w * UNITS_PER_MM).round() as i32;
+    let infill_inset = if o.perimeters > 0 { w_um as i64 * o.perimeters as i64 } else { w_um as i64 / 2 };
+    let infill_inset = infill_inset.min(i32::MAX as i64) as i32;
+    let min_len_um = 0.25 * w_um as f64;
+    let base_angle = o.infill_angle_deg.to_radians();
+    let s = o.solid_layers as usize;
+    let mut layers = Vec::with_capacity(n);
+    let mut toolpath = Toolpath { layers: Vec::with_capacity(n) };
+    let mut pos = DVec2::ZERO;
+    for i in 0..n {
+        let (z, h, slice_z) = stack[i];
+        let shapes = &layer_shapes[i];
+        // Infill area of the whole layer (regions are disjoint, so are their insets).
+        let mut works: Vec<order::RegionWork> = Vec::with_capacity(shapes.len());
+        let mut area: IntShapes<i32> = Vec::new();
+        for region in shapes {
+            let levels = perimeters::perimeter_levels(region, o.perimeters, w_um);
+            let (min, max) = bbox_mm(region);
+            works.push(order::RegionWork {
+                min,
+                max,
+                perimeters: levels.iter().map(|l| l.iter().flat_map(|sh| sh.iter()).map(|c| to_mm_loop(c)).collect()).collect(),
+                infill: Vec::new(),
+            });
+            area.extend(perimeters::inset(std::slice::from_ref(region), infill_inset));
+        }
+        let (solid, sparse) = if area.is_empty() {
+            (Vec::new(), Vec::new())
+        } else if o.infill_density >= 1.0 {
+            (area, Vec::new())
+        } else if s == 0 {
+            (Vec::new(), area)
+        } else {
+            // Covered by every layer within `s` above and below.
+            let mut cov: Option<IntShapes<i32>> = None;
+            if i < s || i + s >= n {
+                cov = Some(Vec::new());
+            } else {
+                for (j, other) in layer_shapes.iter().enumerate().take(i + s + 1).skip(i - s) {
+                    if j == i {
+                        continue;
+                    }
+                    let next = match &cov {
+                        None => other.clone(),
+                        Some(c) => regions::intersect(c, other),
+                    };
+                    let done = next.is_empty();
+                    cov = Some(next);
+                    if done {
+                        break;
+                    }
+                }
+            }
+            let cov = cov.unwrap_or_default();
+            if cov.is_empty() {
+                (area, Vec::new())
+            } else {
+                (regions::difference(&area, &cov), regions::intersect(&area, &cov))
+            }
+        };
+        let angle = if i % 2 == 0 { base_angle } else { base_angle + std::f64::consts::FRAC_PI_2 };
+        let mut lines: Vec<(Feature, Vec<DVec2>)> = Vec::new();
+        for l in infill::rectilinear(&solid, w_um as f64, angle, min_len_um) {
+            lines.push((Feature::SolidInfill, l));
+        }
+        if o.infill_density > 0.0 && !sparse.is_empty() {
+            let spacing = w_um as f64 / o.infill_density;
+            for l in infill::rectilinear(&sparse, spacing, angle, min_len_um) {
+                lines.push((Feature::Infill, l));
+            }
+        }
+        // Hand each polyline to the region containing its first point.
+        for (f, l) in lines {
+            let p = l[0];
+            let k = (0..shapes.len())
+                .find(|&k| {
+                    let r = &works[k];
+                    p.x >= r.min.x && p.x <= r.max.x && p.y >= r.min.y && p.y <= r.max.y && contains(&shapes[k], p)
+                })
+                .unwrap_or_else(|| {
+                    (0..works.len())
+                        .min_by(|&a, &b| {
+                            order::box_dist2(p, works[a].min, works[a].max)
+                                .total_cmp(&order::box_dist2(p, works[b].min, works[b].max))
+                        })
+                        .unwrap_or(0)
+                });
+            if let Some(r) = works.get_mut(k) {
+                r.infill.push((f, l));
+            }
+        }
+        let paths = order::order_layer(works, &mut pos, z, w);
+        toolpath.layers.push(ToolpathLayer { z, height: h, paths });
+        layers.push(SlicedLayer { slice_z, z, height: h, regions: regions::to_polygons(shapes) });
+        tick(0.4 + 0.6 * (i + 1) as f32 / n as f32, progress);
+    }
+    tick(1.0, progress);
+    Ok(Sliced { layers, toolpath, report })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn layer_stack_counts() {
+        let o = Options::default();
+        let st = layer_stack(&o, 20.0).unwrap();
+        assert_eq!(st.len(), 100);
+        assert!((st[99].0 - 20.0).abs() < 1e-9);
+        assert!((st[0].2 - 0.1).abs() < 1e-12);
+        assert_eq!(layer_stack(&o, 0.15).unwrap().len(), 1);
+        assert_eq!(layer_stack(&o, 0.05).unwrap().len(), 0, "a plate-thin mesh is never cut");
+        assert!(matches!(layer_stack(&o, 1e6), Err(Error::TooManyLayers { .. })));
+    }
+
+    #[test]
+    fn bad_options_are_rejected() {
+        let o = Options { layer_height_mm: 0.0, ..Default::default() };
+        let e = validate(&o).unwrap_err();
+        assert!(matches!(e, Error::BadOption { field: "layer_height_mm", .. }), "{e}");
+        let o = Options { infill_density: f64::NAN, ..Default::default() };
+        assert!(validate(&o).is_err());
+        assert!(validate(&Options::default()).is_ok());
+    }
 }

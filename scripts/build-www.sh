@@ -43,12 +43,21 @@ if [ -z "${SKIP_WASM:-}" ]; then
     "$target_dir/wasm32-unknown-unknown/wasm/weft.wasm"
   if command -v wasm-opt >/dev/null 2>&1; then
     # Features rustc enables by default for wasm32-unknown-unknown (bulk memory, saturating
-    # float→int, sign extension, mutable globals, multi-value, reference types); wasm-opt
-    # must accept every one the module uses or it refuses to load it.
-    wasm-opt -Oz --enable-bulk-memory --enable-nontrapping-float-to-int --enable-sign-ext \
+    # float→int, sign extension, mutable globals, multi-value, reference types): wasm-opt must
+    # accept every one the module uses. An old wasm-opt (Debian bookworm's binaryen 108 cannot
+    # read the table.fill that wasm-bindgen emits for reference types) fails to parse the
+    # module: the unoptimised module is kept then, it works the same, only larger.
+    if wasm-opt -Oz --enable-bulk-memory --enable-nontrapping-float-to-int --enable-sign-ext \
       --enable-mutable-globals --enable-multivalue --enable-reference-types \
-      -o pkg/weft_bg.wasm.opt pkg/weft_bg.wasm
-    mv pkg/weft_bg.wasm.opt pkg/weft_bg.wasm
+      -o pkg/weft_bg.wasm.opt pkg/weft_bg.wasm 2>pkg/wasm-opt.log; then
+      mv pkg/weft_bg.wasm.opt pkg/weft_bg.wasm
+      rm -f pkg/wasm-opt.log
+    else
+      rm -f pkg/weft_bg.wasm.opt
+      say "wasm-opt $(wasm-opt --version 2>/dev/null | awk '{print $3}') could not optimise the module" \
+        "($(head -c 200 pkg/wasm-opt.log | tr '\n' ' ')); keeping it unoptimised"
+      rm -f pkg/wasm-opt.log
+    fi
   fi
   say "pkg/weft_bg.wasm: $(du -k pkg/weft_bg.wasm | cut -f1) KiB"
 fi

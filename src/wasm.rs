@@ -42,14 +42,20 @@ pub fn validate_design(json: &str) -> Result<String, JsError> {
 #[wasm_bindgen(js_name = setField)]
 pub fn set_field(json: &str, path: &str, value: &str) -> Result<String, JsError> {
     let d = Design::from_json("design", json).map_err(js_err)?;
-    d.with_overrides(&[format!("{path}={value}")]).map(|d| d.to_json_pretty()).map_err(js_err)
+    d.with_overrides(&[format!("{path}={value}")]).map(|d| d.to_json_pretty()).map_err(|e| match e {
+        // The page edits one field at a time: name it, not the CLI's `--set` form.
+        crate::design::Error::Override { message, .. } => JsError::new(&format!("{path}: {message}")),
+        other => js_err(other),
+    })
 }
 
 /// A share-link fragment for the design (JSON `{fragment, embedded, note}`).
 #[wasm_bindgen(js_name = encodeShare)]
 pub fn encode_share(design_json: &str, file_name: Option<String>, file_bytes: Option<Vec<u8>>) -> Result<String, JsError> {
-    let d = Design::from_json("design", design_json).map_err(js_err)?;
-    let _ = file_name;
+    let mut d = Design::from_json("design", design_json).map_err(js_err)?;
+    if let (Some(name), Some(slot)) = (file_name, d.job.input_mut()) {
+        *slot = crate::design::Input::File { name, embedded: None };
+    }
     let link = share::encode(&d, file_bytes.as_deref());
     serde_json::to_string(&link).map_err(js_err)
 }

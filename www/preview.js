@@ -51,6 +51,7 @@ export class Preview {
     this.controls = new OrbitControls(this.camera, canvas);
     this.controls.enableDamping = false; // damping needs a continuous loop
     this.controls.screenSpacePanning = true;
+    this.controls.listenToKeyEvents(canvas); // arrow keys pan when the canvas has focus
     this.controls.addEventListener("change", () => this.requestRender());
 
     this.plate = new THREE.Group();
@@ -66,6 +67,7 @@ export class Preview {
       new THREE.LineBasicMaterial({ color: TRAVEL_COLOR, transparent: true, opacity: 0.35 }),
     );
     this.travel.frustumCulled = false;
+    this.travel.visible = ui.showTravel.checked;
     this.scene.add(this.extrusion, this.travel);
 
     /** @type {import("./protocol.js").PreviewBuffers|null} */
@@ -153,6 +155,7 @@ export class Preview {
       input.min = "0";
       input.max = String(Math.max(0, this.layers - 1));
       input.disabled = this.layers === 0;
+      input.style.visibility = this.layers > 1 ? "" : "hidden";
     }
     layerMin.value = "0";
     layerMax.value = String(Math.max(0, this.layers - 1));
@@ -327,10 +330,14 @@ export class Preview {
     this.plate.add(lines(grid, 0x3a414d));
     this.plate.add(lines([x0, y0, 0, x0 + bx, y0, 0, x0 + bx, y0, 0, x0 + bx, y0 + by, 0,
       x0 + bx, y0 + by, 0, x0, y0 + by, 0, x0, y0 + by, 0, x0, y0, 0], 0x8a93a3));
+    // Origin: X red, Y green, Z blue, drawn over the plate lines.
     const a = Math.max(5, Math.min(bx, by) * 0.08);
-    this.plate.add(lines([0, 0, 0, a, 0, 0], 0xe5484d));
-    this.plate.add(lines([0, 0, 0, 0, a, 0], 0x46a758));
-    this.plate.add(lines([0, 0, 0, 0, 0, a], 0x3e63dd));
+    for (const [flat, color] of [[[0, 0, 0, a, 0, 0], 0xff5a5f], [[0, 0, 0, 0, a, 0], 0x4cc76a], [[0, 0, 0, 0, 0, a], 0x5b8cff]]) {
+      const axis = lines(flat, color);
+      axis.material.depthTest = false;
+      axis.renderOrder = 1;
+      this.plate.add(axis);
+    }
     const plane = new THREE.Mesh(
       new THREE.PlaneGeometry(bx, by),
       new THREE.MeshBasicMaterial({ color: 0x262b33, side: THREE.DoubleSide, polygonOffset: true, polygonOffsetFactor: 1, polygonOffsetUnits: 1 }),
@@ -345,7 +352,7 @@ export class Preview {
     const center = b.getCenter(new THREE.Vector3());
     const radius = Math.max(1, b.getSize(new THREE.Vector3()).length() / 2);
     const fov = (this.camera.fov * Math.PI) / 180;
-    const dist = (radius / Math.sin(fov / 2)) * 1.05;
+    const dist = (radius / Math.sin(fov / 2)) * (box ? 1.45 : 1.0);
     const dir = new THREE.Vector3(-0.55, -1, 0.75).normalize();
     this.camera.position.copy(center).addScaledVector(dir, dist);
     this.camera.near = Math.max(0.01, dist / 1000);

@@ -263,12 +263,26 @@ pub(crate) struct FxHasher(u64);
 impl std::hash::Hasher for FxHasher {
     #[inline]
     fn finish(&self) -> u64 {
-        self.0
+        // Final avalanche so the low bits (bucket index) depend on every input bit: float
+        // bit patterns of round numbers end in long runs of zeros.
+        let mut h = self.0;
+        h ^= h >> 29;
+        h = h.wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        h ^ (h >> 32)
     }
     #[inline]
     fn write(&mut self, bytes: &[u8]) {
-        for &b in bytes {
-            self.write_u64(b as u64);
+        let mut chunks = bytes.chunks_exact(8);
+        for c in &mut chunks {
+            let mut w = [0u8; 8];
+            w.copy_from_slice(c);
+            self.write_u64(u64::from_le_bytes(w));
+        }
+        let rest = chunks.remainder();
+        if !rest.is_empty() {
+            let mut w = [0u8; 8];
+            w.get_mut(..rest.len()).unwrap_or_default().copy_from_slice(rest);
+            self.write_u64(u64::from_le_bytes(w));
         }
     }
     #[inline]

@@ -199,7 +199,8 @@ fn zero_area(v: &[[f32; 3]], t: [u32; 3]) -> bool {
     let cr = [e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]];
     let longest2 = dot(e1).max(dot(e2)).max(dot(e3));
     let area2 = dot(cr).sqrt();
-    !(area2 > ZERO_AREA_RATIO * longest2)
+    // NaN (cannot happen: coordinates are finite) would also count as degenerate.
+    area2.partial_cmp(&(ZERO_AREA_RATIO * longest2)) != Some(std::cmp::Ordering::Greater)
 }
 
 #[cfg(test)]

@@ -60,7 +60,7 @@ pub struct ImportReport {
     pub triangles_read: usize,
     /// Triangles kept.
     pub triangles: usize,
-    /// Distinct vertices after welding.
+    /// Distinct vertices after welding (those used by the kept triangles).
     pub vertices: usize,
     /// Triangles with zero area (or repeated corners) dropped.
     pub degenerate_removed: usize,

@@ -398,3 +398,16 @@ fn million_triangle_binary_stl_is_fast() {
     println!("{} triangles, {} MB: {dt:?} ({:?})", im.report.triangles, bytes.len() >> 20, im.report);
     assert!(dt.as_secs_f64() < 1.0, "{dt:?}");
 }
+
+#[test]
+fn binary_stl_length_mismatch_uses_the_extension_hint() {
+    let mut cube = std::fs::read(fixture_dir().join("cube.stl")).unwrap();
+    cube.extend_from_slice(&[0u8; 10]); // trailing junk some exporters leave
+    let im = read_mesh("junk.stl", &cube, &Options::default()).unwrap();
+    assert_eq!(im.report.format, Some(Format::StlBinary));
+    assert_eq!(im.report.triangles, 12);
+    // Without the .stl name, a binary blob whose count disagrees with its length is unknown.
+    let e = read_mesh("junk.bin", &cube, &Options::default()).unwrap_err();
+    assert!(matches!(e, Error::UnknownFormat { .. }), "{e}");
+    assert!(e.to_string().contains("starts with bytes 73 6f 6c 69 64"), "{e}");
+}

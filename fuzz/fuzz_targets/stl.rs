@@ -1,0 +1,7 @@
+//! Any bytes named `.stl` (binary or ASCII) must give `Ok` or `Err`, never a panic.
+#![no_main]
+use libfuzzer_sys::fuzz_target;
+
+fuzz_target!(|data: &[u8]| {
+    let _ = weft::import::read_mesh("fuzz.stl", data, &weft::import::Options::default());
+});

@@ -1,0 +1,315 @@
+//! STL, binary and ASCII.
+//!
+//! Binary: 80-byte header, little-endian u32 triangle count, then 50 bytes per triangle
+//! (normal, three vertices, 2 attribute bytes). The header may start with "solid"; the count
+//! agreeing with the length decides. ASCII: `solid … facet normal … outer loop vertex ×3
+//! endloop endfacet … endsolid`, any case and whitespace, several solids per file. Normals
+//! are ignored (recomputed from the winding).
+
+use super::{malformed, parse_finite, show, Error, RawMesh};
+
+const HEADER: usize = 84;
+const RECORD: usize = 50;
+const REEXPORT: &str = "the file was cut short; export it again";
+
+fn count(bytes: &[u8]) -> Option<u32> {
+    let c: [u8; 4] = bytes.get(80..84)?.try_into().ok()?;
+    Some(u32::from_le_bytes(c))
+}
+
+/// True when the file is exactly as long as its binary-STL triangle count says.
+pub(super) fn binary_count_matches(bytes: &[u8]) -> bool {
+    match count(bytes) {
+        Some(n) => HEADER as u64 + RECORD as u64 * n as u64 == bytes.len() as u64,
+        None => false,
+    }
+}
+
+/// Reads a binary STL. Bytes after the promised triangles are ignored.
+pub(super) fn read_binary(file: &str, bytes: &[u8]) -> Result<RawMesh, Error> {
+    let Some(n) = count(bytes) else {
+        return Err(malformed(
+            file,
+            format!("byte {}", bytes.len()),
+            format!("the file is {} bytes, shorter than the 84-byte binary STL header", bytes.len()),
+            REEXPORT,
+        ));
+    };
+    let n = n as u64;
+    let expected = HEADER as u64 + RECORD as u64 * n;
+    let len = bytes.len() as u64;
+    if expected > len {
+        let i = (len - HEADER as u64) / RECORD as u64;
+        return Err(malformed(
+            file,
+            format!("triangle {} (byte {})", i + 1, HEADER as u64 + RECORD as u64 * i),
+            format!("the header promises {n} triangles ({expected} bytes) but the file ends after {len} bytes"),
+            REEXPORT,
+        ));
+    }
+    // n ≤ len / 50 here, so the allocation is bounded by the file size.
+    let n = n as usize;
+    if n.checked_mul(3).is_none_or(|v| v > u32::MAX as usize) {
+        return Err(malformed(file, "header", format!("{n} triangles are more than weft can index"), "split the model into smaller files"));
+    }
+    let body = bytes.get(HEADER..HEADER + n * RECORD).unwrap_or_default();
+    let mut vertices = Vec::with_capacity(n * 3);
+    let mut triangles = Vec::with_capacity(n);
+    for (i, rec) in body.chunks_exact(RECORD).enumerate() {
+        let mut f = [0f32; 9];
+        for (k, slot) in f.iter_mut().enumerate() {
+            let o = 12 + 4 * k;
+            let b: [u8; 4] = rec.get(o..o + 4).and_then(|s| s.try_into().ok()).unwrap_or_default();
+            *slot = f32::from_le_bytes(b);
+        }
+        if !f.iter().all(|v| v.is_finite()) {
+            let bad = f.iter().position(|v| !v.is_finite()).unwrap_or(0);
+            let what = if f[bad].is_nan() { "not a number (NaN)" } else { "infinite" };
+            return Err(malformed(
+                file,
+                format!("triangle {} (byte {})", i + 1, HEADER + RECORD * i),
+                format!("vertex {} has a coordinate that is {what}", bad / 3 + 1),
+                "repair the mesh in your modelling program and export it again",
+            ));
+        }
+        let base = (i * 3) as u32;
+        vertices.push([f[0], f[1], f[2]]);
+        vertices.push([f[3], f[4], f[5]]);
+        vertices.push([f[6], f[7], f[8]]);
+        triangles.push([base, base + 1, base + 2]);
+    }
+    Ok(RawMesh { vertices, triangles })
+}
+
+/// Whitespace tokenizer over bytes that knows the line of each token.
+struct Lexer<'a> {
+    bytes: &'a [u8],
+    pos: usize,
+    line: usize,
+}
+
+impl<'a> Lexer<'a> {
+    fn new(bytes: &'a [u8]) -> Self {
+        let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
+        Lexer { bytes, pos: 0, line: 1 }
+    }
+
+    /// The next token and its line, or `None` at the end.
+    fn next(&mut self) -> Option<(&'a [u8], usize)> {
+        while let Some(&b) = self.bytes.get(self.pos) {
+            if b == b'\n' {
+                self.line += 1;
+            } else if !b.is_ascii_whitespace() {
+                break;
+            }
+            self.pos += 1;
+        }
+        let start = self.pos;
+        while let Some(&b) = self.bytes.get(self.pos) {
+            if b.is_ascii_whitespace() {
+                break;
+            }
+            self.pos += 1;
+        }
+        if start == self.pos {
+            return None;
+        }
+        Some((self.bytes.get(start..self.pos)?, self.line))
+    }
+
+    /// Skips to the end of the current line (names after `solid` / `endsolid`).
+    fn skip_line(&mut self) {
+        while let Some(&b) = self.bytes.get(self.pos) {
+            if b == b'\n' {
+                return;
+            }
+            self.pos += 1;
+        }
+    }
+}
+
+fn is(token: &[u8], word: &str) -> bool {
+    token.eq_ignore_ascii_case(word.as_bytes())
+}
+
+/// Reads an ASCII STL.
+pub(super) fn read_ascii(file: &str, bytes: &[u8]) -> Result<RawMesh, Error> {
+    let mut lx = Lexer::new(bytes);
+    let mut mesh = RawMesh::default();
+    let fix = "the file is not valid ASCII STL; export it again (binary STL is smaller and safer)";
+    let expected = |what: &str, got: Option<(&[u8], usize)>, line_at_end: usize| -> Error {
+        match got {
+            Some((t, line)) => malformed(file, format!("line {line}"), format!("expected {what}, found \"{}\"", show(t)), fix),
+            None => malformed(file, format!("line {line_at_end}"), format!("the file ends where {what} was expected"), REEXPORT),
+        }
+    };
+    let mut loop_pts: Vec<[f32; 3]> = Vec::with_capacity(3);
+    'solids: loop {
+        match lx.next() {
+            None => break,
+            Some((t, _)) if is(t, "solid") => lx.skip_line(),
+            got => return Err(expected("\"solid\"", got, lx.line)),
+        }
+        loop {
+            let got = lx.next();
+            match got {
+                // A missing `endsolid` at the very end is tolerated.
+                None => break 'solids,
+                Some((t, _)) if is(t, "endsolid") => {
+                    lx.skip_line();
+                    continue 'solids;
+                }
+                Some((t, _)) if is(t, "facet") => {}
+                got => return Err(expected("\"facet\" or \"endsolid\"", got, lx.line)),
+            }
+            let mut got = lx.next();
+            if matches!(got, Some((t, _)) if is(t, "normal")) {
+                // Normals are recomputed; their values (sometimes "nan") are not checked.
+                for _ in 0..3 {
+                    if lx.next().is_none() {
+                        return Err(expected("a normal component", None, lx.line));
+                    }
+                }
+                got = lx.next();
+            }
+            if matches!(got, Some((t, _)) if is(t, "outer")) {
+                got = lx.next();
+            }
+            match got {
+                Some((t, _)) if is(t, "loop") => {}
+                got => return Err(expected("\"outer loop\"", got, lx.line)),
+            }
+            loop_pts.clear();
+            loop {
+                match lx.next() {
+                    Some((t, _)) if is(t, "vertex") => {
+                        let mut p = [0f32; 3];
+                        for (axis, slot) in p.iter_mut().enumerate() {
+                            let got = lx.next();
+                            let v = got.and_then(|(t, _)| parse_finite(t)).map(|v| v as f32).filter(|v| v.is_finite());
+                            match v {
+                                Some(v) => *slot = v,
+                                None => return Err(expected(&format!("the {} coordinate of a vertex (a finite number)", ["x", "y", "z"][axis]), got, lx.line)),
+                            }
+                        }
+                        loop_pts.push(p);
+                    }
+                    Some((t, line)) if is(t, "endloop") => {
+                        if loop_pts.len() < 3 {
+                            return Err(malformed(file, format!("line {line}"), format!("a facet has {} vertices, needs 3", loop_pts.len()), fix));
+                        }
+                        break;
+                    }
+                    got => return Err(expected("\"vertex\" or \"endloop\"", got, lx.line)),
+                }
+            }
+            match lx.next() {
+                Some((t, _)) if is(t, "endfacet") => {}
+                got => return Err(expected("\"endfacet\"", got, lx.line)),
+            }
+            push_fan(file, &mut mesh, &loop_pts, lx.line)?;
+        }
+    }
+    Ok(mesh)
+}
+
+/// Appends a polygon as a fan of triangles with fresh vertices.
+fn push_fan(file: &str, mesh: &mut RawMesh, pts: &[[f32; 3]], line: usize) -> Result<(), Error> {
+    let base = mesh.vertices.len();
+    if base.saturating_add(pts.len()) > u32::MAX as usize {
+        return Err(malformed(file, format!("line {line}"), "more vertices than weft can index", "split the model into smaller files"));
+    }
+    mesh.vertices.extend_from_slice(pts);
+    let base = base as u32;
+    for k in 1..pts.len().saturating_sub(1) {
+        let k = k as u32;
+        mesh.triangles.push([base, base + k, base + k + 1]);
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    pub(crate) fn binary(tris: &[[[f32; 3]; 3]]) -> Vec<u8> {
+        let mut b = vec![0u8; 80];
+        b[..5].copy_from_slice(b"solid");
+        b.extend_from_slice(&(tris.len() as u32).to_le_bytes());
+        for t in tris {
+            b.extend_from_slice(&[0u8; 12]);
+            for v in t {
+                for c in v {
+                    b.extend_from_slice(&c.to_le_bytes());
+                }
+            }
+            b.extend_from_slice(&[0, 0]);
+        }
+        b
+    }
+
+    const T: [[f32; 3]; 3] = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
+
+    #[test]
+    fn binary_reads_and_validates() {
+        let b = binary(&[T, T]);
+        assert!(binary_count_matches(&b));
+        let m = read_binary("a.stl", &b).unwrap();
+        assert_eq!(m.triangles.len(), 2);
+        assert_eq!(m.vertices[1], [1.0, 0.0, 0.0]);
+
+        let cut = &b[..b.len() - 10];
+        assert!(!binary_count_matches(cut));
+        let e = read_binary("a.stl", cut).unwrap_err().to_string();
+        assert!(e.contains("triangle 2 (byte 134)"), "{e}");
+        assert!(e.contains("cut short"), "{e}");
+
+        let mut nan = binary(&[T, T]);
+        let o = 84 + 50 + 12 + 4 * 4; // triangle 2, vertex 2, y
+        nan[o..o + 4].copy_from_slice(&f32::NAN.to_le_bytes());
+        let e = read_binary("a.stl", &nan).unwrap_err().to_string();
+        assert!(e.contains("triangle 2 (byte 134)") && e.contains("vertex 2") && e.contains("NaN"), "{e}");
+
+        let e = read_binary("a.stl", &[0u8; 40]).unwrap_err().to_string();
+        assert!(e.contains("shorter than the 84-byte"), "{e}");
+    }
+
+    #[test]
+    fn huge_count_does_not_allocate() {
+        let mut b = vec![0u8; 84];
+        b[80..84].copy_from_slice(&u32::MAX.to_le_bytes());
+        assert!(read_binary("a.stl", &b).is_err());
+    }
+
+    #[test]
+    fn ascii_tolerant() {
+        let s = "SOLID cube\r\n  Facet Normal 0 0 nan\r\n outer loop\r\n vertex 0 0 0\r\n VERTEX 1 0 0\r\n vertex 0 1 0\r\n endloop\r\n endfacet\r\nendsolid cube\r\n\
+                 solid second one\n facet normal 0 0 1 outer loop vertex 0 0 1 vertex 1 0 1 vertex 1 1 1 vertex 0 1 1 endloop endfacet\n";
+        let m = read_ascii("a.stl", s.as_bytes()).unwrap();
+        assert_eq!(m.triangles.len(), 3, "quad facet becomes a fan of two");
+        assert_eq!(m.vertices.len(), 7);
+    }
+
+    #[test]
+    fn ascii_errors_name_the_line() {
+        let s = "solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 one 0\nendloop\nendfacet\nendsolid\n";
+        let e = read_ascii("a.stl", s.as_bytes()).unwrap_err().to_string();
+        assert!(e.contains("line 6") && e.contains("y coordinate") && e.contains("\"one\""), "{e}");
+
+        let s = "solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 1 0\nendloop\nendfct\n";
+        let e = read_ascii("a.stl", s.as_bytes()).unwrap_err().to_string();
+        assert!(e.contains("line 8") && e.contains("\"endfacet\""), "{e}");
+
+        let s = "solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\n";
+        let e = read_ascii("a.stl", s.as_bytes()).unwrap_err().to_string();
+        assert!(e.contains("line 5") && e.contains("ends"), "{e}");
+
+        let s = "solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 inf\n";
+        let e = read_ascii("a.stl", s.as_bytes()).unwrap_err().to_string();
+        assert!(e.contains("line 4") && e.contains("finite"), "{e}");
+
+        let s = "solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 0 0 1\nendloop\nendfacet\n";
+        let e = read_ascii("a.stl", s.as_bytes()).unwrap_err().to_string();
+        assert!(e.contains("line 6") && e.contains("2 vertices"), "{e}");
+    }
+}

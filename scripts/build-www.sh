@@ -26,7 +26,7 @@ if [ -z "${SKIP_WASM:-}" ]; then
   export PATH="$HOME/.cargo/bin:$PATH"
   if [ "$(wasm-bindgen --version 2>/dev/null | awk '{print $2}')" != "$bindgen_version" ]; then
     say "installing wasm-bindgen-cli $bindgen_version"
-    cargo install wasm-bindgen-cli --version "$bindgen_version" --locked
+    cargo install wasm-bindgen-cli --version "$bindgen_version"
   fi
   if ! command -v wasm-opt >/dev/null 2>&1; then
     say "wasm-opt missing; trying apt-get install binaryen"

@@ -58,6 +58,8 @@ pub(crate) struct Machine<'o> {
     retracted: bool,
     in_run: bool,
     layer_pending: bool,
+    seen_layer_comment: bool,
+    merge_first: bool,
 
     extruded_mm: f64,
     travel_mm: f64,
@@ -100,6 +102,8 @@ impl<'o> Machine<'o> {
             retracted: false,
             in_run: false,
             layer_pending: false,
+            seen_layer_comment: false,
+            merge_first: false,
             extruded_mm: 0.0,
             travel_mm: 0.0,
             retractions: 0,
@@ -199,7 +203,14 @@ impl<'o> Machine<'o> {
         let c = trim_start(c);
         if c.starts_with(b"LAYER:") || c.starts_with(b"LAYER_CHANGE") {
             if self.comment_layers {
-                self.layer_pending = true;
+                if !self.seen_layer_comment {
+                    // Extrusion before the first layer comment (a purge line) joins layer 0.
+                    self.seen_layer_comment = true;
+                    self.merge_first = true;
+                }
+                if !self.merge_first {
+                    self.layer_pending = true;
+                }
             }
         } else if let Some(name) = c.strip_prefix(b"TYPE:") {
             self.feature = std::str::from_utf8(name).ok().and_then(Feature::from_gcode_name).map_or(255, Feature::code);
@@ -388,6 +399,7 @@ impl<'o> Machine<'o> {
             }
         };
         self.layer_pending = false;
+        self.merge_first = false;
         if new_layer {
             self.start_layer(t[2]);
         }

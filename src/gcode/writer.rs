@@ -272,7 +272,7 @@ pub(crate) fn write(toolpath: &Toolpath, options: &Options) -> Result<Gcode, Err
     header.push_str(&format!("; material: {}\n", one_line(&material.name)));
     header.push_str(&format!("; estimated printing time (normal mode) = {}\n", duration(time_s)));
     header.push_str(&format!("; filament used [mm] = {}\n", fixed(out.e_total, 2)));
-    header.push_str(&format!("; filament used [cm3] = {}\n", fixed(volume_cm3, 2)));
+    header.push_str(&format!("; filament used [cm3] = {}\n", fixed(volume_cm3, 3)));
     header.push_str(&format!("; extruded path length [mm] = {}\n", fixed(extruded_mm, 2)));
     header.push_str(";FLAVOR:Marlin\n");
     header.push_str(&format!(";TIME:{}\n", fixed(time_s, 0)));

@@ -6,9 +6,9 @@
 //! found against all earlier segments are unioned, so nothing counts twice. Segments that
 //! only meet at an end point or cross count zero.
 //!
-//! Candidates come from a uniform grid hashed into a table: every segment is cut into pieces
-//! no longer than a cell and each piece is registered in the cells its bounding box touches;
-//! a query looks at the cells of its pieces' boxes grown by the tolerance. Average cost is
+//! Candidates come from a uniform grid hashed into a table of linked lists: every segment is
+//! cut into pieces no longer than a cell; each segment first queries the cells of its pieces'
+//! boxes grown by the tolerance, then registers itself in the cells its pieces' boxes touch. Average cost is
 //! linear in the number of segments.
 
 /// One extrusion segment in the layer plane.
@@ -32,18 +32,19 @@ const MAX_CELLS_AXIS: i64 = 16;
 /// Reusable buffers.
 #[derive(Default)]
 pub struct Overlap {
-    cells: Vec<(i64, i64, u32)>,
-    fill: Vec<u32>,
-    starts: Vec<u32>,
-    items: Vec<u32>,
+    head: Vec<u32>,
+    next: Vec<u32>,
+    item: Vec<u32>,
     stamp: Vec<u32>,
     intervals: Vec<(f64, f64)>,
 }
 
 #[inline]
 fn cell_of(v: f64, inv: f64) -> i64 {
-    let c = (v * inv).floor();
-    c as i64 // saturates, NaN → 0
+    // floor without a libm call; `as` saturates and maps NaN to 0.
+    let t = v * inv;
+    let c = t as i64;
+    if (c as f64) > t { c - 1 } else { c }
 }
 
 #[inline]
@@ -58,8 +59,9 @@ fn for_piece_cells(s: &Seg, cs: f64, grow: f64, mut f: impl FnMut(i64, i64)) {
     let inv = 1.0 / cs;
     let dx = s.b[0] - s.a[0];
     let dy = s.b[1] - s.a[1];
-    let len = (dx * dx + dy * dy).sqrt();
-    let n = if len.is_finite() { ((len / cs).ceil() as usize).clamp(1, MAX_PIECES) } else { 1 };
+    // Pieces no longer than a cell along either axis.
+    let span = dx.abs().max(dy.abs());
+    let n = if span.is_finite() { ((span * inv).ceil() as usize).clamp(1, MAX_PIECES) } else { 1 };
     let step = 1.0 / n as f64;
     for k in 0..n {
         let t0 = k as f64 * step;
@@ -92,14 +94,30 @@ fn on_segment(a: &Seg, b: &Seg) -> Option<(f64, f64)> {
     if !(la2 > 0.0 && lb2 > 0.0) {
         return None;
     }
-    let la = la2.sqrt();
     let cross = ax * by - ay * bx;
-    if cross.abs() > SIN_MAX_ANGLE * la * lb2.sqrt() {
+    if cross * cross > SIN_MAX_ANGLE * SIN_MAX_ANGLE * la2 * lb2 {
         return None;
     }
     let tol = 0.25 * (a.w + b.w);
-    let (ux, uy) = (ax / la, ay / la);
+    // Cheap rejections (no square roots): B wholly to one side of A's line beyond the
+    // tolerance, or wholly before or after A along it.
     let (rx, ry) = (b.a[0] - a.a[0], b.a[1] - a.a[1]);
+    let (qx, qy) = (b.b[0] - a.a[0], b.b[1] - a.a[1]);
+    let c0 = ax * ry - ay * rx;
+    let c1 = ax * qy - ay * qx;
+    if (c0 > 0.0) == (c1 > 0.0) {
+        let m = c0.abs().min(c1.abs());
+        if m * m > tol * tol * la2 {
+            return None;
+        }
+    }
+    let p0 = ax * rx + ay * ry;
+    let p1 = ax * qx + ay * qy;
+    if (p0 <= 0.0 && p1 <= 0.0) || (p0 >= la2 && p1 >= la2) {
+        return None;
+    }
+    let la = la2.sqrt();
+    let (ux, uy) = (ax / la, ay / la);
     // Lateral distance d(t) = d0 + t·dd and projection s(t) = s0 + t·ds along A.
     let d0 = rx * -uy + ry * ux;
     let dd = bx * -uy + by * ux;
@@ -143,56 +161,50 @@ impl Overlap {
         if !(wmax > 0.0) {
             wmax = if default_width > 0.0 && default_width.is_finite() { default_width } else { 0.4 };
         }
-        let cs = (2.0 * wmax).max(0.5);
+        let cs = (3.0 * wmax).max(0.5);
         let grow = 0.5 * wmax + 1e-9;
 
-        // Register pieces, then build the bucket table (counting sort keeps print order).
-        self.cells.clear();
-        for (i, s) in segs.iter().enumerate() {
-            let cells = &mut self.cells;
-            for_piece_cells(s, cs, 0.0, |cx, cy| cells.push((cx, cy, i as u32)));
-        }
-        let buckets = (self.cells.len() * 2).next_power_of_two().max(64);
+        // Incremental grid: query a segment against what is registered, then register it.
+        let buckets = (segs.len() * 4).next_power_of_two().max(64);
         let probe_mask = (buckets - 1) as u64;
-        self.starts.clear();
-        self.starts.resize(buckets + 1, 0);
-        for &(cx, cy, _) in &self.cells {
-            self.starts[bucket(cx, cy, probe_mask) as usize + 1] += 1;
-        }
-        for k in 0..buckets {
-            self.starts[k + 1] += self.starts[k];
-        }
-        self.items.clear();
-        self.items.resize(self.cells.len(), 0);
-        self.fill.clear();
-        self.fill.extend_from_slice(&self.starts[..buckets]);
-        for &(cx, cy, i) in &self.cells {
-            let slot = &mut self.fill[bucket(cx, cy, probe_mask) as usize];
-            self.items[*slot as usize] = i;
-            *slot += 1;
-        }
+        self.head.clear();
+        self.head.resize(buckets, u32::MAX);
+        self.next.clear();
+        self.item.clear();
         self.stamp.clear();
         self.stamp.resize(segs.len(), u32::MAX);
-
         let mut total = 0.0;
         for (j, b) in segs.iter().enumerate() {
             self.intervals.clear();
-            let (starts, items, stamp, intervals) = (&self.starts, &self.items, &mut self.stamp, &mut self.intervals);
+            let (head, next, item, stamp, intervals) = (&self.head, &self.next, &self.item, &mut self.stamp, &mut self.intervals);
             for_piece_cells(b, cs, grow, |cx, cy| {
-                let k = bucket(cx, cy, probe_mask) as usize;
-                for &i in &items[starts[k] as usize..starts[k + 1] as usize] {
-                    if i as usize >= j {
-                        break; // items are in print order
-                    }
-                    if stamp[i as usize] == j as u32 {
+                let mut link = head[bucket(cx, cy, probe_mask) as usize];
+                while link != u32::MAX {
+                    let i = item[link as usize] as usize;
+                    link = next[link as usize];
+                    if stamp[i] == j as u32 {
                         continue;
                     }
-                    stamp[i as usize] = j as u32;
-                    if let Some(iv) = on_segment(&segs[i as usize], b) {
+                    stamp[i] = j as u32;
+                    if let Some(iv) = on_segment(&segs[i], b) {
                         intervals.push(iv);
                     }
                 }
             });
+            {
+                let (head, next, item) = (&mut self.head, &mut self.next, &mut self.item);
+                let mut last = u32::MAX;
+                for_piece_cells(b, cs, 0.0, |cx, cy| {
+                    let k = bucket(cx, cy, probe_mask);
+                    if k == last {
+                        return;
+                    }
+                    last = k;
+                    next.push(head[k as usize]);
+                    item.push(j as u32);
+                    head[k as usize] = (item.len() - 1) as u32;
+                });
+            }
             if self.intervals.is_empty() {
                 continue;
             }

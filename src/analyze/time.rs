@@ -67,16 +67,13 @@ impl MotionTimer {
             let cos_theta = -(p.dir[0] * dir_in[0] + p.dir[1] * dir_in[1] + p.dir[2] * dir_in[2]);
             let a_j = p.a.min(a);
             let sin_half = (0.5 * (1.0 - cos_theta.clamp(-1.0, 1.0))).sqrt();
-            let mut vj = p.v.min(v);
+            // Squared junction speed: both feed rates, the junction deviation limit and what
+            // the previous move can reach from its own entry speed.
+            let mut vj2 = (p.v * p.v).min(v * v).min(p.v_in * p.v_in + 2.0 * p.a.max(0.0) * p.len);
             if sin_half < 0.999_999 {
-                let lim2 = a_j * JUNCTION_DEVIATION_MM * sin_half / (1.0 - sin_half);
-                vj = vj.min(lim2.max(0.0).sqrt());
+                vj2 = vj2.min(a_j * JUNCTION_DEVIATION_MM * sin_half / (1.0 - sin_half));
             }
-            // The previous move can only reach so much from its own entry speed.
-            vj = vj.min((p.v_in * p.v_in + 2.0 * p.a.max(0.0) * p.len).sqrt());
-            if !vj.is_finite() {
-                vj = 0.0;
-            }
+            let vj = if vj2 > 0.0 && vj2.is_finite() { vj2.sqrt() } else { 0.0 };
             self.total += trapezoid_time(p.len, p.v, p.a, p.v_in, vj);
             v_in = vj;
         }

@@ -292,7 +292,7 @@ impl<'o> Machine<'o> {
         let (rpx, rpy) = (p[0] - c[0], p[1] - c[1]);
         let (rtx, rty) = (t[0] - c[0], t[1] - c[1]);
         let r = (rpx * rpx + rpy * rpy).sqrt();
-        if !(r > MOTION_EPS) || !r.is_finite() {
+        if r.is_nan() || r <= MOTION_EPS || !r.is_finite() {
             return fallback(self);
         }
         let two_pi = 2.0 * std::f64::consts::PI;
@@ -323,7 +323,7 @@ impl<'o> Machine<'o> {
         if need_points {
             let n1 = (xy / ARC_CHORD_MM).ceil();
             let n2 = (ang.abs() / ARC_STEP_RAD).ceil();
-            let n = if n1.is_finite() { n1.max(n2).clamp(1.0, 4096.0) as usize } else { 1 };
+            let n = if n1.is_finite() { n1.max(n2).clamp(1.0, 1024.0) as usize } else { 1 };
             for k in 1..n {
                 let f = k as f64 / n as f64;
                 let th = th0 + ang * f;
@@ -526,7 +526,7 @@ fn push6(v: &mut Vec<f32>, a: [f64; 3], b: [f64; 3]) {
 /// Σ length_i · edges_i / (total length · number of paths).
 pub fn gippo_score(paths: &[(f64, u32)]) -> f64 {
     let total: f64 = paths.iter().map(|p| p.0).sum();
-    if paths.is_empty() || !(total > 0.0) {
+    if paths.is_empty() || total.is_nan() || total <= 0.0 {
         return 0.0;
     }
     paths.iter().map(|p| p.0 * p.1 as f64).sum::<f64>() / (total * paths.len() as f64)

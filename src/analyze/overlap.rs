@@ -24,8 +24,10 @@ pub struct Seg {
 
 /// sin(10°).
 const SIN_MAX_ANGLE: f64 = 0.173_648_177_666_930_35;
-/// Pieces per segment at most (guards absurd coordinates).
-const MAX_PIECES: usize = 4096;
+/// Segments spanning more than this along X or Y are ignored by the overlap measure, mm.
+pub const MAX_SPAN_MM: f64 = 2000.0;
+/// Pieces per segment at most.
+const MAX_PIECES: usize = 8192;
 /// Cells per piece axis at most (only reached after the piece cap).
 const MAX_CELLS_AXIS: i64 = 16;
 
@@ -59,9 +61,13 @@ fn for_piece_cells(s: &Seg, cs: f64, grow: f64, mut f: impl FnMut(i64, i64)) {
     let inv = 1.0 / cs;
     let dx = s.b[0] - s.a[0];
     let dy = s.b[1] - s.a[1];
-    // Pieces no longer than a cell along either axis.
+    // Pieces no longer than a cell along either axis. Segments longer than any printer
+    // (or at non-finite positions) take no part in overlap.
     let span = dx.abs().max(dy.abs());
-    let n = if span.is_finite() { ((span * inv).ceil() as usize).clamp(1, MAX_PIECES) } else { 1 };
+    if span.is_nan() || span > MAX_SPAN_MM || !s.a[0].is_finite() || !s.a[1].is_finite() || s.a[0].abs() > 1e9 || s.a[1].abs() > 1e9 {
+        return;
+    }
+    let n = ((span * inv).ceil() as usize).clamp(1, MAX_PIECES);
     let step = 1.0 / n as f64;
     for k in 0..n {
         let t0 = k as f64 * step;
@@ -158,7 +164,7 @@ impl Overlap {
                 wmax = s.w;
             }
         }
-        if !(wmax > 0.0) {
+        if wmax <= 0.0 {
             wmax = if default_width > 0.0 && default_width.is_finite() { default_width } else { 0.4 };
         }
         let cs = (3.0 * wmax).max(0.5);

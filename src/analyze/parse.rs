@@ -178,7 +178,7 @@ pub fn lex_line(s: &[u8]) -> Result<Line<'_>, String> {
                         }
                         None => -1.0,
                     };
-                    cmd = if code < 0.0 || code > 1.0e6 {
+                    cmd = if !(0.0..=1.0e6).contains(&code) {
                         Command::Other
                     } else {
                         let whole = code as u32;
@@ -285,7 +285,7 @@ mod tests {
         assert_eq!(parse_number(b"-.5"), Some((-0.5, 3)));
         assert_eq!(parse_number(b"+3"), Some((3.0, 2)));
         assert_eq!(parse_number(b"0.1"), Some((0.1, 3)));
-        assert_eq!(parse_number(b"1234567890.123456789012"), Some((1234567890.123456789012, 23)));
+        assert_eq!(parse_number(b"1234567890.123456789012"), Some(("1234567890.123456789012".parse().unwrap(), 23)));
         assert_eq!(parse_number(b"-"), None);
         assert_eq!(parse_number(b"."), None);
         assert_eq!(parse_number(b"x"), None);

@@ -59,7 +59,7 @@ impl MotionTimer {
     /// A move of `len` mm entering along unit vector `dir_in` and leaving along `dir_out`
     /// (equal for straight moves) at feed `v` mm/s with acceleration `a` mm/s².
     pub fn push(&mut self, len: f64, dir_in: [f64; 3], dir_out: [f64; 3], v: f64, a: f64) {
-        if !(len > 0.0) || !(v > 0.0) {
+        if len.is_nan() || len <= 0.0 || v.is_nan() || v <= 0.0 {
             return;
         }
         let mut v_in = 0.0;

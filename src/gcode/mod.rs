@@ -265,6 +265,11 @@ pub enum Error {
 /// `travel_mm` and `estimated_time_s` come from running [`crate::analyze::analyze`] on the
 /// produced text (so they include moves of the start and end templates and agree with
 /// `weft analyze`).
+///
+/// Numbers are formatted with integer arithmetic (X/Y/Z 3 decimals, E 5, F whole mm/min,
+/// trailing zeros trimmed, never `-0`), so output is byte-identical on native and wasm.
+/// Options are expected to be physically sensible (positive diameters, speeds and heights);
+/// a non-finite number would be written as `0`.
 pub fn write_gcode(toolpath: &Toolpath, options: &Options) -> Result<Gcode, Error> {
     writer::write(toolpath, options)
 }

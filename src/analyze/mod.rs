@@ -5,6 +5,13 @@
 
 use serde::Serialize;
 
+mod machine;
+mod overlap;
+pub mod parse;
+pub mod time;
+
+pub use machine::{gippo_score, DEFAULT_ACCELERATION_MM_S2, DEFAULT_FEED_MM_MIN};
+
 /// Default line width assumed when a file has no `;WIDTH:` comments, mm.
 pub const DEFAULT_LINE_WIDTH_MM: f64 = 0.4;
 /// Default filament diameter assumed when a file does not state one, mm.
@@ -63,7 +70,10 @@ pub struct Report {
     pub travel_mm: f64,
     /// Retractions (E moving back, or G10).
     pub retractions: usize,
-    /// Extruded length lying on already-extruded segments of the same layer, mm.
+    /// Extruded length lying on already-extruded segments of the same layer, mm: the parts
+    /// of each extruding segment that are nearly parallel (≤ 10°) to an earlier segment of
+    /// its layer, within half a line width of it laterally and alongside it (segments that
+    /// only touch or cross add nothing; a strut printed twice adds its length once).
     pub overlap_mm: f64,
     /// GIPPO equation 1 over all extrusion paths, averaged over layers weighted by nothing (mean of layers).
     pub gippo_score: f64,
@@ -132,7 +142,39 @@ pub enum Error {
 }
 
 /// Analyses G-code `bytes`; `file` names it in messages.
+///
+/// Reads Marlin-style G-code: `G0`/`G1`, `G2`/`G3` arcs (`I J` or `R`, XY plane, helical
+/// Z), `G4` dwell, `G10`/`G11` firmware retraction (`G10` with `P` or `L` is a tool or
+/// offset setting, not a retraction), `G20`/`G21` units, `G28` homing (named axes or all to
+/// 0), `G90`/`G91` (which, as in Marlin, also reset the E mode), `M82`/`M83`, `G92`, `M204`
+/// (`S` both, `P` print, `T` travel acceleration); comments after `;` and in parentheses,
+/// `N` line numbers, `*` checksums, lowercase, CRLF; lines of parameters with no command
+/// repeat the last motion command. Other commands are ignored (with their arguments).
+///
+/// Definitions:
+/// - an *extruding move* is a `G0`–`G3` with XYZ motion and a positive E delta; other moves
+///   with motion are *travels*;
+/// - a *retraction* is the start of a retracted state: E moving back (with or without motion,
+///   so a wipe followed by a retract counts once) or `G10`; extrusion or a positive E-only
+///   move ends it;
+/// - an *extrusion path* is a maximal run of extruding moves, broken by a travel, a
+///   retraction or a layer change; `NumEdges` counts its moves (an arc is one edge);
+/// - *layers*: when the file has `;LAYER:` or `;LAYER_CHANGE` comments, such a comment starts
+///   a new layer at the next extruding move (several comments in a row make one change;
+///   extrusion before the first comment, such as a purge line, belongs to the first layer);
+///   otherwise an extruding move whose end Z differs from the layer's Z starts one. A layer's
+///   Z is the end Z of its first extruding move. Travels and retractions between the last
+///   extrusion of a layer and the first of the next belong to the next;
+/// - `gippo_score` is GIPPO equation 1 per layer, and the report's is the mean over layers;
+/// - `filament_mm` is the high-water mark of the net E fed (sum of all E deltas, ignoring
+///   `G92` resets): filament retracted and fed again is not counted twice, and a final
+///   retraction does not reduce it;
+/// - `overlap_mm`: see the overlap rule in [`Report::overlap_mm`] (nearly parallel, within
+///   half a line width, unioned per segment; arcs are measured on their preview chords);
+/// - time: see [`time`].
+///
+/// Errors: any NUL or other non-text control byte → [`Error::NotText`]; a parameter of an
+/// interpreted command whose number cannot be read → [`Error::Malformed`] with its line.
 pub fn analyze(file: &str, bytes: &[u8], options: &Options) -> Result<Analysis, Error> {
-    let _ = (file, bytes, options);
-    Ok(Analysis::default())
+    machine::run(file, bytes, options)
 }

@@ -8,6 +8,14 @@
 use crate::geom::Toolpath;
 use serde::{Deserialize, Serialize};
 
+mod flavor;
+pub mod format;
+mod template;
+mod writer;
+
+pub use template::PLACEHOLDERS;
+pub use writer::equation4_e;
+
 /// G-code dialects.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -238,10 +246,30 @@ pub enum Error {
 }
 
 /// Writes `toolpath` as G-code.
+///
+/// Layout: a comment header with totals (PrusaSlicer and Cura styles), the start template,
+/// `G90`, `M82`/`M83` (after `G90`, which resets the E mode in Marlin), `G92 E0`,
+/// `M204 S<acceleration>`, then per layer `;LAYER_CHANGE`, `;Z:`, `;HEIGHT:`, `;LAYER:<n>`
+/// (0-based, counting only layers with paths), the fan (`M106`) on `fan_start_layer` and
+/// `M104 S<nozzle_temp>` on layer 1. Each path: a travel to its first point (retracting when
+/// the XY travel is at least `min_travel_mm`, with optional z-hop; no travel when the path
+/// starts where the previous one ended), `;TYPE:` and `;WIDTH:` when they change within the
+/// layer (both are repeated on every layer), then one `G1 X Y [Z] E [F]` per segment
+/// (zero-length segments are skipped; F only when it changes). E follows equation 4 with
+/// the layer's height as LT and the path's width as d_n; in absolute mode the printed E is
+/// the exact running sum rounded to 5 decimals, so rounding never drifts. A final retraction
+/// precedes the end template. Coordinates are in printer space: with [`Origin::Corner`] the
+/// model (centred on 0, 0) is shifted to the bed centre.
+///
+/// [`GcodeStats::extruded_mm`] and [`GcodeStats::filament_mm`] are the writer's exact sums;
+/// `travel_mm` and `estimated_time_s` come from running [`crate::analyze::analyze`] on the
+/// produced text (so they include moves of the start and end templates and agree with
+/// `weft analyze`).
+///
+/// Numbers are formatted with integer arithmetic (X/Y/Z 3 decimals, E 5, F whole mm/min,
+/// trailing zeros trimmed, never `-0`), so output is byte-identical on native and wasm.
+/// Options are expected to be physically sensible (positive diameters, speeds and heights);
+/// a non-finite number would be written as `0`.
 pub fn write_gcode(toolpath: &Toolpath, options: &Options) -> Result<Gcode, Error> {
-    let _ = options;
-    if toolpath.layers.iter().all(|l| l.paths.is_empty()) {
-        return Err(Error::Empty);
-    }
-    Ok(Gcode::default())
+    writer::write(toolpath, options)
 }

@@ -1,0 +1,235 @@
+//! Overlap: extruded length lying on earlier extrusions of the same layer.
+//!
+//! A later segment B lies on an earlier segment A where the two are nearly parallel (angle
+//! ≤ 10°, either direction), B is within half a line width (the mean of the two widths,
+//! halved) of A's line, and B's point projects inside A. For each B the parameter intervals
+//! found against all earlier segments are unioned, so nothing counts twice. Segments that
+//! only meet at an end point or cross count zero.
+//!
+//! Candidates come from a uniform grid hashed into a table of linked lists: every segment is
+//! cut into pieces no longer than a cell; each segment first queries the cells of its pieces'
+//! boxes grown by the tolerance, then registers itself in the cells its pieces' boxes touch. Average cost is
+//! linear in the number of segments.
+
+/// One extrusion segment in the layer plane.
+#[derive(Clone, Copy, Debug)]
+pub struct Seg {
+    /// Start x, y (mm).
+    pub a: [f64; 2],
+    /// End x, y (mm).
+    pub b: [f64; 2],
+    /// Line width (mm).
+    pub w: f64,
+}
+
+/// sin(10°).
+const SIN_MAX_ANGLE: f64 = 0.173_648_177_666_930_35;
+/// Segments spanning more than this along X or Y are ignored by the overlap measure, mm.
+pub const MAX_SPAN_MM: f64 = 2000.0;
+/// Pieces per segment at most.
+const MAX_PIECES: usize = 8192;
+/// Cells per piece axis at most (only reached after the piece cap).
+const MAX_CELLS_AXIS: i64 = 16;
+
+/// Reusable buffers.
+#[derive(Default)]
+pub struct Overlap {
+    head: Vec<u32>,
+    next: Vec<u32>,
+    item: Vec<u32>,
+    stamp: Vec<u32>,
+    intervals: Vec<(f64, f64)>,
+}
+
+#[inline]
+fn cell_of(v: f64, inv: f64) -> i64 {
+    // floor without a libm call; `as` saturates and maps NaN to 0.
+    let t = v * inv;
+    let c = t as i64;
+    if (c as f64) > t { c - 1 } else { c }
+}
+
+#[inline]
+fn bucket(cx: i64, cy: i64, mask: u64) -> u32 {
+    let h = (cx as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ (cy as u64).wrapping_mul(0xC2B2_AE3D_27D4_EB4F);
+    ((h ^ (h >> 29)) & mask) as u32
+}
+
+/// Calls `f(cx, cy)` for every cell touched by the box of each piece of `s`, grown by `grow`.
+#[inline]
+fn for_piece_cells(s: &Seg, cs: f64, grow: f64, mut f: impl FnMut(i64, i64)) {
+    let inv = 1.0 / cs;
+    let dx = s.b[0] - s.a[0];
+    let dy = s.b[1] - s.a[1];
+    // Pieces no longer than a cell along either axis. Segments longer than any printer
+    // (or at non-finite positions) take no part in overlap.
+    let span = dx.abs().max(dy.abs());
+    if span.is_nan() || span > MAX_SPAN_MM || !s.a[0].is_finite() || !s.a[1].is_finite() || s.a[0].abs() > 1e9 || s.a[1].abs() > 1e9 {
+        return;
+    }
+    let n = ((span * inv).ceil() as usize).clamp(1, MAX_PIECES);
+    let step = 1.0 / n as f64;
+    for k in 0..n {
+        let t0 = k as f64 * step;
+        let t1 = if k + 1 == n { 1.0 } else { (k + 1) as f64 * step };
+        let (x0, y0) = (s.a[0] + dx * t0, s.a[1] + dy * t0);
+        let (x1, y1) = (s.a[0] + dx * t1, s.a[1] + dy * t1);
+        let cx0 = cell_of(x0.min(x1) - grow, inv);
+        let cx1 = cell_of(x0.max(x1) + grow, inv).min(cx0.saturating_add(MAX_CELLS_AXIS));
+        let cy0 = cell_of(y0.min(y1) - grow, inv);
+        let cy1 = cell_of(y0.max(y1) + grow, inv).min(cy0.saturating_add(MAX_CELLS_AXIS));
+        let mut cy = cy0;
+        while cy <= cy1 {
+            let mut cx = cx0;
+            while cx <= cx1 {
+                f(cx, cy);
+                cx += 1;
+            }
+            cy += 1;
+        }
+    }
+}
+
+/// The part of `b` (as a parameter interval of `b`) lying on `a`, if longer than nothing.
+#[inline]
+fn on_segment(a: &Seg, b: &Seg) -> Option<(f64, f64)> {
+    let (ax, ay) = (a.b[0] - a.a[0], a.b[1] - a.a[1]);
+    let (bx, by) = (b.b[0] - b.a[0], b.b[1] - b.a[1]);
+    let la2 = ax * ax + ay * ay;
+    let lb2 = bx * bx + by * by;
+    if !(la2 > 0.0 && lb2 > 0.0) {
+        return None;
+    }
+    let cross = ax * by - ay * bx;
+    if cross * cross > SIN_MAX_ANGLE * SIN_MAX_ANGLE * la2 * lb2 {
+        return None;
+    }
+    let tol = 0.25 * (a.w + b.w);
+    // Cheap rejections (no square roots): B wholly to one side of A's line beyond the
+    // tolerance, or wholly before or after A along it.
+    let (rx, ry) = (b.a[0] - a.a[0], b.a[1] - a.a[1]);
+    let (qx, qy) = (b.b[0] - a.a[0], b.b[1] - a.a[1]);
+    let c0 = ax * ry - ay * rx;
+    let c1 = ax * qy - ay * qx;
+    if (c0 > 0.0) == (c1 > 0.0) {
+        let m = c0.abs().min(c1.abs());
+        if m * m > tol * tol * la2 {
+            return None;
+        }
+    }
+    let p0 = ax * rx + ay * ry;
+    let p1 = ax * qx + ay * qy;
+    if (p0 <= 0.0 && p1 <= 0.0) || (p0 >= la2 && p1 >= la2) {
+        return None;
+    }
+    let la = la2.sqrt();
+    let (ux, uy) = (ax / la, ay / la);
+    // Lateral distance d(t) = d0 + t·dd and projection s(t) = s0 + t·ds along A.
+    let d0 = rx * -uy + ry * ux;
+    let dd = bx * -uy + by * ux;
+    let s0 = rx * ux + ry * uy;
+    let ds = bx * ux + by * uy;
+    let mut lo = 0.0f64;
+    let mut hi = 1.0f64;
+    clip(&mut lo, &mut hi, d0, dd, -tol, tol)?;
+    clip(&mut lo, &mut hi, s0, ds, 0.0, la)?;
+    if hi - lo > 1e-12 { Some((lo, hi)) } else { None }
+}
+
+/// Narrows `[lo, hi]` to where `v0 + t·dv` lies in `[min, max]`.
+#[inline]
+fn clip(lo: &mut f64, hi: &mut f64, v0: f64, dv: f64, min: f64, max: f64) -> Option<()> {
+    if dv == 0.0 {
+        return if v0 >= min && v0 <= max { Some(()) } else { None };
+    }
+    let mut t0 = (min - v0) / dv;
+    let mut t1 = (max - v0) / dv;
+    if t0 > t1 {
+        std::mem::swap(&mut t0, &mut t1);
+    }
+    *lo = lo.max(t0);
+    *hi = hi.min(t1);
+    if *hi > *lo { Some(()) } else { None }
+}
+
+impl Overlap {
+    /// Total overlapping length of `segs` (in print order), mm.
+    pub fn layer(&mut self, segs: &[Seg], default_width: f64) -> f64 {
+        if segs.len() < 2 || segs.len() >= u32::MAX as usize {
+            return 0.0;
+        }
+        let mut wmax = 0.0f64;
+        for s in segs {
+            if s.w.is_finite() && s.w > wmax {
+                wmax = s.w;
+            }
+        }
+        if wmax <= 0.0 {
+            wmax = if default_width > 0.0 && default_width.is_finite() { default_width } else { 0.4 };
+        }
+        let cs = (3.0 * wmax).max(0.5);
+        let grow = 0.5 * wmax + 1e-9;
+
+        // Incremental grid: query a segment against what is registered, then register it.
+        let buckets = (segs.len() * 4).next_power_of_two().max(64);
+        let probe_mask = (buckets - 1) as u64;
+        self.head.clear();
+        self.head.resize(buckets, u32::MAX);
+        self.next.clear();
+        self.item.clear();
+        self.stamp.clear();
+        self.stamp.resize(segs.len(), u32::MAX);
+        let mut total = 0.0;
+        for (j, b) in segs.iter().enumerate() {
+            self.intervals.clear();
+            let (head, next, item, stamp, intervals) = (&self.head, &self.next, &self.item, &mut self.stamp, &mut self.intervals);
+            for_piece_cells(b, cs, grow, |cx, cy| {
+                let mut link = head[bucket(cx, cy, probe_mask) as usize];
+                while link != u32::MAX {
+                    let i = item[link as usize] as usize;
+                    link = next[link as usize];
+                    if stamp[i] == j as u32 {
+                        continue;
+                    }
+                    stamp[i] = j as u32;
+                    if let Some(iv) = on_segment(&segs[i], b) {
+                        intervals.push(iv);
+                    }
+                }
+            });
+            {
+                let (head, next, item) = (&mut self.head, &mut self.next, &mut self.item);
+                let mut last = u32::MAX;
+                for_piece_cells(b, cs, 0.0, |cx, cy| {
+                    let k = bucket(cx, cy, probe_mask);
+                    if k == last {
+                        return;
+                    }
+                    last = k;
+                    next.push(head[k as usize]);
+                    item.push(j as u32);
+                    head[k as usize] = (item.len() - 1) as u32;
+                });
+            }
+            if self.intervals.is_empty() {
+                continue;
+            }
+            self.intervals.sort_by(|x, y| x.0.total_cmp(&y.0));
+            let mut covered = 0.0;
+            let (mut lo, mut hi) = self.intervals[0];
+            for &(l, h) in &self.intervals[1..] {
+                if l > hi {
+                    covered += hi - lo;
+                    lo = l;
+                    hi = h;
+                } else if h > hi {
+                    hi = h;
+                }
+            }
+            covered += hi - lo;
+            let (dx, dy) = (b.b[0] - b.a[0], b.b[1] - b.a[1]);
+            total += covered * (dx * dx + dy * dy).sqrt();
+        }
+        total
+    }
+}

@@ -1,0 +1,317 @@
+//! Byte-level G-code lexing: words, numbers, comments. No allocation per line.
+
+/// Powers of ten exactly representable as f64.
+const POW10: [f64; 23] = [
+    1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16, 1e17, 1e18, 1e19,
+    1e20, 1e21, 1e22,
+];
+
+/// Parses a decimal number `[+-]?digits[.digits]` (or `.digits`) at the start of `s`.
+/// Returns the value and the bytes consumed; `None` when there is no digit.
+/// Exact (correctly rounded) for up to 15 significant digits and 22 decimals, which covers
+/// everything slicers write; longer forms fall back to the standard library parser.
+#[inline]
+pub fn parse_number(s: &[u8]) -> Option<(f64, usize)> {
+    let mut i = 0;
+    let mut neg = false;
+    if let Some(&c) = s.first() {
+        if c == b'-' || c == b'+' {
+            neg = c == b'-';
+            i = 1;
+        }
+    }
+    let mut mant: u64 = 0;
+    let mut digits = 0usize;
+    let mut frac_digits = 0usize;
+    while i < s.len() && s[i].is_ascii_digit() {
+        if digits < 19 {
+            mant = mant * 10 + (s[i] - b'0') as u64;
+        }
+        digits += 1;
+        i += 1;
+    }
+    if i < s.len() && s[i] == b'.' {
+        i += 1;
+        while i < s.len() && s[i].is_ascii_digit() {
+            if digits < 19 {
+                mant = mant * 10 + (s[i] - b'0') as u64;
+                frac_digits += 1;
+            }
+            digits += 1;
+            i += 1;
+        }
+    }
+    if digits == 0 {
+        return None;
+    }
+    let v = if mant < (1u64 << 53) && digits < 19 && frac_digits < POW10.len() {
+        mant as f64 / POW10[frac_digits]
+    } else {
+        // Rare: too many digits for the fast path.
+        let text = std::str::from_utf8(&s[usize::from(neg || s[0] == b'+')..i]).ok()?;
+        text.parse::<f64>().ok()?
+    };
+    Some((if neg { -v } else { v }, i))
+}
+
+/// Parameter words of one line: a value per letter A–Z.
+#[derive(Clone, Copy, Debug)]
+pub struct Words {
+    /// Bit `L - 'A'` set when letter L appeared with a number.
+    pub mask: u32,
+    /// Bit set when the letter appeared without a number (G28 X flags).
+    pub flags: u32,
+    /// Values by letter.
+    pub vals: [f64; 26],
+}
+
+impl Default for Words {
+    fn default() -> Self {
+        Words { mask: 0, flags: 0, vals: [0.0; 26] }
+    }
+}
+
+impl Words {
+    /// The value of `letter` (uppercase) when present with a number.
+    #[inline]
+    pub fn get(&self, letter: u8) -> Option<f64> {
+        let k = (letter - b'A') as usize;
+        if self.mask & (1 << k) != 0 { Some(self.vals[k]) } else { None }
+    }
+
+    /// Whether `letter` appeared at all.
+    #[inline]
+    pub fn has(&self, letter: u8) -> bool {
+        let k = (letter - b'A') as u32;
+        (self.mask | self.flags) & (1 << k) != 0
+    }
+}
+
+/// The command word of a line.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Command {
+    /// No command word (blank, comment-only or unknown).
+    None,
+    /// `G<n>`; `sub` is the part after a dot (`G29.1` → 1).
+    G(u32, u32),
+    /// `M<n>`.
+    M(u32),
+    /// `T<n>` or other command letters we ignore.
+    Other,
+    /// Parameters without a command word (`X10 Y5`): repeats the modal motion.
+    Modal,
+}
+
+/// One lexed line.
+#[derive(Debug)]
+pub struct Line<'a> {
+    /// The command.
+    pub cmd: Command,
+    /// Its parameters (only for commands the analyzer interprets).
+    pub words: Words,
+    /// Text after `;`, if any.
+    pub comment: Option<&'a [u8]>,
+}
+
+/// Whether the analyzer reads this command's parameters (and so checks them strictly).
+#[inline]
+fn interpreted(cmd: Command) -> bool {
+    matches!(cmd, Command::G(0..=4 | 10 | 11 | 20 | 21 | 28 | 90 | 91 | 92, 0) | Command::M(82 | 83 | 204) | Command::Modal)
+}
+
+/// Skips a `( … )` comment starting at `i` (which holds `(`); returns the index after it.
+#[inline]
+fn skip_paren(s: &[u8], i: usize) -> usize {
+    match s[i..].iter().position(|&b| b == b')') {
+        Some(p) => i + p + 1,
+        None => s.len(),
+    }
+}
+
+#[inline]
+fn find_comment(s: &[u8], mut i: usize) -> Option<&[u8]> {
+    while i < s.len() {
+        match s[i] {
+            b';' => return Some(&s[i + 1..]),
+            b'(' => i = skip_paren(s, i),
+            _ => i += 1,
+        }
+    }
+    None
+}
+
+/// Lexes one line (without its newline). `Err` describes a malformed parameter.
+pub fn lex_line(s: &[u8]) -> Result<Line<'_>, String> {
+    let mut words = Words::default();
+    let mut cmd = Command::None;
+    let mut i = 0;
+    while i < s.len() {
+        let b = s[i];
+        match b {
+            b' ' | b'\t' | b'\r' | 0x0b | 0x0c => i += 1,
+            b';' => return Ok(Line { cmd, words, comment: Some(&s[i + 1..]) }),
+            b'(' => i = skip_paren(s, i),
+            b'*' => {
+                // Checksum: skip its digits, keep reading (a comment may follow).
+                i += 1;
+                while i < s.len() && s[i].is_ascii_digit() {
+                    i += 1;
+                }
+            }
+            b'%' if cmd == Command::None => i += 1,
+            _ if b.is_ascii_alphabetic() => {
+                let letter = b.to_ascii_uppercase();
+                i += 1;
+                let num = parse_number(&s[i..]);
+                if cmd == Command::None && matches!(letter, b'G' | b'M' | b'T' | b'N') {
+                    if letter == b'N' {
+                        // Line number: skip it.
+                        if let Some((_, n)) = num {
+                            i += n;
+                        }
+                        continue;
+                    }
+                    let code = match num {
+                        Some((v, n)) => {
+                            i += n;
+                            v
+                        }
+                        None => -1.0,
+                    };
+                    cmd = if !(0.0..=1.0e6).contains(&code) {
+                        Command::Other
+                    } else {
+                        let whole = code as u32;
+                        let sub = ((code - whole as f64) * 10.0 + 0.5) as u32;
+                        match letter {
+                            b'G' => Command::G(whole, sub),
+                            b'M' => Command::M(whole),
+                            _ => Command::Other,
+                        }
+                    };
+                    if !interpreted(cmd) {
+                        // Free-form arguments (M117 text, file names): only look for a comment.
+                        return Ok(Line { cmd, words, comment: find_comment(s, i) });
+                    }
+                    continue;
+                }
+                if cmd == Command::None {
+                    cmd = Command::Modal;
+                }
+                let k = (letter - b'A') as usize;
+                match num {
+                    Some((v, n)) => {
+                        i += n;
+                        if !v.is_finite() {
+                            return Err(format!("the number after {} is out of range", letter as char));
+                        }
+                        words.vals[k] = v;
+                        words.mask |= 1 << k;
+                        if let Some(&next) = s.get(i) {
+                            if !(next.is_ascii_alphabetic() || matches!(next, b' ' | b'\t' | b'\r' | b';' | b'(' | b'*' | 0x0b | 0x0c)) {
+                                return Err(format!("cannot read the number after {} (unexpected '{}')", letter as char, printable(next)));
+                            }
+                        }
+                    }
+                    None => {
+                        if !matches!(cmd, Command::G(28, _)) && b"XYZEFIJRPS".contains(&letter) {
+                            return Err(format!("{} is not followed by a number", letter as char));
+                        }
+                        words.flags |= 1 << k;
+                    }
+                }
+            }
+            _ => {
+                if interpreted(cmd) {
+                    return Err(format!("unexpected '{}'", printable(b)));
+                }
+                // Junk on an otherwise empty line: ignore the line but keep its comment.
+                return Ok(Line { cmd: Command::None, words, comment: find_comment(s, i) });
+            }
+        }
+    }
+    Ok(Line { cmd, words, comment: None })
+}
+
+fn printable(b: u8) -> String {
+    if b.is_ascii_graphic() { (b as char).to_string() } else { format!("\\x{b:02x}") }
+}
+
+/// Position of the first byte that cannot appear in a text file (NUL and other C0 controls
+/// except tab, LF, VT, FF, CR and ESC).
+pub fn first_binary_byte(bytes: &[u8]) -> Option<usize> {
+    #[inline]
+    fn bad(b: u8) -> bool {
+        b < 0x20 && !matches!(b, b'\t' | b'\n' | 0x0b | 0x0c | b'\r' | 0x1b)
+    }
+    let mut base = 0;
+    for chunk in bytes.chunks(256) {
+        if chunk.iter().fold(false, |acc, &b| acc | bad(b)) {
+            return chunk.iter().position(|&b| bad(b)).map(|p| base + p);
+        }
+        base += chunk.len();
+    }
+    None
+}
+
+/// Whether the file has layer-change comments (`;LAYER:` or `;LAYER_CHANGE`).
+pub fn has_layer_comments(bytes: &[u8]) -> bool {
+    let mut i = 0;
+    while let Some(p) = bytes[i..].iter().position(|&b| b == b';') {
+        let rest = &bytes[i + p + 1..];
+        let rest = trim_start(rest);
+        if rest.starts_with(b"LAYER:") || rest.starts_with(b"LAYER_CHANGE") {
+            return true;
+        }
+        i += p + 1;
+    }
+    false
+}
+
+/// Drops leading spaces and tabs.
+#[inline]
+pub fn trim_start(s: &[u8]) -> &[u8] {
+    let n = s.iter().take_while(|&&b| b == b' ' || b == b'\t').count();
+    &s[n..]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn numbers() {
+        assert_eq!(parse_number(b"12.5 "), Some((12.5, 4)));
+        assert_eq!(parse_number(b"-.5"), Some((-0.5, 3)));
+        assert_eq!(parse_number(b"+3"), Some((3.0, 2)));
+        assert_eq!(parse_number(b"0.1"), Some((0.1, 3)));
+        assert_eq!(parse_number(b"1234567890.123456789012"), Some(("1234567890.123456789012".parse().unwrap(), 23)));
+        assert_eq!(parse_number(b"-"), None);
+        assert_eq!(parse_number(b"."), None);
+        assert_eq!(parse_number(b"x"), None);
+        for s in ["0.00001", "123.456", "99999.99999", "0.3", "7.0e0"] {
+            let (v, _) = parse_number(s.as_bytes()).unwrap();
+            let end = s.find('e').unwrap_or(s.len());
+            assert_eq!(v, s[..end].parse::<f64>().unwrap(), "{s}");
+        }
+    }
+
+    #[test]
+    fn lexing() {
+        let l = lex_line(b"N12 g1 x10.5Y-2 e.25 *71 ; hi").unwrap();
+        assert_eq!(l.cmd, Command::G(1, 0));
+        assert_eq!(l.words.get(b'X'), Some(10.5));
+        assert_eq!(l.words.get(b'Y'), Some(-2.0));
+        assert_eq!(l.words.get(b'E'), Some(0.25));
+        assert_eq!(l.comment, Some(&b" hi"[..]));
+        let l = lex_line(b"M117 Hello (world); x").unwrap();
+        assert_eq!(l.cmd, Command::M(117));
+        assert_eq!(l.comment, Some(&b" x"[..]));
+        assert!(lex_line(b"G1 X1.2.3").is_err());
+        assert!(lex_line(b"G1 Xabc").is_err());
+        assert!(lex_line(b"G28 X Y").is_ok());
+        let l = lex_line(b"X5 (c) Y6").unwrap();
+        assert_eq!(l.cmd, Command::Modal);
+        assert_eq!(l.words.get(b'Y'), Some(6.0));
+    }
+}

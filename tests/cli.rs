@@ -56,6 +56,14 @@ fn every_example_runs_and_reads_back() {
         let nominal = r["gcode"]["extruded_mm"].as_f64().unwrap();
         let read = a["extruded_mm"].as_f64().unwrap();
         assert!((nominal - read).abs() <= 1e-3 * nominal, "{stem}: extruded {read} vs nominal {nominal}");
+        // Nothing is printed twice: prisms exactly 0; the sphere's thin solid rings near its
+        // dome stay under 0.01 % of the extruded length (known: connectors on both ring edges).
+        let overlap = a["overlap_mm"].as_f64().unwrap();
+        if stem.starts_with("sphere") {
+            assert!(overlap <= 1e-4 * read, "{stem}: overlap {overlap} mm");
+        } else {
+            assert_eq!(overlap, 0.0, "{stem}: overlap {overlap} mm");
+        }
     }
 }
 

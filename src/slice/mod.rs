@@ -291,7 +291,10 @@ pub fn slice(mesh: &Mesh, options: &Options, progress: &mut dyn FnMut(f32)) -> R
     // Pass 2: perimeters, infill, order.
     let w = o.line_width_mm;
     let w_um = (w * UNITS_PER_MM).round() as i32;
-    let infill_inset = if o.perimeters > 0 { w_um as i64 * o.perimeters as i64 } else { w_um as i64 / 2 };
+    // Infill centre lines stay a full half width inside the innermost perimeter's inner edge:
+    // lines and their boundary-following connectors then sit side by side with the perimeter
+    // (the analyzer's overlap_mm is 0) instead of re-covering half of it.
+    let infill_inset = w_um as i64 * o.perimeters as i64 + w_um as i64 / 2;
     let infill_inset = infill_inset.min(i32::MAX as i64) as i32;
     let min_len_um = 0.25 * w_um as f64;
     let base_angle = o.infill_angle_deg.to_radians();
@@ -347,7 +350,13 @@ pub fn slice(mesh: &Mesh, options: &Options, progress: &mut dyn FnMut(f32)) -> R
             if cov.is_empty() {
                 (area, Vec::new())
             } else {
-                (regions::difference(&area, &cov), regions::intersect(&area, &cov))
+                // Solid and sparse lines both follow their area's boundary; keeping the sparse
+                // area one line width away from the solid one stops them sharing a boundary
+                // (which would print that stretch twice).
+                let solid = regions::difference(&area, &cov);
+                let sparse = regions::intersect(&area, &cov);
+                let sparse = if solid.is_empty() { sparse } else { regions::difference(&sparse, &perimeters::outset(&solid, w_um)) };
+                (solid, sparse)
             }
         };
         let angle = if i % 2 == 0 { base_angle } else { base_angle + std::f64::consts::FRAC_PI_2 };

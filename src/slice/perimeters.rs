@@ -21,6 +21,17 @@ pub(crate) fn inset(shapes: &[IntShape<i32>], d_um: i32) -> IntShapes<i32> {
     out
 }
 
+/// Grows `shapes` by `d_um` micrometres (miter joins). `d_um <= 0` returns the input unchanged.
+pub(crate) fn outset(shapes: &[IntShape<i32>], d_um: i32) -> IntShapes<i32> {
+    if d_um <= 0 || shapes.is_empty() {
+        return shapes.to_vec();
+    }
+    let style = IntOutlineStyle::new(d_um).line_join(IntLineJoin::Miter(Angle::from_bits(1 << 28)));
+    let mut out = shapes.outline(&style).unwrap_or_default();
+    super::regions::sort_shapes(&mut out);
+    out
+}
+
 /// Perimeter centre lines of one region: level 0 is the external perimeter (inset by
 /// `width / 2`), level `k` is inset by another `k × width`. Each level is a list of shapes
 /// (an inset may split a region in parts, or vanish).

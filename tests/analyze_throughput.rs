@@ -20,7 +20,7 @@ fn big_toolpath(layers: usize) -> Toolpath {
                     DVec3::new(r * t.cos(), r * t.sin(), z)
                 })
                 .collect();
-            paths.push(Path { points: pts, feature: Feature::Perimeter, width: 0.45, speed_factor: 1.0 });
+            paths.push(Path { points: pts, feature: Feature::Perimeter, width: 0.45, speed_factor: 1.0, approach: None });
         }
         // Zig-zag infill inside, 1 mm segments.
         let mut pts = Vec::new();
@@ -31,7 +31,7 @@ fn big_toolpath(layers: usize) -> Toolpath {
                 pts.push(DVec3::new(x, y, z));
             }
         }
-        paths.push(Path { points: pts, feature: Feature::Infill, width: 0.45, speed_factor: 1.0 });
+        paths.push(Path { points: pts, feature: Feature::Infill, width: 0.45, speed_factor: 1.0, approach: None });
         tp.layers.push(ToolpathLayer { z, height: 0.2, paths });
     }
     tp

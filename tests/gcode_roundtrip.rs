@@ -22,9 +22,9 @@ fn toolpath(layers: usize) -> Toolpath {
             z,
             height: 0.2,
             paths: vec![
-                Path { points: zig, feature: Feature::Lattice, width: 0.4, speed_factor: 1.0 },
-                Path { points: square, feature: Feature::Contour, width: 0.45, speed_factor: 1.0 },
-                Path { points: diag, feature: Feature::Lattice, width: 0.4, speed_factor: 0.6 },
+                Path { points: zig, feature: Feature::Lattice, width: 0.4, speed_factor: 1.0, approach: None },
+                Path { points: square, feature: Feature::Contour, width: 0.45, speed_factor: 1.0, approach: None },
+                Path { points: diag, feature: Feature::Lattice, width: 0.4, speed_factor: 0.6, approach: None },
             ],
         });
     }

@@ -16,6 +16,7 @@ fn square(z: f64, side: f64, at: (f64, f64)) -> Path {
         feature: Feature::Lattice,
         width: 0.4,
         speed_factor: 1.0,
+        approach: None,
     }
 }
 
@@ -139,8 +140,8 @@ fn short_travel_is_not_retracted_and_layers_advance() {
     o.printer.retraction.length_mm = 0.0;
     o.printer.origin = Origin::Center;
     o.material.fan_start_layer = 1;
-    let l0 = ToolpathLayer { z: 0.2, height: 0.2, paths: vec![Path { points: vec![DVec3::new(0.0, 0.0, 0.2), DVec3::new(1.0, 0.0, 0.2)], feature: Feature::Perimeter, width: 0.4, speed_factor: 1.0 }] };
-    let l1 = ToolpathLayer { z: 0.4, height: 0.2, paths: vec![Path { points: vec![DVec3::new(1.0, 0.0, 0.4), DVec3::new(0.0, 0.0, 0.4)], feature: Feature::Perimeter, width: 0.4, speed_factor: 1.0 }] };
+    let l0 = ToolpathLayer { z: 0.2, height: 0.2, paths: vec![Path { points: vec![DVec3::new(0.0, 0.0, 0.2), DVec3::new(1.0, 0.0, 0.2)], feature: Feature::Perimeter, width: 0.4, speed_factor: 1.0, approach: None }] };
+    let l1 = ToolpathLayer { z: 0.4, height: 0.2, paths: vec![Path { points: vec![DVec3::new(1.0, 0.0, 0.4), DVec3::new(0.0, 0.0, 0.4)], feature: Feature::Perimeter, width: 0.4, speed_factor: 1.0, approach: None }] };
     let g = write_gcode(&Toolpath { layers: vec![l0, l1] }, &o).unwrap();
     let f = |v: f64| weft::gcode::format::fixed(v, 5);
     let e = eq4(1.0, 0.2, 0.4);

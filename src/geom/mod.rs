@@ -9,9 +9,11 @@ mod mesh;
 mod polygon;
 pub mod shapes;
 pub mod tolerance;
+mod stroke;
 mod toolpath;
 
 pub use glam::{DVec2, DVec3};
 pub use mesh::{Aabb, Mesh};
 pub use polygon::{Polygon, signed_area};
+pub use stroke::{Stroke, StrokeLayer};
 pub use toolpath::{Feature, Path, Toolpath, ToolpathLayer};

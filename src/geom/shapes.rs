@@ -30,6 +30,19 @@ pub enum Shape {
         #[serde(default = "default_segments")]
         segments: u32,
     },
+    /// Upright cylinder whose top is a paraboloid dish `dish_depth` deep at the centre
+    /// (the GIPPO paper's concave cylinder: every layer near the top is different).
+    ConcaveCylinder {
+        /// Radius in mm.
+        radius: f64,
+        /// Height at the rim in mm.
+        height: f64,
+        /// Depth of the dish at the centre in mm (less than `height`).
+        dish_depth: f64,
+        /// Facets around (8–512).
+        #[serde(default = "default_segments")]
+        segments: u32,
+    },
 }
 
 fn default_segments() -> u32 {
@@ -43,6 +56,9 @@ impl Shape {
             Shape::Cube { size } => cube(size),
             Shape::Sphere { radius, segments } => uv_sphere(radius, segments.clamp(8, 512)),
             Shape::Cylinder { radius, height, segments } => cylinder(radius, height, segments.clamp(8, 512)),
+            Shape::ConcaveCylinder { radius, height, dish_depth, segments } => {
+                concave_cylinder(radius, height, dish_depth.clamp(0.0, height * 0.99), segments.clamp(8, 512))
+            }
         }
     }
 }
@@ -120,6 +136,42 @@ fn cylinder(r: f64, h: f64, seg: u32) -> Mesh {
     m
 }
 
+fn concave_cylinder(r: f64, h: f64, depth: f64, seg: u32) -> Mesh {
+    let rings = (seg / 4).max(4);
+    let mut m = Mesh::default();
+    let top_z = |t: f64| h - depth * (1.0 - t * t); // t = radius fraction
+    m.vertices.push([0.0, 0.0, 0.0]);
+    m.vertices.push([0.0, 0.0, top_z(0.0) as f32]);
+    // Ring k (1..=rings) of the dish at radius fraction k/rings; ring `rings` is the rim.
+    for k in 1..=rings {
+        let t = k as f64 / rings as f64;
+        for j in 0..seg {
+            let th = 2.0 * std::f64::consts::PI * j as f64 / seg as f64;
+            m.vertices.push([(t * r * libm::cos(th)) as f32, (t * r * libm::sin(th)) as f32, top_z(t) as f32]);
+        }
+    }
+    let bottom = m.vertices.len() as u32;
+    for j in 0..seg {
+        let th = 2.0 * std::f64::consts::PI * j as f64 / seg as f64;
+        m.vertices.push([(r * libm::cos(th)) as f32, (r * libm::sin(th)) as f32, 0.0]);
+    }
+    let ring = |k: u32, j: u32| 2 + (k - 1) * seg + (j % seg);
+    let low = |j: u32| bottom + (j % seg);
+    for j in 0..seg {
+        m.triangles.push([1, ring(1, j), ring(1, j + 1)]);
+        for k in 1..rings {
+            let (a, b, c, d) = (ring(k, j), ring(k + 1, j), ring(k + 1, j + 1), ring(k, j + 1));
+            m.triangles.push([a, b, c]);
+            m.triangles.push([a, c, d]);
+        }
+        let (rim0, rim1) = (ring(rings, j), ring(rings, j + 1));
+        m.triangles.push([low(j), low(j + 1), rim1]);
+        m.triangles.push([low(j), rim1, rim0]);
+        m.triangles.push([0, low(j + 1), low(j)]);
+    }
+    m
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -144,6 +196,7 @@ mod tests {
             Shape::Cube { size: [20.0, 10.0, 5.0] },
             Shape::Sphere { radius: 10.0, segments: 32 },
             Shape::Cylinder { radius: 5.0, height: 8.0, segments: 24 },
+            Shape::ConcaveCylinder { radius: 5.0, height: 4.0, dish_depth: 2.0, segments: 32 },
         ] {
             let m = s.mesh();
             assert_closed(&m);

@@ -84,9 +84,19 @@ pub struct Path {
     pub width: f64,
     /// Multiplies the feature's print speed (1.0 = as configured; GIPPO slows short paths).
     pub speed_factor: f64,
+    /// How the nozzle gets here from where the previous path ended. `None`: a free travel
+    /// (the writer retracts and hops as configured). `Some(route)`: the nozzle moves through
+    /// `route` (intermediate points, may be empty) *without* extruding and without retracting,
+    /// e.g. along struts already printed (Chinese-postman "continuous" paths).
+    pub approach: Option<Vec<DVec3>>,
 }
 
 impl Path {
+    /// An extrusion at full speed reached by a free travel.
+    pub fn new(points: Vec<DVec3>, feature: Feature, width: f64) -> Path {
+        Path { points, feature, width, speed_factor: 1.0, approach: None }
+    }
+
     /// Length in mm.
     pub fn length(&self) -> f64 {
         self.points.windows(2).map(|w| w[0].distance(w[1])).sum()

@@ -17,10 +17,11 @@ pub fn bench_mesh(triangles: usize) -> Mesh {
 /// The slicing benchmark's design: the default printer, 0.2 mm layers, slicing `bench.stl`.
 pub fn bench_design() -> Design {
     let mut d = Design { name: "bench".into(), ..Design::default() };
-    let Job::Slice(job) = &mut d.job;
-    job.input = Input::File { name: "bench.stl".into(), embedded: None };
-    job.slice.layer_height_mm = 0.2;
-    job.slice.first_layer_height_mm = 0.2;
+    d.job.set_input(Input::File { name: "bench.stl".into(), embedded: None });
+    if let Job::Slice(job) = &mut d.job {
+        job.slice.layer_height_mm = 0.2;
+        job.slice.first_layer_height_mm = 0.2;
+    }
     d
 }
 

@@ -124,6 +124,23 @@ impl Session {
         serde_json::to_string(&Out { analysis: &a.report }).map_err(js_err)
     }
 
+    /// The lattice strokes of layer `layer` (0-based) of a lattice design, for the page's 2D
+    /// preview: 5 floats per segment, x0 y0 x1 y1 feature-code (mm, model coordinates).
+    #[wasm_bindgen(js_name = latticeLayer)]
+    pub fn lattice_layer(&self, design_json: &str, layer: usize) -> Result<Vec<f32>, JsError> {
+        let design = Design::from_json("design", design_json).map_err(js_err)?;
+        let (layers, _) = pipeline::lattice_strokes(&design, &self.files, &mut |_, _| {}).map_err(js_err)?;
+        let mut out = Vec::new();
+        if let Some(l) = layers.get(layer.min(layers.len().saturating_sub(1))) {
+            for s in &l.strokes {
+                for w in s.points.windows(2) {
+                    out.extend_from_slice(&[w[0].x as f32, w[0].y as f32, w[1].x as f32, w[1].y as f32, s.feature.code() as f32]);
+                }
+            }
+        }
+        Ok(out)
+    }
+
     /// G-code bytes of the last result.
     pub fn gcode(&self) -> Vec<u8> {
         self.gcode.clone()

@@ -45,6 +45,8 @@ pub struct Design {
 pub enum Job {
     /// Slice a solid: perimeters plus rectilinear infill.
     Slice(SliceJob),
+    /// A lattice from the atlas, printed along optimised paths (GIPPO), optionally non-planar.
+    Lattice(LatticeJob),
 }
 
 impl Job {
@@ -52,6 +54,7 @@ impl Job {
     pub fn kind(&self) -> &'static str {
         match self {
             Job::Slice(_) => "slice",
+            Job::Lattice(_) => "lattice",
         }
     }
 
@@ -59,6 +62,7 @@ impl Job {
     pub fn input(&self) -> Option<&Input> {
         match self {
             Job::Slice(j) => Some(&j.input),
+            Job::Lattice(j) => j.input.as_ref(),
         }
     }
 
@@ -66,6 +70,19 @@ impl Job {
     pub fn input_mut(&mut self) -> Option<&mut Input> {
         match self {
             Job::Slice(j) => Some(&mut j.input),
+            Job::Lattice(j) => j.input.as_mut(),
+        }
+    }
+
+    /// Replaces the main input (`--input`, a file dropped on the page). A lattice job then fills
+    /// the layers of that solid (its domain becomes `solid`).
+    pub fn set_input(&mut self, input: Input) {
+        match self {
+            Job::Slice(j) => j.input = input,
+            Job::Lattice(j) => {
+                j.input = Some(input);
+                j.domain = crate::lattice::Domain::Solid;
+            }
         }
     }
 }
@@ -74,11 +91,40 @@ impl Job {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SliceJob {
-    /// The solid to slice.
+    /// The solid to slice. Default: a 20 mm cube.
+    #[serde(default = "default_slice_input")]
     pub input: Input,
     /// Layer heights, perimeters, infill.
     #[serde(default)]
     pub slice: crate::slice::Options,
+}
+
+/// Settings of a `lattice` job.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LatticeJob {
+    /// Where the lattice goes: a built-in planar domain, or the layers of `input`.
+    #[serde(default)]
+    pub domain: crate::lattice::Domain,
+    /// The solid whose layers are filled when `domain` is `solid`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub input: Option<Input>,
+    /// Pattern, layers, rotation, overrides, contour.
+    #[serde(default)]
+    pub lattice: crate::lattice::Options,
+    /// Path optimisation.
+    #[serde(default)]
+    pub paths: crate::paths::Options,
+    /// Projection onto a non-planar surface (off when absent).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub nonplanar: Option<crate::nonplanar::Options>,
+    /// The surface mesh when `nonplanar.surface` is `mesh`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub surface_input: Option<Input>,
+}
+
+fn default_slice_input() -> Input {
+    Input::Builtin(Shape::Cube { size: [20.0, 20.0, 20.0] })
 }
 
 /// Where a mesh comes from.
@@ -157,10 +203,7 @@ impl Default for Design {
             printer: Printer::default(),
             material: Material::default(),
             speeds: Speeds::default(),
-            job: Job::Slice(SliceJob {
-                input: Input::Builtin(Shape::Cube { size: [20.0, 20.0, 20.0] }),
-                slice: Default::default(),
-            }),
+            job: Job::Slice(SliceJob { input: default_slice_input(), slice: Default::default() }),
         }
     }
 }
@@ -260,6 +303,11 @@ pub(crate) fn set_path(root: &mut Value, path: &str, new: Value) -> Result<(), S
         match cur {
             Value::Object(map) => {
                 if last {
+                    // Changing a tagged variant (`…kind`) starts the new variant from its
+                    // defaults instead of keeping the old variant's fields.
+                    if *part == "kind" && map.get("kind") != Some(&new) {
+                        map.clear();
+                    }
                     map.insert((*part).to_string(), new);
                     return Ok(());
                 }

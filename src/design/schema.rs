@@ -22,6 +22,8 @@ pub enum Kind {
     Choice,
     /// Three numbers (X, Y, Z).
     Vec3,
+    /// An optional block, present or absent (a checkbox); `default` is its JSON when switched on.
+    Section,
 }
 
 /// One editable field.
@@ -54,16 +56,19 @@ pub struct Field {
     /// Only for this job kind.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub job: Option<&'static str>,
+    /// JSON value a [`Kind::Section`] takes when switched on.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub default: Option<&'static str>,
 }
 
 const fn num(path: &'static str, section: &'static str, label: &'static str, unit: &'static str, min: f64, max: f64, step: f64, doc: &'static str) -> Field {
-    Field { path, section, label, unit, kind: Kind::Number, min: Some(min), max: Some(max), step: Some(step), choices: &[], doc, job: None }
+    Field { path, section, label, unit, kind: Kind::Number, min: Some(min), max: Some(max), step: Some(step), choices: &[], doc, job: None, default: None }
 }
 const fn int(path: &'static str, section: &'static str, label: &'static str, min: f64, max: f64, doc: &'static str) -> Field {
-    Field { path, section, label, unit: "", kind: Kind::Integer, min: Some(min), max: Some(max), step: Some(1.0), choices: &[], doc, job: None }
+    Field { path, section, label, unit: "", kind: Kind::Integer, min: Some(min), max: Some(max), step: Some(1.0), choices: &[], doc, job: None, default: None }
 }
 const fn other(path: &'static str, section: &'static str, label: &'static str, kind: Kind, choices: &'static [&'static str], doc: &'static str) -> Field {
-    Field { path, section, label, unit: "", kind, min: None, max: None, step: None, choices, doc, job: None }
+    Field { path, section, label, unit: "", kind, min: None, max: None, step: None, choices, doc, job: None, default: None }
 }
 const fn for_job(mut f: Field, job: &'static str) -> Field {
     f.job = Some(job);
@@ -112,14 +117,50 @@ pub const FIELDS: &[Field] = &[
     for_job(num("job.slice.infill_angle_deg", "Slicing", "Infill angle", "°", -360.0, 360.0, 1.0, "Odd layers add 90°."), "slice"),
     for_job(int("job.slice.solid_layers", "Slicing", "Solid layers (top and bottom)", 0.0, 1000.0, ""), "slice"),
     for_job(num("job.slice.gap_closing_mm", "Slicing", "Gap closing", "mm", 0.0, 5.0, 0.01, "Open contour ends closer than this are joined."), "slice"),
+    for_job(other("job.domain.kind", "Domain", "Domain", Kind::Choice, &["rectangle", "disc", "tensile_specimen", "solid"], "Where the lattice goes: a built-in shape, or the layers of a loaded solid."), "lattice"),
+    for_job(num("job.domain.width_mm", "Domain", "Width", "mm", 0.1, 2000.0, 0.1, ""), "lattice"),
+    for_job(num("job.domain.height_mm", "Domain", "Height", "mm", 0.1, 2000.0, 0.1, ""), "lattice"),
+    for_job(num("job.domain.diameter_mm", "Domain", "Diameter", "mm", 0.1, 2000.0, 0.1, ""), "lattice"),
+    for_job(num("job.domain.length_mm", "Domain", "Lattice length", "mm", 0.1, 2000.0, 0.1, "Between the handles."), "lattice"),
+    for_job(num("job.domain.handle_length_mm", "Domain", "Handle length", "mm", 0.1, 1000.0, 0.1, "Solid handle at each end."), "lattice"),
+    for_job(other("job.lattice.pattern.kind", "Lattice", "Pattern", Kind::Choice, PATTERNS, "The atlas pattern."), "lattice"),
+    for_job(num("job.lattice.pattern.hexagon_radius_mm", "Lattice", "Hexagon radius", "mm", 0.05, 1000.0, 0.05, ""), "lattice"),
+    for_job(num("job.lattice.pattern.density_per_mm2", "Lattice", "Seed points", "/mm²", 0.0001, 100.0, 0.01, "Voronoi seed points per mm² (placed by the random seed)."), "lattice"),
+    for_job(num("job.lattice.pattern.cell_size_mm", "Lattice", "Cell size", "mm", 0.05, 1000.0, 0.05, ""), "lattice"),
+    for_job(num("job.lattice.pattern.cell_width_mm", "Lattice", "Unit-cell width", "mm", 0.05, 1000.0, 0.05, ""), "lattice"),
+    for_job(num("job.lattice.pattern.cell_height_mm", "Lattice", "Unit-cell height", "mm", 0.05, 1000.0, 0.05, ""), "lattice"),
+    for_job(num("job.lattice.pattern.strand_distance_mm", "Lattice", "Strand distance", "mm", 0.05, 1000.0, 0.05, "Centre to centre."), "lattice"),
+    for_job(num("job.lattice.layer_thickness_mm", "Lattice", "Layer thickness", "mm", 0.01, 2.0, 0.001, "LT in GIPPO equation 4."), "lattice"),
+    for_job(int("job.lattice.layers", "Lattice", "Layers", 1.0, 10000.0, "Ignored for a solid domain (it has as many as it slices to)."), "lattice"),
+    for_job(num("job.lattice.rotation_deg", "Lattice", "Rotation per layer", "°", -360.0, 360.0, 1.0, ""), "lattice"),
+    for_job(other("job.lattice.contour", "Lattice", "Add the contour", Kind::Bool, &[], "Print each region's outline, joined into the graph."), "lattice"),
+    for_job(other("job.paths.method", "Paths", "Optimiser", Kind::Choice, &["gippo_max", "gippo_min", "euler", "continuous"], "gippo_*: the paper's randomised search; euler: the proven minimum number of paths; continuous: one nozzle path per component."), "lattice"),
+    for_job(int("job.paths.iterations", "Paths", "GIPPO iterations", 1.0, 100000.0, "The paper uses 500."), "lattice"),
+    for_job(other("job.paths.order", "Paths", "Path order", Kind::Choice, &["longest_first", "min_travel"], "longest_first is the paper's."), "lattice"),
+    for_job(num("job.paths.merge_tolerance_mm", "Paths", "Node merge tolerance", "mm", 0.0001, 1.0, 0.001, ""), "lattice"),
+    for_job(int("job.paths.short_path_segments", "Paths", "Short path below", 0.0, 1000.0, "Paths with fewer segments are slowed down (the paper: 4)."), "lattice"),
+    for_job(num("job.paths.short_path_speed_factor", "Paths", "Short path speed", "×", 0.01, 1.0, 0.05, "The paper: 0.6."), "lattice"),
+    Field { default: Some("{\"surface\":{\"kind\":\"sphere\"}}"), ..for_job(other("job.nonplanar", "Non-planar", "Print on a surface", Kind::Section, &[], "Project every layer onto a surface along Z."), "lattice") },
+    for_job(other("job.nonplanar.surface.kind", "Non-planar", "Surface", Kind::Choice, &["sphere", "cylinder", "mesh"], "mesh: the loaded surface file."), "lattice"),
+    for_job(num("job.nonplanar.surface.radius_mm", "Non-planar", "Radius", "mm", 0.1, 10000.0, 0.1, ""), "lattice"),
+    Field { unit: "mm", min: Some(-10000.0), max: Some(10000.0), step: Some(0.1), ..for_job(other("job.nonplanar.surface.center_mm", "Non-planar", "Centre X, Y, Z", Kind::Vec3, &[], ""), "lattice") },
+    for_job(num("job.nonplanar.surface.axis_z_mm", "Non-planar", "Axis height", "mm", -10000.0, 10000.0, 0.1, "The cylinder lies along X."), "lattice"),
+    for_job(num("job.nonplanar.max_segment_mm", "Non-planar", "Longest segment", "mm", 0.01, 10.0, 0.01, "Segments are split so Z follows the surface."), "lattice"),
     Field { unit: "mm", min: Some(0.01), max: Some(2000.0), step: Some(0.1), ..other("job.input.builtin.size", "Input", "Cube size X, Y, Z", Kind::Vec3, &[], "") },
     Field { unit: "mm", min: Some(0.01), max: Some(1000.0), step: Some(0.1), ..other("job.input.builtin.radius", "Input", "Radius", Kind::Number, &[], "") },
     Field { unit: "mm", min: Some(0.01), max: Some(2000.0), step: Some(0.1), ..other("job.input.builtin.height", "Input", "Height", Kind::Number, &[], "") },
+    Field { unit: "mm", min: Some(0.0), max: Some(2000.0), step: Some(0.1), ..other("job.input.builtin.dish_depth", "Input", "Dish depth", Kind::Number, &[], "Depth of the concave top at the centre.") },
     Field { min: Some(8.0), max: Some(512.0), step: Some(1.0), ..other("job.input.builtin.segments", "Input", "Facets around", Kind::Integer, &[], "") },
 ];
 
 /// Built-in shapes offered in the form.
-pub const BUILTIN_SHAPES: &[&str] = &["cube", "sphere", "cylinder"];
+pub const BUILTIN_SHAPES: &[&str] = &["cube", "sphere", "cylinder", "concave_cylinder"];
+/// The lattice atlas.
+pub const PATTERNS: &[&str] = &[
+    "honeycomb", "voronoi", "penrose", "snub_square", "arrowhead", "reentrant_honeycomb", "rectilinear", "square_grid", "triangle_grid",
+];
+/// Job kinds.
+pub const JOB_KINDS: &[&str] = &["slice", "lattice"];
 
 /// The schema as JSON for the page.
 pub fn schema_json() -> String {
@@ -129,8 +170,9 @@ pub fn schema_json() -> String {
         fields: &'static [Field],
         job_kinds: &'static [&'static str],
         builtin_shapes: &'static [&'static str],
+        patterns: &'static [&'static str],
     }
-    serde_json::to_string(&Schema { version: super::DESIGN_VERSION, fields: FIELDS, job_kinds: &["slice"], builtin_shapes: BUILTIN_SHAPES })
+    serde_json::to_string(&Schema { version: super::DESIGN_VERSION, fields: FIELDS, job_kinds: JOB_KINDS, builtin_shapes: BUILTIN_SHAPES, patterns: PATTERNS })
         .unwrap_or_default()
 }
 
@@ -199,6 +241,31 @@ pub fn validate(design: &Design) -> Vec<Problem> {
             if let super::Input::File { name, .. } = &j.input {
                 if name.trim().is_empty() {
                     out.push(Problem { path: "job.input.file.name".into(), message: "is empty: name the mesh file to slice".into() });
+                }
+            }
+        }
+        Job::Lattice(j) => {
+            let t = j.lattice.layer_thickness_mm;
+            if t > nozzle {
+                out.push(Problem {
+                    path: "job.lattice.layer_thickness_mm".into(),
+                    message: format!("{} mm is thicker than the {} mm nozzle: use at most the nozzle diameter", fmt(t), fmt(nozzle)),
+                });
+            }
+            if j.domain == crate::lattice::Domain::Solid && j.input.is_none() {
+                out.push(Problem { path: "job.input".into(), message: "a solid domain needs a solid: load a mesh or set job.input".into() });
+            }
+            if let Some(np) = &j.nonplanar {
+                if np.surface == crate::nonplanar::Surface::Mesh && j.surface_input.is_none() {
+                    out.push(Problem { path: "job.surface_input".into(), message: "a mesh surface needs a mesh: load the surface file or set job.surface_input".into() });
+                }
+            }
+            for o in &j.lattice.overrides {
+                if o.layer >= j.lattice.layers && j.domain != crate::lattice::Domain::Solid {
+                    out.push(Problem {
+                        path: "job.lattice.overrides".into(),
+                        message: format!("layer {} does not exist (the lattice has {} layers, numbered from 0)", o.layer, j.lattice.layers),
+                    });
                 }
             }
         }

@@ -224,28 +224,44 @@ pub fn generate(
 pub enum Domain {
     /// Rectangle W × H (the paper's 10 × 10 mm grids).
     Rectangle {
-        /// Width along X, mm.
+        /// Width along X, mm. Default 10.
+        #[serde(default = "d_ten")]
         width_mm: f64,
-        /// Height along Y, mm.
+        /// Height along Y, mm. Default 10.
+        #[serde(default = "d_ten")]
         height_mm: f64,
     },
     /// Disc (the paper's Ø48 mm ball-burst samples).
     Disc {
-        /// Diameter, mm.
+        /// Diameter, mm. Default 48.
+        #[serde(default = "d_disc")]
         diameter_mm: f64,
     },
     /// Tensile specimen: a lattice `width_mm` × `length_mm` (along X) with a solid handle
     /// `width_mm` × `handle_length_mm` at each end, joined to the lattice.
     TensileSpecimen {
         /// Width (Y), mm. Default 10.
+        #[serde(default = "d_ten")]
         width_mm: f64,
         /// Lattice length (X), mm. Default 10.
+        #[serde(default = "d_ten")]
         length_mm: f64,
         /// Handle length (X) at each end, mm. Default 3.
+        #[serde(default = "d_handle")]
         handle_length_mm: f64,
     },
     /// The layers of the job's input solid, sliced every layer thickness.
     Solid,
+}
+
+fn d_ten() -> f64 {
+    10.0
+}
+fn d_disc() -> f64 {
+    48.0
+}
+fn d_handle() -> f64 {
+    3.0
 }
 
 impl Default for Domain {

@@ -16,16 +16,21 @@ pub const DEFAULT_MAX_SEGMENT_MM: f64 = 0.25;
 pub enum Surface {
     /// Sphere (its top is printed on).
     Sphere {
-        /// Radius, mm.
+        /// Radius, mm. Default 20.
+        #[serde(default = "d_radius")]
         radius_mm: f64,
         /// Centre X, Y, Z, mm (model coordinates: the lattice is centred on X = Y = 0).
+        /// Default [0, 0, −20] (the sphere's top at Z = 0).
+        #[serde(default = "d_center")]
         center_mm: [f64; 3],
     },
     /// Cylinder lying along X (its top is printed on).
     Cylinder {
-        /// Radius, mm.
+        /// Radius, mm. Default 20.
+        #[serde(default = "d_radius")]
         radius_mm: f64,
-        /// Axis height Z, mm.
+        /// Axis height Z, mm. Default −20 (the cylinder's top at Z = 0).
+        #[serde(default = "d_axis")]
         axis_z_mm: f64,
     },
     /// The job's surface mesh (ray casts).
@@ -36,11 +41,28 @@ pub enum Surface {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Options {
-    /// The surface.
+    /// The surface. Default: a sphere of radius 20 mm with its top at Z = 0.
+    #[serde(default)]
     pub surface: Surface,
     /// Longest segment after projection, mm. Default 0.25.
     #[serde(default = "d_seg")]
     pub max_segment_mm: f64,
+}
+
+fn d_radius() -> f64 {
+    20.0
+}
+fn d_center() -> [f64; 3] {
+    [0.0, 0.0, -20.0]
+}
+fn d_axis() -> f64 {
+    -20.0
+}
+
+impl Default for Surface {
+    fn default() -> Self {
+        Surface::Sphere { radius_mm: d_radius(), center_mm: d_center() }
+    }
 }
 
 fn d_seg() -> f64 {

@@ -40,14 +40,82 @@ pub use native::run_all;
 #[cfg(not(target_arch = "wasm32"))]
 mod native {
     use super::*;
-    use crate::pipeline::{self, Files, RunOptions, Stage};
+    use crate::pipeline::{self, Files, RunOptions, RunOutput, Stage};
     use std::time::Instant;
 
-    fn peak_rss_mb() -> Option<f64> {
+    /// Analyzer passes per configuration; the fastest is reported (the machine may be shared).
+    const ANALYZE_REPEATS: usize = 3;
+
+    fn status_mb(field: &str) -> Option<f64> {
         let status = std::fs::read_to_string("/proc/self/status").ok()?;
-        let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+        let line = status.lines().find(|l| l.starts_with(field))?;
         let kb: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
         Some(kb / 1024.0)
+    }
+
+    /// Peak resident set size since the start or the last [`reset_peak_rss`], MB (Linux).
+    fn peak_rss_mb() -> Option<f64> {
+        status_mb("VmHWM:")
+    }
+
+    /// Resets the peak RSS to the current RSS (Linux `clear_refs` 5); false when not possible.
+    fn reset_peak_rss() -> bool {
+        std::fs::write("/proc/self/clear_refs", "5").is_ok()
+    }
+
+    /// CPU time of this thread, s (Linux; `None` elsewhere).
+    fn thread_cpu_s() -> Option<f64> {
+        let stat = std::fs::read_to_string("/proc/thread-self/stat").ok()?;
+        let after = &stat[stat.rfind(')')? + 2..];
+        let f: Vec<&str> = after.split_whitespace().collect();
+        let ticks = f.get(11)?.parse::<f64>().ok()? + f.get(12)?.parse::<f64>().ok()?;
+        Some(ticks / 100.0)
+    }
+
+    struct Timed {
+        stages: Vec<(Stage, f64)>,
+        total: f64,
+        peak_mb: Option<f64>,
+        peak_is_job: bool,
+    }
+
+    fn run_timed(files: &Files, collect_preview: bool) -> Result<(Timed, RunOutput), String> {
+        let design = bench_design();
+        let peak_is_job = reset_peak_rss();
+        let mut stage_start = Instant::now();
+        let mut current = Stage::Import;
+        let mut stages: Vec<(Stage, f64)> = Vec::new();
+        let t = Instant::now();
+        let output = pipeline::run(&design, files, &RunOptions { collect_preview }, &mut |stage, _| {
+            if stage != current {
+                stages.push((current, stage_start.elapsed().as_secs_f64()));
+                current = stage;
+                stage_start = Instant::now();
+            }
+        })
+        .map_err(|e| e.to_string())?;
+        stages.push((current, stage_start.elapsed().as_secs_f64()));
+        let total = t.elapsed().as_secs_f64();
+        Ok((Timed { stages, total, peak_mb: peak_rss_mb(), peak_is_job }, output))
+    }
+
+    /// Fastest of [`ANALYZE_REPEATS`] passes: (wall s, thread CPU s of that pass, paths).
+    fn time_analyze(gcode: &[u8], collect_preview: bool) -> Result<(f64, Option<f64>, usize), String> {
+        let options = crate::analyze::Options { collect_preview, ..Default::default() };
+        let mut best: Option<(f64, Option<f64>, usize)> = None;
+        for _ in 0..ANALYZE_REPEATS {
+            let c = thread_cpu_s();
+            let t = Instant::now();
+            let a = crate::analyze::analyze("bench.gcode", gcode, &options).map_err(|e| e.to_string())?;
+            let s = t.elapsed().as_secs_f64();
+            let cpu = thread_cpu_s().zip(c).map(|(b, a)| b - a);
+            let paths = a.report.extrusion_paths;
+            drop(a);
+            if best.is_none_or(|b| s < b.0) {
+                best = Some((s, cpu, paths));
+            }
+        }
+        best.ok_or_else(|| "no analyzer pass".to_string())
     }
 
     /// Runs every benchmark and returns a Markdown report.
@@ -58,53 +126,51 @@ mod native {
         let stl = mesh.to_stl_binary();
         let gen_s = t0.elapsed().as_secs_f64();
         let stl_mb = stl.len() as f64 / 1e6;
+        let n_triangles = mesh.triangles.len();
+        drop(mesh);
         let mut files = Files::new();
         files.insert("bench.stl".into(), stl);
-        let design = bench_design();
-        let mut stage_start = Instant::now();
-        let mut current = Stage::Import;
-        let mut stage_times: Vec<(Stage, f64)> = Vec::new();
-        let t = Instant::now();
-        let output = pipeline::run(&design, &files, &RunOptions::default(), &mut |stage, _| {
-            if stage != current {
-                stage_times.push((current, stage_start.elapsed().as_secs_f64()));
-                current = stage;
-                stage_start = Instant::now();
-            }
-        })
-        .map_err(|e| e.to_string())?;
-        stage_times.push((current, stage_start.elapsed().as_secs_f64()));
-        let total = t.elapsed().as_secs_f64();
-        out.push_str(&format!(
-            "## slice: {} triangles ({:.1} MB binary STL, generated in {:.2} s), 0.2 mm layers\n\n",
-            mesh.triangles.len(),
-            stl_mb,
-            gen_s
-        ));
-        out.push_str("| stage | seconds |\n|---|---|\n");
-        for (stage, s) in &stage_times {
-            out.push_str(&format!("| {} | {:.3} |\n", stage.name(), s));
-        }
-        out.push_str(&format!("| **total** | **{total:.3}** |\n\n"));
-        out.push_str(&format!(
-            "layers {}, G-code {:.1} MB, peak RSS {} MB ({:.1}× the STL)\n\n",
-            output.report.analysis.layers,
-            output.gcode.len() as f64 / 1e6,
-            peak_rss_mb().map_or("?".into(), |m| format!("{m:.0}")),
-            peak_rss_mb().unwrap_or(0.0) / stl_mb
-        ));
-        let big = repeat_to(&output.gcode, gcode_mb * 1_000_000);
+
+        // The CLI's run (no preview buffers), then the page's (Session.run builds them).
+        let (plain, output) = run_timed(&files, false)?;
+        let layers = output.report.analysis.layers;
+        let gcode = output.gcode;
+        let (preview, output) = run_timed(&files, true)?;
+        let same = output.gcode == gcode;
         drop(output);
-        let t = Instant::now();
-        let analysis = crate::analyze::analyze("bench.gcode", big.as_bytes(), &Default::default()).map_err(|e| e.to_string())?;
-        let s = t.elapsed().as_secs_f64();
+
         out.push_str(&format!(
-            "## analyze: {:.1} MB of G-code in {:.3} s = **{:.0} MB/s** ({} extrusion paths)\n",
-            big.len() as f64 / 1e6,
-            s,
-            big.len() as f64 / 1e6 / s,
-            analysis.report.extrusion_paths
+            "## slice: {n_triangles} triangles ({stl_mb:.1} MB binary STL, generated in {gen_s:.2} s), 0.2 mm layers\n\n"
         ));
+        out.push_str("| stage | seconds (no preview, CLI) | seconds (with preview, as the page) |\n|---|---|---|\n");
+        for ((stage, a), (_, b)) in plain.stages.iter().zip(&preview.stages) {
+            out.push_str(&format!("| {} | {a:.3} | {b:.3} |\n", stage.name()));
+        }
+        out.push_str(&format!("| **total** | **{:.3}** | **{:.3}** |\n\n", plain.total, preview.total));
+        let rss = |t: &Timed| match t.peak_mb {
+            Some(m) => format!("{m:.0} MB ({:.1}× the STL){}", m / stl_mb, if t.peak_is_job { "" } else { " (process peak)" }),
+            None => "?".into(),
+        };
+        out.push_str(&format!(
+            "layers {layers}, G-code {:.1} MB{}, peak RSS during the run {} without preview, {} with preview\n\n",
+            gcode.len() as f64 / 1e6,
+            if same { "" } else { " (the preview run's G-code DIFFERS)" },
+            rss(&plain),
+            rss(&preview),
+        ));
+        drop((plain, preview, files));
+
+        let big = repeat_to(&gcode, gcode_mb * 1_000_000);
+        drop(gcode);
+        let mb = big.len() as f64 / 1e6;
+        for (collect_preview, label) in [(false, "analyze"), (true, "analyze with preview")] {
+            let (s, cpu, paths) = time_analyze(big.as_bytes(), collect_preview)?;
+            out.push_str(&format!(
+                "## {label}: {mb:.1} MB of G-code in {s:.3} s = **{:.0} MB/s** (CPU {}; best of {ANALYZE_REPEATS}; {paths} extrusion paths)\n",
+                mb / s,
+                cpu.map_or("?".into(), |c| format!("{c:.2} s")),
+            ));
+        }
         Ok(out)
     }
 }

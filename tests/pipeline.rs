@@ -70,7 +70,7 @@ fn seed_and_design_determine_the_bytes() {
     let run = |d: &Design| pipeline::run(d, &Files::new(), &RunOptions::default(), &mut |_, _| {}).unwrap().gcode;
     let a = run(&design);
     assert_eq!(a, run(&design));
-    let Job::Slice(_) = &design.job;
+    assert!(matches!(design.job, Job::Slice(_)));
     let mut other = design.clone();
     other.material.extrusion_multiplier = 1.1;
     assert_ne!(a, run(&other));

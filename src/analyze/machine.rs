@@ -532,6 +532,26 @@ pub fn gippo_score(paths: &[(f64, u32)]) -> f64 {
     paths.iter().map(|p| p.0 * p.1 as f64).sum::<f64>() / (total * paths.len() as f64)
 }
 
+/// Position of the first `\n` in `s`, eight bytes at a time.
+#[inline]
+fn find_newline(s: &[u8]) -> Option<usize> {
+    const ONES: u64 = 0x0101_0101_0101_0101;
+    const HIGHS: u64 = 0x8080_8080_8080_8080;
+    const NL: u64 = 0x0a0a_0a0a_0a0a_0a0a;
+    let mut chunks = s.chunks_exact(8);
+    let mut base = 0;
+    for c in &mut chunks {
+        let x = u64::from_le_bytes([c[0], c[1], c[2], c[3], c[4], c[5], c[6], c[7]]) ^ NL;
+        // The lowest high bit set marks the first zero byte of x (borrows only move up).
+        let z = x.wrapping_sub(ONES) & !x & HIGHS;
+        if z != 0 {
+            return Some(base + (z.trailing_zeros() / 8) as usize);
+        }
+        base += 8;
+    }
+    chunks.remainder().iter().position(|&b| b == b'\n').map(|p| base + p)
+}
+
 /// Runs the analyzer over `bytes`.
 pub(crate) fn run(file: &str, bytes: &[u8], options: &Options) -> Result<Analysis, Error> {
     if let Some(offset) = super::parse::first_binary_byte(bytes) {
@@ -541,7 +561,7 @@ pub(crate) fn run(file: &str, bytes: &[u8], options: &Options) -> Result<Analysi
     let mut start = 0;
     let mut line_no = 0usize;
     while start < bytes.len() {
-        let end = bytes[start..].iter().position(|&b| b == b'\n').map_or(bytes.len(), |p| start + p);
+        let end = find_newline(&bytes[start..]).map_or(bytes.len(), |p| start + p);
         line_no += 1;
         let mut line = &bytes[start..end];
         if let Some((&b'\r', rest)) = line.split_last() {

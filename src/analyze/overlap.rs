@@ -34,10 +34,16 @@ const MAX_CELLS_AXIS: i64 = 16;
 /// Reusable buffers.
 #[derive(Default)]
 pub struct Overlap {
+    /// First node of each bucket's list.
     head: Vec<u32>,
-    next: Vec<u32>,
-    item: Vec<u32>,
+    /// List nodes: [next node, segment].
+    nodes: Vec<[u32; 2]>,
+    /// Last query (2j) or registration (2j + 1) that visited each bucket.
+    bucket_stamp: Vec<u32>,
+    /// Last query that tested each segment.
     stamp: Vec<u32>,
+    /// Prepared segments of the layer.
+    prep: Vec<Prep>,
     intervals: Vec<(f64, f64)>,
 }
 
@@ -90,13 +96,37 @@ fn for_piece_cells(s: &Seg, cs: f64, grow: f64, mut f: impl FnMut(i64, i64)) {
     }
 }
 
+/// A segment with the quantities [`on_segment`] needs, computed once per segment (not once
+/// per candidate pair).
+#[derive(Clone, Copy, Debug)]
+struct Prep {
+    /// Start x, y.
+    a: [f64; 2],
+    /// End x, y.
+    b: [f64; 2],
+    /// End minus start.
+    d: [f64; 2],
+    /// Squared length.
+    l2: f64,
+    /// Line width.
+    w: f64,
+}
+
+impl Prep {
+    #[inline]
+    fn new(s: &Seg) -> Prep {
+        let (dx, dy) = (s.b[0] - s.a[0], s.b[1] - s.a[1]);
+        Prep { a: s.a, b: s.b, d: [dx, dy], l2: dx * dx + dy * dy, w: s.w }
+    }
+}
+
 /// The part of `b` (as a parameter interval of `b`) lying on `a`, if longer than nothing.
 #[inline]
-fn on_segment(a: &Seg, b: &Seg) -> Option<(f64, f64)> {
-    let (ax, ay) = (a.b[0] - a.a[0], a.b[1] - a.a[1]);
-    let (bx, by) = (b.b[0] - b.a[0], b.b[1] - b.a[1]);
-    let la2 = ax * ax + ay * ay;
-    let lb2 = bx * bx + by * by;
+fn on_segment(a: &Prep, b: &Prep) -> Option<(f64, f64)> {
+    let [ax, ay] = a.d;
+    let [bx, by] = b.d;
+    let la2 = a.l2;
+    let lb2 = b.l2;
     if !(la2 > 0.0 && lb2 > 0.0) {
         return None;
     }
@@ -171,44 +201,61 @@ impl Overlap {
         let grow = 0.5 * wmax + 1e-9;
 
         // Incremental grid: query a segment against what is registered, then register it.
+        // A bucket is walked at most once per query and holds a segment at most once (both
+        // through `bucket_stamp`); each segment is tested at most once per query (`stamp`).
         let buckets = (segs.len() * 4).next_power_of_two().max(64);
         let probe_mask = (buckets - 1) as u64;
         self.head.clear();
         self.head.resize(buckets, u32::MAX);
-        self.next.clear();
-        self.item.clear();
+        self.bucket_stamp.clear();
+        self.bucket_stamp.resize(buckets, u32::MAX);
+        self.nodes.clear();
         self.stamp.clear();
         self.stamp.resize(segs.len(), u32::MAX);
+        self.prep.clear();
+        self.prep.extend(segs.iter().map(Prep::new));
         let mut total = 0.0;
         for (j, b) in segs.iter().enumerate() {
+            let j32 = j as u32;
+            // Stamps: 2j for the query, 2j + 1 for the registration (segments < u32::MAX / 2
+            // per layer; beyond that, no bucket is skipped, which changes nothing but speed).
+            let (q_mark, r_mark) = if j < (u32::MAX / 2) as usize { (2 * j32, 2 * j32 + 1) } else { (u32::MAX, u32::MAX) };
             self.intervals.clear();
-            let (head, next, item, stamp, intervals) = (&self.head, &self.next, &self.item, &mut self.stamp, &mut self.intervals);
-            for_piece_cells(b, cs, grow, |cx, cy| {
-                let mut link = head[bucket(cx, cy, probe_mask) as usize];
-                while link != u32::MAX {
-                    let i = item[link as usize] as usize;
-                    link = next[link as usize];
-                    if stamp[i] == j as u32 {
-                        continue;
-                    }
-                    stamp[i] = j as u32;
-                    if let Some(iv) = on_segment(&segs[i], b) {
-                        intervals.push(iv);
-                    }
-                }
-            });
-            {
-                let (head, next, item) = (&mut self.head, &mut self.next, &mut self.item);
-                let mut last = u32::MAX;
-                for_piece_cells(b, cs, 0.0, |cx, cy| {
-                    let k = bucket(cx, cy, probe_mask);
-                    if k == last {
+            let bp = &self.prep[j];
+            let (head, nodes, stamp, bstamp, intervals, prep) =
+                (&self.head, &self.nodes, &mut self.stamp, &mut self.bucket_stamp, &mut self.intervals, &self.prep);
+            if !nodes.is_empty() {
+                for_piece_cells(b, cs, grow, |cx, cy| {
+                    let k = bucket(cx, cy, probe_mask) as usize;
+                    if bstamp[k] == q_mark && q_mark != u32::MAX {
                         return;
                     }
-                    last = k;
-                    next.push(head[k as usize]);
-                    item.push(j as u32);
-                    head[k as usize] = (item.len() - 1) as u32;
+                    bstamp[k] = q_mark;
+                    let mut link = head[k];
+                    while link != u32::MAX {
+                        let [next, i] = nodes[link as usize];
+                        link = next;
+                        let i = i as usize;
+                        if stamp[i] == j32 {
+                            continue;
+                        }
+                        stamp[i] = j32;
+                        if let Some(iv) = on_segment(&prep[i], bp) {
+                            intervals.push(iv);
+                        }
+                    }
+                });
+            }
+            {
+                let (head, nodes, bstamp) = (&mut self.head, &mut self.nodes, &mut self.bucket_stamp);
+                for_piece_cells(b, cs, 0.0, |cx, cy| {
+                    let k = bucket(cx, cy, probe_mask) as usize;
+                    if bstamp[k] == r_mark && r_mark != u32::MAX {
+                        return;
+                    }
+                    bstamp[k] = r_mark;
+                    nodes.push([head[k], j32]);
+                    head[k] = (nodes.len() - 1) as u32;
                 });
             }
             if self.intervals.is_empty() {

@@ -20,36 +20,52 @@ pub fn parse_number(s: &[u8]) -> Option<(f64, usize)> {
             i = 1;
         }
     }
-    let mut mant: u64 = 0;
-    let mut digits = 0usize;
-    let mut frac_digits = 0usize;
+    // Digits before and after the point; the mantissa is accumulated in a separate pass only
+    // when it is short enough for the fast path (fewer than 19 digits), which keeps the scan
+    // loops free of the accumulator's dependency chain.
+    let int_start = i;
     while i < s.len() && s[i].is_ascii_digit() {
-        if digits < 19 {
-            mant = mant * 10 + (s[i] - b'0') as u64;
-        }
-        digits += 1;
         i += 1;
     }
+    let int_end = i;
+    let mut frac_start = i;
     if i < s.len() && s[i] == b'.' {
         i += 1;
+        frac_start = i;
         while i < s.len() && s[i].is_ascii_digit() {
-            if digits < 19 {
-                mant = mant * 10 + (s[i] - b'0') as u64;
-                frac_digits += 1;
-            }
-            digits += 1;
             i += 1;
         }
     }
+    let int_digits = int_end - int_start;
+    let frac_digits = i - frac_start;
+    let digits = int_digits + frac_digits;
     if digits == 0 {
         return None;
     }
-    let v = if mant < (1u64 << 53) && digits < 19 && frac_digits < POW10.len() {
-        mant as f64 / POW10[frac_digits]
+    let v = if digits < 19 {
+        // Fewer than 19 digits: the mantissa fits in a u64 (< 10^18 < 2^63).
+        let mut mant: u64 = 0;
+        for &b in &s[int_start..int_end] {
+            mant = mant * 10 + (b - b'0') as u64;
+        }
+        for &b in &s[frac_start..i] {
+            mant = mant * 10 + (b - b'0') as u64;
+        }
+        if mant < (1u64 << 53) && frac_digits < POW10.len() {
+            Some(mant as f64 / POW10[frac_digits])
+        } else {
+            None
+        }
     } else {
-        // Rare: too many digits for the fast path.
-        let text = std::str::from_utf8(&s[usize::from(neg || s[0] == b'+')..i]).ok()?;
-        text.parse::<f64>().ok()?
+        None
+    };
+    let v = match v {
+        Some(v) => v,
+        None => {
+            // Rare: too many digits for the fast path.
+            let text = std::str::from_utf8(&s[usize::from(neg || s[0] == b'+')..i]).ok()?;
+            text.parse::<f64>().ok()?
+        }
     };
     Some((if neg { -v } else { v }, i))
 }

@@ -10,13 +10,13 @@
 //   WEFT_PKG_DIR   serve this directory as /pkg/ instead of ./pkg (test another wasm build)
 //   E2E_TIMEOUT_S  per-job timeout in seconds (default 120)
 //   E2E_HEADED=1   show the browser
-import { createServer } from "node:http";
-import { createReadStream, existsSync, mkdirSync, readFileSync, statSync, writeFileSync } from "node:fs";
+import { existsSync, mkdirSync, readFileSync, writeFileSync } from "node:fs";
 import { createHash } from "node:crypto";
 import { execFileSync } from "node:child_process";
-import { dirname, extname, join, resolve, sep } from "node:path";
+import { dirname, join, resolve } from "node:path";
 import { fileURLToPath } from "node:url";
 import { chromium } from "playwright-core";
+import { serve } from "./server.mjs";
 
 const ROOT = resolve(dirname(fileURLToPath(import.meta.url)), "../..");
 const OUT = join(ROOT, "tests/e2e/out");
@@ -26,47 +26,6 @@ const PKG_DIR = process.env.WEFT_PKG_DIR ? resolve(process.env.WEFT_PKG_DIR) : j
 const JOB_TIMEOUT = Number(process.env.E2E_TIMEOUT_S ?? 120) * 1000;
 const VIEWPORT = { width: 1400, height: 900 };
 mkdirSync(OUT, { recursive: true });
-
-// ---------------------------------------------------------------------------------------
-// Static server (localhost only)
-// ---------------------------------------------------------------------------------------
-const MIME = {
-  ".html": "text/html; charset=utf-8", ".js": "text/javascript; charset=utf-8",
-  ".mjs": "text/javascript; charset=utf-8", ".css": "text/css; charset=utf-8",
-  ".json": "application/json; charset=utf-8", ".wasm": "application/wasm",
-  ".png": "image/png", ".svg": "image/svg+xml", ".txt": "text/plain; charset=utf-8",
-  ".stl": "model/stl", ".obj": "text/plain; charset=utf-8", ".3mf": "application/octet-stream",
-  ".gcode": "text/plain; charset=utf-8", ".ts": "text/plain; charset=utf-8",
-};
-
-function serve() {
-  const server = createServer((req, res) => {
-    let path = decodeURIComponent(new URL(req.url, "http://localhost").pathname);
-    let base = ROOT;
-    if (path.startsWith("/pkg/")) {
-      base = PKG_DIR;
-      path = path.slice(4);
-    }
-    let file = resolve(join(base, path));
-    if (file !== base && !file.startsWith(base + sep)) {
-      res.writeHead(403).end("forbidden");
-      return;
-    }
-    try {
-      if (statSync(file).isDirectory()) file = join(file, "index.html");
-      const size = statSync(file).size;
-      res.writeHead(200, {
-        "content-type": MIME[extname(file)] ?? "application/octet-stream",
-        "content-length": size,
-        "cache-control": "no-store",
-      });
-      createReadStream(file).pipe(res);
-    } catch {
-      res.writeHead(404, { "content-type": "text/plain" }).end("not found");
-    }
-  });
-  return new Promise((ok) => server.listen(0, "127.0.0.1", () => ok(server)));
-}
 
 // ---------------------------------------------------------------------------------------
 // Helpers
@@ -186,8 +145,9 @@ async function check(n, title, fn) {
   }
 }
 
-const server = await serve();
-const base = `http://127.0.0.1:${server.address().port}`;
+// Static server of the repository root, localhost only (tests/e2e/server.mjs).
+const server = await serve({ root: ROOT, pkgDir: PKG_DIR });
+const base = server.url;
 const browser = await chromium.launch({
   executablePath: CHROMIUM,
   headless: !process.env.E2E_HEADED,

@@ -104,7 +104,7 @@ fn point_order_is_preserved() {
                 }
                 assert!(k < pb.points.len(), "point {q} missing or out of order");
             }
-            assert_eq!(pb.points[0].distance(on_sphere(pa.points[0].x, pa.points[0].y, i, 10.0, c)) < 1e-9, true);
+            assert!(pb.points[0].distance(on_sphere(pa.points[0].x, pa.points[0].y, i, 10.0, c)) < 1e-9);
             let last = pa.points.last().unwrap();
             assert!(pb.points.last().unwrap().distance(on_sphere(last.x, last.y, i, 10.0, c)) < 1e-9);
         }

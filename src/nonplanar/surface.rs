@@ -123,7 +123,7 @@ impl MeshGrid {
             let v = [mesh.vertex(idx[0]), mesh.vertex(idx[1]), mesh.vertex(idx[2])];
             let c = (v[1] - v[0]).cross(v[2] - v[0]);
             let len = c.length();
-            if !(len > 1e-18) || !len.is_finite() {
+            if !len.is_finite() || len <= 1e-18 {
                 continue;
             }
             let mut n = c / len;

@@ -1,6 +1,6 @@
-//! G-code dialects. The layer loop in `writer.rs` talks to a [`Dialect`] only; a new flavour
-//! (e.g. a pneumatic `.nc` dialect that opens a valve per path instead of pushing E) is one
-//! more impl of this trait plus one arm in [`dialect`].
+//! G-code dialects. The layer loop in `writer.rs` talks to a [`Dialect`] only: Marlin (E axis,
+//! retraction, pre/post flow as `G1 E`) and the pneumatic `.nc` dialect (a valve per path, no
+//! E). A new flavour is one more impl of this trait plus one arm in [`dialect`].
 
 use super::format::{fixed, push_fixed};
 use super::writer::Out;

@@ -1,11 +1,19 @@
-//! G-code dialects. The layer loop in `writer.rs` talks to a [`Dialect`] only; a new flavour
-//! (e.g. a pneumatic `.nc` dialect that opens a valve per path instead of pushing E) is one
-//! more impl of this trait plus one arm in [`dialect`].
+//! G-code dialects. The layer loop in `writer.rs` talks to a [`Dialect`] only: Marlin (E axis,
+//! retraction, pre/post flow as `G1 E`) and the pneumatic `.nc` dialect (a valve per path, no
+//! E). A new flavour is one more impl of this trait plus one arm in [`dialect`].
 
-use super::format::push_fixed;
+use super::format::{fixed, push_fixed};
 use super::writer::Out;
 use super::{Flavor, Options};
 use crate::geom::DVec3;
+
+/// What the dialect needs to know about the path being written.
+pub(crate) struct PathCtx {
+    /// The path's speed factor (below 1: a short path the optimiser slowed down).
+    pub speed_factor: f64,
+    /// The path's print speed (feature speed × speed factor), mm/s.
+    pub speed_mm_s: f64,
+}
 
 /// What a flavour decides: how to set up, travel, extrude and finish.
 pub(crate) trait Dialect {
@@ -13,20 +21,46 @@ pub(crate) trait Dialect {
     fn prologue(&mut self, out: &mut Out, options: &Options);
     /// Moves without extruding from the current position to `to`, the start of the next path.
     fn travel(&mut self, out: &mut Out, to: DVec3, options: &Options);
+    /// Moves without extruding through `route` then to `to` with `G1` at the travel speed,
+    /// never retracting or hopping (an approach route along printed struts).
+    fn approach(&mut self, out: &mut Out, route: &[DVec3], to: DVec3, options: &Options) {
+        dry_route(out, route, to, options);
+    }
     /// Before the first segment of a path.
-    fn path_begin(&mut self, _out: &mut Out) {}
+    fn path_begin(&mut self, _out: &mut Out, _options: &Options, _path: &PathCtx) {}
+    /// How far before the end of the path [`Dialect::path_end`] is called, mm; the rest of
+    /// the path is written with [`Dialect::coast`].
+    fn end_lead_mm(&self, _options: &Options, _path: &PathCtx) -> f64 {
+        0.0
+    }
     /// One extruding segment to `to`, feeding `e` mm of filament, at `feed` mm/min.
     fn segment(&mut self, out: &mut Out, to: DVec3, e: f64, feed: u64);
-    /// After the last segment of a path.
-    fn path_end(&mut self, _out: &mut Out) {}
+    /// A move along the path after [`Dialect::path_end`] (no material fed).
+    fn coast(&mut self, out: &mut Out, to: DVec3, feed: u64) {
+        out.dry_move(to, feed);
+    }
+    /// After the last extruding segment of a path.
+    fn path_end(&mut self, _out: &mut Out, _options: &Options) {}
     /// Before the end template.
     fn epilogue(&mut self, out: &mut Out, options: &Options);
+}
+
+/// `G1` moves without E through `route` then to `to` at the travel speed (zero-length moves
+/// skipped).
+fn dry_route(out: &mut Out, route: &[DVec3], to: DVec3, options: &Options) {
+    let feed = feed_mm_min(options.printer.travel_speed_mm_s);
+    for &p in route.iter().chain(std::iter::once(&to)) {
+        if out.pos.is_none_or(|q| q.distance(p) > 1e-9) {
+            out.dry_move(p, feed);
+        }
+    }
 }
 
 /// The dialect object for `flavor`.
 pub(crate) fn dialect(flavor: Flavor) -> Box<dyn Dialect> {
     match flavor {
         Flavor::Marlin => Box::new(Marlin),
+        Flavor::Pneumatic => Box::new(PneumaticDialect { pressure_written: None }),
     }
 }
 
@@ -69,6 +103,23 @@ impl Marlin {
         out.push_feed(&mut line, feed_mm_min(r.speed_mm_s));
         out.line(&line);
         out.retracted = false;
+    }
+
+    /// `G1 E` feeding `e` mm without motion at the retraction speed (pre- and post-flow);
+    /// nothing when `e` is not positive.
+    fn push_e(out: &mut Out, e: f64, options: &Options) {
+        if !(e > 0.0 && e.is_finite()) {
+            return;
+        }
+        out.e_total += e;
+        let mut line = String::from("G1 E");
+        if out.relative_e {
+            push_fixed(&mut line, e, 5);
+        } else {
+            push_fixed(&mut line, out.e_total, 5);
+        }
+        out.push_feed(&mut line, feed_mm_min(options.printer.retraction.speed_mm_s));
+        out.line(&line);
     }
 }
 
@@ -116,6 +167,21 @@ impl Dialect for Marlin {
         }
     }
 
+    fn approach(&mut self, out: &mut Out, route: &[DVec3], to: DVec3, options: &Options) {
+        if out.retracted {
+            Self::unretract(out, options);
+        }
+        dry_route(out, route, to, options);
+    }
+
+    fn path_begin(&mut self, out: &mut Out, options: &Options, _path: &PathCtx) {
+        Self::push_e(out, options.material.flow.pre_flow_mm, options);
+    }
+
+    fn path_end(&mut self, out: &mut Out, options: &Options) {
+        Self::push_e(out, options.material.flow.post_flow_mm, options);
+    }
+
     fn segment(&mut self, out: &mut Out, to: DVec3, e: f64, feed: u64) {
         let mut line = String::with_capacity(48);
         line.push_str("G1 X");
@@ -140,4 +206,89 @@ impl Dialect for Marlin {
             Self::retract(out, options);
         }
     }
+}
+
+/// Pneumatic extrusion (`.nc`): no E axis. Travels are `G0` (lifted by the retraction's
+/// `z_hop_mm` when at least `min_travel_mm` long; there is no filament to retract); a path is
+/// the pressure line (when the pressure changes), the valve-on code, the pre-flow dwell,
+/// `G1 X Y [Z] [F]` moves, the valve-off code (early by the post-flow time, see
+/// [`super::Flow::post_flow_s`]).
+struct PneumaticDialect {
+    /// Last pressure written, in Pa (rounded).
+    pressure_written: Option<i64>,
+}
+
+/// Appends `code` (one or more lines) unless it is blank.
+fn push_code(out: &mut Out, code: &str) {
+    let code = code.trim_end_matches(['\n', '\r']);
+    if !code.trim().is_empty() {
+        out.line(code);
+    }
+}
+
+impl Dialect for PneumaticDialect {
+    fn prologue(&mut self, out: &mut Out, _options: &Options) {
+        out.line("G21 ; millimetres");
+        out.line("G90 ; absolute coordinates");
+    }
+
+    fn travel(&mut self, out: &mut Out, to: DVec3, options: &Options) {
+        let p = &options.printer;
+        let z_feed = feed_mm_min(p.z_speed_mm_s);
+        let xy_feed = feed_mm_min(p.travel_speed_mm_s);
+        let Some(from) = out.pos else {
+            out.move_z_with("G0", to.z, z_feed);
+            out.move_xy(to, xy_feed);
+            return;
+        };
+        let dxy = ((to.x - from.x) * (to.x - from.x) + (to.y - from.y) * (to.y - from.y)).sqrt();
+        let xy_moves = dxy > 1e-9;
+        if !xy_moves && (to.z - from.z).abs() <= 1e-9 {
+            return;
+        }
+        let r = &p.retraction;
+        let hop = if xy_moves && dxy >= r.min_travel_mm && r.z_hop_mm > 0.0 { r.z_hop_mm } else { 0.0 };
+        out.move_z_with("G0", (from.z + hop).max(to.z), z_feed);
+        if xy_moves {
+            out.move_xy(to, xy_feed);
+        }
+        out.move_z_with("G0", to.z, z_feed);
+    }
+
+    fn path_begin(&mut self, out: &mut Out, options: &Options, path: &PathCtx) {
+        let pn = &options.printer.pneumatic;
+        let mut kpa = pn.pressure_kpa;
+        if path.speed_factor < 1.0 {
+            kpa *= pn.short_path_pressure_factor;
+        }
+        let pa = (kpa * 1000.0).round() as i64;
+        if !pn.pressure_template.trim().is_empty() && self.pressure_written != Some(pa) {
+            let line = pn.pressure_template.replace("{pressure_kpa}", &fixed(kpa, 3));
+            push_code(out, &line);
+            self.pressure_written = Some(pa);
+        }
+        push_code(out, &pn.valve_on);
+        let ms = (options.material.flow.pre_flow_s * 1000.0).round();
+        if ms.is_finite() && ms >= 1.0 {
+            let mut line = String::from("G4 P");
+            push_fixed(&mut line, ms, 0);
+            line.push_str(" ; pre-flow");
+            out.line(&line);
+        }
+    }
+
+    fn end_lead_mm(&self, options: &Options, path: &PathCtx) -> f64 {
+        let lead = options.material.flow.post_flow_s * path.speed_mm_s;
+        if lead.is_finite() && lead > 0.0 { lead } else { 0.0 }
+    }
+
+    fn segment(&mut self, out: &mut Out, to: DVec3, _e: f64, feed: u64) {
+        out.dry_move(to, feed);
+    }
+
+    fn path_end(&mut self, out: &mut Out, options: &Options) {
+        push_code(out, &options.printer.pneumatic.valve_off);
+    }
+
+    fn epilogue(&mut self, _out: &mut Out, _options: &Options) {}
 }

@@ -22,6 +22,29 @@ pub use writer::equation4_e;
 pub enum Flavor {
     /// Marlin (and Klipper/RepRapFirmware, which read the same subset).
     Marlin,
+    /// Pneumatic extrusion (`.nc` files for CNC-style bioprinters such as the GIPPO paper's
+    /// Bioscaffolder): no E axis; each path opens a valve ([`Pneumatic::valve_on`]) and closes
+    /// it ([`Pneumatic::valve_off`]); the pressure is set per path
+    /// ([`Pneumatic::pressure_template`]). Set [`Printer::pneumatic`] to your machine's codes.
+    Pneumatic,
+}
+
+impl Flavor {
+    /// File name extension of the output, without the dot: `gcode` (Marlin) or `nc` (pneumatic).
+    pub fn file_extension(self) -> &'static str {
+        match self {
+            Flavor::Marlin => "gcode",
+            Flavor::Pneumatic => "nc",
+        }
+    }
+
+    /// Name written in the `;FLAVOR:` header line.
+    pub fn name(self) -> &'static str {
+        match self {
+            Flavor::Marlin => "Marlin",
+            Flavor::Pneumatic => "Pneumatic",
+        }
+    }
 }
 
 /// Where the printer's X = Y = 0 is.
@@ -85,12 +108,75 @@ pub struct Printer {
     pub start_gcode: String,
     /// End G-code, same placeholders.
     pub end_gcode: String,
+    /// Valve and pressure codes of the pneumatic flavour (ignored by Marlin).
+    pub pneumatic: Pneumatic,
+}
+
+/// Machine codes of the pneumatic flavour ([`Flavor::Pneumatic`]). Controllers differ: these
+/// defaults are placeholders in the style of CNC controllers; set the codes of your machine.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Pneumatic {
+    /// Line(s) written before the first move of each path to start the flow. Default `M3`
+    /// (spindle on: the output CNC controllers usually switch a dispenser relay with).
+    pub valve_on: String,
+    /// Line(s) written after each path to stop the flow. Default `M5` (spindle off).
+    pub valve_off: String,
+    /// Line written before a path whose pressure differs from the last one written;
+    /// `{pressure_kpa}` is replaced by the pressure in kPa (up to 3 decimals). Empty: no
+    /// pressure line. Default `; pressure {pressure_kpa} kPa` (a comment: put your machine's
+    /// pressure code here, e.g. `M9 P{pressure_kpa}`).
+    pub pressure_template: String,
+    /// Extrusion pressure, kPa. Default 300.
+    pub pressure_kpa: f64,
+    /// Multiplies the pressure of short paths (those the optimiser slowed down: speed factor
+    /// below 1). Default 1.
+    pub short_path_pressure_factor: f64,
+}
+
+impl Default for Pneumatic {
+    fn default() -> Self {
+        Pneumatic {
+            valve_on: "M3".into(),
+            valve_off: "M5".into(),
+            pressure_template: "; pressure {pressure_kpa} kPa".into(),
+            pressure_kpa: 300.0,
+            short_path_pressure_factor: 1.0,
+        }
+    }
+}
+
+/// Extra material at path ends (GIPPO's "pre-flow" and "post-flow"). All default to 0, which
+/// writes nothing.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Flow {
+    /// Marlin: filament pushed at the start of every path, after the travel (and unretract),
+    /// before the first move: `G1 E<+pre_flow_mm>` at the retraction speed, mm. Default 0.
+    pub pre_flow_mm: f64,
+    /// Marlin: filament pushed at the end of every path, without motion, before the next
+    /// retraction: `G1 E<+post_flow_mm>` at the retraction speed, mm. Default 0.
+    pub post_flow_mm: f64,
+    /// Pneumatic: dwell after opening the valve, before the first move (`G4 P<ms>`), so the
+    /// flow is established when the nozzle starts moving, s. Default 0.
+    pub pre_flow_s: f64,
+    /// Pneumatic: the valve closes this long (at the path's speed) before the path's end and
+    /// the nozzle finishes the path with the valve closed (the residual pressure keeps the
+    /// material flowing, so the end does not blob), s. Longer than the path: the valve closes
+    /// right after the pre-flow. Default 0.
+    pub post_flow_s: f64,
 }
 
 /// Default start G-code (Marlin).
 pub const DEFAULT_START_GCODE: &str = "M140 S{bed_temp_c} ; bed\nM104 S{first_layer_nozzle_temp_c} ; nozzle\nG28 ; home\nM190 S{bed_temp_c}\nM109 S{first_layer_nozzle_temp_c}\nG92 E0\n";
 /// Default end G-code (Marlin).
 pub const DEFAULT_END_GCODE: &str = "M107 ; fan off\nM104 S0\nM140 S0\nG91\nG1 Z5 F600\nG90\nM84 ; motors off\n";
+/// Start code of the pneumatic flavour, written instead of [`DEFAULT_START_GCODE`] when the
+/// flavour is pneumatic and `start_gcode` is left at the Marlin default.
+pub const DEFAULT_PNEUMATIC_START_GCODE: &str = "G28 ; home\n";
+/// End code of the pneumatic flavour, written instead of [`DEFAULT_END_GCODE`] when the
+/// flavour is pneumatic and `end_gcode` is left at the Marlin default.
+pub const DEFAULT_PNEUMATIC_END_GCODE: &str = "G91\nG0 Z5 F600\nG90\nM2 ; end of program\n";
 
 impl Default for Printer {
     fn default() -> Self {
@@ -108,6 +194,7 @@ impl Default for Printer {
             acceleration_mm_s2: 1000.0,
             start_gcode: DEFAULT_START_GCODE.into(),
             end_gcode: DEFAULT_END_GCODE.into(),
+            pneumatic: Pneumatic::default(),
         }
     }
 }
@@ -132,6 +219,8 @@ pub struct Material {
     pub extrusion_multiplier: f64,
     /// Cross-section correction k (equation 4). Default 1.
     pub k: f64,
+    /// Pre-flow and post-flow (default: none).
+    pub flow: Flow,
 }
 
 impl Default for Material {
@@ -145,6 +234,7 @@ impl Default for Material {
             fan_start_layer: 1,
             extrusion_multiplier: 1.0,
             k: 1.0,
+            flow: Flow::default(),
         }
     }
 }
@@ -253,9 +343,13 @@ pub enum Error {
 /// (0-based, counting only layers with paths), the fan (`M106`) on `fan_start_layer` and
 /// `M104 S<nozzle_temp>` on layer 1. Each path: a travel to its first point (retracting when
 /// the XY travel is at least `min_travel_mm`, with optional z-hop; no travel when the path
-/// starts where the previous one ended), `;TYPE:` and `;WIDTH:` when they change within the
-/// layer (both are repeated on every layer), then one `G1 X Y [Z] E [F]` per segment
-/// (zero-length segments are skipped; F only when it changes). E follows equation 4 with
+/// starts where the previous one ended) or, when the path has an
+/// [`approach`](crate::geom::Path::approach) route, `G1 X Y [Z] F<travel>` moves without E
+/// through the route to its first point (no retraction, no hop; the analyzer counts them as
+/// travel), `;TYPE:` and `;WIDTH:` when they change within the
+/// layer (both are repeated on every layer), the pre-flow (`G1 E`, see [`Flow`]), then one
+/// `G1 X Y [Z] E [F]` per segment at the feature's speed times the path's `speed_factor`
+/// (zero-length segments are skipped; F only when it changes), then the post-flow. E follows equation 4 with
 /// the layer's height as LT and the path's width as d_n; in absolute mode the printed E is
 /// the exact running sum rounded to 5 decimals, so rounding never drifts. A final retraction
 /// precedes the end template. Coordinates are in printer space: with [`Origin::Corner`] the
@@ -265,6 +359,16 @@ pub enum Error {
 /// `travel_mm` and `estimated_time_s` come from running [`crate::analyze::analyze`] on the
 /// produced text (so they include moves of the start and end templates and agree with
 /// `weft analyze`).
+///
+/// [`Flavor::Pneumatic`] writes the same layout without E: `G21`/`G90` instead of the E
+/// modes, `G0` travels (lifted by `z_hop_mm` when at least `min_travel_mm` long, no
+/// retraction), and per path the pressure line (when it changes), the valve-on code, the
+/// pre-flow dwell `G4 P<ms>`, `G1 X Y [Z] [F]` moves and the valve-off code (written
+/// `post_flow_s` before the path's end; the rest of the path follows with the valve closed).
+/// With the default (Marlin) start/end templates it writes [`DEFAULT_PNEUMATIC_START_GCODE`]
+/// and [`DEFAULT_PNEUMATIC_END_GCODE`] instead. The analyzer sees no extrusion in such a file
+/// (it counts a move as extruding only when E increases): it reports 0 extrusion paths and
+/// every move as travel.
 ///
 /// Numbers are formatted with integer arithmetic (X/Y/Z 3 decimals, E 5, F whole mm/min,
 /// trailing zeros trimmed, never `-0`), so output is byte-identical on native and wasm.

@@ -1,10 +1,11 @@
 //! The layer loop: header, start template, layers, end template. Flavour specifics live in
 //! [`super::flavor`].
 
-use super::flavor::{dialect, feed_mm_min};
+use super::flavor::{dialect, feed_mm_min, PathCtx};
 use super::format::{duration, fixed, push_fixed, push_u64};
 use super::template::expand;
-use super::{Error, Gcode, GcodeStats, Options, Origin};
+use super::{Error, Flavor, Gcode, GcodeStats, Options, Origin};
+use super::{DEFAULT_END_GCODE, DEFAULT_PNEUMATIC_END_GCODE, DEFAULT_PNEUMATIC_START_GCODE, DEFAULT_START_GCODE};
 use crate::geom::{DVec3, Feature, Toolpath};
 
 /// The text being written and the machine state the writer tracks.
@@ -56,11 +57,16 @@ impl Out {
 
     /// `G1 Z<z> F<feed>` when the printed Z changes.
     pub fn move_z(&mut self, z: f64, feed: u64) {
+        self.move_z_with("G1", z, feed);
+    }
+
+    /// `<code> Z<z> F<feed>` when the printed Z changes.
+    pub fn move_z_with(&mut self, code: &str, z: f64, feed: u64) {
         let zi = (z * 1000.0).round() as i64;
         if self.z_written == Some(zi) {
             return;
         }
-        let mut line = String::from("G1");
+        let mut line = String::from(code);
         self.push_z_if_changed(&mut line, z);
         self.push_feed(&mut line, feed);
         self.line(&line);
@@ -75,6 +81,21 @@ impl Out {
         push_fixed(&mut line, to.x, 3);
         line.push_str(" Y");
         push_fixed(&mut line, to.y, 3);
+        self.push_feed(&mut line, feed);
+        self.line(&line);
+        self.pos = Some(to);
+    }
+}
+
+impl Out {
+    /// `G1 X<x> Y<y> [Z<z>] [F<feed>]` without E.
+    pub fn dry_move(&mut self, to: DVec3, feed: u64) {
+        let mut line = String::with_capacity(40);
+        line.push_str("G1 X");
+        push_fixed(&mut line, to.x, 3);
+        line.push_str(" Y");
+        push_fixed(&mut line, to.y, 3);
+        self.push_z_if_changed(&mut line, to.z);
         self.push_feed(&mut line, feed);
         self.line(&line);
         self.pos = Some(to);
@@ -125,7 +146,7 @@ fn check_bed(toolpath: &Toolpath, options: &Options, offset: DVec3) -> Result<()
     let mut max = DVec3::splat(f64::NEG_INFINITY);
     for l in &toolpath.layers {
         for p in &l.paths {
-            for q in &p.points {
+            for q in p.points.iter().chain(p.approach.iter().flatten()) {
                 min = min.min(*q + offset);
                 max = max.max(*q + offset);
             }
@@ -164,8 +185,11 @@ pub(crate) fn write(toolpath: &Toolpath, options: &Options) -> Result<Gcode, Err
         ("fan_pwm", pwm.to_string()),
         ("design_name", one_line(&options.design_name)),
     ];
-    let start = expand(&printer.start_gcode, "start_gcode", &vars)?;
-    let end = expand(&printer.end_gcode, "end_gcode", &vars)?;
+    let pneumatic = printer.flavor == Flavor::Pneumatic;
+    let start_template = if pneumatic && printer.start_gcode == DEFAULT_START_GCODE { DEFAULT_PNEUMATIC_START_GCODE } else { &printer.start_gcode };
+    let end_template = if pneumatic && printer.end_gcode == DEFAULT_END_GCODE { DEFAULT_PNEUMATIC_END_GCODE } else { &printer.end_gcode };
+    let start = expand(start_template, "start_gcode", &vars)?;
+    let end = expand(end_template, "end_gcode", &vars)?;
 
     let mut out = Out {
         text: String::with_capacity(1 << 16),
@@ -187,6 +211,7 @@ pub(crate) fn write(toolpath: &Toolpath, options: &Options) -> Result<Gcode, Err
     let mut extruded_mm = 0.0;
     let mut layers_written = 0usize;
     let mut line = String::new();
+    let mut route_buf: Vec<DVec3> = Vec::new();
     for layer in &toolpath.layers {
         if layer.paths.iter().all(|p| p.points.len() < 2) {
             continue;
@@ -214,7 +239,14 @@ pub(crate) fn write(toolpath: &Toolpath, options: &Options) -> Result<Gcode, Err
                 continue;
             }
             let first = path.points[0] + offset;
-            d.travel(&mut out, first, options);
+            match &path.approach {
+                Some(route) if out.pos.is_some() => {
+                    route_buf.clear();
+                    route_buf.extend(route.iter().map(|q| *q + offset));
+                    d.approach(&mut out, &route_buf, first, options);
+                }
+                _ => d.travel(&mut out, first, options),
+            }
             if feature != Some(path.feature) {
                 out.line(&format!(";TYPE:{}", path.feature.gcode_name()));
                 feature = Some(path.feature);
@@ -224,8 +256,20 @@ pub(crate) fn write(toolpath: &Toolpath, options: &Options) -> Result<Gcode, Err
                 out.line(&format!(";WIDTH:{}", fixed(path.width, 3)));
                 width = Some(wi);
             }
-            let feed = feed_mm_min(feature_speed(options, path.feature, n) * path.speed_factor);
-            d.path_begin(&mut out);
+            let speed = feature_speed(options, path.feature, n) * path.speed_factor;
+            let feed = feed_mm_min(speed);
+            let ctx = PathCtx { speed_factor: path.speed_factor, speed_mm_s: speed };
+            d.path_begin(&mut out, options, &ctx);
+            // The dialect may end the path early (pneumatic post-flow): from `cut` mm on, the
+            // remaining moves are coasts.
+            let lead = d.end_lead_mm(options, &ctx);
+            let cut = if lead > 0.0 { (path.length() - lead).max(0.0) } else { f64::INFINITY };
+            let mut done = 0.0;
+            let mut open = true;
+            if cut <= 0.0 {
+                d.path_end(&mut out, options);
+                open = false;
+            }
             for w in path.points.windows(2) {
                 let len = w[0].distance(w[1]);
                 if len <= 0.0 {
@@ -233,9 +277,25 @@ pub(crate) fn write(toolpath: &Toolpath, options: &Options) -> Result<Gcode, Err
                 }
                 let e = equation4_e(len, layer.height, path.width, material.extrusion_multiplier, material.k, printer.filament_diameter_mm);
                 extruded_mm += len;
-                d.segment(&mut out, w[1] + offset, e, feed);
+                let to = w[1] + offset;
+                if !open {
+                    d.coast(&mut out, to, feed);
+                } else if done + len > cut + 1e-9 {
+                    let t = (cut - done) / len;
+                    if t * len > 1e-9 {
+                        d.segment(&mut out, w[0].lerp(w[1], t) + offset, e * t, feed);
+                    }
+                    d.path_end(&mut out, options);
+                    open = false;
+                    d.coast(&mut out, to, feed);
+                } else {
+                    d.segment(&mut out, to, e, feed);
+                }
+                done += len;
             }
-            d.path_end(&mut out);
+            if open {
+                d.path_end(&mut out, options);
+            }
         }
     }
     d.epilogue(&mut out, options);
@@ -274,7 +334,7 @@ pub(crate) fn write(toolpath: &Toolpath, options: &Options) -> Result<Gcode, Err
     header.push_str(&format!("; filament used [mm] = {}\n", fixed(out.e_total, 2)));
     header.push_str(&format!("; filament used [cm3] = {}\n", fixed(volume_cm3, 3)));
     header.push_str(&format!("; extruded path length [mm] = {}\n", fixed(extruded_mm, 2)));
-    header.push_str(";FLAVOR:Marlin\n");
+    header.push_str(&format!(";FLAVOR:{}\n", printer.flavor.name()));
     header.push_str(&format!(";TIME:{}\n", fixed(time_s, 0)));
     header.push_str(&format!(";Filament used: {}m\n", fixed(out.e_total / 1000.0, 5)));
     header.push_str(&format!(";LAYER_COUNT:{layers_written}\n"));

@@ -2,7 +2,12 @@
 //! surface along the build direction (−Z), and layer `i` is lifted `(i + 1) ×` its thickness
 //! along the surface normal. Paths keep their order; Z varies along every path.
 //!
-//! Entry: [`project`].
+//! Entry: [`project`]. Files: `surface.rs` (vertical ray casts: analytic sphere and cylinder,
+//! a grid over mesh triangles), `project.rs` (splitting and lifting), `collision.rs`.
+
+mod collision;
+mod project;
+mod surface;
 
 use crate::geom::{Mesh, Toolpath};
 use serde::{Deserialize, Serialize};
@@ -112,8 +117,72 @@ pub enum Error {
     NothingOver,
 }
 
-/// Projects a planar toolpath (layer `i` at any z) onto the surface.
+/// Projects a planar toolpath onto the surface.
+///
+/// Layer `i` (input layers come in at any Z, e.g. `(i + 1) · h`; only X and Y of the points
+/// are used) is placed `dᵢ = h₀ + … + hᵢ` (the sum of the layer heights so far: `(i + 1) · h`
+/// for uniform layers) above the surface along its normal: for every point (x, y) a ray going
+/// down (−Z) meets the surface at its highest point `p` under (x, y) with outward unit normal
+/// `n` (oriented up), and the point becomes `p + n · dᵢ` (the GIPPO paper: each next layer is
+/// offset by the layer thickness along the surface normal).
+///
+/// - Sphere: its top cap, analytically. Cylinder: lying along X through Y = 0 at
+///   `axis_z_mm`, its top half, analytically. Mesh: `surface_mesh`, normals smoothed across
+///   edges whose faces differ by less than 40° (so curved meshes give continuous layers) and
+///   oriented up.
+/// - Segments are split before projecting (uniformly in XY, then bisected) until no projected
+///   segment is longer than `max_segment_mm`, so Z follows the surface. Paths keep their order
+///   and their points (each input point maps to one output point, in order, with the inserted
+///   points between). Approach routes are projected too: the leg from the previous path's end
+///   (same layer) through the route to the path's start is split the same way and its
+///   interior points become the route.
+/// - Points whose ray misses the surface are counted in
+///   [`ProjectionReport::missed_points`] (input points of paths and approach routes, not the
+///   inserted ones) and kept at the lowest surface Z found under the toolpath's other points
+///   (plus `dᵢ`, straight up). If every point misses: [`Error::NothingOver`].
+/// - [`ProjectionReport::collisions`]: projected segments (paths and approach legs) whose
+///   midpoint lies more than 1 µm below the layer beneath (the surface offset by `dᵢ₋₁`,
+///   the bare surface for layer 0): a straight move there would dig in. Sphere and cylinder
+///   exactly; meshes against the tangent plane under the midpoint.
+/// - Each output layer's `z` is its highest projected Z; `height` is kept (equation 4's LT).
+///
+/// Options: `max_segment_mm` in [0.01, 10], radius > 0 and finite coordinates, else
+/// [`Error::BadOption`]; [`Surface::Mesh`] needs a mesh with triangles
+/// ([`Error::NoSurfaceMesh`]). Deterministic (f64 only, no hash maps): identical on native
+/// and wasm.
 pub fn project(toolpath: &Toolpath, surface_mesh: Option<&Mesh>, options: &Options) -> Result<Projected, Error> {
-    let _ = (surface_mesh, options);
-    Ok(Projected { toolpath: toolpath.clone(), report: ProjectionReport::default() })
+    validate(options)?;
+    let caster = surface::Caster::new(&options.surface, surface_mesh)?;
+    project::run(toolpath, &caster, options.max_segment_mm)
+}
+
+fn bad(field: &'static str, value: f64, fix: &str) -> Error {
+    Error::BadOption { field, value, fix: fix.into() }
+}
+
+fn validate(options: &Options) -> Result<(), Error> {
+    let s = options.max_segment_mm;
+    if !(0.01..=10.0).contains(&s) {
+        return Err(bad("max_segment_mm", s, "use 0.01 to 10 mm (default 0.25)"));
+    }
+    match &options.surface {
+        Surface::Sphere { radius_mm, center_mm } => {
+            if !(radius_mm.is_finite() && *radius_mm > 0.0) {
+                return Err(bad("surface.radius_mm", *radius_mm, "use a positive radius"));
+            }
+            if let Some(c) = center_mm.iter().find(|c| !c.is_finite()) {
+                return Err(bad("surface.center_mm", *c, "use finite coordinates"));
+            }
+        }
+        Surface::Cylinder { radius_mm, axis_z_mm } => {
+            if !(radius_mm.is_finite() && *radius_mm > 0.0) {
+                return Err(bad("surface.radius_mm", *radius_mm, "use a positive radius"));
+            }
+            if !axis_z_mm.is_finite() {
+                return Err(bad("surface.axis_z_mm", *axis_z_mm, "use a finite height"));
+            }
+        }
+        Surface::Mesh => {}
+    }
+    Ok(())
 }

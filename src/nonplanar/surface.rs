@@ -1,0 +1,268 @@
+//! Vertical ray casts onto the print surface: the highest surface point under (x, y) and its
+//! outward unit normal.
+//!
+//! Meshes use a small uniform XY grid over the triangles rather than parry3d: every ray here
+//! is vertical, so a 2D grid of triangle bounding boxes plus a 2D barycentric test is exact and
+//! simple (~150 lines), computes in f64 (bit-identical on native and wasm), and adds nothing to
+//! the wasm binary, whereas parry3d pulls in nalgebra/simba and its f32 build (hundreds of kB
+//! of wasm for one query type).
+
+use super::{Error, Surface};
+use crate::geom::{DVec2, DVec3, Mesh};
+
+/// A surface point and its outward unit normal.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Hit {
+    /// Point on the surface.
+    pub p: DVec3,
+    /// Outward unit normal (pointing up, towards the nozzle).
+    pub n: DVec3,
+}
+
+/// A surface ready for ray casts.
+pub(crate) enum Caster {
+    Sphere { center: DVec3, radius: f64 },
+    Cylinder { radius: f64, axis_z: f64 },
+    Mesh(Box<MeshGrid>),
+}
+
+impl Caster {
+    /// Prepares `surface` (`mesh` is the job's surface mesh, for [`Surface::Mesh`]).
+    pub fn new(surface: &Surface, mesh: Option<&Mesh>) -> Result<Caster, Error> {
+        Ok(match *surface {
+            Surface::Sphere { radius_mm, center_mm } => {
+                Caster::Sphere { center: DVec3::from_array(center_mm), radius: radius_mm }
+            }
+            Surface::Cylinder { radius_mm, axis_z_mm } => Caster::Cylinder { radius: radius_mm, axis_z: axis_z_mm },
+            Surface::Mesh => {
+                let mesh = mesh.ok_or(Error::NoSurfaceMesh)?;
+                let grid = MeshGrid::new(mesh).ok_or(Error::NoSurfaceMesh)?;
+                Caster::Mesh(Box::new(grid))
+            }
+        })
+    }
+
+    /// The first surface point a ray going down at (x, y) meets (the highest one), or `None`.
+    pub fn cast(&self, x: f64, y: f64) -> Option<Hit> {
+        match self {
+            Caster::Sphere { center, radius } => {
+                let (dx, dy) = (x - center.x, y - center.y);
+                let h2 = radius * radius - dx * dx - dy * dy;
+                if h2 < 0.0 {
+                    return None;
+                }
+                let p = DVec3::new(x, y, center.z + h2.sqrt());
+                Some(Hit { p, n: (p - *center) / *radius })
+            }
+            Caster::Cylinder { radius, axis_z } => {
+                let h2 = radius * radius - y * y;
+                if h2 < 0.0 {
+                    return None;
+                }
+                let h = h2.sqrt();
+                Some(Hit { p: DVec3::new(x, y, axis_z + h), n: DVec3::new(0.0, y / radius, h / radius) })
+            }
+            Caster::Mesh(g) => g.cast(x, y),
+        }
+    }
+}
+
+/// One triangle in f64 with its corner normals (oriented up).
+struct Tri {
+    v: [DVec3; 3],
+    n: [DVec3; 3],
+    /// 2D barycentric denominator.
+    det: f64,
+}
+
+/// Triangles bucketed by the XY cells their bounding boxes overlap (CSR layout).
+pub(crate) struct MeshGrid {
+    tris: Vec<Tri>,
+    min: DVec2,
+    cell: f64,
+    nx: usize,
+    ny: usize,
+    /// `items[start[c]..start[c + 1]]` are the triangles (ascending) of cell `c`.
+    start: Vec<u32>,
+    items: Vec<u32>,
+}
+
+/// Faces meeting at a vertex are smoothed together when their normals are within this angle
+/// (cos 40°): curved surfaces get continuous normals, sharp edges (a box's rim) stay sharp.
+const CREASE_COS: f64 = 0.766_044_443_118_978;
+
+impl MeshGrid {
+    /// `None` when no triangle has an XY footprint.
+    fn new(mesh: &Mesh) -> Option<MeshGrid> {
+        // Weld vertices by exact position so unwelded meshes (STL) still get smooth normals.
+        let mut order: Vec<u32> = (0..mesh.vertices.len() as u32).collect();
+        let key = |i: u32| {
+            let v = mesh.vertices[i as usize];
+            [v[0].to_bits(), v[1].to_bits(), v[2].to_bits()]
+        };
+        order.sort_by_key(|&i| (key(i), i));
+        let mut canon = vec![0u32; mesh.vertices.len()];
+        let mut k = 0usize;
+        while k < order.len() {
+            let mut j = k;
+            while j < order.len() && key(order[j]) == key(order[k]) {
+                canon[order[j] as usize] = order[k];
+                j += 1;
+            }
+            k = j;
+        }
+        // Face normals oriented up (a ray from above sees the upper side), unit length.
+        struct Face {
+            idx: [u32; 3],
+            n: DVec3,
+            angle: [f64; 3],
+        }
+        let mut faces = Vec::new();
+        for t in &mesh.triangles {
+            let idx = [canon[t[0] as usize], canon[t[1] as usize], canon[t[2] as usize]];
+            let v = [mesh.vertex(idx[0]), mesh.vertex(idx[1]), mesh.vertex(idx[2])];
+            let c = (v[1] - v[0]).cross(v[2] - v[0]);
+            let len = c.length();
+            if !len.is_finite() || len <= 1e-18 {
+                continue;
+            }
+            let mut n = c / len;
+            if n.z < 0.0 {
+                n = -n;
+            }
+            let mut angle = [0.0; 3];
+            for (k, a) in angle.iter_mut().enumerate() {
+                let e1 = (v[(k + 1) % 3] - v[k]).normalize_or_zero();
+                let e2 = (v[(k + 2) % 3] - v[k]).normalize_or_zero();
+                *a = libm::acos(e1.dot(e2).clamp(-1.0, 1.0));
+            }
+            faces.push(Face { idx, n, angle });
+        }
+        // Vertex → faces (CSR).
+        let nv = mesh.vertices.len();
+        let mut vstart = vec![0u32; nv + 1];
+        for f in &faces {
+            for &i in &f.idx {
+                vstart[i as usize + 1] += 1;
+            }
+        }
+        for i in 0..nv {
+            vstart[i + 1] += vstart[i];
+        }
+        let mut fill = vstart.clone();
+        let mut vfaces = vec![0u32; vstart[nv] as usize];
+        for (fi, f) in faces.iter().enumerate() {
+            for &i in &f.idx {
+                vfaces[fill[i as usize] as usize] = fi as u32;
+                fill[i as usize] += 1;
+            }
+        }
+        let mut tris = Vec::new();
+        let mut lo = DVec2::splat(f64::INFINITY);
+        let mut hi = DVec2::splat(f64::NEG_INFINITY);
+        for f in &faces {
+            let v = [mesh.vertex(f.idx[0]), mesh.vertex(f.idx[1]), mesh.vertex(f.idx[2])];
+            let det = (v[1].y - v[2].y) * (v[0].x - v[2].x) + (v[2].x - v[1].x) * (v[0].y - v[2].y);
+            if det.abs() < 1e-14 || f.n.z <= 1e-9 {
+                continue; // vertical: no footprint
+            }
+            let mut n = [f.n; 3];
+            for (k, nk) in n.iter_mut().enumerate() {
+                let vi = f.idx[k] as usize;
+                let mut sum = DVec3::ZERO;
+                for &g in &vfaces[vstart[vi] as usize..vstart[vi + 1] as usize] {
+                    let g = &faces[g as usize];
+                    if g.n.dot(f.n) >= CREASE_COS {
+                        let corner = g.idx.iter().position(|&x| x as usize == vi).unwrap_or(0);
+                        sum += g.n * g.angle[corner];
+                    }
+                }
+                let s = sum.normalize_or_zero();
+                if s != DVec3::ZERO {
+                    *nk = s;
+                }
+            }
+            for p in &v {
+                lo = lo.min(p.truncate());
+                hi = hi.max(p.truncate());
+            }
+            tris.push(Tri { v, n, det });
+        }
+        if tris.is_empty() {
+            return None;
+        }
+        let size = (hi - lo).max(DVec2::splat(1e-6));
+        let cell = ((size.x * size.y / tris.len() as f64).sqrt() * 1.5).max(size.x.max(size.y) / 1024.0).max(1e-6);
+        let nx = ((size.x / cell).ceil() as usize).clamp(1, 1024);
+        let ny = ((size.y / cell).ceil() as usize).clamp(1, 1024);
+        let mut g = MeshGrid { tris, min: lo, cell, nx, ny, start: vec![0; nx * ny + 1], items: Vec::new() };
+        let ranges: Vec<(usize, usize, usize, usize)> = g.tris.iter().map(|t| g.cell_range(t)).collect();
+        for &(x0, x1, y0, y1) in &ranges {
+            for cy in y0..=y1 {
+                for cx in x0..=x1 {
+                    g.start[cy * nx + cx + 1] += 1;
+                }
+            }
+        }
+        for c in 0..nx * ny {
+            g.start[c + 1] += g.start[c];
+        }
+        let mut fill = g.start.clone();
+        g.items = vec![0; g.start[nx * ny] as usize];
+        for (ti, &(x0, x1, y0, y1)) in ranges.iter().enumerate() {
+            for cy in y0..=y1 {
+                for cx in x0..=x1 {
+                    let c = cy * nx + cx;
+                    g.items[fill[c] as usize] = ti as u32;
+                    fill[c] += 1;
+                }
+            }
+        }
+        Some(g)
+    }
+
+    fn cell_of(&self, x: f64, y: f64) -> (usize, usize) {
+        let cx = ((x - self.min.x) / self.cell).floor().clamp(0.0, (self.nx - 1) as f64) as usize;
+        let cy = ((y - self.min.y) / self.cell).floor().clamp(0.0, (self.ny - 1) as f64) as usize;
+        (cx, cy)
+    }
+
+    fn cell_range(&self, t: &Tri) -> (usize, usize, usize, usize) {
+        let lo = t.v[0].truncate().min(t.v[1].truncate()).min(t.v[2].truncate());
+        let hi = t.v[0].truncate().max(t.v[1].truncate()).max(t.v[2].truncate());
+        let eps = 1e-9;
+        let (x0, y0) = self.cell_of(lo.x - eps, lo.y - eps);
+        let (x1, y1) = self.cell_of(hi.x + eps, hi.y + eps);
+        (x0, x1, y0, y1)
+    }
+
+    fn cast(&self, x: f64, y: f64) -> Option<Hit> {
+        let eps = 1e-9;
+        let span = DVec2::new(self.nx as f64, self.ny as f64) * self.cell;
+        if !(x >= self.min.x - eps && y >= self.min.y - eps && x <= self.min.x + span.x + eps && y <= self.min.y + span.y + eps) {
+            return None;
+        }
+        let (cx, cy) = self.cell_of(x, y);
+        let c = cy * self.nx + cx;
+        let mut best: Option<(f64, &Tri, [f64; 3])> = None;
+        for &ti in &self.items[self.start[c] as usize..self.start[c + 1] as usize] {
+            let t = &self.tris[ti as usize];
+            let [a, b, cc] = t.v;
+            let l1 = ((b.y - cc.y) * (x - cc.x) + (cc.x - b.x) * (y - cc.y)) / t.det;
+            let l2 = ((cc.y - a.y) * (x - cc.x) + (a.x - cc.x) * (y - cc.y)) / t.det;
+            let l3 = 1.0 - l1 - l2;
+            if l1 < -eps || l2 < -eps || l3 < -eps {
+                continue;
+            }
+            let z = l1 * a.z + l2 * b.z + l3 * cc.z;
+            if best.is_none_or(|(bz, _, _)| z > bz) {
+                best = Some((z, t, [l1, l2, l3]));
+            }
+        }
+        let (z, t, l) = best?;
+        let l = [l[0].clamp(0.0, 1.0), l[1].clamp(0.0, 1.0), l[2].clamp(0.0, 1.0)];
+        let n = (t.n[0] * l[0] + t.n[1] * l[1] + t.n[2] * l[2]).normalize_or_zero();
+        let n = if n == DVec3::ZERO { t.n[0] } else { n };
+        Some(Hit { p: DVec3::new(x, y, z), n })
+    }
+}

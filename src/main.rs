@@ -32,7 +32,7 @@ enum Command {
     Run {
         /// The design (JSON), or a share link / fragment (`#d=…`).
         design: String,
-        /// Output G-code file (default: <design name>.gcode).
+        /// Output file (default: <design name>.gcode, or .nc for the pneumatic flavour).
         #[arg(long, short)]
         out: Option<PathBuf>,
         /// Also write the run report (JSON) here.
@@ -133,7 +133,7 @@ fn cmd_run(
         eprint!("\r              \r");
     }
     let output = result.map_err(|e| e.to_string())?;
-    let out = out.unwrap_or_else(|| PathBuf::from(format!("{}.gcode", design.name)));
+    let out = out.unwrap_or_else(|| PathBuf::from(format!("{}.{}", design.name, design.printer.flavor.file_extension())));
     write(&out, output.gcode.as_bytes())?;
     if let Some(path) = report {
         let json = serde_json::to_string_pretty(&output.report).unwrap_or_default();

@@ -97,6 +97,44 @@ impl Graph {
     }
 }
 
+impl Graph {
+    /// Contracts every edge shorter than `min_len` (its end vertices become one, at the
+    /// lowest-numbered vertex of the group), so that no strut shorter than `min_len` is left
+    /// to be dropped later (which would disconnect the lattice). Edge order is kept.
+    pub fn contract_short(&mut self, min_len: f64) {
+        let n = self.pts.len();
+        let mut parent: Vec<u32> = (0..n as u32).collect();
+        fn find(p: &mut [u32], mut i: u32) -> u32 {
+            while p[i as usize] != i {
+                p[i as usize] = p[p[i as usize] as usize];
+                i = p[i as usize];
+            }
+            i
+        }
+        let mut any = false;
+        for e in &self.edges {
+            if (self.pts[e[0] as usize] - self.pts[e[1] as usize]).length() < min_len {
+                let (a, b) = (find(&mut parent, e[0]), find(&mut parent, e[1]));
+                if a != b {
+                    parent[a.max(b) as usize] = a.min(b);
+                    any = true;
+                }
+            }
+        }
+        if !any {
+            return;
+        }
+        let old = std::mem::take(&mut self.edges);
+        self.seen.clear();
+        for e in old {
+            let (a, b) = (find(&mut parent, e[0]), find(&mut parent, e[1]));
+            if a != b && self.seen.insert((a.min(b), a.max(b))) {
+                self.edges.push([a, b]);
+            }
+        }
+    }
+}
+
 /// √3 (sqrt is correctly rounded on every target).
 pub(crate) fn sqrt3() -> f64 {
     3f64.sqrt()

@@ -384,7 +384,7 @@ pub(crate) fn pattern_graph(p: &Pattern, rect: Rect, seed: u64) -> Result<Graph,
     if !(est <= MAX_STRUTS_PER_LAYER as f64) {
         return Err(Error::TooDense { struts: est.min(usize::MAX as f64) as usize, limit: MAX_STRUTS_PER_LAYER });
     }
-    Ok(match *p {
+    let mut g = match *p {
         Pattern::Honeycomb { hexagon_radius_mm } => honeycomb::honeycomb(hexagon_radius_mm, rect),
         Pattern::Voronoi { density_per_mm2 } => voronoi::voronoi(density_per_mm2, seed, rect),
         Pattern::Penrose { cell_size_mm } => penrose::penrose(cell_size_mm, rect),
@@ -396,7 +396,9 @@ pub(crate) fn pattern_graph(p: &Pattern, rect: Rect, seed: u64) -> Result<Graph,
         Pattern::Rectilinear { strand_distance_mm } => grids::rectilinear(strand_distance_mm, rect),
         Pattern::SquareGrid { cell_size_mm } => grids::square(cell_size_mm, rect),
         Pattern::TriangleGrid { cell_size_mm } => grids::triangle(cell_size_mm, rect),
-    })
+    };
+    g.contract_short(MIN_PIECE_MM);
+    Ok(g)
 }
 
 /// Crops the graph's edges (turned by (cos, sin)) to `clip`; pushes two-point strokes of

@@ -110,8 +110,7 @@ fn square_grid_strut_count_matches_the_formula() {
         let n = 2 * (5.0f64 / c + 1e-9).floor() as usize + 1;
         let on_grid = ((5.0 / c) - (5.0 / c).round()).abs() < 1e-9;
         let per_line = if on_grid { n - 1 } else { n + 1 };
-        let lines = if on_grid { n } else { n };
-        assert_eq!(segs.len(), 2 * lines * per_line, "cell {c}");
+        assert_eq!(segs.len(), 2 * n * per_line, "cell {c}");
     }
 }
 
@@ -356,4 +355,28 @@ fn pore_fractions_reach_table_1() {
         println!("table 1 {p:?}: pores {got:.3} (paper {want})");
         assert!((got - want).abs() < 0.03, "{p:?}: {got} vs {want}");
     }
+}
+
+/// Timings (run with `--release -- --ignored --nocapture`).
+#[test]
+#[ignore]
+fn timing() {
+    let t = std::time::Instant::now();
+    let l = gen(Pattern::Honeycomb { hexagon_radius_mm: 1.0 }, &Domain::Disc { diameter_mm: 48.0 }, 1, 0.0, 0);
+    println!("48 mm disc honeycomb r 1: {} struts in {:?}", l.report.struts_per_layer[0], t.elapsed());
+    let t = std::time::Instant::now();
+    let l = gen(Pattern::Honeycomb { hexagon_radius_mm: 1.0 }, &Domain::Disc { diameter_mm: 48.0 }, 2, 45.0, 0);
+    println!("48 mm disc honeycomb r 1, two layers (0°, 45°): {} + {} struts in {:?}", l.report.struts_per_layer[0], l.report.struts_per_layer[1], t.elapsed());
+    let t = std::time::Instant::now();
+    let l = gen(Pattern::Voronoi { density_per_mm2: 0.5 }, &rect10(), 1, 0.0, 0);
+    println!("10 × 10 Voronoi 0.5/mm²: {} struts in {:?}", l.report.struts_per_layer[0], t.elapsed());
+    let t = std::time::Instant::now();
+    let l = gen(Pattern::Voronoi { density_per_mm2: 100.0 }, &rect10(), 1, 0.0, 0);
+    println!("10 × 10 Voronoi 100/mm²: {} struts in {:?}", l.report.struts_per_layer[0], t.elapsed());
+    let t = std::time::Instant::now();
+    let l = gen(Pattern::Penrose { cell_size_mm: 0.5 }, &Domain::Disc { diameter_mm: 48.0 }, 1, 0.0, 0);
+    println!("48 mm disc Penrose 0.5: {} struts in {:?}", l.report.struts_per_layer[0], t.elapsed());
+    let t = std::time::Instant::now();
+    let l = gen(Pattern::Voronoi { density_per_mm2: 5.0 }, &Domain::Disc { diameter_mm: 48.0 }, 1, 0.0, 0);
+    println!("48 mm disc Voronoi 5/mm²: {} struts in {:?}", l.report.struts_per_layer[0], t.elapsed());
 }

@@ -17,7 +17,7 @@ pub(crate) fn rect_polygon(x0: f64, y0: f64, x1: f64, y1: f64) -> Polygon {
 /// Sides of a polygon inscribed in a circle of radius `r` whose chord error is at most
 /// [`DISC_CHORD_ERROR_MM`] (16 to 8192 sides).
 pub fn disc_sides(r: f64) -> usize {
-    if !(r > DISC_CHORD_ERROR_MM) {
+    if r.is_nan() || r <= DISC_CHORD_ERROR_MM {
         return 16;
     }
     // sagitta = r (1 − cos(π / n)) ≤ e  ⇔  n ≥ π / acos(1 − e / r)

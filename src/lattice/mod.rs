@@ -381,7 +381,7 @@ pub(crate) fn estimate_struts(p: &Pattern, rect: Rect) -> f64 {
 /// The pattern's strut graph over `rect` (pattern frame), after the density guard.
 pub(crate) fn pattern_graph(p: &Pattern, rect: Rect, seed: u64) -> Result<Graph, Error> {
     let est = estimate_struts(p, rect);
-    if !(est <= MAX_STRUTS_PER_LAYER as f64) {
+    if est.is_nan() || est > MAX_STRUTS_PER_LAYER as f64 {
         return Err(Error::TooDense { struts: est.min(usize::MAX as f64) as usize, limit: MAX_STRUTS_PER_LAYER });
     }
     let mut g = match *p {
@@ -542,4 +542,134 @@ impl Default for Domain {
 /// the lattice's end edges). Unusable sizes (≤ 0, not finite) give layers with no regions.
 pub fn planar_domains(domain: &Domain, options: &Options) -> Option<Vec<LayerDomain>> {
     domain::planar(domain, options)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn square(h: f64) -> Rect {
+        Rect { min: DVec2::splat(-h), max: DVec2::splat(h) }
+    }
+
+    fn lengths(g: &Graph) -> Vec<f64> {
+        g.edges.iter().map(|e| (g.pts[e[0] as usize] - g.pts[e[1] as usize]).length()).collect()
+    }
+
+    fn degrees(g: &Graph) -> Vec<usize> {
+        let mut d = vec![0; g.pts.len()];
+        for e in &g.edges {
+            d[e[0] as usize] += 1;
+            d[e[1] as usize] += 1;
+        }
+        d
+    }
+
+    /// Degrees of vertices within `r` of the origin.
+    fn inner_degrees(g: &Graph, r: f64) -> Vec<usize> {
+        let d = degrees(g);
+        (0..g.pts.len()).filter(|&i| g.pts[i].length() < r).map(|i| d[i]).collect()
+    }
+
+    #[test]
+    fn penrose_edges_are_exactly_the_cell_size() {
+        for a in [1.0, 0.37, 5.0] {
+            let g = penrose::penrose(a, square(8.0 * a));
+            assert!(g.edges.len() > 200);
+            for l in lengths(&g) {
+                assert!((l - a).abs() < 1e-6 * a.max(1.0), "edge {l} for {a}");
+            }
+            let d = inner_degrees(&g, 6.0 * a);
+            assert!(d.iter().all(|&k| (3..=7).contains(&k)), "{d:?}");
+            // The sun: the centre has five edges (the 10 triangles merged into 5 thin rhombi).
+            assert!(d.contains(&5));
+        }
+    }
+
+    #[test]
+    fn snub_square_is_3_3_4_3_4() {
+        let g = snub_square::snub_square(1.0, square(6.0));
+        for l in lengths(&g) {
+            assert!((l - 1.0).abs() < 1e-9);
+        }
+        assert!(inner_degrees(&g, 4.0).iter().all(|&k| k == 5));
+        // 10 edges and 4 vertices per period L² = (2 + √3) a².
+        let n = g.pts.iter().filter(|p| p.x.abs() < 4.0 && p.y.abs() < 4.0).count() as f64;
+        assert!((n / 64.0 - 4.0 / (2.0 + 3f64.sqrt())).abs() < 0.1, "{n}");
+    }
+
+    #[test]
+    fn voronoi_vertices_are_equidistant_from_three_points() {
+        let rect = square(5.0);
+        let g = voronoi::voronoi(2.0, 11, rect);
+        let pts = voronoi::points(2.0, 11, rect.grown(3.0 / 2f64.sqrt()));
+        let mut checked = 0;
+        for v in g.pts.iter().filter(|p| p.length() < 3.0) {
+            let mut d: Vec<f64> = pts.iter().map(|s| (*s - *v).length()).collect();
+            d.sort_by(f64::total_cmp);
+            assert!(d[2] - d[0] < 0.011, "vertex {v}: {:?}", &d[..4]);
+            checked += 1;
+        }
+        assert!(checked > 50);
+        // No bisector edge crosses another: every edge is at most as long as the box.
+        assert!(lengths(&g).iter().all(|&l| l > 0.0 && l < 10.0));
+    }
+
+    #[test]
+    fn voronoi_points_are_layer_independent() {
+        let a = voronoi::points(1.0, 5, square(4.0));
+        let b = voronoi::points(1.0, 5, square(6.0));
+        let inner: Vec<DVec2> = b.iter().copied().filter(|p| p.x.abs() <= 4.0 && p.y.abs() <= 4.0).collect();
+        assert_eq!(a, inner);
+        // Poisson density: about 64 points in 64 mm² (± 4 σ).
+        assert!((a.len() as f64 - 64.0).abs() < 32.0, "{}", a.len());
+    }
+
+    #[test]
+    fn honeycomb_and_reentrant_edges() {
+        let g = honeycomb::honeycomb(1.0, square(5.0));
+        assert!(lengths(&g).iter().all(|l| (l - 1.0).abs() < 1e-12));
+        assert!(inner_degrees(&g, 3.0).iter().all(|&k| k == 3));
+        let g = reentrant::reentrant(2.0, 2.0, square(5.0));
+        assert!(inner_degrees(&g, 3.0).iter().all(|&k| k == 3));
+        // Struts per unit cell: 6.
+        let n = g.edges.iter().filter(|e| {
+            let m = (g.pts[e[0] as usize] + g.pts[e[1] as usize]) * 0.5;
+            m.x >= 0.1 && m.x < 2.1 && m.y >= 0.1 && m.y < 2.1
+        });
+        assert_eq!(n.count(), 6);
+        let g = arrowhead::arrowhead(2.0, 2.0, square(5.0));
+        let n = g.edges.iter().filter(|e| {
+            let m = (g.pts[e[0] as usize] + g.pts[e[1] as usize]) * 0.5;
+            m.x >= 0.1 && m.x < 2.1 && m.y >= 0.1 && m.y < 2.1
+        });
+        assert_eq!(n.count(), 5);
+    }
+
+    #[test]
+    fn estimates_track_real_counts() {
+        let rect = square(10.0);
+        for p in [
+            Pattern::Honeycomb { hexagon_radius_mm: 1.0 },
+            Pattern::Voronoi { density_per_mm2: 1.0 },
+            Pattern::Penrose { cell_size_mm: 1.0 },
+            Pattern::SnubSquare { cell_size_mm: 1.0 },
+            Pattern::Arrowhead { cell_width_mm: 2.0, cell_height_mm: 2.0 },
+            Pattern::ReentrantHoneycomb { cell_width_mm: 2.0, cell_height_mm: 2.0 },
+            Pattern::SquareGrid { cell_size_mm: 1.0 },
+            Pattern::TriangleGrid { cell_size_mm: 1.0 },
+        ] {
+            let est = estimate_struts(&p, rect);
+            let g = pattern_graph(&p, rect, 1).unwrap();
+            let inside = g
+                .edges
+                .iter()
+                .filter(|e| {
+                    let m = (g.pts[e[0] as usize] + g.pts[e[1] as usize]) * 0.5;
+                    m.x.abs() < 10.0 && m.y.abs() < 10.0
+                })
+                .count() as f64;
+            assert!((inside / est - 1.0).abs() < 0.15, "{p:?}: {inside} vs {est}");
+        }
+    }
 }

@@ -16,7 +16,7 @@ use rand_core::{Rng, SeedableRng};
 use rand_pcg::Pcg64;
 
 /// Mixed into the design seed for Voronoi points (layer-independent).
-pub const VORONOI_SEED_SALT: u64 = 0x5EED_0F_C0DE_B0A7;
+pub const VORONOI_SEED_SALT: u64 = 0x5EED_0FC0_DEB0_A7A7;
 
 /// Mean points per block.
 const PER_BLOCK: f64 = 8.0;

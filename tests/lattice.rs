@@ -184,6 +184,7 @@ fn rotated_layers_are_the_first_layer_turned() {
     for p in all_patterns() {
         let l = gen(p.clone(), &disc, 2, 45.0, 5);
         let (s0, s1) = (struts(&l.layers[0].strokes), struts(&l.layers[1].strokes));
+        assert_ne!(s0, s1, "{p:?}: layer 1 not turned");
         let (l0, l1) = (total_length(&s0), total_length(&s1));
         assert!((l0 - l1).abs() < 0.02 * l0, "{p:?}: {l0} vs {l1}");
         // Interior nodes of layer 0 turned by 45° are nodes of layer 1 (within 2 µm).
@@ -347,11 +348,14 @@ fn pore_fractions_reach_table_1() {
         (Pattern::Voronoi { density_per_mm2: 0.6 }, 0.69),
         (Pattern::Penrose { cell_size_mm: 1.23 }, 0.59),
         (Pattern::SnubSquare { cell_size_mm: 1.17 }, 0.55),
-        (Pattern::Arrowhead { cell_width_mm: 1.6, cell_height_mm: 1.6 }, 0.55),
+        (Pattern::Arrowhead { cell_width_mm: 1.65, cell_height_mm: 1.65 }, 0.55),
         (Pattern::ReentrantHoneycomb { cell_width_mm: 1.85, cell_height_mm: 1.85 }, 0.63),
     ];
     for (p, want) in table {
-        let got = gen(p.clone(), &rect10(), 1, 0.0, 1).report.pore_fraction_per_layer[0];
+        // Voronoi varies with the seed (about ±3 % on 60 cells): average 8 seeds.
+        let seeds = if matches!(p, Pattern::Voronoi { .. }) { 8 } else { 1 };
+        let got = (1..=seeds).map(|s| gen(p.clone(), &rect10(), 1, 0.0, s).report.pore_fraction_per_layer[0]).sum::<f64>()
+            / seeds as f64;
         println!("table 1 {p:?}: pores {got:.3} (paper {want})");
         assert!((got - want).abs() < 0.03, "{p:?}: {got} vs {want}");
     }

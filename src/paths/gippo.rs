@@ -54,11 +54,10 @@ impl Flat {
 pub(crate) fn run(graph: &Graph, iterations: u32, maximise: bool, rng: &mut Pcg64) -> Solution {
     let n = graph.nodes.len();
     let m = graph.edges.len();
-    let mut iteration_scores = Vec::with_capacity(iterations as usize);
     if m == 0 {
-        iteration_scores.resize(iterations as usize, 0.0);
-        return Solution { chains: Vec::new(), score: 0.0, iteration_scores };
+        return Solution { chains: Vec::new(), score: 0.0, iteration_scores: Vec::new() };
     }
+    let mut iteration_scores = Vec::with_capacity(iterations as usize);
     let total_length = graph.total_length();
     let degree: Vec<u32> = (0..n).map(|v| graph.degree(v) as u32).collect();
 

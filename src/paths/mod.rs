@@ -112,7 +112,8 @@ pub struct LayerPaths {
     pub paths: usize,
     /// Equation 1 of the chosen solution.
     pub score: f64,
-    /// Equation 1 of every GIPPO iteration, in iteration order (empty for euler/continuous).
+    /// Equation 1 of every GIPPO iteration, in iteration order (empty for euler/continuous and
+    /// for layers without edges).
     pub iteration_scores: Vec<f64>,
     /// LTS % (equation 2) of the chosen solution.
     pub lts_percent: f64,

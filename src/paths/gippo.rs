@@ -60,6 +60,16 @@ pub(crate) fn run(graph: &Graph, iterations: u32, maximise: bool, rng: &mut Pcg6
     let mut iteration_scores = Vec::with_capacity(iterations as usize);
     let total_length = graph.total_length();
     let degree: Vec<u32> = (0..n).map(|v| graph.degree(v) as u32).collect();
+    // Compact adjacency: (edge, other end, length) per incidence, CSR by node.
+    let mut adj_start: Vec<u32> = Vec::with_capacity(n + 1);
+    let mut adj: Vec<(u32, u32, f64)> = Vec::with_capacity(2 * m);
+    for v in 0..n {
+        adj_start.push(adj.len() as u32);
+        for &e in graph.incident(v) {
+            adj.push((e as u32, graph.other(e, v) as u32, graph.edges[e].length));
+        }
+    }
+    adj_start.push(adj.len() as u32);
 
     let mut used = vec![false; m];
     let mut free = degree.clone();
@@ -95,7 +105,7 @@ pub(crate) fn run(graph: &Graph, iterations: u32, maximise: bool, rng: &mut Pcg6
             let mut length = 0.0;
             loop {
                 // Candidate (at_back, edge, length) over both extremities.
-                let mut pick: Option<(bool, usize, f64)> = None;
+                let mut pick: Option<(bool, usize, usize, f64)> = None;
                 let mut ties = 0u64;
                 for (at_back, ext) in [(true, bnode), (false, fnode)] {
                     if !at_back && fnode == bnode {
@@ -104,36 +114,36 @@ pub(crate) fn run(graph: &Graph, iterations: u32, maximise: bool, rng: &mut Pcg6
                     if free[ext] == 0 {
                         continue;
                     }
-                    for &e in graph.incident(ext) {
+                    for &(e, w, len) in &adj[adj_start[ext] as usize..adj_start[ext + 1] as usize] {
+                        let (e, w) = (e as usize, w as usize);
                         if used[e] {
                             continue;
                         }
-                        let len = graph.edges[e].length;
                         match pick {
                             None => {
-                                pick = Some((at_back, e, len));
+                                pick = Some((at_back, e, w, len));
                                 ties = 1;
                             }
-                            Some((_, _, bl)) => {
+                            Some((_, _, _, bl)) => {
                                 let better = if maximise { len > bl + TIE_MM } else { len < bl - TIE_MM };
                                 if better {
-                                    pick = Some((at_back, e, len));
+                                    pick = Some((at_back, e, w, len));
                                     ties = 1;
                                 } else if (len - bl).abs() <= TIE_MM {
                                     ties += 1;
                                     if below(rng, ties as usize) == 0 {
-                                        pick = Some((at_back, e, len));
+                                        pick = Some((at_back, e, w, len));
                                     }
                                 }
                             }
                         }
                     }
                 }
-                let Some((at_back, e, len)) = pick else { break };
+                let Some((at_back, e, w, len)) = pick else { break };
                 used[e] = true;
                 length += len;
-                let (a, b) = (graph.edges[e].a, graph.edges[e].b);
-                for v in [a, b] {
+                let ext = if at_back { bnode } else { fnode };
+                for v in [ext, w] {
                     free[v] -= 1;
                     if free[v] == 0 {
                         // Swap-remove from the incomplete list.
@@ -146,10 +156,10 @@ pub(crate) fn run(graph: &Graph, iterations: u32, maximise: bool, rng: &mut Pcg6
                 }
                 if at_back {
                     back.push(e as u32);
-                    bnode = graph.other(e, bnode);
+                    bnode = w;
                 } else {
                     front.push(e as u32);
-                    fnode = graph.other(e, fnode);
+                    fnode = w;
                 }
             }
             // Path = reverse(front) ++ back, starting at the front extremity.

@@ -288,13 +288,13 @@ pub fn build_graph(layer: &StrokeLayer, merge_tolerance_mm: f64) -> Graph {
     let mut component = vec![usize::MAX; n];
     let mut root_comp = vec![usize::MAX; n];
     let mut components = 0;
-    for i in 0..n {
+    for (i, comp) in component.iter_mut().enumerate() {
         let r = find(&mut parent, i);
         if root_comp[r] == usize::MAX {
             root_comp[r] = components;
             components += 1;
         }
-        component[i] = root_comp[r];
+        *comp = root_comp[r];
     }
 
     Graph {

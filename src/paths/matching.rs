@@ -21,12 +21,15 @@ const MAX_PASSES: usize = 64;
 /// Below this many active nodes, every pair is a candidate.
 const ALL_PAIRS_BELOW: usize = 48;
 
+/// Candidate generator: candidate pairs `(cost, i, j)` among the given active items.
+pub type Candidates<'a> = dyn FnMut(&[usize]) -> Vec<(f64, usize, usize)> + 'a;
+
 /// Pairs `n` (even) items. `candidates(active)` returns candidate pairs `(cost, i, j)` among
 /// the `active` items; `cost(i, j)` returns a known cost (or `None`) for the improvement step.
 /// Returns every item's partner.
 pub fn min_pairing(
     n: usize,
-    candidates: &mut dyn FnMut(&[usize]) -> Vec<(f64, usize, usize)>,
+    candidates: &mut Candidates<'_>,
     cost: &mut dyn FnMut(usize, usize) -> Option<f64>,
 ) -> Vec<usize> {
     const NONE: usize = usize::MAX;
@@ -85,8 +88,7 @@ pub fn min_pairing(
     for _ in 0..MAX_PASSES {
         let mut improved = false;
         for a in 0..n {
-            for x in start[a]..start[a + 1] {
-                let c = nbr[x];
+            for &c in &nbr[start[a]..start[a + 1]] {
                 let b = partner[a];
                 let d = partner[c];
                 if c == a || c == b || b == NONE || d == NONE {

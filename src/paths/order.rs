@@ -90,9 +90,9 @@ pub(crate) fn min_travel(chains: Vec<Chain>, graph: &Graph, from: DVec2) -> Vec<
         let mut best: Option<(f64, u32)> = None;
         if remaining.len() < BRUTE_BELOW || order.is_empty() {
             for &i in &remaining {
-                for w in 0..2 {
+                for (w, p) in ends[i].iter().enumerate() {
                     let id = (2 * i + w) as u32;
-                    let d = cur.distance(ends[i][w]);
+                    let d = cur.distance(*p);
                     if better(d, id, &best) {
                         best = Some((d, id));
                     }
@@ -140,8 +140,8 @@ pub(crate) fn min_travel(chains: Vec<Chain>, graph: &Graph, from: DVec2) -> Vec<
         remaining[p] = last;
         rem_pos[last] = p;
         remaining.pop();
-        for w in 0..2 {
-            let (x, y) = cell_xy(ends[i][w]);
+        for (w, p) in ends[i].iter().enumerate() {
+            let (x, y) = cell_xy(*p);
             let list = &mut cells[y as usize * nx + x as usize];
             if let Some(k) = list.iter().position(|&e| e as usize == 2 * i + w) {
                 list.swap_remove(k);

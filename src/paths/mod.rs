@@ -5,7 +5,28 @@
 //! the provably minimal `euler` (max(1, odd/2) paths per component) and `continuous`
 //! (one nozzle path per component, pairing edges travelled along printed struts).
 
-use crate::geom::{StrokeLayer, Toolpath};
+//!
+//! Pipeline per layer: [`graph::build_graph`] → method (`gippo.rs`, `euler.rs` +
+//! `matching.rs`, `postman.rs`) → order (`order.rs`) → [`ToolpathLayer`] + [`LayerPaths`]
+//! (`metrics.rs`). Everything is deterministic (same input and seed → identical output on
+//! native and wasm): no hash-map iteration order, no platform transcendental functions,
+//! GIPPO's RNG is `rand_pcg::Pcg64` seeded per layer.
+
+pub mod graph;
+pub mod matching;
+pub mod metrics;
+
+mod euler;
+mod gippo;
+mod order;
+mod postman;
+
+pub use graph::{build_graph, Edge, Graph};
+
+use crate::geom::{DVec2, DVec3, Feature, Path, StrokeLayer, Toolpath, ToolpathLayer};
+use metrics::Run;
+use rand_core::SeedableRng;
+use rand_pcg::Pcg64;
 use serde::{Deserialize, Serialize};
 
 /// Default GIPPO iterations (the paper's 500).
@@ -91,7 +112,8 @@ pub struct LayerPaths {
     pub paths: usize,
     /// Equation 1 of the chosen solution.
     pub score: f64,
-    /// Equation 1 of every GIPPO iteration, in iteration order (empty for euler/continuous).
+    /// Equation 1 of every GIPPO iteration, in iteration order (empty for euler/continuous and
+    /// for layers without edges).
     pub iteration_scores: Vec<f64>,
     /// LTS % (equation 2) of the chosen solution.
     pub lts_percent: f64,
@@ -107,6 +129,12 @@ pub struct LayerPaths {
     pub travel_mm: f64,
     /// Travels that need a retraction (free travels).
     pub retractions: usize,
+    /// Duplicate edges collapsed while building the graph.
+    pub duplicates_collapsed: usize,
+    /// Total length of the odd-node pairing, mm: euler — the virtual edges (Euclidean, a
+    /// near-optimal matching); continuous — the struts travelled twice (graph distance,
+    /// before the longest travelled run is dropped to open the walk); 0 for GIPPO.
+    pub pairing_mm: f64,
 }
 
 /// The optimiser's report.
@@ -143,6 +171,9 @@ pub enum Error {
 }
 
 /// Optimises every layer. `line_width_mm` is written into the paths; `seed` seeds GIPPO.
+///
+/// Each stroke layer becomes one toolpath layer (same z and height) whose paths print every
+/// graph edge exactly once. `progress` is called after each layer with the fraction done.
 pub fn optimise(
     layers: &[StrokeLayer],
     options: &Options,
@@ -150,6 +181,195 @@ pub fn optimise(
     seed: u64,
     progress: &mut dyn FnMut(f32),
 ) -> Result<Optimised, Error> {
-    let _ = (layers, options, line_width_mm, seed, progress);
-    Ok(Optimised::default())
+    validate(options)?;
+    let mut toolpath = Toolpath::default();
+    let mut report = PathsReport { method: Some(options.method), layers: Vec::with_capacity(layers.len()) };
+    let mut last_end: Option<DVec2> = None;
+    for (li, layer) in layers.iter().enumerate() {
+        let graph = build_graph(layer, options.merge_tolerance_mm);
+        let mut stats = LayerPaths {
+            nodes: graph.nodes.len(),
+            edges: graph.edges.len(),
+            degenerate_dropped: graph.degenerate_dropped,
+            components: graph.components,
+            odd_nodes: graph.odd_nodes(),
+            lower_bound_paths: graph.lower_bound_paths(),
+            duplicates_collapsed: graph.duplicates_collapsed,
+            ..LayerPaths::default()
+        };
+        let mut gippo_score = None;
+        let mut chains = match options.method {
+            Method::GippoMax | Method::GippoMin => {
+                let mut rng = Pcg64::seed_from_u64(layer_seed(seed, li));
+                let sol = gippo::run(&graph, options.iterations, options.method == Method::GippoMax, &mut rng);
+                gippo_score = Some(sol.score);
+                stats.iteration_scores = sol.iteration_scores;
+                sol.chains
+            }
+            Method::Euler => {
+                let r = euler::run(&graph);
+                stats.pairing_mm = r.pairing_mm;
+                r.chains
+            }
+            Method::Continuous => {
+                let r = postman::run(&graph);
+                stats.pairing_mm = r.pairing_mm;
+                r.chains
+            }
+        };
+        chains = match options.order {
+            Order::LongestFirst => {
+                order::sort_longest_first(&mut chains, &graph);
+                chains
+            }
+            Order::MinTravel => {
+                let from = last_end.unwrap_or_else(|| {
+                    graph.nodes.iter().fold(DVec2::splat(f64::INFINITY), |m, p| m.min(*p))
+                });
+                order::min_travel(chains, &graph, from)
+            }
+        };
+
+        let mut out = ToolpathLayer { z: layer.z, height: layer.height, paths: Vec::new() };
+        let mut runs = Vec::new();
+        for chain in &chains {
+            emit_chain(&graph, chain, layer.z, line_width_mm, options, &mut out.paths, &mut runs);
+        }
+        stats.paths = out.paths.len();
+        stats.score = gippo_score.unwrap_or_else(|| metrics::score(&runs));
+        stats.lts_percent = metrics::lts_percent(&runs);
+        stats.oe_percent = metrics::oe_percent(&runs);
+        let (long, medium, short) = metrics::classes(&runs);
+        stats.long_paths = long;
+        stats.medium_paths = medium;
+        stats.short_paths = short;
+        for w in out.paths.windows(2) {
+            let a = w[0].points.last().expect("path has points");
+            let b = w[1].points[0];
+            stats.travel_mm += a.truncate().distance(b.truncate());
+            if w[1].approach.is_none() {
+                stats.retractions += 1;
+            }
+        }
+        if let Some(p) = out.paths.last() {
+            last_end = Some(p.points.last().expect("path has points").truncate());
+        }
+        toolpath.layers.push(out);
+        report.layers.push(stats);
+        progress((li + 1) as f32 / layers.len() as f32);
+    }
+    Ok(Optimised { toolpath, report })
+}
+
+/// GIPPO's RNG seed for layer `index`: the job seed mixed with the layer index (SplitMix64
+/// finaliser), so layers get independent streams.
+pub fn layer_seed(seed: u64, index: usize) -> u64 {
+    let mut z = seed ^ (index as u64).wrapping_add(1).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^ (z >> 31)
+}
+
+/// Checks the options' ranges.
+pub fn validate(options: &Options) -> Result<(), Error> {
+    if !(1..=100_000).contains(&options.iterations) {
+        return Err(Error::BadOption {
+            field: "iterations",
+            value: options.iterations as f64,
+            fix: "use 1 to 100000 (the paper uses 500)".into(),
+        });
+    }
+    let tol = options.merge_tolerance_mm;
+    if !(tol.is_finite() && tol > 0.0 && tol <= 1.0) {
+        return Err(Error::BadOption {
+            field: "merge_tolerance_mm",
+            value: tol,
+            fix: "use a tolerance in (0, 1] mm, e.g. 0.005".into(),
+        });
+    }
+    let f = options.short_path_speed_factor;
+    if !(f.is_finite() && f > 0.0 && f <= 1.0) {
+        return Err(Error::BadOption {
+            field: "short_path_speed_factor",
+            value: f,
+            fix: "use a factor in (0, 1], e.g. 0.6".into(),
+        });
+    }
+    Ok(())
+}
+
+/// A walk through the graph: a GIPPO / Euler path, or a continuous component walk whose
+/// `travel` steps are walked without extruding.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Chain {
+    /// Nodes visited, `edges.len() + 1` of them.
+    pub nodes: Vec<usize>,
+    /// Graph edge of every step.
+    pub edges: Vec<usize>,
+    /// Step walked without extruding (a duplicated strut).
+    pub travel: Vec<bool>,
+}
+
+impl Chain {
+    /// Walks it the other way.
+    pub fn reverse(&mut self) {
+        self.nodes.reverse();
+        self.edges.reverse();
+        self.travel.reverse();
+    }
+}
+
+/// Splits a chain into extrusion paths: every maximal printed run is a [`Path`]; the first is
+/// reached by a free travel, later ones through the travelled run before them.
+fn emit_chain(
+    graph: &Graph,
+    chain: &Chain,
+    z: f64,
+    width: f64,
+    options: &Options,
+    paths: &mut Vec<Path>,
+    runs: &mut Vec<Run>,
+) {
+    let at = |v: usize| DVec3::new(graph.nodes[v].x, graph.nodes[v].y, z);
+    let mut k = 0;
+    let mut first = true;
+    let steps = chain.edges.len();
+    while k < steps {
+        // Travelled run (approach).
+        let t0 = k;
+        while k < steps && chain.travel[k] {
+            k += 1;
+        }
+        if k == steps {
+            break;
+        }
+        let approach = if first {
+            None
+        } else {
+            // Intermediate nodes strictly between the previous end and this start.
+            Some((t0 + 1..k).map(|i| at(chain.nodes[i])).collect())
+        };
+        let p0 = k;
+        let mut by_feature = [0.0f64; Feature::ALL.len()];
+        let mut length = 0.0;
+        while k < steps && !chain.travel[k] {
+            let e = &graph.edges[chain.edges[k]];
+            by_feature[e.feature.code() as usize] += e.length;
+            length += e.length;
+            k += 1;
+        }
+        let mut feature = 0;
+        for (i, &l) in by_feature.iter().enumerate() {
+            if l > by_feature[feature] {
+                feature = i;
+            }
+        }
+        let segments = k - p0;
+        let points: Vec<DVec3> = (p0..=k).map(|i| at(chain.nodes[i])).collect();
+        let speed_factor =
+            if (segments as u64) < options.short_path_segments as u64 { options.short_path_speed_factor } else { 1.0 };
+        paths.push(Path { points, feature: Feature::ALL[feature], width, speed_factor, approach });
+        runs.push(Run { length, segments });
+        first = false;
+    }
 }

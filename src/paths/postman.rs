@@ -1,0 +1,235 @@
+//! Continuous printing (Chinese postman): per component, pair the odd-degree nodes by their
+//! shortest-path distance *in the graph* (bounded Dijkstra candidates + the near-optimal
+//! matching of [`super::matching`]), duplicate the edges along each pair's shortest path as
+//! non-extruding "travel along struts", and walk an Euler circuit of the augmented multigraph
+//! (Hierholzer, preferring printing edges, then the straightest continuation).
+//!
+//! The nozzle need not return to its start, so the circuit is cut open by dropping its
+//! longest run of duplicated edges (first such run on ties): one open walk per component
+//! that starts and ends printing. The walk becomes extrusion paths split at the remaining
+//! duplicated runs; those runs are the next path's `approach` route. Every real edge is
+//! printed exactly once.
+
+use super::euler::{circuits, component_starts, odd_by_component, walk_nodes, AugEdge};
+use super::graph::{Graph, IntMap};
+use super::matching::{min_pairing, CANDIDATES_PER_NODE};
+use super::Chain;
+use std::cell::RefCell;
+use std::cmp::Ordering;
+use std::collections::BinaryHeap;
+
+#[derive(Clone, Copy, PartialEq)]
+struct Item {
+    d: f64,
+    v: usize,
+}
+impl Eq for Item {}
+impl Ord for Item {
+    fn cmp(&self, o: &Self) -> Ordering {
+        // Min-heap by distance, then node.
+        o.d.total_cmp(&self.d).then(o.v.cmp(&self.v))
+    }
+}
+impl PartialOrd for Item {
+    fn partial_cmp(&self, o: &Self) -> Option<Ordering> {
+        Some(self.cmp(o))
+    }
+}
+
+/// Reusable single-source Dijkstra.
+struct Dijkstra {
+    dist: Vec<f64>,
+    pred: Vec<usize>,
+    done: Vec<bool>,
+    touched: Vec<usize>,
+    heap: BinaryHeap<Item>,
+}
+
+impl Dijkstra {
+    fn new(n: usize) -> Dijkstra {
+        Dijkstra {
+            dist: vec![f64::INFINITY; n],
+            pred: vec![usize::MAX; n],
+            done: vec![false; n],
+            touched: Vec::new(),
+            heap: BinaryHeap::new(),
+        }
+    }
+
+    fn reset(&mut self) {
+        for &v in &self.touched {
+            self.dist[v] = f64::INFINITY;
+            self.pred[v] = usize::MAX;
+            self.done[v] = false;
+        }
+        self.touched.clear();
+        self.heap.clear();
+    }
+
+    /// Settles nodes from `src` in distance order, calling `visit(node, dist)` on each; stops
+    /// when `visit` returns false or the component is exhausted.
+    fn run(&mut self, g: &Graph, src: usize, visit: &mut dyn FnMut(usize, f64) -> bool) {
+        self.reset();
+        self.dist[src] = 0.0;
+        self.touched.push(src);
+        self.heap.push(Item { d: 0.0, v: src });
+        while let Some(Item { d, v }) = self.heap.pop() {
+            if self.done[v] || d > self.dist[v] {
+                continue;
+            }
+            self.done[v] = true;
+            if !visit(v, d) {
+                return;
+            }
+            for &e in g.incident(v) {
+                let w = g.other(e, v);
+                let nd = d + g.edges[e].length;
+                if nd < self.dist[w] {
+                    if self.dist[w] == f64::INFINITY {
+                        self.touched.push(w);
+                    }
+                    self.dist[w] = nd;
+                    self.pred[w] = e;
+                    self.heap.push(Item { d: nd, v: w });
+                }
+            }
+        }
+    }
+}
+
+/// Continuous result: one chain (open walk) per component, and the total length of the
+/// duplicated (travelled) struts before cutting the circuits open, mm.
+pub(crate) struct PostmanPaths {
+    pub chains: Vec<Chain>,
+    pub pairing_mm: f64,
+}
+
+/// Chinese-postman walks of every component.
+pub(crate) fn run(graph: &Graph) -> PostmanPaths {
+    let n = graph.nodes.len();
+    let mut aug: Vec<AugEdge> =
+        graph.edges.iter().enumerate().map(|(i, e)| AugEdge { a: e.a, b: e.b, base: i, real: true }).collect();
+    let odd = odd_by_component(graph);
+    let mut dij = Dijkstra::new(n);
+    let mut local = vec![usize::MAX; n];
+    let mut mark = vec![0u32; n];
+    let mut stamp = 0u32;
+    let mut pairing_mm = 0.0;
+
+    for nodes in &odd {
+        if nodes.is_empty() {
+            continue;
+        }
+        for (i, &v) in nodes.iter().enumerate() {
+            local[v] = i;
+        }
+        let known: RefCell<IntMap<(usize, usize), f64>> = RefCell::new(IntMap::default());
+        let partner = {
+            let dij_cell = RefCell::new(&mut dij);
+            let mut candidates = |active: &[usize]| -> Vec<(f64, usize, usize)> {
+                stamp += 1;
+                for &i in active {
+                    mark[nodes[i]] = stamp;
+                }
+                let k = CANDIDATES_PER_NODE.min(active.len() - 1);
+                let mut out = Vec::with_capacity(active.len() * k);
+                let mut d = dij_cell.borrow_mut();
+                let mut known = known.borrow_mut();
+                for &i in active {
+                    let src = nodes[i];
+                    let mut found = 0;
+                    d.run(graph, src, &mut |v, dist| {
+                        if v != src && mark[v] == stamp {
+                            let j = local[v];
+                            out.push((dist, i.min(j), i.max(j)));
+                            known.insert((i.min(j), i.max(j)), dist);
+                            found += 1;
+                        }
+                        found < k
+                    });
+                }
+                out
+            };
+            let mut cost = |i: usize, j: usize| known.borrow().get(&(i.min(j), i.max(j))).copied();
+            min_pairing(nodes.len(), &mut candidates, &mut cost)
+        };
+        // Duplicate the struts along each pair's shortest path.
+        for (i, &j) in partner.iter().enumerate() {
+            if j == usize::MAX || i > j {
+                continue;
+            }
+            let (src, dst) = (nodes[i], nodes[j]);
+            let mut reached = f64::NAN;
+            dij.run(graph, src, &mut |v, dist| {
+                if v == dst {
+                    reached = dist;
+                    false
+                } else {
+                    true
+                }
+            });
+            if reached.is_nan() {
+                continue; // Unreachable: cannot happen within a component.
+            }
+            pairing_mm += reached;
+            let mut v = dst;
+            while v != src {
+                let e = dij.pred[v];
+                aug.push(AugEdge { a: graph.edges[e].a, b: graph.edges[e].b, base: e, real: false });
+                v = graph.other(e, v);
+            }
+        }
+        for &v in nodes {
+            local[v] = usize::MAX;
+        }
+    }
+
+    let starts = component_starts(graph, &odd);
+    let mut chains = Vec::with_capacity(starts.len());
+    for (c, circuit) in circuits(&graph.nodes, &aug, &starts).into_iter().enumerate() {
+        if circuit.is_empty() {
+            continue;
+        }
+        let nodes = walk_nodes(&aug, starts[c], &circuit);
+        let len = circuit.len();
+        // The longest (circular) run of duplicated edges: where the walk is cut open.
+        let mut cut: Option<(usize, f64)> = None; // (index of the run's last edge, length)
+        if let Some(real_at) = circuit.iter().position(|&e| aug[e].real) {
+            let mut k = 0;
+            while k < len {
+                let i = (real_at + 1 + k) % len;
+                if aug[circuit[i]].real {
+                    k += 1;
+                    continue;
+                }
+                let mut run_len = 0.0;
+                let mut last = i;
+                while k < len && !aug[circuit[(real_at + 1 + k) % len]].real {
+                    last = (real_at + 1 + k) % len;
+                    run_len += graph.edges[aug[circuit[last]].base].length;
+                    k += 1;
+                }
+                if cut.is_none_or(|(_, l)| run_len > l) {
+                    cut = Some((last, run_len));
+                }
+            }
+        }
+        let begin = cut.map_or(0, |(last, _)| (last + 1) % len);
+        let mut chain = Chain::default();
+        chain.nodes.push(nodes[begin]);
+        for k in 0..len {
+            let i = (begin + k) % len;
+            chain.nodes.push(nodes[i + 1]);
+            chain.edges.push(aug[circuit[i]].base);
+            chain.travel.push(!aug[circuit[i]].real);
+        }
+        // Drop the trailing duplicated run (the cut).
+        while chain.travel.last() == Some(&true) {
+            chain.travel.pop();
+            chain.edges.pop();
+            chain.nodes.pop();
+        }
+        chains.push(chain);
+    }
+    PostmanPaths { chains, pairing_mm }
+}

@@ -197,6 +197,14 @@ impl Session {
     }
 }
 
+/// Segments (x0 y0 x1 y1, mm, centred on 0) of `pattern` (JSON, e.g. `{"kind":"voronoi"}`)
+/// cropped to a `size_mm` square: the page's pattern thumbnails.
+#[wasm_bindgen(js_name = patternThumbnail)]
+pub fn pattern_thumbnail(pattern_json: &str, size_mm: f64, seed: u64) -> Result<Vec<f32>, JsError> {
+    let pattern: crate::lattice::Pattern = serde_json::from_str(pattern_json).map_err(js_err)?;
+    Ok(crate::lattice::thumbnail(&pattern, size_mm, seed).into_iter().flat_map(|s| s.map(|x| x as f32)).collect())
+}
+
 /// Benchmark workload: binary STL of the benchmark mesh (about `triangles` triangles).
 #[wasm_bindgen(js_name = benchMeshStl)]
 pub fn bench_mesh_stl(triangles: usize) -> Vec<u8> {

@@ -1,7 +1,8 @@
 // The page: design form, files, worker management, results. UI only: everything that can
 // take time runs in worker.js; the cheap synchronous calls (schema, validation, share codec)
 // use a wasm instance of our own.
-import { MSG, STAGES } from "./protocol.js";
+import { MSG, STAGES, JOB_STAGES, LAYER2D_STRIDE } from "./protocol.js";
+import { drawSegments2d, renderScorePlot, renderPathClasses, renderPathTable, FEATURE_COLORS_2D } from "./lattice.js";
 
 const $ = (id) => document.getElementById(id);
 const STORAGE_KEY = "weft.design";
@@ -9,6 +10,9 @@ const UNDO_LIMIT = 200;
 const PROGRESS_DELAY_MS = 500;
 const MESH_EXT = ["stl", "obj", "3mf"];
 const GCODE_EXT = ["gcode", "gco", "g"];
+const LAYER2D_DEBOUNCE_MS = 200;
+/** Side of the square a pattern thumbnail shows, mm. */
+const THUMB_MM = 6;
 /** Parameters of the built-in shapes when the schema does not give defaults. */
 const SHAPE_DEFAULTS = {
   cube: { shape: "cube", size: [20, 20, 20] },
@@ -49,6 +53,10 @@ window.weft = {
   get busy() { return jobs.active.size > 0; },
   get preview() { return preview; },
   run: () => runDesign(),
+  /** Completed 2D layer previews (and the segments drawn by the last one). */
+  get layer2dCount() { return lattice2d.drawn; },
+  get layer2dSegments() { return lattice2d.segments; },
+  get thumbnails() { return [...thumbs.cache.keys()]; },
 };
 
 async function start() {
@@ -69,7 +77,7 @@ async function start() {
   try {
     const { Preview } = await import("./preview.js");
     preview = new Preview($("preview"), {
-      colorBy: $("color-by"), showTravel: $("show-travel"), layerMin: $("layer-min"),
+      colorBy: $("color-by"), showTravel: $("show-travel"), showStarts: $("show-starts"), layerMin: $("layer-min"),
       layerMax: $("layer-max"), layerLabel: $("layer-label"), legend: $("legend"),
     });
   } catch (err) {
@@ -77,6 +85,7 @@ async function start() {
   }
   workers.start();
   loadInitialDesign();
+  renderLatticeResult();
   fillExamples();
   if ("serviceWorker" in navigator && window.isSecureContext) {
     navigator.serviceWorker.register("sw.js").catch(() => {});
@@ -116,7 +125,7 @@ function openShare(fragment) {
     return;
   }
   setDesign(json);
-  const file = inputFile();
+  const file = usedInputFile();
   if (file && !file.embedded && !state.files.has(file.name)) {
     showNotice(`This design slices ${file.name}, which is not in the link: load ${file.name} ` +
       "(Open… or drop it on the page) and it will be sliced.");
@@ -147,6 +156,7 @@ function setDesign(json, { record = true } = {}) {
   } catch { /* quota or disabled: the design stays in memory */ }
   renderForm();
   updateButtons();
+  scheduleLayer2d();
 }
 
 function undo() {
@@ -179,6 +189,38 @@ function inputFile() {
   return state.design?.job?.input?.file ?? null;
 }
 
+/** The loaded-file input the current design really reads (a lattice reads it only on a solid domain). */
+function usedInputFile() {
+  const job = state.design?.job;
+  if (job?.kind === "lattice" && job.domain?.kind !== "solid") return null;
+  return inputFile();
+}
+
+function isLattice() {
+  return state.design?.job?.kind === "lattice";
+}
+
+/** Extension of the output: `.nc` for pneumatic (CNC-style) controllers, else `.gcode`. */
+function gcodeExtension() {
+  return state.design?.printer?.flavor === "pneumatic" ? "nc" : "gcode";
+}
+
+/**
+ * Sets several fields through the Rust side (which resets a tagged object when its `kind`
+ * changes) and makes the result the design in one undo step; returns the problem or null.
+ * @param {Array<[string, string]>} assignments  [path, JSON value]
+ */
+function setFields(assignments) {
+  let next = state.json;
+  try {
+    for (const [path, value] of assignments) next = weft.setField(next, path, value);
+  } catch (err) {
+    return messageOf(err).replace(/^--set:\s*/gm, "");
+  }
+  setDesign(next);
+  return null;
+}
+
 function designName() {
   const name = String(state.design?.name ?? "").trim() || "weft";
   return name.replace(/[\\/:*?"<>|\u0000-\u001f]+/g, "_");
@@ -190,16 +232,25 @@ function designName() {
 /** path → {inputs, error, field} */
 const fieldViews = new Map();
 
-/** Schema fields shown for the current design (job kind, built-in shape). */
+/**
+ * Schema fields shown for the current design: those of its job kind whose path exists in the
+ * design (so only the current pattern's, domain's, surface's and built-in shape's parameters),
+ * plus each `…kind` choice and optional Section whose parent object exists.
+ */
 function visibleFields() {
-  const kind = state.design?.job?.kind;
-  const builtin = state.design?.job?.input?.builtin;
+  const design = state.design;
+  const kind = design?.job?.kind;
+  const usesInput = kind !== "lattice" || design?.job?.domain?.kind === "solid";
   const fields = schema.fields.filter((f) => {
     if (f.job && f.job !== kind) return false;
-    if (!f.path.startsWith("job.input.")) return true;
-    // Shape parameters: only those the current built-in shape has.
-    const key = f.path.slice("job.input.builtin.".length);
-    return f.path.startsWith("job.input.builtin.") && builtin != null && !key.includes(".") && key in builtin;
+    if (!f.path.startsWith("job.")) return true;
+    if (f.path.startsWith("job.input.") && !usesInput) return false;
+    const parent = f.path.slice(0, f.path.lastIndexOf("."));
+    if (f.kind === "section" || (f.kind === "choice" && f.path.endsWith(".kind"))) {
+      const p = getPath(design, parent);
+      return p !== null && typeof p === "object" && !Array.isArray(p);
+    }
+    return getPath(design, f.path) !== undefined;
   });
   if (!fields.some((f) => f.path === "name")) {
     fields.unshift({ path: "name", section: "Design", label: "Name", kind: "text", unit: "", doc: "Used for the downloaded file name." });
@@ -216,6 +267,10 @@ function renderForm() {
   if (key !== formKey) buildForm(fields, key);
   for (const [path, view] of fieldViews) writeField(view, getPath(state.design, path));
   renderInput();
+  renderPatternPicker();
+  $("slice").textContent = isLattice() ? "Run" : "Slice";
+  $("download").textContent = `Download ${gcodeExtension() === "nc" ? ".nc" : "G-code"}`;
+  $("lattice-panel").hidden = !isLattice() && !state.result?.report?.paths;
 }
 
 /** Sections with a fixed place in the "Design" fieldset; the others get their own. */
@@ -283,7 +338,8 @@ function buildField(f) {
     el.inputMode = f.kind === "integer" ? "numeric" : "decimal";
   };
   switch (f.kind) {
-    case "bool": {
+    case "bool":
+    case "section": {
       const el = make("input");
       el.type = "checkbox";
       break;
@@ -321,7 +377,7 @@ function buildField(f) {
     default:
       numeric(make("input"));
   }
-  if (f.kind !== "bool" && f.kind !== "text") {
+  if (f.kind !== "bool" && f.kind !== "section" && f.kind !== "text") {
     const unit = document.createElement("span"); // empty too, so the inputs line up
     unit.className = "unit";
     unit.textContent = f.unit ?? "";
@@ -344,6 +400,7 @@ function writeField(view, value) {
   if (view.error.hidden === false && view.dirty) return; // keep the user's invalid entry visible
   setFieldError(view, null);
   if (f.kind === "bool") inputs[0].checked = Boolean(value);
+  else if (f.kind === "section") inputs[0].checked = value !== undefined && value !== null;
   else if (f.kind === "choice") inputs[0].value = JSON.stringify(value);
   else if (f.kind === "vec3") inputs.forEach((el, i) => { el.value = Array.isArray(value) ? String(value[i]) : ""; });
   else inputs[0].value = value === undefined || value === null ? "" : String(value);
@@ -352,6 +409,8 @@ function writeField(view, value) {
 function readField({ f, inputs }) {
   switch (f.kind) {
     case "bool": return String(inputs[0].checked);
+    // An optional block: its default JSON when switched on; null (→ absent) when off.
+    case "section": return inputs[0].checked ? (f.default ?? "{}") : "null";
     case "choice": return inputs[0].value;
     case "text": return JSON.stringify(inputs[0].value);
     case "vec3": return `[${inputs.map((el) => el.value.trim() || "null").join(",")}]`;
@@ -361,8 +420,16 @@ function readField({ f, inputs }) {
 
 function commitField(view) {
   let next;
+  const value = readField(view);
   try {
-    next = weft.setField(state.json, view.f.path, readField(view));
+    if (view.f.path === "job.domain.kind" && value === '"solid"' && isLattice() && !state.design.job.input) {
+      // A solid domain needs a solid: the last loaded mesh, else a built-in cube.
+      const name = [...state.files.keys()].pop();
+      const input = name ? { file: { name } } : { builtin: shapeDefaults("cube") };
+      next = weft.setField(weft.setField(state.json, "job.input", JSON.stringify(input)), view.f.path, value);
+    } else {
+      next = weft.setField(state.json, view.f.path, value);
+    }
   } catch (err) {
     view.dirty = true;
     // setField reuses the CLI's `--set path=value` parser, whose messages start with "--set:".
@@ -398,6 +465,10 @@ function shapeDefaults(shape) {
 function renderInput() {
   const input = state.design?.job?.input ?? {};
   const select = $("input-kind");
+  const planar = isLattice() && state.design.job.domain?.kind !== "solid";
+  select.closest(".field").hidden = planar;
+  $("input-extra").hidden = planar;
+  $("input-info").hidden = planar;
   const options = [];
   for (const shape of shapeNames()) options.push([`builtin:${shape}`, `Built-in ${shape}`]);
   const names = new Set(state.files.keys());
@@ -480,6 +551,215 @@ function onInputKindChange() {
     else d.job.input = { file: { name: value.slice(5) } };
   });
   if (problem) showError(problem);
+}
+
+// ---------------------------------------------------------------------------------------
+// Lattice jobs: pattern picker, 2D layer preview, path-optimisation results
+// ---------------------------------------------------------------------------------------
+/** The 2D preview of one layer (#layer2d), fed by `layer2d` requests to the worker. */
+const lattice2d = {
+  timer: 0,
+  seq: 0, // newest request sent; older answers are dropped
+  drawn: 0, // answers drawn (for tests)
+  segments: 0, // segments in the last drawing
+  last: null, // {segments: Float32Array, layer}
+};
+
+function layerCount() {
+  const job = state.design?.job;
+  if (job?.kind !== "lattice") return 1;
+  if (job.domain?.kind === "solid") return Math.max(1, state.result?.report?.lattice?.layers ?? 1);
+  return Math.max(1, job.lattice?.layers ?? 1);
+}
+
+/** Asks the worker for the chosen layer's strokes after `delay` ms without further edits. */
+function scheduleLayer2d(delay = LAYER2D_DEBOUNCE_MS) {
+  clearTimeout(lattice2d.timer);
+  if (!isLattice()) return;
+  const input = $("layer2d-layer");
+  const count = layerCount();
+  input.max = String(count);
+  const layer = Math.min(count, Math.max(1, Math.round(input.valueAsNumber) || 1));
+  if (String(layer) !== input.value) input.value = String(layer);
+  lattice2d.timer = setTimeout(() => requestLayer2d(layer - 1), delay);
+}
+
+async function requestLayer2d(layer) {
+  const mine = ++lattice2d.seq;
+  const info = $("layer2d-info");
+  const file = usedInputFile();
+  if (file && !file.embedded && !state.files.has(file.name)) {
+    info.textContent = `load ${file.name} to see its layers`;
+    return;
+  }
+  info.textContent = "…";
+  let res;
+  try {
+    res = await workers.request({ type: MSG.LAYER2D, design: state.json, layer, key: "preview" });
+  } catch (err) {
+    if (mine === lattice2d.seq && !err.cancelled) {
+      info.textContent = messageOf(err);
+      info.classList.add("field-error");
+    }
+    return;
+  }
+  if (mine !== lattice2d.seq || res.stale) return; // a newer request is on its way
+  info.classList.remove("field-error");
+  lattice2d.last = { segments: res.segments, layer };
+  lattice2d.drawn++;
+  redrawLattice2d();
+  const n = res.segments.length / LAYER2D_STRIDE;
+  info.textContent = `of ${layerCount()} · ${n.toLocaleString("en-US")} segments · ${Math.round(res.ms)} ms`;
+}
+
+function redrawLattice2d() {
+  if ($("lattice-panel").hidden) return;
+  const { counts, segments } = drawSegments2d($("layer2d"), lattice2d.last?.segments ?? null, { stride: LAYER2D_STRIDE, scaleBar: true });
+  lattice2d.segments = segments;
+  const names = { 4: "lattice", 5: "contour", 6: "handle" };
+  $("layer2d-legend").replaceChildren(...Object.keys(counts).map((code) => {
+    const el = document.createElement("span");
+    const sw = document.createElement("span");
+    sw.className = "swatch";
+    sw.style.background = FEATURE_COLORS_2D[code] ?? "#e0b84d";
+    el.append(sw, ` ${names[code] ?? `feature ${code}`}`);
+    return el;
+  }));
+}
+
+/** Pattern thumbnails: name → {segments, stride}, drawn once per pattern and seed. */
+const thumbs = { cache: new Map(), seed: null, pending: new Set() };
+
+function thumbnailSeed() {
+  return Number(state.design?.seed ?? 1);
+}
+
+/** Segments of a pattern's thumbnail: `patternThumbnail` when the module has it, else the worker. */
+function loadThumbnail(kind) {
+  const cached = thumbs.cache.get(kind);
+  if ((cached && !(cached.failedAt < Date.now() - 10000)) || thumbs.pending.has(kind)) return;
+  const seed = thumbnailSeed();
+  if (typeof weft.patternThumbnail === "function") {
+    const pattern = JSON.stringify({ kind });
+    let segments = null;
+    for (const s of [seed, BigInt(seed)]) { // u64 seeds cross as BigInt
+      try {
+        segments = weft.patternThumbnail(pattern, THUMB_MM, s);
+        break;
+      } catch { /* try the other seed type, then the worker */ }
+    }
+    if (segments) {
+      thumbs.cache.set(kind, { segments, stride: 4 });
+      return;
+    }
+  }
+  // Fallback: the 2D preview of a default lattice design with this pattern.
+  let design;
+  try {
+    design = weft.setField(weft.defaultDesign(), "job.kind", '"lattice"');
+    for (const [path, value] of [
+      ["seed", String(seed)],
+      ["job.domain", JSON.stringify({ kind: "rectangle", width_mm: THUMB_MM, height_mm: THUMB_MM })],
+      ["job.lattice.pattern", JSON.stringify({ kind })],
+    ]) design = weft.setField(design, path, value);
+  } catch {
+    return;
+  }
+  thumbs.pending.add(kind);
+  workers.request({ type: MSG.LAYER2D, design, layer: 0, key: `thumb:${kind}` })
+    .then((res) => {
+      if (!res.stale) thumbs.cache.set(kind, { segments: res.segments, stride: LAYER2D_STRIDE });
+      drawThumbnail(kind);
+    })
+    // Drawn blank; tried again on a later form update.
+    .catch(() => thumbs.cache.set(kind, { segments: new Float32Array(0), stride: LAYER2D_STRIDE, failedAt: Date.now() }))
+    .finally(() => thumbs.pending.delete(kind));
+}
+
+function drawThumbnail(kind) {
+  const canvas = document.querySelector(`#pattern-picker canvas[data-pattern="${kind}"]`);
+  const t = thumbs.cache.get(kind);
+  if (!canvas || !t) return;
+  const half = THUMB_MM / 2;
+  const frame = t.stride === 4 ? [-half, -half, half, half] : null;
+  drawSegments2d(canvas, t.segments, { stride: t.stride, frame, lineWidth: 1, color: FEATURE_COLORS_2D[4] });
+}
+
+/** The atlas as a grid of thumbnails under the pattern choice; a click sets the pattern. */
+function renderPatternPicker() {
+  const view = fieldViews.get("job.lattice.pattern.kind");
+  const patterns = schema.patterns ?? [];
+  let picker = $("pattern-picker");
+  if (!view || !patterns.length) {
+    picker?.remove();
+    return;
+  }
+  if (thumbs.seed !== thumbnailSeed()) {
+    // Voronoi depends on the seed: redraw all with the design's.
+    thumbs.cache.clear();
+    thumbs.seed = thumbnailSeed();
+  }
+  if (!picker || picker.previousElementSibling !== view.wrap) {
+    picker?.remove();
+    picker = document.createElement("div");
+    picker.id = "pattern-picker";
+    picker.className = "pattern-picker";
+    picker.setAttribute("role", "group");
+    picker.setAttribute("aria-label", "Lattice patterns");
+    for (const kind of patterns) {
+      const b = document.createElement("button");
+      b.type = "button";
+      b.className = "pattern";
+      b.dataset.pattern = kind;
+      b.title = kind.replace(/_/g, " ");
+      const c = document.createElement("canvas");
+      c.dataset.pattern = kind;
+      c.width = 64;
+      c.height = 64;
+      drawSegments2d(c, null); // background until the thumbnail arrives
+      const label = document.createElement("span");
+      label.textContent = kind.replace(/_/g, " ");
+      b.append(c, label);
+      b.addEventListener("click", () => {
+        const problem = setFields([["job.lattice.pattern.kind", JSON.stringify(kind)]]);
+        if (problem) showError(problem);
+      });
+      picker.append(b);
+    }
+    view.wrap.after(picker);
+  }
+  const current = state.design?.job?.lattice?.pattern?.kind;
+  for (const b of picker.querySelectorAll("button")) b.setAttribute("aria-pressed", String(b.dataset.pattern === current));
+  for (const kind of patterns) {
+    loadThumbnail(kind);
+    drawThumbnail(kind);
+  }
+}
+
+/** Score plot, path classes and numbers of the chosen layer of the last result. */
+function renderLatticeResult() {
+  const report = state.result?.report;
+  const layers = report?.paths?.layers ?? [];
+  const panel = $("lattice-panel");
+  panel.hidden = !isLattice() && !layers.length;
+  const select = $("paths-layer");
+  if (select.options.length !== layers.length) {
+    const keep = select.value;
+    select.replaceChildren(...layers.map((_, i) => new Option(`${i + 1} of ${layers.length}`, String(i))));
+    if (keep && Number(keep) < layers.length) select.value = keep;
+  }
+  select.hidden = layers.length < 2;
+  select.previousElementSibling.hidden = select.hidden;
+  const i = Math.min(layers.length - 1, Math.max(0, Number(select.value) || 0));
+  const layer = layers[i] ?? null;
+  $("score-title").textContent = renderScorePlot($("score-plot"), layer, report?.paths?.method ?? null);
+  renderPathClasses($("path-classes"), layer);
+  renderPathTable($("path-table"), layer, { pores: report?.lattice?.pore_fraction_per_layer?.[i] });
+  const np = report?.nonplanar;
+  $("paths-title").textContent = layer
+    ? `Paths${layers.length > 1 ? ` · layer ${i + 1}` : ""}${np ? ` · non-planar: ${np.missed_points ?? 0} missed, ${np.collisions ?? 0} collisions` : ""}`
+    : "Paths";
+  if (state.design?.job?.domain?.kind === "solid") scheduleLayer2d(0); // its layer count is known now
 }
 
 // ---------------------------------------------------------------------------------------
@@ -575,6 +855,7 @@ const workers = {
 // --- jobs and the progress bar ----------------------------------------------------------
 const jobs = {
   active: new Map(), // token → label
+  stages: null, // stage names of the running job (JOB_STAGES), for the overall bar
   timer: 0,
   nextToken: 1,
   begin(label) {
@@ -609,8 +890,9 @@ const jobs = {
       $("progress-label").textContent = `${stage}…`;
       return;
     }
-    const i = STAGES.indexOf(stage);
-    const overall = i < 0 ? fraction : (i + Math.min(1, Math.max(0, fraction))) / STAGES.length;
+    const stages = this.stages ?? STAGES;
+    const i = stages.indexOf(stage);
+    const overall = i < 0 ? fraction : (i + Math.min(1, Math.max(0, fraction))) / stages.length;
     bar.value = overall;
     $("progress-label").textContent = `${stage}… ${Math.round(overall * 100)}%`;
   },
@@ -629,7 +911,7 @@ function cancel() {
 let latestRun = 0;
 
 async function runDesign() {
-  const file = inputFile();
+  const file = usedInputFile();
   if (file && !file.embedded && !state.files.has(file.name)) {
     showError(`The design slices ${file.name}, which is not loaded: open or drop ${file.name} first, or pick a built-in shape.`);
     return;
@@ -637,9 +919,11 @@ async function runDesign() {
   const token = jobs.begin("starting");
   const mine = ++latestRun;
   const name = designName();
+  const ext = gcodeExtension();
+  jobs.stages = JOB_STAGES[state.design?.job?.kind] ?? STAGES;
   try {
     const res = await workers.request({ type: MSG.RUN, design: state.json }, (s, f) => jobs.progress(s, f));
-    if (mine === latestRun) showResult(res, `${name}.gcode`);
+    if (mine === latestRun) showResult(res, `${name}.${ext}`);
   } catch (err) {
     if (!err.cancelled) showError(messageOf(err));
   } finally {
@@ -698,7 +982,10 @@ async function openFile(file) {
   }
   state.files.set(file.name, bytes);
   state.imports = { ...state.imports, [file.name]: report };
-  const problem = changeDesign((d) => { d.job.input = { file: { name: file.name } }; });
+  // A lattice job fills the layers of the loaded solid (its domain becomes `solid`).
+  const problem = isLattice()
+    ? setFields([["job.input", JSON.stringify({ file: { name: file.name } })], ["job.domain.kind", '"solid"']])
+    : changeDesign((d) => { d.job.input = { file: { name: file.name } }; });
   if (problem) {
     showError(problem);
     return;
@@ -716,6 +1003,7 @@ function showResult(res, fileName) {
   const origin = state.design?.printer?.origin;
   preview?.setResult(buffers, { origin: typeof origin === "string" ? origin : "corner" });
   renderStats(report, gcode, res.ms);
+  renderLatticeResult();
   hideErrorUnlessCrash();
 }
 
@@ -816,6 +1104,9 @@ function wireUi() {
   });
   $("input-kind").addEventListener("change", onInputKindChange);
   $("examples").addEventListener("change", openExample);
+  $("layer2d-layer").addEventListener("change", () => scheduleLayer2d(0));
+  $("paths-layer").addEventListener("change", renderLatticeResult);
+  new ResizeObserver(() => redrawLattice2d()).observe($("layer2d"));
   $("error-close").addEventListener("click", hideError);
   $("notice-close").addEventListener("click", () => { $("notice").hidden = true; });
   $("design-form").addEventListener("submit", (e) => e.preventDefault());
@@ -901,7 +1192,7 @@ async function openExample() {
     showError(`Example ${file} could not be opened: ${messageOf(err)}`);
     return;
   }
-  const f = inputFile();
+  const f = usedInputFile();
   if (!f || f.embedded || state.files.has(f.name)) runDesign();
   else showNotice(`This example slices ${f.name}: load ${f.name} to run it.`);
 }

@@ -26,6 +26,9 @@ export const FEATURE_COLORS = [
 ];
 const UNKNOWN_COLOR = [190, 190, 190];
 const TRAVEL_COLOR = 0x5aa0ff;
+const START_COLOR = 0xffffff;
+/** Size of a path-start marker, CSS pixels. */
+const START_SIZE_PX = 7;
 
 /** 256-entry "turbo"-like ramp (blue → green → yellow → red), sRGB bytes. */
 const RAMP = buildRamp();
@@ -34,7 +37,7 @@ export class Preview {
   /**
    * @param {HTMLCanvasElement} canvas
    * @param {{colorBy: HTMLSelectElement, showTravel: HTMLInputElement,
-   *          layerMin: HTMLInputElement, layerMax: HTMLInputElement,
+   *          showStarts?: HTMLInputElement, layerMin: HTMLInputElement, layerMax: HTMLInputElement,
    *          layerLabel: HTMLElement, legend: HTMLElement}} ui
    */
   constructor(canvas, ui) {
@@ -68,7 +71,20 @@ export class Preview {
     );
     this.travel.frustumCulled = false;
     this.travel.visible = ui.showTravel.checked;
-    this.scene.add(this.extrusion, this.travel);
+    // Path starts: a round marker at the first vertex of every extrusion path.
+    this.starts = new THREE.Points(
+      new THREE.BufferGeometry(),
+      new THREE.PointsMaterial({
+        color: START_COLOR, size: START_SIZE_PX * this.renderer.getPixelRatio(), sizeAttenuation: false,
+        map: dotTexture(), alphaTest: 0.5, transparent: true, depthTest: false,
+      }),
+    );
+    this.starts.frustumCulled = false;
+    this.starts.renderOrder = 2;
+    this.starts.visible = Boolean(ui.showStarts?.checked);
+    /** first start marker of each layer, plus the end */
+    this.startLayerStart = new Uint32Array(0);
+    this.scene.add(this.extrusion, this.travel, this.starts);
 
     /** @type {import("./protocol.js").PreviewBuffers|null} */
     this.data = null;
@@ -83,6 +99,11 @@ export class Preview {
     };
 
     ui.colorBy.addEventListener("change", () => this.applyColors());
+    ui.showStarts?.addEventListener("change", () => {
+      this.starts.visible = ui.showStarts.checked;
+      this.updateLegend(ui.colorBy.value, this.data ? this.data.positions.length / 6 : 0);
+      this.requestRender();
+    });
     ui.showTravel.addEventListener("change", () => {
       this.travel.visible = ui.showTravel.checked;
       this.requestRender();
@@ -131,6 +152,7 @@ export class Preview {
     const travelGeometry = this.travel.geometry;
     geometry.dispose();
     travelGeometry.dispose();
+    this.starts.geometry.dispose();
     this.colorCache.clear(); // their GPU buffers go with the disposed geometry / GC
     this.data = data;
     this.featureCounts = null;
@@ -159,6 +181,7 @@ export class Preview {
     }
     layerMin.value = "0";
     layerMax.value = String(Math.max(0, this.layers - 1));
+    this.buildStarts();
 
     const bed = data?.bedSize && data.bedSize.length >= 2 && data.bedSize[0] > 0 ? data.bedSize : DEFAULT_BED;
     this.setBed(bed, options.origin ?? "corner");
@@ -183,6 +206,8 @@ export class Preview {
     const start = d.layerStart[lo];
     const end = d.layerStart[hi + 1];
     this.extrusion.geometry.setDrawRange(start * 2, (end - start) * 2);
+    const sl = this.startLayerStart;
+    if (sl.length > hi + 1) this.starts.geometry.setDrawRange(sl[lo], sl[hi + 1] - sl[lo]);
     const ts = d.travelLayerStart;
     if (ts && ts.length > hi + 1) {
       this.travel.geometry.setDrawRange(ts[lo] * 2, (ts[hi + 1] - ts[lo]) * 2);
@@ -193,6 +218,41 @@ export class Preview {
     const zText = z && z.length > hi ? ` · z ${z[lo].toFixed(2)}–${z[hi].toFixed(2)} mm` : "";
     label.textContent = `layers ${lo + 1}–${hi + 1} of ${this.layers}${zText}`;
     this.requestRender();
+  }
+
+  /**
+   * Path-start markers: the first vertex of every segment whose path index differs from the
+   * previous segment's, with the first marker of each layer (for the layer range).
+   */
+  buildStarts() {
+    const d = this.data;
+    const segments = d ? d.positions.length / 6 : 0;
+    const path = d?.path;
+    this.starts.geometry = new THREE.BufferGeometry();
+    if (!segments || !path || path.length < segments) {
+      this.startLayerStart = new Uint32Array(0);
+      this.starts.geometry.setAttribute("position", new THREE.BufferAttribute(new Float32Array(0), 3));
+      return;
+    }
+    let count = 0;
+    for (let i = 0; i < segments; i++) if (i === 0 || path[i] !== path[i - 1]) count++;
+    const pos = new Float32Array(count * 3);
+    const layerStart = d.layerStart;
+    const sl = new Uint32Array(this.layers + 1);
+    let k = 0;
+    let layer = 0;
+    for (let i = 0; i < segments; i++) {
+      while (layer < this.layers && layerStart[layer] <= i) sl[layer++] = k; // layers starting here
+      if (i === 0 || path[i] !== path[i - 1]) {
+        pos[k * 3] = d.positions[i * 6];
+        pos[k * 3 + 1] = d.positions[i * 6 + 1];
+        pos[k * 3 + 2] = d.positions[i * 6 + 2];
+        k++;
+      }
+    }
+    while (layer <= this.layers) sl[layer++] = k;
+    this.startLayerStart = sl;
+    this.starts.geometry.setAttribute("position", new THREE.BufferAttribute(pos, 3));
   }
 
   /** Sets (or reuses) the colour attribute for the selected mode and updates the legend. */
@@ -238,8 +298,8 @@ export class Preview {
       const palette = PATH_PALETTE;
       const n = palette.length / 3;
       for (let i = 0; i < segments; i++) {
-        // Multiplicative hash so neighbouring paths get distant colours.
-        const k = (Math.imul(d.path[i], 2654435761) >>> 0) % n * 3;
+        // Consecutive paths are a golden-ratio hue step (≈ 137.5°) apart.
+        const k = (d.path[i] % n) * 3;
         put(i, palette[k], palette[k + 1], palette[k + 2]);
       }
     } else {
@@ -309,6 +369,7 @@ export class Preview {
       const paths = this.data.path.length ? this.data.path[this.data.path.length - 1] + 1 : 0;
       legend.append(item(null, `one colour per extrusion path (${paths.toLocaleString()} paths)`));
     }
+    if (this.starts.visible) legend.append(item([255, 255, 255], "path start", true));
     legend.append(item(null, `${segments.toLocaleString()} segments`));
   }
 
@@ -370,12 +431,12 @@ function lines(flat, color) {
   return new THREE.LineSegments(g, new THREE.LineBasicMaterial({ color }));
 }
 
-function item(rgb, text) {
+function item(rgb, text, round = false) {
   const el = document.createElement("span");
   el.className = "legend-item";
   if (rgb) {
     const sw = document.createElement("span");
-    sw.className = "swatch";
+    sw.className = round ? "swatch round" : "swatch";
     sw.style.background = `rgb(${rgb[0]},${rgb[1]},${rgb[2]})`;
     el.append(sw);
   }
@@ -420,13 +481,35 @@ function buildRamp() {
   return out;
 }
 
-/** 37 well-spread hues for colouring by path. */
+/** A round white dot (alpha) for the path-start markers. */
+function dotTexture() {
+  const size = 32;
+  const c = document.createElement("canvas");
+  c.width = c.height = size;
+  const ctx = c.getContext("2d");
+  ctx.fillStyle = "#000";
+  ctx.beginPath();
+  ctx.arc(size / 2, size / 2, size / 2 - 1, 0, Math.PI * 2);
+  ctx.fill();
+  ctx.fillStyle = "#fff";
+  ctx.beginPath();
+  ctx.arc(size / 2, size / 2, size / 2 - 6, 0, Math.PI * 2);
+  ctx.fill();
+  const t = new THREE.CanvasTexture(c);
+  t.colorSpace = THREE.NoColorSpace;
+  return t;
+}
+
+/**
+ * 256 colours for colouring by path, entry i at hue i × golden ratio: consecutive paths are
+ * ≈ 137.5° apart on the colour wheel, and lightness cycles over three levels.
+ */
 const PATH_PALETTE = (() => {
-  const n = 37;
+  const n = 256;
   const out = new Uint8Array(n * 3);
   const c = new THREE.Color();
   for (let i = 0; i < n; i++) {
-    c.setHSL((i * 0.618034) % 1, 0.75, i % 2 ? 0.55 : 0.65);
+    c.setHSL((i * 0.618034) % 1, 0.8, [0.55, 0.68, 0.45][i % 3]);
     out[i * 3] = Math.round(c.r * 255);
     out[i * 3 + 1] = Math.round(c.g * 255);
     out[i * 3 + 2] = Math.round(c.b * 255);

@@ -1,7 +1,7 @@
 // Messages between the page (main.js) and the wasm worker (worker.js).
 //
 // Every request from the page carries an `id`; the worker answers each request with exactly
-// one `loaded` / `result` / `error` message bearing the same id (plus any number of `progress`
+// one `loaded` / `result` / `layer2d` / `error` message bearing the same id (plus any number of `progress`
 // messages for `run` and `analyze`). Bytes travel in ArrayBuffers listed in the transfer list
 // of postMessage, so they move between threads instead of being copied.
 
@@ -14,6 +14,8 @@ export const MSG = Object.freeze({
   RUN: "run",
   /** Analyse a G-code file. @see AnalyzeRequest */
   ANALYZE: "analyze",
+  /** Lattice strokes of one layer for the 2D preview (answered by `layer2d`). @see Layer2dRequest */
+  LAYER2D: "layer2d",
   /** Advisory: the page stops work by terminating the worker; see main.js. @see CancelRequest */
   CANCEL: "cancel",
   // worker → page
@@ -23,6 +25,8 @@ export const MSG = Object.freeze({
   LOADED: "loaded",
   /** Stage progress of a `run` / `analyze`. @see ProgressMessage */
   PROGRESS: "progress",
+  /** Answer to `layer2d` (same type name). @see Layer2dMessage */
+  LAYER2D_RESULT: "layer2d",
   /** Answer to `run` / `analyze`. @see ResultMessage */
   RESULT: "result",
   /** A request failed (or the module could not start). @see ErrorMessage */
@@ -30,7 +34,16 @@ export const MSG = Object.freeze({
 });
 
 /** Pipeline stage names reported by Session.run, in order. */
-export const STAGES = Object.freeze(["import", "slice", "gcode", "analyze"]);
+export const STAGES = Object.freeze(["import", "slice", "lattice", "paths", "nonplanar", "gcode", "analyze"]);
+
+/** The stages each job kind goes through, in order (for the overall progress bar). */
+export const JOB_STAGES = Object.freeze({
+  slice: Object.freeze(["import", "slice", "gcode", "analyze"]),
+  lattice: Object.freeze(["import", "slice", "lattice", "paths", "nonplanar", "gcode", "analyze"]),
+});
+
+/** Floats per segment of a `layer2d` answer: x0 y0 x1 y1 feature-code (mm). */
+export const LAYER2D_STRIDE = 5;
 
 /**
  * Preview buffers of a result: message key → [Session method, typed array constructor].
@@ -85,6 +98,15 @@ export const FEATURE_UNKNOWN = 255;
  * @property {ArrayBuffer} bytes  G-code, transferred
  */
 /**
+ * @typedef {Object} Layer2dRequest
+ * @property {"layer2d"} type
+ * @property {number} id
+ * @property {string} design   design JSON (a lattice job)
+ * @property {number} layer    0-based layer (clamped to the last layer by the worker)
+ * @property {string} [key]    requests with the same key supersede each other: when a newer
+ *                             one is already waiting, the older is answered `stale` unrun
+ */
+/**
  * @typedef {Object} CancelRequest
  * @property {"cancel"} type
  * @property {number} id  the request to cancel
@@ -102,6 +124,15 @@ export const FEATURE_UNKNOWN = 255;
  * @property {number} id
  * @property {string} stage     one of STAGES
  * @property {number} fraction  0..1 within the stage
+ */
+/**
+ * @typedef {Object} Layer2dMessage
+ * @property {"layer2d"} type
+ * @property {number} id
+ * @property {number} layer
+ * @property {Float32Array} segments  LAYER2D_STRIDE floats per segment (transferred); empty when stale
+ * @property {boolean} [stale]        skipped because a newer request with the same key was waiting
+ * @property {number} ms
  */
 /**
  * @typedef {Object} PreviewBuffers
@@ -130,7 +161,7 @@ export const FEATURE_UNKNOWN = 255;
  * @typedef {Object} ErrorMessage
  * @property {"error"} type
  * @property {number|null} id   the failed request (null: module start-up)
- * @property {string} request   "load" | "run" | "analyze" | "init"
+ * @property {string} request   "load" | "run" | "analyze" | "layer2d" | "init"
  * @property {string} message   the message from Rust (or JS)
  * @property {string} [name]    file name for load / analyze
  * @property {boolean} [fatal]  the wasm instance trapped or ran out of memory: restart the worker

@@ -10,9 +10,13 @@ let session = null;
 let queue = [];
 /** @type {WebAssembly.Memory|null} */
 let memory = null;
+/** key → id of the newest `layer2d` request received with that key */
+const newestLayer2d = new Map();
 
 self.onmessage = ({ data }) => {
+  if (data?.type === MSG.LAYER2D) newestLayer2d.set(data.key ?? "", data.id);
   if (queue) queue.push(data);
+  else if (data?.type === MSG.LAYER2D) setTimeout(() => handle(data), 0); // let newer ones arrive first
   else handle(data);
 };
 
@@ -51,6 +55,19 @@ function handle(msg) {
         self.postMessage({ type: MSG.PROGRESS, id: msg.id, stage: "analyze", fraction: 0 });
         const report = JSON.parse(session.analyzeGcode(msg.name, new Uint8Array(msg.bytes)));
         postResult(msg.id, "analyze", report, t0);
+        break;
+      }
+      case MSG.LAYER2D: {
+        const t0 = performance.now();
+        if (newestLayer2d.get(msg.key ?? "") !== msg.id) {
+          self.postMessage({ type: MSG.LAYER2D_RESULT, id: msg.id, layer: msg.layer, segments: new Float32Array(0), stale: true, ms: 0 });
+          break;
+        }
+        const segments = owned(session.latticeLayer(msg.design, Math.max(0, msg.layer | 0)), Float32Array);
+        self.postMessage(
+          { type: MSG.LAYER2D_RESULT, id: msg.id, layer: msg.layer, segments, ms: performance.now() - t0 },
+          transferList([segments]),
+        );
         break;
       }
       case MSG.CANCEL:

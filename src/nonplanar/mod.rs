@@ -25,7 +25,7 @@ pub enum Surface {
         #[serde(default = "d_radius")]
         radius_mm: f64,
         /// Centre X, Y, Z, mm (model coordinates: the lattice is centred on X = Y = 0).
-        /// Default [0, 0, −20] (the sphere's top at Z = 0).
+        /// Default [0, 0, 0] (the sphere's top 20 mm above the plate, the lattice on it).
         #[serde(default = "d_center")]
         center_mm: [f64; 3],
     },
@@ -34,7 +34,7 @@ pub enum Surface {
         /// Radius, mm. Default 20.
         #[serde(default = "d_radius")]
         radius_mm: f64,
-        /// Axis height Z, mm. Default −20 (the cylinder's top at Z = 0).
+        /// Axis height Z, mm. Default 0 (the cylinder's top 20 mm above the plate).
         #[serde(default = "d_axis")]
         axis_z_mm: f64,
     },
@@ -46,7 +46,7 @@ pub enum Surface {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Options {
-    /// The surface. Default: a sphere of radius 20 mm with its top at Z = 0.
+    /// The surface. Default: a sphere of radius 20 mm centred on the origin.
     #[serde(default)]
     pub surface: Surface,
     /// Longest segment after projection, mm. Default 0.25.
@@ -58,10 +58,10 @@ fn d_radius() -> f64 {
     20.0
 }
 fn d_center() -> [f64; 3] {
-    [0.0, 0.0, -20.0]
+    [0.0, 0.0, 0.0]
 }
 fn d_axis() -> f64 {
-    -20.0
+    0.0
 }
 
 impl Default for Surface {

@@ -1,0 +1,19 @@
+#!/usr/bin/env bash
+# Benchmarks of BENCHMARKS.md: builds the native CLI and the wasm page, then runs the browser
+# worker benchmark and `weft bench` side by side (tests/e2e/bench.mjs), printing Markdown on
+# stdout (progress on stderr). Not part of scripts/test.sh: timings depend on the machine.
+# Usage: scripts/bench.sh                 (CARGO_TARGET_DIR is honoured; default ./target)
+#        BENCH_TRIANGLES=200000 BENCH_GCODE_MB=20 scripts/bench.sh   (a quick run)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+root=$(pwd)
+target_dir=${CARGO_TARGET_DIR:-$root/target}
+say() { printf '[bench] %s\n' "$*" >&2; }
+
+say "cargo build --release --bin weft"
+cargo build --release --bin weft >&2
+say "scripts/build-www.sh"
+bash scripts/build-www.sh >&2
+
+say "machine: $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2- | sed 's/^ //'), $(nproc) cores, $(free -g | awk '/^Mem:/{print $2}') GiB RAM; load: $(cut -d' ' -f1-3 /proc/loadavg)"
+WEFT_BIN="${WEFT_BIN:-$target_dir/release/weft}" node tests/e2e/bench.mjs

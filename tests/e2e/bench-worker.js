@@ -1,0 +1,102 @@
+// Browser benchmark worker (module worker, started by tests/e2e/bench.mjs). Runs the same
+// workloads as `weft bench` (src/bench.rs) inside a Web Worker and times them with
+// performance.now().
+//
+// Messages (page → worker):
+//   { cmd: "stl", triangles }        → { type: "stl", bytes (transferred), ms }
+//       generates the benchmark mesh's binary STL (benchMeshStl; not part of the job).
+//   { cmd: "run", stl, gcodeMb }     → { type: "result", ... } or { type: "error", message }
+//       `stl` (ArrayBuffer, optional: generated here when absent). Times Session.addFile
+//       (import) and Session.run(benchDesign()) per stage through the progress callback
+//       (import / slice / gcode / analyze), then analyses ~gcodeMb MB of G-code (the run's
+//       G-code repeated) with benchAnalyze. Reports wasm linear memory
+//       (memory.buffer.byteLength, which only grows: its value at a point is the peak so far).
+// Run the job in a fresh worker (the page does) so the STL generation does not count in the
+// job's linear memory.
+import init, { Session, benchAnalyze, benchDesign, benchMeshStl } from "../../pkg/weft.js";
+
+const ready = init();
+
+const MB = 1e6;
+
+self.onmessage = async ({ data }) => {
+  try {
+    const { memory } = await ready;
+    const mem = () => memory.buffer.byteLength;
+    if (data.cmd === "stl") {
+      const t0 = performance.now();
+      const bytes = benchMeshStl(data.triangles);
+      const ms = performance.now() - t0;
+      self.postMessage({ type: "stl", bytes: bytes.buffer, ms }, [bytes.buffer]);
+      return;
+    }
+    if (data.cmd !== "run") throw new Error(`unknown command ${data.cmd}`);
+    const memInit = mem();
+    let stl = data.stl ? new Uint8Array(data.stl) : null;
+    let generated = false;
+    if (!stl) {
+      stl = benchMeshStl(data.triangles ?? 1_000_000);
+      generated = true;
+    }
+    const stlBytes = stl.byteLength;
+    const memBeforeJob = mem();
+
+    // Import (Session.addFile reads the mesh once to report problems, and keeps the bytes).
+    const session = new Session();
+    let t = performance.now();
+    session.addFile("bench.stl", stl);
+    const addFileMs = performance.now() - t;
+    stl = null; // the JS copy is no longer needed
+    const memAfterAddFile = mem();
+
+    // The run, stage by stage (the stage that reports progress first is timed from then on).
+    const stages = [];
+    let current = null;
+    let stageStart = 0;
+    const progress = (stage) => {
+      if (stage !== current) {
+        const now = performance.now();
+        if (current !== null) stages.push({ stage: current, ms: now - stageStart });
+        current = stage;
+        stageStart = now;
+      }
+    };
+    const design = benchDesign();
+    t = performance.now();
+    stageStart = t;
+    const report = JSON.parse(session.run(design, progress));
+    const end = performance.now();
+    if (current !== null) stages.push({ stage: current, ms: end - stageStart });
+    const runMs = end - t;
+    const memAfterRun = mem();
+
+    // Analyzer workload: the run's G-code repeated to ~gcodeMb MB.
+    const gcode = session.gcode();
+    const gcodeBytes = gcode.byteLength;
+    session.free();
+    const target = (data.gcodeMb ?? 100) * MB;
+    const reps = Math.max(1, Math.ceil(target / gcodeBytes));
+    const big = new Uint8Array(gcodeBytes * reps);
+    for (let i = 0; i < reps; i++) big.set(gcode, i * gcodeBytes);
+    t = performance.now();
+    const analysis = JSON.parse(benchAnalyze(big));
+    const analyzeMs = performance.now() - t;
+
+    self.postMessage({
+      type: "result",
+      triangles: data.triangles ?? null,
+      stlBytes,
+      generatedInWorker: generated,
+      addFileMs,
+      stages,
+      runMs,
+      layers: report.analysis.layers,
+      gcodeBytes,
+      analyze: { bytes: big.byteLength, ms: analyzeMs, paths: analysis.extrusion_paths },
+      memory: { init: memInit, beforeJob: memBeforeJob, afterAddFile: memAfterAddFile, afterRun: memAfterRun, end: mem() },
+      userAgent: navigator.userAgent,
+    });
+  } catch (err) {
+    self.postMessage({ type: "error", message: String(err?.stack ?? err?.message ?? err) });
+  }
+};

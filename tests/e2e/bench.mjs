@@ -1,0 +1,217 @@
+#!/usr/bin/env node
+// Browser benchmark: runs the `weft bench` workloads (src/bench.rs) inside a Web Worker in
+// headless Debian Chromium (tests/e2e/bench-worker.js) and the native CLI's `weft bench`, and
+// prints both side by side as Markdown. Not part of the test suite (timings depend on the
+// machine); see BENCHMARKS.md and scripts/bench.sh.
+//
+//   node tests/e2e/bench.mjs
+// Environment:
+//   WEFT_BIN        native CLI (default ./target/release/weft; "" skips the native run)
+//   CHROMIUM        browser executable (default /usr/bin/chromium)
+//   WEFT_PKG_DIR    serve this directory as /pkg/ instead of ./pkg
+//   BENCH_TRIANGLES triangles of the benchmark mesh (default 1000000)
+//   BENCH_GCODE_MB  size of the analyzer workload, MB (default 100)
+//   BENCH_TIMEOUT_S timeout of the browser job, s (default 900)
+import { execFileSync } from "node:child_process";
+import { existsSync, readFileSync, writeFileSync } from "node:fs";
+import { join, resolve } from "node:path";
+import { chromium } from "playwright-core";
+import { ROOT, serve } from "./server.mjs";
+
+const WEFT_BIN = process.env.WEFT_BIN === "" ? null : resolve(ROOT, process.env.WEFT_BIN ?? "target/release/weft");
+const CHROMIUM = process.env.CHROMIUM ?? "/usr/bin/chromium";
+const PKG_DIR = process.env.WEFT_PKG_DIR ? resolve(process.env.WEFT_PKG_DIR) : join(ROOT, "pkg");
+const TRIANGLES = Number(process.env.BENCH_TRIANGLES ?? 1_000_000);
+const GCODE_MB = Number(process.env.BENCH_GCODE_MB ?? 100);
+const TIMEOUT = Number(process.env.BENCH_TIMEOUT_S ?? 900) * 1000;
+const MB = 1e6;
+const MiB = 1024 * 1024;
+
+const log = (...a) => console.error("[bench]", ...a);
+const f = (x, d = 3) => (x == null || Number.isNaN(x) ? "?" : x.toFixed(d));
+
+/** VmHWM / VmRSS of a process, MiB (Linux). */
+function procMem(pid) {
+  try {
+    const s = readFileSync(`/proc/${pid}/status`, "utf8");
+    const kb = (k) => Number((s.match(new RegExp(`^${k}:\\s+(\\d+)`, "m")) ?? [])[1]) / 1024;
+    return { hwm: kb("VmHWM"), rss: kb("VmRSS") };
+  } catch {
+    return null;
+  }
+}
+
+/** Resets a process's peak RSS to its current RSS (Linux clear_refs 5); false if refused. */
+function resetPeak(pid) {
+  try {
+    writeFileSync(`/proc/${pid}/clear_refs`, "5");
+    return true;
+  } catch {
+    return false;
+  }
+}
+
+// ---------------------------------------------------------------------------------------
+// Native: `weft bench`
+// ---------------------------------------------------------------------------------------
+function runNative() {
+  if (!WEFT_BIN) return null;
+  if (!existsSync(WEFT_BIN)) throw new Error(`${WEFT_BIN} not found: cargo build --release (or set WEFT_BIN)`);
+  log(`native: ${WEFT_BIN} bench --triangles ${TRIANGLES} --gcode-mb ${GCODE_MB}`);
+  const text = execFileSync(WEFT_BIN, ["bench", "--triangles", String(TRIANGLES), "--gcode-mb", String(GCODE_MB)], {
+    cwd: ROOT, encoding: "utf8", maxBuffer: 1 << 24, timeout: TIMEOUT,
+  });
+  const stages = {};
+  for (const m of text.matchAll(/^\| (\w+) \| ([\d.]+) \| ([\d.]+) \|$/gm)) stages[m[1]] = { plain: Number(m[2]), preview: Number(m[3]) };
+  const total = text.match(/^\| \*\*total\*\* \| \*\*([\d.]+)\*\* \| \*\*([\d.]+)\*\* \|$/m);
+  const analyze = text.match(/^## analyze: .*\*\*(\d+) MB\/s\*\*/m);
+  const analyzePreview = text.match(/^## analyze with preview: .*\*\*(\d+) MB\/s\*\*/m);
+  return {
+    text,
+    stages,
+    total: total ? { plain: Number(total[1]), preview: Number(total[2]) } : null,
+    analyzeMBs: analyze ? Number(analyze[1]) : null,
+    analyzePreviewMBs: analyzePreview ? Number(analyzePreview[1]) : null,
+  };
+}
+
+// ---------------------------------------------------------------------------------------
+// Browser: the worker
+// ---------------------------------------------------------------------------------------
+async function runBrowser() {
+  const server = await serve({ pkgDir: PKG_DIR });
+  const browser = await chromium.launch({
+    executablePath: CHROMIUM,
+    headless: true,
+    args: [
+      "--headless", "--no-sandbox", "--disable-background-networking", "--disable-component-update",
+      "--disable-sync", "--disable-gpu-sandbox", "--use-angle=swiftshader", "--enable-unsafe-swiftshader",
+      "--js-flags=--max-old-space-size=4096",
+    ],
+  });
+  try {
+    const version = browser.version();
+    const context = await browser.newContext();
+    const page = await context.newPage();
+    const errors = [];
+    page.on("pageerror", (e) => errors.push(e.message));
+    page.on("console", (m) => { if (m.type() === "error") errors.push(m.text()); });
+    // A blank page of the server's origin (module workers must be same-origin).
+    await page.route(`${server.url}/bench.html`, (route) =>
+      route.fulfill({ contentType: "text/html; charset=utf-8", body: "<!doctype html><title>weft bench</title>" }));
+    await page.goto(`${server.url}/bench.html`);
+
+    // Renderer processes (the worker runs in its page's renderer), for peak RSS.
+    const cdp = await browser.newBrowserCDPSession();
+    const renderers = async () => {
+      try {
+        const info = await cdp.send("SystemInfo.getProcessInfo");
+        return info.processInfo.filter((p) => p.type === "renderer").map((p) => p.id);
+      } catch {
+        return [];
+      }
+    };
+
+    // 1. The STL, generated in a worker that is then terminated (not part of the job).
+    log(`browser ${version}: generating the ${TRIANGLES}-triangle STL in a worker`);
+    const gen = await page.evaluate(async (triangles) => {
+      const w = new Worker("/tests/e2e/bench-worker.js", { type: "module" });
+      const msg = await new Promise((ok, fail) => {
+        w.onmessage = ({ data }) => ok(data);
+        w.onerror = (e) => fail(new Error(e.message || "worker failed to start"));
+        w.postMessage({ cmd: "stl", triangles });
+      });
+      w.terminate();
+      if (msg.type !== "stl") throw new Error(msg.message ?? "no STL");
+      window.__stl = msg.bytes;
+      return { bytes: msg.bytes.byteLength, ms: msg.ms };
+    }, TRIANGLES);
+
+    // 2. The job, in a fresh worker (fresh wasm memory).
+    const pids = await renderers();
+    const peakReset = pids.length > 0 && pids.every(resetPeak);
+    const before = Object.fromEntries(pids.map((p) => [p, procMem(p)]));
+    log(`running the job in a fresh worker (renderer pids ${pids.join(", ") || "?"})`);
+    const result = await page.evaluate(async ({ gcodeMb, timeout }) => {
+      const w = new Worker("/tests/e2e/bench-worker.js", { type: "module" });
+      const stl = window.__stl;
+      window.__stl = null;
+      try {
+        return await new Promise((ok, fail) => {
+          const timer = setTimeout(() => fail(new Error(`no result within ${timeout / 1000} s`)), timeout);
+          w.onmessage = ({ data }) => {
+            clearTimeout(timer);
+            if (data.type === "result") ok(data);
+            else fail(new Error(data.message ?? JSON.stringify(data)));
+          };
+          w.onerror = (e) => { clearTimeout(timer); fail(new Error(e.message || "worker error (out of memory?)")); };
+          w.postMessage({ cmd: "run", stl, gcodeMb }, [stl]);
+        });
+      } finally {
+        w.terminate();
+      }
+    }, { gcodeMb: GCODE_MB, timeout: TIMEOUT });
+    const after = Object.fromEntries(pids.map((p) => [p, procMem(p)]));
+    const rendererPeakMiB = Math.max(0, ...pids.map((p) => after[p]?.hwm ?? 0));
+    const rendererBeforeMiB = Math.max(0, ...pids.map((p) => before[p]?.rss ?? 0));
+    if (errors.length) log(`page errors: ${errors.join(" | ")}`);
+    return { version, gen, result, rendererPeakMiB, rendererBeforeMiB, peakReset };
+  } finally {
+    await browser.close();
+    await server.close();
+  }
+}
+
+// ---------------------------------------------------------------------------------------
+// Report
+// ---------------------------------------------------------------------------------------
+const browserRun = await runBrowser();
+const native = runNative();
+const { result: r, version } = browserRun;
+const stlMB = r.stlBytes / MB;
+const ws = Object.fromEntries(r.stages.map((s) => [s.stage, s.ms / 1000]));
+const out = [];
+out.push(`## slice + G-code: ${TRIANGLES} triangles requested (${f(stlMB, 1)} MB binary STL), 0.2 mm layers, ${r.layers} layers, G-code ${f(r.gcodeBytes / MB, 1)} MB`);
+out.push("");
+out.push(`Browser: Chromium ${version}, module Web Worker, wasm (\`pkg/\`). Native: \`weft bench\`. Seconds.`);
+out.push("");
+out.push("| stage | native, no preview (CLI) | native, with preview | worker (Session.run, with preview) | worker / native with preview |");
+out.push("|---|---|---|---|---|");
+for (const stage of ["import", "slice", "gcode", "analyze"]) {
+  const n = native?.stages[stage];
+  const w = ws[stage];
+  out.push(`| ${stage} | ${f(n?.plain)} | ${f(n?.preview)} | ${f(w)} | ${n && w != null ? `${f(w / n.preview, 2)}×` : "?"} |`);
+}
+const wt = r.runMs / 1000;
+out.push(`| **total (run)** | **${f(native?.total?.plain)}** | **${f(native?.total?.preview)}** | **${f(wt)}** | **${native?.total ? `${f(wt / native.total.preview, 2)}×` : "?"}** |`);
+out.push(`| Session.addFile (extra import the page does on load) | | | ${f(r.addFileMs / 1000)} | |`);
+out.push("");
+const m = r.memory;
+out.push("Worker wasm linear memory (`memory.buffer.byteLength`; it only grows, so each value is the peak so far):");
+out.push("");
+out.push("| point | MiB | × STL size |");
+out.push("|---|---|---|");
+const row = (label, bytes) => out.push(`| ${label} | ${f(bytes / MiB, 0)} | ${f(bytes / r.stlBytes, 2)}× |`);
+row("after init", m.init);
+row("STL bytes handed to the worker", m.beforeJob);
+row("after Session.addFile (import)", m.afterAddFile);
+row("**after Session.run (peak of the job)**", m.afterRun);
+row(`after the analyzer workload (${f(r.analyze.bytes / MB, 0)} MB of G-code copied into wasm memory)`, m.end);
+out.push("");
+out.push(`Renderer process (page + worker) peak RSS during the job: ${f(browserRun.rendererPeakMiB, 0)} MiB` +
+  `${browserRun.peakReset ? ` (peak reset before the job; ${f(browserRun.rendererBeforeMiB, 0)} MiB resident then, including the ${f(stlMB, 0)} MB STL held by the page)` : " (process lifetime peak: includes the STL generation)"}; ` +
+  `it includes the analyzer workload's ${f(r.analyze.bytes / MB, 0)} MB buffer and its copy in wasm memory.`);
+out.push("");
+const wMBs = r.analyze.bytes / MB / (r.analyze.ms / 1000);
+out.push(`## analyze: ${f(r.analyze.bytes / MB, 1)} MB of G-code (the run's G-code repeated), no preview`);
+out.push("");
+out.push("| | MB/s |");
+out.push("|---|---|");
+out.push(`| native (\`weft bench\`, best of 3) | ${native?.analyzeMBs ?? "?"} |`);
+out.push(`| native with preview | ${native?.analyzePreviewMBs ?? "?"} |`);
+out.push(`| worker (\`benchAnalyze\`, one pass) | ${f(wMBs, 0)} |`);
+out.push("");
+console.log(out.join("\n"));
+if (native) {
+  console.log("\n<details><summary>weft bench output</summary>\n\n" + native.text.trim() + "\n\n</details>");
+}

@@ -180,7 +180,7 @@ fn voronoi_interior_nodes_have_degree_three() {
 
 #[test]
 fn rotated_layers_are_the_first_layer_turned() {
-    let disc = Domain::Disc { diameter_mm: 20.0 };
+    let disc = Domain::Disc { diameter_mm: 48.0 };
     for p in all_patterns() {
         let l = gen(p.clone(), &disc, 2, 45.0, 5);
         let (s0, s1) = (struts(&l.layers[0].strokes), struts(&l.layers[1].strokes));
@@ -248,7 +248,7 @@ fn tensile_specimen_handles_are_filled_and_joined() {
     let outlines: Vec<&&Stroke> = handle.iter().filter(|s| s.points.len() == 5).collect();
     assert_eq!(outlines.len(), 2);
     let fills: Vec<&&Stroke> = handle.iter().filter(|s| s.points.len() == 2).collect();
-    assert_eq!(fills.len(), 2 * 50, "10 mm / 0.2 mm lines per handle");
+    assert_eq!(fills.len(), 2 * 49, "10 mm / 0.2 mm lines per handle, less the outline's own bead");
     for f in &fills {
         assert!((f.points[0].y - f.points[1].y).abs() < 1e-12);
         assert!(((f.points[1].x - f.points[0].x).abs() - 3.0).abs() < 1e-9);
@@ -383,4 +383,128 @@ fn timing() {
     let t = std::time::Instant::now();
     let l = gen(Pattern::Voronoi { density_per_mm2: 5.0 }, &Domain::Disc { diameter_mm: 48.0 }, 1, 0.0, 0);
     println!("48 mm disc Voronoi 5/mm²: {} struts in {:?}", l.report.struts_per_layer[0], t.elapsed());
+}
+
+
+/// Length (mm) of `b` lying on `a` by the G-code analyzer's rule: nearly parallel (≤ 10°),
+/// within half a line width of `a`'s line, projecting inside `a`.
+fn on_segment(a: [DVec2; 2], b: [DVec2; 2]) -> f64 {
+    let (da, db) = (a[1] - a[0], b[1] - b[0]);
+    let (la, lb) = (da.length(), db.length());
+    if la == 0.0 || lb == 0.0 || (da.perp_dot(db) / (la * lb)).abs() > 10f64.to_radians().sin() {
+        return 0.0;
+    }
+    let (u, tol) = (da / la, LW / 2.0);
+    let n = DVec2::new(-u.y, u.x);
+    let r = b[0] - a[0];
+    let (mut lo, mut hi) = (0.0f64, 1.0f64);
+    for (v0, dv, min, max) in [(r.dot(n), db.dot(n), -tol, tol), (r.dot(u), db.dot(u), 0.0, la)] {
+        if dv == 0.0 {
+            if v0 < min || v0 > max {
+                return 0.0;
+            }
+            continue;
+        }
+        let (t0, t1) = ((min - v0) / dv, (max - v0) / dv);
+        lo = lo.max(t0.min(t1));
+        hi = hi.min(t0.max(t1));
+    }
+    // Segments only meeting at an end point count zero (as in the analyzer).
+    if hi - lo > 1e-12 { (hi - lo) * lb } else { 0.0 }
+}
+
+/// Overlap of a layer's strokes in any print order: every pair, both ways, mm.
+fn overlap_any_order(strokes: &[Stroke]) -> f64 {
+    let segs: Vec<[DVec2; 2]> = strokes.iter().flat_map(|s| s.points.windows(2).map(|w| [w[0], w[1]])).collect();
+    let mut total = 0.0;
+    for i in 0..segs.len() {
+        for j in i + 1..segs.len() {
+            total += on_segment(segs[i], segs[j]) + on_segment(segs[j], segs[i]);
+        }
+    }
+    total
+}
+
+#[test]
+fn handle_fill_does_not_retrace_outline() {
+    let d = Domain::TensileSpecimen { width_mm: 10.0, length_mm: 10.0, handle_length_mm: 3.0 };
+    let options = Options { pattern: Pattern::Honeycomb { hexagon_radius_mm: 0.92 }, ..Options::default() };
+    let l = lattice::generate(&domains(&d, &options), &options, LW, 1, &mut |_| {}).unwrap();
+    let strokes = &l.layers[0].strokes;
+    let fills: Vec<&Stroke> = strokes.iter().filter(|s| s.feature == Feature::Handle && s.points.len() == 2).collect();
+    let mut ys: Vec<f64> = fills.iter().map(|f| f.points[0].y).collect();
+    ys.sort_by(f64::total_cmp);
+    ys.dedup();
+    // One line width in from the outline (y = ±5), one line width apart.
+    assert_eq!(ys.len(), 49);
+    assert!((ys[0] + 5.0 - LW).abs() < 1e-9 && (5.0 - ys[48] - LW).abs() < 1e-9, "{} … {}", ys[0], ys[48]);
+    for w in ys.windows(2) {
+        assert!((w[1] - w[0] - LW).abs() < 1e-9);
+    }
+    assert_eq!(overlap_any_order(strokes), 0.0);
+}
+
+#[test]
+fn tangent_struts_trimmed_at_contour() {
+    let disc = Domain::Disc { diameter_mm: 48.0 };
+    let (radius, steep) = (24.0, 15f64.to_radians().sin());
+    for rotation in [0.0, 17.0] {
+        let gen = |contour| {
+            let options = Options {
+                pattern: Pattern::Honeycomb { hexagon_radius_mm: 0.92 },
+                layers: 2,
+                rotation_deg: rotation,
+                contour,
+                ..Options::default()
+            };
+            lattice::generate(&domains(&disc, &options), &options, LW, 1, &mut |_| {}).unwrap()
+        };
+        let (plain, with) = (gen(false), gen(true));
+        for (a, b) in plain.layers.iter().zip(&with.layers) {
+            assert_eq!(overlap_any_order(&b.strokes), 0.0, "rotation {rotation}");
+            // Struts crossing the contour steeply are untouched: they still end on it.
+            let kept: BTreeSet<((i64, i64), (i64, i64))> = struts(&b.strokes).iter().map(|s| (key(s[0]), key(s[1]))).collect();
+            let (mut steep_ends, mut trimmed) = (0, 0);
+            for s in struts(&a.strokes) {
+                let unchanged = kept.contains(&(key(s[0]), key(s[1])));
+                let p = if s[0].length() > s[1].length() { s[0] } else { s[1] };
+                // |cos(strut, radius)| = sin(strut, tangent) at the end nearer the contour.
+                let sin = (s[1] - s[0]).normalize().dot(p.normalize()).abs();
+                if p.length() > radius - 1e-3 && sin > steep {
+                    steep_ends += 1;
+                    assert!(unchanged, "steep strut {s:?} changed");
+                } else if !unchanged {
+                    // Only struts running nearly along the contour, in its bead, are trimmed.
+                    trimmed += 1;
+                    assert!(p.length() > radius - LW / 2.0 - 2e-3 && sin <= steep, "{s:?} trimmed");
+                }
+            }
+            assert!(steep_ends > 50, "{steep_ends} steep struts end on the contour");
+            assert!(trimmed > 0, "no strut was nearly tangent");
+        }
+        assert!(with.report.dropped_slivers >= plain.report.dropped_slivers);
+    }
+}
+
+#[test]
+fn thin_region_contours_do_not_overlap() {
+    // The rim of a dished cylinder's top layer: an annulus 0.094 mm wide, narrower than a bead.
+    let ring = |r: f64, n: usize, ccw: bool| -> Vec<DVec2> {
+        (0..n)
+            .map(|k| {
+                let t = std::f64::consts::TAU * k as f64 / n as f64 * if ccw { 1.0 } else { -1.0 };
+                DVec2::new(r * t.cos(), r * t.sin())
+            })
+            .collect()
+    };
+    let region = weft::geom::Polygon { outer: ring(5.0, 128, true), holes: vec![ring(4.906, 128, false)] };
+    let d = LayerDomain { z: 0.148, height: 0.148, regions: vec![region], handles: vec![] };
+    let options = Options { pattern: Pattern::Honeycomb { hexagon_radius_mm: 0.92 }, contour: true, ..Options::default() };
+    let l = lattice::generate(&[d], &options, LW, 1, &mut |_| {}).unwrap();
+    let strokes = &l.layers[0].strokes;
+    assert_eq!(overlap_any_order(strokes), 0.0);
+    // The outer loop is printed whole; the hole's loop lies in its bead and goes.
+    let contours: Vec<&Stroke> = strokes.iter().filter(|s| s.feature == Feature::Contour).collect();
+    assert_eq!(contours.len(), 1);
+    assert_eq!(contours[0].points.len(), 129);
 }

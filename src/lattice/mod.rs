@@ -37,15 +37,18 @@ mod penrose;
 mod reentrant;
 mod snub_square;
 mod thumbnail;
+mod trim;
 mod voronoi;
 
 pub use arrowhead::{INNER_DEPTH as ARROWHEAD_INNER_DEPTH, OUTER_DEPTH as ARROWHEAD_OUTER_DEPTH};
 pub use domain::{disc_sides, DISC_CHORD_ERROR_MM};
 pub use thumbnail::thumbnail;
+pub use trim::{MARGIN_UM as TRIM_MARGIN_UM, MAX_ANGLE_DEG as TRIM_MAX_ANGLE_DEG};
 pub use voronoi::VORONOI_SEED_SALT;
 
 use crop::Clipper;
 use graph::{Graph, Rect};
+use trim::Guard;
 
 /// Most struts one layer may have (estimated before generating).
 pub const MAX_STRUTS_PER_LAYER: usize = 2_000_000;
@@ -221,7 +224,8 @@ pub struct LatticeReport {
     pub pore_fraction_per_layer: Vec<f64>,
     /// Lattice struts (cropped pieces) per layer.
     pub struts_per_layer: Vec<usize>,
-    /// Cropped pieces shorter than [`MIN_PIECE_MM`] dropped, all layers.
+    /// Cropped pieces shorter than [`MIN_PIECE_MM`] dropped, all layers (including those
+    /// trimmed below it at contours and handle outlines; one trimmed away entirely counts once).
     pub dropped_slivers: usize,
 }
 
@@ -271,7 +275,15 @@ pub enum Error {
 /// one two-point [`Feature::Lattice`] stroke per strut piece (µm-rounded points, each
 /// geometric edge once). Then, with `options.contour`, each region's loops as closed
 /// [`Feature::Contour`] strokes; then each handle's outline and its fill lines along X,
-/// `line_width_mm` apart, as [`Feature::Handle`] strokes.
+/// `line_width_mm` apart and at least `line_width_mm` in from the outline's X-parallel edges
+/// (the outline's bead covers the band next to it), as [`Feature::Handle`] strokes.
+///
+/// Nothing is printed twice (the analyzer's overlap stays 0): strut pieces and fill lines
+/// lose the parts lying within half a line width (plus [`TRIM_MARGIN_UM`]) of a printed loop
+/// (contour, handle outline) edge at ≤ [`TRIM_MAX_ANGLE_DEG`] to them, and pieces left
+/// shorter than [`MIN_PIECE_MM`] are dropped; struts crossing a loop more steeply still end
+/// exactly on it. A loop running in an earlier loop's bead (a region narrower than a line
+/// width, a handle against a contour) is likewise opened there into polylines.
 pub fn generate(
     domains: &[LayerDomain],
     options: &Options,
@@ -421,16 +433,28 @@ pub(crate) fn pattern_graph(p: &Pattern, rect: Rect, seed: u64) -> Result<Graph,
     Ok(g)
 }
 
-/// Crops the graph's edges (turned by (cos, sin)) to `clip`; pushes two-point strokes of
-/// `feature`. Returns (total kept length mm, dropped slivers).
-pub(crate) fn crop_graph(g: &Graph, cs: (f64, f64), clip: &Clipper, feature: Feature, out: &mut Vec<Stroke>) -> (f64, usize) {
+/// Crops the graph's edges (turned by (cos, sin)) to `clip`, then trims them out of the
+/// beads of `guard`'s loops (see [`trim`]); pushes two-point strokes of `feature`. Pieces
+/// shorter than [`MIN_PIECE_MM`] are dropped: those left by cropping (of nonzero length), and
+/// those left by trimming (a piece trimmed away entirely counts once). Returns (total kept
+/// length mm, dropped slivers).
+pub(crate) fn crop_graph(
+    g: &Graph,
+    cs: (f64, f64),
+    clip: &Clipper,
+    guard: Option<&Guard>,
+    feature: Feature,
+    out: &mut Vec<Stroke>,
+) -> (f64, usize) {
     let (c, s) = cs;
     let um: Vec<DVec2> = g
         .pts
         .iter()
         .map(|p| DVec2::new(c * p.x - s * p.y, s * p.x + c * p.y) * crate::geom::tolerance::UNITS_PER_MM)
         .collect();
+    let guard = guard.filter(|g| !g.is_empty());
     let mut pieces = Vec::new();
+    let mut keep = Vec::new();
     let (mut total, mut slivers) = (0.0, 0);
     for e in &g.edges {
         pieces.clear();
@@ -444,24 +468,104 @@ pub(crate) fn crop_graph(g: &Graph, cs: (f64, f64), clip: &Clipper, feature: Fea
                 }
                 continue;
             }
-            total += len;
-            out.push(Stroke { points: vec![a, b], feature });
+            let Some(guard) = guard else {
+                total += len;
+                out.push(Stroke { points: vec![a, b], feature });
+                continue;
+            };
+            guard.keep(pc[0], pc[1], u32::MAX, &mut keep);
+            let d = pc[1] - pc[0];
+            let at = |t: f64| if t == 0.0 { a } else if t == 1.0 { b } else { crop::snap_mm(pc[0] + d * t) };
+            let (mut kept, mut short) = (false, 0);
+            for &(t0, t1) in &keep {
+                let (p, q) = (at(t0), at(t1));
+                let len = (q - p).length();
+                if len < MIN_PIECE_MM {
+                    short += usize::from(len > 0.0);
+                    continue;
+                }
+                kept = true;
+                total += len;
+                out.push(Stroke { points: vec![p, q], feature });
+            }
+            // A piece trimmed away entirely counts as one sliver.
+            slivers += if kept || short > 0 { short } else { 1 };
         }
     }
     (total, slivers)
 }
 
-fn closed_loop(ring: &[DVec2], feature: Feature) -> Option<Stroke> {
+/// A ring's points on the µm grid (mm), without repeats or the closing point; None when it
+/// has fewer than 3.
+fn ring_points(ring: &[DVec2]) -> Option<Vec<DVec2>> {
     let mut pts: Vec<DVec2> = ring.iter().map(|&p| crop::snap_mm(crop::to_um_grid(p))).collect();
     pts.dedup();
     while pts.len() > 1 && pts.first() == pts.last() {
         pts.pop();
     }
-    if pts.len() < 3 {
-        return None;
+    (pts.len() >= 3).then_some(pts)
+}
+
+/// Ring `tag` of `guard` (its points `pts`) as strokes of `feature`: one closed loop, or, where
+/// it runs within the bead of an earlier ring (a region narrower than a line width, a handle
+/// against a contour), the open polylines left after trimming those parts away (see [`trim`]).
+fn ring_strokes(pts: &[DVec2], tag: u32, guard: &Guard, feature: Feature, out: &mut Vec<Stroke>) {
+    let n = pts.len();
+    let um: Vec<DVec2> = pts.iter().map(|&p| crop::to_um_grid(p)).collect();
+    let mut keep = Vec::new();
+    // Kept pieces in ring order: (edge, t0, t1).
+    let mut pieces: Vec<(usize, f64, f64)> = Vec::new();
+    for i in 0..n {
+        guard.keep(um[i], um[(i + 1) % n], tag, &mut keep);
+        pieces.extend(keep.iter().map(|&(t0, t1)| (i, t0, t1)));
     }
-    pts.push(pts[0]);
-    Some(Stroke { points: pts, feature })
+    if pieces.len() == n && pieces.iter().all(|&(_, t0, t1)| t0 == 0.0 && t1 == 1.0) {
+        let mut points = pts.to_vec();
+        points.push(pts[0]);
+        out.push(Stroke { points, feature });
+        return;
+    }
+    let at = |i: usize, t: f64| {
+        if t == 0.0 {
+            pts[i]
+        } else if t == 1.0 {
+            pts[(i + 1) % n]
+        } else {
+            crop::snap_mm(um[i] + (um[(i + 1) % n] - um[i]) * t)
+        }
+    };
+    let mut lines: Vec<Vec<DVec2>> = Vec::new();
+    let mut prev: Option<(usize, f64)> = None;
+    for &(i, t0, t1) in &pieces {
+        let joined = matches!(prev, Some((j, 1.0)) if j + 1 == i && t0 == 0.0);
+        if !joined {
+            lines.push(vec![at(i, t0)]);
+        }
+        lines.last_mut().unwrap().push(at(i, t1));
+        prev = Some((i, t1));
+    }
+    // The piece running through the ring's first point joins the last one to the first.
+    if lines.len() > 1 {
+        if let (Some(&(i_last, _, 1.0)), Some(&(0, 0.0, _))) = (pieces.last(), pieces.first()) {
+            if i_last == n - 1 {
+                let first = lines.remove(0);
+                lines.last_mut().unwrap().extend_from_slice(&first[1..]);
+            }
+        }
+    }
+    for mut line in lines {
+        line.dedup();
+        // Ends shorter than a sliver go (the path graph could not tell their points apart).
+        while line.len() >= 2 && (line[1] - line[0]).length() < MIN_PIECE_MM {
+            line.remove(0);
+        }
+        while line.len() >= 2 && (line[line.len() - 1] - line[line.len() - 2]).length() < MIN_PIECE_MM {
+            line.pop();
+        }
+        if line.len() >= 2 {
+            out.push(Stroke { points: line, feature });
+        }
+    }
 }
 
 /// One layer: (strokes, lattice struts, pore fraction, dropped slivers).
@@ -480,35 +584,50 @@ fn layer(
     // Regions' bounding box in the pattern frame (turned back by the layer angle).
     let back = d.regions.iter().flat_map(|p| p.outer.iter()).map(|p| DVec2::new(c * p.x + s * p.y, -s * p.x + c * p.y));
     let back: Vec<DVec2> = back.collect();
+    // The printed loops: contours (when asked for), then handle outlines. Struts and handle
+    // fill lines must not run along them, nor a loop along an earlier one.
+    let mut rings: Vec<Vec<DVec2>> = Vec::new();
+    let mut contour_rings = 0;
+    if contour {
+        for poly in &d.regions {
+            rings.extend(std::iter::once(&poly.outer).chain(poly.holes.iter()).filter_map(|r| ring_points(r)));
+        }
+        contour_rings = rings.len();
+    }
+    let mut handle_rings = Vec::new();
+    for h in &d.handles {
+        let k = rings.len();
+        rings.extend(std::iter::once(&h.outer).chain(h.holes.iter()).filter_map(|r| ring_points(r)));
+        handle_rings.push(k..rings.len());
+    }
+    let guard = Guard::new(&rings, line_width);
     if let Some(bb) = Rect::of_points(back.iter()) {
         let rect = bb.grown(cell_length(pattern));
         let g = pattern_graph(pattern, rect, seed)?;
         let clip = Clipper::new(&d.regions);
-        (length, slivers) = crop_graph(&g, (c, s), &clip, Feature::Lattice, &mut strokes);
+        (length, slivers) = crop_graph(&g, (c, s), &clip, Some(&guard), Feature::Lattice, &mut strokes);
     }
     let struts = strokes.len();
-    if contour {
-        for poly in &d.regions {
-            for ring in std::iter::once(&poly.outer).chain(poly.holes.iter()) {
-                strokes.extend(closed_loop(ring, Feature::Contour));
-            }
-        }
+    for (k, ring) in rings[..contour_rings].iter().enumerate() {
+        ring_strokes(ring, k as u32, &guard, Feature::Contour, &mut strokes);
     }
-    for h in &d.handles {
-        for ring in std::iter::once(&h.outer).chain(h.holes.iter()) {
-            strokes.extend(closed_loop(ring, Feature::Handle));
+    for (h, ks) in d.handles.iter().zip(handle_rings) {
+        for k in ks {
+            ring_strokes(&rings[k], k as u32, &guard, Feature::Handle, &mut strokes);
         }
         let Some(bb) = Rect::of_points(h.outer.iter()) else { continue };
+        // Fill lines strictly inside: the outline's own bead covers the band next to it, so
+        // the first line is one line width in from the outline's X-parallel edges.
         let mut g = Graph::default();
-        let k_max = libm::floor((bb.max.y - bb.min.y) / line_width - 0.5 + 1e-9).max(0.0) as i64;
-        for k in 0..=k_max {
-            let y = bb.min.y + line_width * (0.5 + k as f64);
-            if y < bb.max.y {
+        let k_max = libm::floor((bb.max.y - bb.min.y) / line_width - 2.0 + 1e-9);
+        if k_max >= 0.0 {
+            for k in 0..=(k_max as i64) {
+                let y = bb.min.y + line_width * (1.0 + k as f64);
                 g.seg(DVec2::new(bb.min.x - 1.0, y), DVec2::new(bb.max.x + 1.0, y));
             }
         }
         let clip = Clipper::new(std::slice::from_ref(h));
-        let (_, sl) = crop_graph(&g, (1.0, 0.0), &clip, Feature::Handle, &mut strokes);
+        let (_, sl) = crop_graph(&g, (1.0, 0.0), &clip, Some(&guard), Feature::Handle, &mut strokes);
         slivers += sl;
     }
     let area: f64 = d.regions.iter().map(|p| p.area()).sum();

@@ -18,6 +18,6 @@ pub fn thumbnail(pattern: &Pattern, size_mm: f64, seed: u64) -> Vec<[f64; 4]> {
     let Ok(g) = pattern_graph(pattern, rect, seed) else { return Vec::new() };
     let clip = Clipper::new(&[rect_polygon(-h, -h, h, h)]);
     let mut strokes = Vec::new();
-    crop_graph(&g, (1.0, 0.0), &clip, Feature::Lattice, &mut strokes);
+    crop_graph(&g, (1.0, 0.0), &clip, None, Feature::Lattice, &mut strokes);
     strokes.iter().map(|s| [s.points[0].x, s.points[0].y, s.points[1].x, s.points[1].y]).collect()
 }

@@ -46,6 +46,8 @@ export async function latticeChecks({ browser, baseUrl, weftBin = process.env.WE
       await page.goto(`${baseUrl}/www/`);
       await waitReady(page);
       const before = await page.evaluate(() => window.weft.resultCount);
+      // The menu is filled by an asynchronous fetch of examples/index.json after start-up.
+      await page.waitForSelector(`#examples option[value="${EXAMPLE}"]`, { state: "attached", timeout: 10000 }).catch(() => {});
       const offered = await page.$$eval("#examples option", (os) => os.map((o) => o.value));
       if (!offered.includes(EXAMPLE)) throw new Error(`the Examples menu does not offer ${EXAMPLE} (has ${offered.join(", ")})`);
       await page.selectOption("#examples", EXAMPLE);

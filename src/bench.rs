@@ -34,8 +34,100 @@ pub fn repeat_to(seed: &str, bytes: usize) -> String {
     s
 }
 
+/// The honeycomb-10mm example (embedded so the wasm build has it).
+pub const HONEYCOMB_10MM_JSON: &str = include_str!("../examples/honeycomb-10mm.json");
+/// The ball-burst-disc-48mm example.
+pub const DISC_48MM_JSON: &str = include_str!("../examples/ball-burst-disc-48mm.json");
+
+/// Side of the square honeycomb (r = 0.92 mm) of the euler workload, mm: about 100 000 edges.
+pub const EULER_SQUARE_MM: f64 = 270.0;
+
+/// The lattice path-optimisation workloads (`weft bench --lattice`, `BenchLattice` in wasm).
+pub const LATTICE_WORKLOADS: [&str; 3] = ["honeycomb-10mm", "disc-48mm", "euler-100k"];
+
+/// One lattice path-optimisation workload: the strokes are prepared (lattice generation is
+/// not timed); [`LatticeBench::run`] is the timed part (`paths::optimise` only).
+pub struct LatticeBench {
+    /// Workload name (one of [`LATTICE_WORKLOADS`]).
+    pub name: &'static str,
+    /// The strokes of the one layer optimised.
+    pub strokes: Vec<crate::geom::StrokeLayer>,
+    /// Optimiser options (method, iterations).
+    pub options: crate::paths::Options,
+    /// Line width, mm.
+    pub line_width_mm: f64,
+    /// Seed.
+    pub seed: u64,
+}
+
+/// What one optimise pass produced (to check the passes do the same work).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LatticeRunStats {
+    /// Graph edges of the layer.
+    pub edges: usize,
+    /// Paths produced.
+    pub paths: usize,
+    /// Equation-1 score.
+    pub score: f64,
+}
+
+impl LatticeBench {
+    /// Prepares a workload by name: builds the design and generates its first layer's strokes.
+    pub fn prepare(which: &str) -> Result<LatticeBench, String> {
+        use crate::design::Job;
+        use crate::paths::Method;
+        let (name, json, euler_square) = match which {
+            "honeycomb-10mm" | "honeycomb" => ("honeycomb-10mm", HONEYCOMB_10MM_JSON, None),
+            "disc-48mm" | "disc" => ("disc-48mm", DISC_48MM_JSON, None),
+            "euler-100k" | "euler" => ("euler-100k", HONEYCOMB_10MM_JSON, Some(EULER_SQUARE_MM)),
+            other => return Err(format!("unknown lattice workload '{other}' (one of {})", LATTICE_WORKLOADS.join(", "))),
+        };
+        let mut design = Design::from_json(name, json).map_err(|e| e.to_string())?;
+        let Job::Lattice(job) = &mut design.job else { return Err(format!("{name}: not a lattice design")) };
+        job.lattice.layers = 1;
+        job.paths.iterations = 500;
+        job.paths.method = Method::GippoMax;
+        if let Some(side) = euler_square {
+            job.domain = crate::lattice::Domain::Rectangle { width_mm: side, height_mm: side };
+            job.paths.method = Method::Euler;
+        }
+        let options = job.paths.clone();
+        let (mut strokes, _) = crate::pipeline::lattice_strokes(&design, &Default::default(), &mut |_, _| {})
+            .map_err(|e| e.to_string())?;
+        strokes.truncate(1);
+        Ok(LatticeBench { name, strokes, options, line_width_mm: design.printer.nozzle_diameter_mm, seed: design.seed })
+    }
+
+    /// The timed part: `paths::optimise` of the prepared layer.
+    pub fn run(&self) -> Result<LatticeRunStats, String> {
+        let o = crate::paths::optimise(&self.strokes, &self.options, self.line_width_mm, self.seed, &mut |_| {})
+            .map_err(|e| e.to_string())?;
+        let l = o.report.layers.first().ok_or("no layer")?;
+        Ok(LatticeRunStats { edges: l.edges, paths: l.paths, score: l.score })
+    }
+
+    /// The method's name.
+    pub fn method(&self) -> &'static str {
+        match self.options.method {
+            crate::paths::Method::GippoMax => "gippo_max",
+            crate::paths::Method::GippoMin => "gippo_min",
+            crate::paths::Method::Euler => "euler",
+            crate::paths::Method::Continuous => "continuous",
+        }
+    }
+
+    /// The target of the issue, ms.
+    pub fn target_ms(&self) -> f64 {
+        match self.name {
+            "honeycomb-10mm" => 100.0,
+            "disc-48mm" => 2000.0,
+            _ => 200.0,
+        }
+    }
+}
+
 #[cfg(not(target_arch = "wasm32"))]
-pub use native::run_all;
+pub use native::{run_all, run_lattice};
 
 #[cfg(not(target_arch = "wasm32"))]
 mod native {
@@ -169,6 +261,46 @@ mod native {
                 "## {label}: {mb:.1} MB of G-code in {s:.3} s = **{:.0} MB/s** (CPU {}; best of {ANALYZE_REPEATS}; {paths} extrusion paths)\n",
                 mb / s,
                 cpu.map_or("?".into(), |c| format!("{c:.2} s")),
+            ));
+        }
+        Ok(out)
+    }
+
+    /// Timed optimise passes per lattice workload (best and median reported).
+    pub const LATTICE_REPEATS: usize = 3;
+
+    /// The lattice path-optimisation benchmarks as a Markdown table.
+    pub fn run_lattice() -> Result<String, String> {
+        let mut out = String::new();
+        out.push_str(&format!(
+            "## lattice path optimisation (`paths::optimise` of one prepared layer; best and median of {LATTICE_REPEATS})\n\n"
+        ));
+        out.push_str("| workload | method | edges | paths | score | best ms | median ms | target ms |\n|---|---|---|---|---|---|---|---|\n");
+        for which in LATTICE_WORKLOADS {
+            let b = LatticeBench::prepare(which)?;
+            let mut times = Vec::new();
+            let mut stats = None;
+            for _ in 0..LATTICE_REPEATS {
+                let t = Instant::now();
+                let s = b.run()?;
+                times.push(t.elapsed().as_secs_f64() * 1000.0);
+                if stats.is_some_and(|p| p != s) {
+                    return Err(format!("{which}: passes differ"));
+                }
+                stats = Some(s);
+            }
+            times.sort_by(f64::total_cmp);
+            let s = stats.ok_or("no pass")?;
+            out.push_str(&format!(
+                "| {} | {} | {} | {} | {:.4} | {:.1} | {:.1} | {:.0} |\n",
+                b.name,
+                b.method(),
+                s.edges,
+                s.paths,
+                s.score,
+                times[0],
+                times[times.len() / 2],
+                b.target_ms()
             ));
         }
         Ok(out)

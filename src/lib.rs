@@ -33,5 +33,6 @@ pub mod pipeline;
 pub use design::Design;
 pub use pipeline::{run, RunOptions, RunOutput};
 pub mod bench;
+pub mod export;
 #[cfg(target_arch = "wasm32")]
 mod wasm;

@@ -74,6 +74,17 @@ enum Command {
         /// Size of the analyzer benchmark's G-code, MB.
         #[arg(long, default_value_t = 100)]
         gcode_mb: usize,
+        /// Run only the lattice path-optimisation benchmarks (otherwise they follow the others).
+        #[arg(long)]
+        lattice: bool,
+    },
+    /// Write a lattice design's printed struts as an STL (a box per strut) for other slicers.
+    ExportStl {
+        /// The design (JSON, a lattice job).
+        design: String,
+        /// Output STL.
+        #[arg(long)]
+        out: PathBuf,
     },
 }
 
@@ -210,7 +221,16 @@ fn main() -> ExitCode {
             Ok(())
         }
         Command::Share { design, input } => cmd_share(&design, input),
-        Command::Bench { triangles, gcode_mb } => weft::bench::run_all(triangles, gcode_mb).map(|report| println!("{report}")),
+        Command::Bench { triangles, gcode_mb, lattice } => {
+            let all = if lattice { Ok(String::new()) } else { weft::bench::run_all(triangles, gcode_mb) };
+            all.and_then(|a| weft::bench::run_lattice().map(|l| println!("{a}\n{l}")))
+        }
+        Command::ExportStl { design, out } => load_design(&design).and_then(|d| {
+            let e = weft::export::lattice_stl(&d).map_err(|e| e.to_string())?;
+            write(&out, &e.stl)?;
+            eprintln!("{}: {} struts, {} triangles, {:.3} mm of struts", out.display(), e.struts, e.triangles, e.strut_mm);
+            Ok(())
+        }),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

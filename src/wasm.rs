@@ -223,3 +223,34 @@ pub fn bench_analyze(gcode: &[u8]) -> Result<String, JsError> {
     let a = analyze::analyze("bench.gcode", gcode, &Default::default()).map_err(js_err)?;
     serde_json::to_string(&a.report).map_err(js_err)
 }
+
+/// Benchmark workload: one lattice path-optimisation layer (`src/bench.rs`), prepared by
+/// [`BenchLattice::new`] (not timed); [`BenchLattice::run`] is the part timed in the worker.
+#[wasm_bindgen]
+pub struct BenchLattice(crate::bench::LatticeBench);
+
+#[wasm_bindgen]
+impl BenchLattice {
+    /// Prepares `which` (`honeycomb-10mm`, `disc-48mm` or `euler-100k`).
+    #[wasm_bindgen(constructor)]
+    pub fn new(which: &str) -> Result<BenchLattice, JsError> {
+        crate::bench::LatticeBench::prepare(which).map(BenchLattice).map_err(js_err)
+    }
+
+    /// Runs `paths::optimise` once; returns `{edges, paths, score}` as JSON.
+    pub fn run(&self) -> Result<String, JsError> {
+        let s = self.0.run().map_err(js_err)?;
+        Ok(format!(r#"{{"edges":{},"paths":{},"score":{}}}"#, s.edges, s.paths, s.score))
+    }
+
+    /// The method (`gippo_max` or `euler`).
+    pub fn method(&self) -> String {
+        self.0.method().into()
+    }
+
+    /// The issue's target, ms.
+    #[wasm_bindgen(js_name = targetMs)]
+    pub fn target_ms(&self) -> f64 {
+        self.0.target_ms()
+    }
+}

@@ -11,9 +11,13 @@
 //       (import / slice / gcode / analyze), then analyses ~gcodeMb MB of G-code (the run's
 //       G-code repeated) with benchAnalyze. Reports wasm linear memory
 //       (memory.buffer.byteLength, which only grows: its value at a point is the peak so far).
+//   { cmd: "lattice", repeats }      → { type: "lattice", rows: [{ which, method, edges, paths,
+//       score, targetMs, prepareMs, ms: [...] }] }: the lattice path-optimisation workloads
+//       (src/bench.rs): BenchLattice(which) prepares the layer's strokes (not timed), then
+//       run() (paths::optimise only) is timed `repeats` times with performance.now().
 // Run the job in a fresh worker (the page does) so the STL generation does not count in the
 // job's linear memory.
-import init, { Session, benchAnalyze, benchDesign, benchMeshStl } from "../../pkg/weft.js";
+import init, { BenchLattice, Session, benchAnalyze, benchDesign, benchMeshStl } from "../../pkg/weft.js";
 
 const ready = init();
 
@@ -28,6 +32,27 @@ self.onmessage = async ({ data }) => {
       const bytes = benchMeshStl(data.triangles);
       const ms = performance.now() - t0;
       self.postMessage({ type: "stl", bytes: bytes.buffer, ms }, [bytes.buffer]);
+      return;
+    }
+    if (data.cmd === "lattice") {
+      const rows = [];
+      for (const which of ["honeycomb-10mm", "disc-48mm", "euler-100k"]) {
+        let t = performance.now();
+        const b = new BenchLattice(which);
+        const prepareMs = performance.now() - t;
+        const ms = [];
+        let stats = null;
+        for (let i = 0; i < (data.repeats ?? 3); i++) {
+          t = performance.now();
+          const s = b.run();
+          ms.push(performance.now() - t);
+          if (stats !== null && s !== stats) throw new Error(`${which}: passes differ (${stats} vs ${s})`);
+          stats = s;
+        }
+        rows.push({ which, method: b.method(), targetMs: b.targetMs(), prepareMs, ms, ...JSON.parse(stats) });
+        b.free();
+      }
+      self.postMessage({ type: "lattice", rows, memory: mem() });
       return;
     }
     if (data.cmd !== "run") throw new Error(`unknown command ${data.cmd}`);

@@ -12,6 +12,8 @@
 //   BENCH_TRIANGLES triangles of the benchmark mesh (default 1000000)
 //   BENCH_GCODE_MB  size of the analyzer workload, MB (default 100)
 //   BENCH_TIMEOUT_S timeout of the browser job, s (default 900)
+//   BENCH_LATTICE_ONLY=1  only the lattice path-optimisation benchmarks (`weft bench --lattice`)
+//   BENCH_REPEATS   timed passes per lattice workload in the worker (default 3)
 import { execFileSync } from "node:child_process";
 import { existsSync, readFileSync, writeFileSync } from "node:fs";
 import { join, resolve } from "node:path";
@@ -24,6 +26,8 @@ const PKG_DIR = process.env.WEFT_PKG_DIR ? resolve(process.env.WEFT_PKG_DIR) : j
 const TRIANGLES = Number(process.env.BENCH_TRIANGLES ?? 1_000_000);
 const GCODE_MB = Number(process.env.BENCH_GCODE_MB ?? 100);
 const TIMEOUT = Number(process.env.BENCH_TIMEOUT_S ?? 900) * 1000;
+const LATTICE_ONLY = process.env.BENCH_LATTICE_ONLY === "1";
+const REPEATS = Number(process.env.BENCH_REPEATS ?? 3);
 const MB = 1e6;
 const MiB = 1024 * 1024;
 
@@ -57,8 +61,9 @@ function resetPeak(pid) {
 function runNative() {
   if (!WEFT_BIN) return null;
   if (!existsSync(WEFT_BIN)) throw new Error(`${WEFT_BIN} not found: cargo build --release (or set WEFT_BIN)`);
-  log(`native: ${WEFT_BIN} bench --triangles ${TRIANGLES} --gcode-mb ${GCODE_MB}`);
-  const text = execFileSync(WEFT_BIN, ["bench", "--triangles", String(TRIANGLES), "--gcode-mb", String(GCODE_MB)], {
+  const args = LATTICE_ONLY ? ["bench", "--lattice"] : ["bench", "--triangles", String(TRIANGLES), "--gcode-mb", String(GCODE_MB)];
+  log(`native: ${WEFT_BIN} ${args.join(" ")}`);
+  const text = execFileSync(WEFT_BIN, args, {
     cwd: ROOT, encoding: "utf8", maxBuffer: 1 << 24, timeout: TIMEOUT,
   });
   const stages = {};
@@ -66,8 +71,13 @@ function runNative() {
   const total = text.match(/^\| \*\*total\*\* \| \*\*([\d.]+)\*\* \| \*\*([\d.]+)\*\* \|$/m);
   const analyze = text.match(/^## analyze: .*\*\*(\d+) MB\/s\*\*/m);
   const analyzePreview = text.match(/^## analyze with preview: .*\*\*(\d+) MB\/s\*\*/m);
+  const lattice = {};
+  for (const m of text.matchAll(/^\| ([\w-]+) \| (\w+) \| (\d+) \| (\d+) \| ([\d.]+) \| ([\d.]+) \| ([\d.]+) \| ([\d.]+) \|$/gm)) {
+    lattice[m[1]] = { method: m[2], edges: Number(m[3]), paths: Number(m[4]), score: Number(m[5]), best: Number(m[6]), median: Number(m[7]) };
+  }
   return {
     text,
+    lattice,
     stages,
     total: total ? { plain: Number(total[1]), preview: Number(total[2]) } : null,
     analyzeMBs: analyze ? Number(analyze[1]) : null,
@@ -112,6 +122,27 @@ async function runBrowser() {
       }
     };
 
+    // 0. Lattice path optimisation, in its own fresh worker.
+    log(`browser ${version}: lattice path-optimisation workloads in a worker (${REPEATS} passes each)`);
+    const lattice = await page.evaluate(async ({ repeats, timeout }) => {
+      const w = new Worker("/tests/e2e/bench-worker.js", { type: "module" });
+      try {
+        return await new Promise((ok, fail) => {
+          const timer = setTimeout(() => fail(new Error(`no lattice result within ${timeout / 1000} s`)), timeout);
+          w.onmessage = ({ data }) => {
+            clearTimeout(timer);
+            if (data.type === "lattice") ok(data);
+            else fail(new Error(data.message ?? JSON.stringify(data)));
+          };
+          w.onerror = (e) => { clearTimeout(timer); fail(new Error(e.message || "worker failed to start")); };
+          w.postMessage({ cmd: "lattice", repeats });
+        });
+      } finally {
+        w.terminate();
+      }
+    }, { repeats: REPEATS, timeout: TIMEOUT });
+    if (LATTICE_ONLY) return { version, lattice };
+
     // 1. The STL, generated in a worker that is then terminated (not part of the job).
     log(`browser ${version}: generating the ${TRIANGLES}-triangle STL in a worker`);
     const gen = await page.evaluate(async (triangles) => {
@@ -155,7 +186,7 @@ async function runBrowser() {
     const rendererPeakMiB = Math.max(0, ...pids.map((p) => after[p]?.hwm ?? 0));
     const rendererBeforeMiB = Math.max(0, ...pids.map((p) => before[p]?.rss ?? 0));
     if (errors.length) log(`page errors: ${errors.join(" | ")}`);
-    return { version, gen, result, rendererPeakMiB, rendererBeforeMiB, peakReset };
+    return { version, lattice, gen, result, rendererPeakMiB, rendererBeforeMiB, peakReset };
   } finally {
     await browser.close();
     await server.close();
@@ -168,6 +199,31 @@ async function runBrowser() {
 const browserRun = await runBrowser();
 const native = runNative();
 const { result: r, version } = browserRun;
+const latticeOut = [];
+{
+  const median = (a) => [...a].sort((x, y) => x - y)[Math.floor(a.length / 2)];
+  latticeOut.push(`## lattice path optimisation: \`paths::optimise\` of one prepared layer (strokes generated beforehand, not timed)`);
+  latticeOut.push("");
+  latticeOut.push(`Browser: Chromium ${version}, module Web Worker, wasm (\`BenchLattice.run\`, ${REPEATS} passes). Native: \`weft bench --lattice\`. Milliseconds.`);
+  latticeOut.push("");
+  latticeOut.push("| workload | method | edges | paths | score | native best | native median | worker best | worker median | worker / native (best) | target (worker) | met |");
+  latticeOut.push("|---|---|---|---|---|---|---|---|---|---|---|---|");
+  for (const row of browserRun.lattice.rows) {
+    const n = native?.lattice?.[row.which];
+    const best = Math.min(...row.ms);
+    const med = median(row.ms);
+    const same = !n || (n.edges === row.edges && n.paths === row.paths) ? "" : " (native differs!)";
+    latticeOut.push(`| ${row.which} | ${row.method} | ${row.edges} | ${row.paths}${same} | ${f(row.score, 4)} | ${f(n?.best, 1)} | ${f(n?.median, 1)} | ${f(best, 1)} | ${f(med, 1)} | ${n ? `${f(best / n.best, 2)}×` : "?"} | < ${row.targetMs} | ${med < row.targetMs ? "yes" : "**no**"} |`);
+  }
+  latticeOut.push("");
+  latticeOut.push(`Worker passes (ms): ${browserRun.lattice.rows.map((row) => `${row.which} ${row.ms.map((x) => f(x, 1)).join(", ")} (prepare ${f(row.prepareMs, 0)})`).join("; ")}; wasm linear memory after: ${f(browserRun.lattice.memory / MiB, 0)} MiB.`);
+  latticeOut.push("");
+}
+if (LATTICE_ONLY) {
+  console.log(latticeOut.join("\n"));
+  if (native) console.log("\n<details><summary>weft bench --lattice output</summary>\n\n" + native.text.trim() + "\n\n</details>");
+  process.exit(0);
+}
 const stlMB = r.stlBytes / MB;
 const ws = Object.fromEntries(r.stages.map((s) => [s.stage, s.ms / 1000]));
 const out = [];
@@ -212,6 +268,7 @@ out.push(`| native with preview | ${native?.analyzePreviewMBs ?? "?"} |`);
 out.push(`| worker (\`benchAnalyze\`, one pass) | ${f(wMBs, 0)} |`);
 out.push("");
 console.log(out.join("\n"));
+console.log(latticeOut.join("\n"));
 if (native) {
   console.log("\n<details><summary>weft bench output</summary>\n\n" + native.text.trim() + "\n\n</details>");
 }

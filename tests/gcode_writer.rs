@@ -202,7 +202,8 @@ fn outside_bed_is_an_error() {
     let mut o = plain_options();
     o.printer.bed_size_mm = [8.0, 8.0, 100.0];
     match write_gcode(&one_layer(), &o) {
-        Err(Error::OutsideBed { size_mm, bed_mm }) => {
+        Err(e @ Error::OutsideBed { size_mm, bed_mm, .. }) => {
+            assert!(e.to_string().contains("10.00 × 10.00 × 0.00 mm"), "{e}");
             assert_eq!(size_mm, [10.0, 10.0, 0.0]);
             assert_eq!(bed_mm, [8.0, 8.0, 100.0]);
         }

@@ -313,12 +313,14 @@ pub struct Gcode {
 #[derive(Debug, thiserror::Error, Clone, PartialEq)]
 pub enum Error {
     /// Part does not fit the printer.
-    #[error("the part spans {size_mm:?} mm but the bed is {bed_mm:?} mm; scale it down or pick a larger printer")]
+    #[error("{}", outside_bed_message(size_mm, bed_mm, *below_plate_mm))]
     OutsideBed {
         /// Part size X, Y, Z.
         size_mm: [f64; 3],
         /// Bed size X, Y, Z.
         bed_mm: [f64; 3],
+        /// How far the lowest point is below the plate (Z < 0), mm; 0 when it is not.
+        below_plate_mm: f64,
     },
     /// A template names a placeholder the writer does not know.
     #[error("{template}: unknown placeholder {{{name}}}; use one of {known}")]
@@ -333,6 +335,18 @@ pub enum Error {
     /// Nothing to print.
     #[error("the toolpath is empty: nothing to print; check that the part is not below the first layer height")]
     Empty,
+}
+
+fn outside_bed_message(size: &[f64; 3], bed: &[f64; 3], below: f64) -> String {
+    if below > 0.0 {
+        return format!(
+            "the print reaches {below:.2} mm below the plate (Z < 0); raise it (for a non-planar surface, move the surface up so its printed part lies above Z = 0)"
+        );
+    }
+    format!(
+        "the print spans {:.2} × {:.2} × {:.2} mm but the printer reaches {:.0} × {:.0} × {:.0} mm; scale it down or pick a larger printer",
+        size[0], size[1], size[2], bed[0], bed[1], bed[2]
+    )
 }
 
 /// Writes `toolpath` as G-code.

@@ -161,7 +161,8 @@ fn check_bed(toolpath: &Toolpath, options: &Options, offset: DVec3) -> Result<()
     let finite = min.is_finite() && max.is_finite();
     if !finite || min.x < lo.x - eps || min.y < lo.y - eps || min.z < lo.z - eps || max.x > hi.x + eps || max.y > hi.y + eps || max.z > hi.z + eps {
         let size = max - min;
-        return Err(Error::OutsideBed { size_mm: [size.x, size.y, size.z], bed_mm: bed });
+        let below_plate_mm = if finite && min.z < lo.z - eps { lo.z - min.z } else { 0.0 };
+        return Err(Error::OutsideBed { size_mm: [size.x, size.y, size.z], bed_mm: bed, below_plate_mm });
     }
     Ok(())
 }

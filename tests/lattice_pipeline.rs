@@ -33,14 +33,17 @@ const PLANAR: &[&str] = &[
 ];
 
 /// Snaps a printed point (printer coordinates, f32) to the id of the graph node within 2 µm.
+/// Grid cell → (node id, x, y) of the nodes in it.
+type Cells = BTreeMap<(i64, i64), Vec<(usize, f64, f64)>>;
+
 struct Snap {
-    cells: BTreeMap<(i64, i64), Vec<(usize, f64, f64)>>,
+    cells: Cells,
 }
 
 impl Snap {
     const CELL: f64 = 0.01;
     fn new(nodes: impl Iterator<Item = (f64, f64)>) -> Snap {
-        let mut cells: BTreeMap<(i64, i64), Vec<(usize, f64, f64)>> = BTreeMap::new();
+        let mut cells = Cells::new();
         for (i, (x, y)) in nodes.enumerate() {
             cells.entry(((x / Self::CELL).floor() as i64, (y / Self::CELL).floor() as i64)).or_default().push((i, x, y));
         }
@@ -80,7 +83,7 @@ fn assert_every_edge_once(design: &Design) -> weft::RunOutput {
         let snap = Snap::new(graph.nodes.iter().map(|p| (p.x, p.y)));
         let mut expected: BTreeMap<(usize, usize), i32> = BTreeMap::new();
         for e in &graph.edges {
-            let key = (e.a.min(e.b) as usize, e.a.max(e.b) as usize);
+            let key = (e.a.min(e.b), e.a.max(e.b));
             *expected.entry(key).or_default() += 1;
             nominal_total += e.length;
         }
@@ -138,7 +141,7 @@ fn continuous_needs_no_retraction_inside_a_component() {
         let out = assert_every_edge_once(&with_method(example(name), Method::Continuous, 1));
         let paths = out.report.paths.as_ref().unwrap();
         for (li, layer) in paths.layers.iter().enumerate() {
-            assert!(layer.retractions + 1 <= layer.components.max(1), "{name} layer {li}: {} retractions, {} components", layer.retractions, layer.components);
+            assert!(layer.retractions < layer.components.max(1), "{name} layer {li}: {} retractions, {} components", layer.retractions, layer.components);
         }
     }
 }

@@ -4,6 +4,7 @@
 # stdout (progress on stderr). Not part of scripts/test.sh: timings depend on the machine.
 # Usage: scripts/bench.sh                 (CARGO_TARGET_DIR is honoured; default ./target)
 #        BENCH_TRIANGLES=200000 BENCH_GCODE_MB=20 scripts/bench.sh   (a quick run)
+#        BENCH_LATTICE_ONLY=1 scripts/bench.sh   (only the lattice path-optimisation benchmarks)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 root=$(pwd)

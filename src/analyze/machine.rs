@@ -74,6 +74,10 @@ pub(crate) struct Machine<'o> {
     segs: Vec<Seg>,
     layer_paths: Vec<(f64, u32)>,
     overlap: Overlap,
+    /// Native builds measure overlap on a second thread: layers go out here (index, segments)…
+    overlap_out: Option<std::sync::mpsc::SyncSender<(usize, Vec<Seg>)>>,
+    /// …and their overlap comes back here, in layer order.
+    overlap_in: Option<std::sync::mpsc::Receiver<(usize, f64)>>,
     timer: MotionTimer,
     arc_pts: Vec<[f64; 3]>,
     preview: Option<Preview>,
@@ -115,6 +119,8 @@ impl<'o> Machine<'o> {
             segs: Vec::new(),
             layer_paths: Vec::new(),
             overlap: Overlap::default(),
+            overlap_out: None,
+            overlap_in: None,
             timer: MotionTimer::default(),
             arc_pts: Vec::new(),
             preview: if opts.collect_preview { Some(Preview::default()) } else { None },
@@ -461,11 +467,16 @@ impl<'o> Machine<'o> {
 
     /// Computes overlap and GIPPO score of the current layer and clears its buffers.
     fn finish_layer(&mut self) {
+        let index = self.layers.len().wrapping_sub(1);
         let Some(layer) = self.layers.last_mut() else { return };
         if self.layer_paths.is_empty() {
             return;
         }
-        layer.overlap = self.overlap.layer(&self.segs, self.opts.default_line_width_mm);
+        match &self.overlap_out {
+            // The overlap thread owns the buffer from here; the result is filled in at finish().
+            Some(tx) if tx.send((index, std::mem::take(&mut self.segs))).is_ok() => {}
+            _ => layer.overlap = self.overlap.layer(&self.segs, self.opts.default_line_width_mm),
+        }
         layer.gippo = gippo_score(&self.layer_paths);
         layer.paths = self.layer_paths.len();
         layer.extruded = self.layer_paths.iter().map(|p| p.0).sum();
@@ -477,6 +488,15 @@ impl<'o> Machine<'o> {
     pub fn finish(mut self) -> Analysis {
         self.timer.stop();
         self.finish_layer();
+        // Closing the channel ends the overlap thread once it has measured every layer sent.
+        drop(self.overlap_out.take());
+        if let Some(rx) = self.overlap_in.take() {
+            for (index, overlap) in rx {
+                if let Some(layer) = self.layers.get_mut(index) {
+                    layer.overlap = overlap;
+                }
+            }
+        }
         let n = self.layers.len();
         let mut per_layer = Vec::with_capacity(n);
         for i in 0..n {
@@ -557,7 +577,37 @@ pub(crate) fn run(file: &str, bytes: &[u8], options: &Options) -> Result<Analysi
     if let Some(offset) = super::parse::first_binary_byte(bytes) {
         return Err(Error::NotText { file: file.to_string(), offset });
     }
-    let mut m = Machine::new(options, super::parse::has_layer_comments(bytes));
+    let layer_comments = super::parse::has_layer_comments(bytes);
+    #[cfg(not(target_arch = "wasm32"))]
+    if bytes.len() >= PARALLEL_OVERLAP_MIN_BYTES {
+        // Overlap is per layer and independent of parsing: measure it on a second core while
+        // the next layers are parsed. Same layers, same order, same arithmetic → same results.
+        return std::thread::scope(|scope| {
+            let (seg_tx, seg_rx) = std::sync::mpsc::sync_channel::<(usize, Vec<Seg>)>(8);
+            let (res_tx, res_rx) = std::sync::mpsc::channel();
+            let width = options.default_line_width_mm;
+            scope.spawn(move || {
+                let mut overlap = Overlap::default();
+                for (index, segs) in seg_rx {
+                    if res_tx.send((index, overlap.layer(&segs, width))).is_err() {
+                        break;
+                    }
+                }
+            });
+            let mut m = Machine::new(options, layer_comments);
+            m.overlap_out = Some(seg_tx);
+            m.overlap_in = Some(res_rx);
+            parse_all(file, bytes, m)
+        });
+    }
+    parse_all(file, bytes, Machine::new(options, layer_comments))
+}
+
+/// Files at least this large (bytes) measure overlap on a second thread (native builds).
+#[cfg(not(target_arch = "wasm32"))]
+const PARALLEL_OVERLAP_MIN_BYTES: usize = 1 << 20;
+
+fn parse_all(file: &str, bytes: &[u8], mut m: Machine) -> Result<Analysis, Error> {
     let mut start = 0;
     let mut line_no = 0usize;
     while start < bytes.len() {

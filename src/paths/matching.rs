@@ -39,7 +39,8 @@ pub fn min_pairing(
     let mut active: Vec<usize> = (0..n).collect();
     while active.len() >= 2 {
         let mut cands = candidates(&active);
-        cands.sort_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)).then(x.2.cmp(&y.2)));
+        // (cost, i, j) is a total order, so the unstable sort gives the same sequence.
+        cands.sort_unstable_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)).then(x.2.cmp(&y.2)));
         let mut matched = false;
         for &(c, i, j) in &cands {
             if i != j && partner[i] == NONE && partner[j] == NONE {
@@ -85,17 +86,33 @@ pub fn min_pairing(
         fill[j] += 1;
     }
 
+    // a–c costs never change: evaluate them once (with the same `cost`, so the same bits).
+    let mut nbr_cost = vec![None; nbr.len()];
+    for a in 0..n {
+        for k in start[a]..start[a + 1] {
+            if nbr[k] != a {
+                nbr_cost[k] = cost(a, nbr[k]);
+            }
+        }
+    }
     for _ in 0..MAX_PASSES {
         let mut improved = false;
         for a in 0..n {
-            for &c in &nbr[start[a]..start[a + 1]] {
+            for k in start[a]..start[a + 1] {
+                let c = nbr[k];
                 let b = partner[a];
                 let d = partner[c];
                 if c == a || c == b || b == NONE || d == NONE {
                     continue;
                 }
-                let (Some(ac), Some(bd)) = (cost(a, c), cost(b, d)) else { continue };
-                if ac + bd < pcost[a] + pcost[c] - 1e-9 {
+                let budget = pcost[a] + pcost[c] - 1e-9;
+                // Costs are ≥ 0: when a–c alone uses the budget, no b–d can make the swap pay.
+                let Some(ac) = nbr_cost[k] else { continue };
+                if ac >= budget {
+                    continue;
+                }
+                let Some(bd) = cost(b, d) else { continue };
+                if ac + bd < budget {
                     partner[a] = c;
                     partner[c] = a;
                     partner[b] = d;

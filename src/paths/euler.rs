@@ -32,22 +32,7 @@ pub(crate) struct AugEdge {
 /// incoming direction (largest cosine), then the lowest index.
 pub(crate) fn circuits(pos: &[DVec2], edges: &[AugEdge], starts: &[usize]) -> Vec<Vec<usize>> {
     let n = pos.len();
-    let mut adj_start = vec![0usize; n + 1];
-    for e in edges {
-        adj_start[e.a + 1] += 1;
-        adj_start[e.b + 1] += 1;
-    }
-    for i in 0..n {
-        adj_start[i + 1] += adj_start[i];
-    }
-    let mut fill = adj_start.clone();
-    let mut adj = vec![0usize; adj_start[n]];
-    for (i, e) in edges.iter().enumerate() {
-        adj[fill[e.a]] = i;
-        fill[e.a] += 1;
-        adj[fill[e.b]] = i;
-        fill[e.b] += 1;
-    }
+    let (adj_start, adj) = super::graph::incidence(n, edges.iter().map(|e| (e.a, e.b)));
     let mut ptr: Vec<usize> = adj_start[..n].to_vec();
     let mut used = vec![false; edges.len()];
     let other = |e: usize, v: usize| if edges[e].a == v { edges[e].b } else { edges[e].a };

@@ -251,22 +251,7 @@ pub fn build_graph(layer: &StrokeLayer, merge_tolerance_mm: f64) -> Graph {
 
     // 7. Adjacency (CSR), lists sorted by edge index.
     let n = nodes.len();
-    let mut adj_start = vec![0usize; n + 1];
-    for e in &edges {
-        adj_start[e.a + 1] += 1;
-        adj_start[e.b + 1] += 1;
-    }
-    for i in 0..n {
-        adj_start[i + 1] += adj_start[i];
-    }
-    let mut fill = adj_start.clone();
-    let mut adj = vec![0usize; adj_start[n]];
-    for (i, e) in edges.iter().enumerate() {
-        adj[fill[e.a]] = i;
-        fill[e.a] += 1;
-        adj[fill[e.b]] = i;
-        fill[e.b] += 1;
-    }
+    let (adj_start, adj) = incidence(n, edges.iter().map(|e| (e.a, e.b)));
 
     // 8. Components (union-find, numbered by lowest node).
     let mut parent: Vec<usize> = (0..n).collect();
@@ -540,4 +525,26 @@ mod tests {
         assert_eq!(g.degenerate_dropped, 1);
         assert_eq!(g.components, 1);
     }
+}
+
+/// Incidence lists in CSR form of `n` nodes and the edges `(a, b)` (by position): node `v`'s
+/// edges are `adj[start[v]..start[v + 1]]`, in edge order. Returns `(start, adj)`.
+pub(crate) fn incidence(n: usize, ends: impl Iterator<Item = (usize, usize)> + Clone) -> (Vec<usize>, Vec<usize>) {
+    let mut start = vec![0usize; n + 1];
+    for (a, b) in ends.clone() {
+        start[a + 1] += 1;
+        start[b + 1] += 1;
+    }
+    for i in 0..n {
+        start[i + 1] += start[i];
+    }
+    let mut fill = start.clone();
+    let mut adj = vec![0usize; start[n]];
+    for (i, (a, b)) in ends.enumerate() {
+        adj[fill[a]] = i;
+        fill[a] += 1;
+        adj[fill[b]] = i;
+        fill[b] += 1;
+    }
+    (start, adj)
 }

@@ -475,6 +475,28 @@ fn intersect(segs: &[Seg], i: u32, j: u32, tol: f64, out: &mut Vec<Split>) {
     }
 }
 
+/// Incidence lists in CSR form of `n` nodes and the edges `(a, b)` (by position): node `v`'s
+/// edges are `adj[start[v]..start[v + 1]]`, in edge order. Returns `(start, adj)`.
+pub(crate) fn incidence(n: usize, ends: impl Iterator<Item = (usize, usize)> + Clone) -> (Vec<usize>, Vec<usize>) {
+    let mut start = vec![0usize; n + 1];
+    for (a, b) in ends.clone() {
+        start[a + 1] += 1;
+        start[b + 1] += 1;
+    }
+    for i in 0..n {
+        start[i + 1] += start[i];
+    }
+    let mut fill = start.clone();
+    let mut adj = vec![0usize; start[n]];
+    for (i, (a, b)) in ends.enumerate() {
+        adj[fill[a]] = i;
+        fill[a] += 1;
+        adj[fill[b]] = i;
+        fill[b] += 1;
+    }
+    (start, adj)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -527,24 +549,3 @@ mod tests {
     }
 }
 
-/// Incidence lists in CSR form of `n` nodes and the edges `(a, b)` (by position): node `v`'s
-/// edges are `adj[start[v]..start[v + 1]]`, in edge order. Returns `(start, adj)`.
-pub(crate) fn incidence(n: usize, ends: impl Iterator<Item = (usize, usize)> + Clone) -> (Vec<usize>, Vec<usize>) {
-    let mut start = vec![0usize; n + 1];
-    for (a, b) in ends.clone() {
-        start[a + 1] += 1;
-        start[b + 1] += 1;
-    }
-    for i in 0..n {
-        start[i + 1] += start[i];
-    }
-    let mut fill = start.clone();
-    let mut adj = vec![0usize; start[n]];
-    for (i, (a, b)) in ends.enumerate() {
-        adj[fill[a]] = i;
-        fill[a] += 1;
-        adj[fill[b]] = i;
-        fill[b] += 1;
-    }
-    (start, adj)
-}

@@ -13,6 +13,7 @@ import { createHash } from "node:crypto";
 import { execFileSync } from "node:child_process";
 import { join } from "node:path";
 import { tmpdir } from "node:os";
+import { colouredPixels, downloadGcode, waitReady, waitResult } from "./page-helpers.mjs";
 
 const EXAMPLE = "honeycomb-10mm.json";
 const BACKGROUND = [0x1f, 0x23, 0x2a]; // the 2D views' background (lattice.js)
@@ -173,48 +174,3 @@ export async function latticeChecks({ browser, baseUrl, weftBin = process.env.WE
   return n;
 }
 
-async function waitReady(page) {
-  await page.waitForFunction(() => window.weft && window.weft.design, null, { timeout: 30000 });
-}
-
-async function waitResult(page, before, what, timeout) {
-  const handle = await page.waitForFunction(
-    (n) => {
-      if (window.weft.resultCount > n) return "ok";
-      const err = document.getElementById("error");
-      if (!err.hidden && !window.weft.busy) return `error: ${document.getElementById("error-text").textContent.trim()}`;
-      return false;
-    },
-    before,
-    { timeout, polling: 100 },
-  ).catch(() => null);
-  const state = handle ? await handle.jsonValue() : `no result within ${timeout / 1000} s`;
-  if (state !== "ok") throw new Error(`${what}: ${state}`);
-}
-
-async function colouredPixels(page) {
-  return page.evaluate(async () => {
-    await new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r)));
-    const src = document.getElementById("preview");
-    const c = document.createElement("canvas");
-    c.width = src.width;
-    c.height = src.height;
-    const ctx = c.getContext("2d");
-    ctx.drawImage(src, 0, 0);
-    const d = ctx.getImageData(0, 0, c.width, c.height).data;
-    let n = 0;
-    for (let i = 0; i < d.length; i += 4) {
-      const max = Math.max(d[i], d[i + 1], d[i + 2]);
-      const min = Math.min(d[i], d[i + 1], d[i + 2]);
-      if (max - min > 60 && max > 90) n++;
-    }
-    return n;
-  });
-}
-
-async function downloadGcode(page, path) {
-  if (await page.isDisabled("#download")) throw new Error("Download is disabled: there is no result");
-  const [dl] = await Promise.all([page.waitForEvent("download", { timeout: 30000 }), page.click("#download")]);
-  await dl.saveAs(path);
-  return { path, name: dl.suggestedFilename(), bytes: readFileSync(path) };
-}

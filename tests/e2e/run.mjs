@@ -18,6 +18,7 @@ import { fileURLToPath } from "node:url";
 import { chromium } from "playwright-core";
 import { serve } from "./server.mjs";
 import { latticeChecks } from "./lattice-checks.mjs";
+import { colouredPixels, downloadGcode, waitReady, waitResult as waitResultWithin } from "./page-helpers.mjs";
 
 const ROOT = resolve(dirname(fileURLToPath(import.meta.url)), "../..");
 const OUT = join(ROOT, "tests/e2e/out");
@@ -74,57 +75,8 @@ function cli(args) {
   }
 }
 
-async function waitReady(page) {
-  await page.waitForFunction(() => window.weft && window.weft.design, null, { timeout: 30000 });
-}
-
-/** Waits for the page to show one more result than `before`; fails on a visible error. */
-async function waitResult(page, before, what) {
-  const handle = await page.waitForFunction(
-    (n) => {
-      if (window.weft.resultCount > n) return "ok";
-      const err = document.getElementById("error");
-      if (!err.hidden && !window.weft.busy) return `error: ${document.getElementById("error-text").textContent.trim()}`;
-      return false;
-    },
-    before,
-    { timeout: JOB_TIMEOUT, polling: 100 },
-  ).catch(() => null);
-  const state = handle ? await handle.jsonValue() : `no result within ${JOB_TIMEOUT / 1000} s`;
-  if (state !== "ok") throw new Error(`${what}: ${state}`);
-}
-
-/** Pixels of the preview canvas that are toolpath-coloured (saturated), read after a frame. */
-async function colouredPixels(page) {
-  return page.evaluate(async () => {
-    await new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r)));
-    const src = document.getElementById("preview");
-    const c = document.createElement("canvas");
-    c.width = src.width;
-    c.height = src.height;
-    const ctx = c.getContext("2d");
-    ctx.drawImage(src, 0, 0);
-    const d = ctx.getImageData(0, 0, c.width, c.height).data;
-    let n = 0;
-    for (let i = 0; i < d.length; i += 4) {
-      const max = Math.max(d[i], d[i + 1], d[i + 2]);
-      const min = Math.min(d[i], d[i + 1], d[i + 2]);
-      if (max - min > 60 && max > 90) n++;
-    }
-    return n;
-  });
-}
-
-async function download(page, what) {
-  if (await page.isDisabled("#download")) throw new Error("Download G-code is disabled: there is no result to download");
-  const [dl] = await Promise.all([
-    page.waitForEvent("download", { timeout: 30000 }),
-    page.click("#download"),
-  ]);
-  const path = join(OUT, what);
-  await dl.saveAs(path);
-  return { path, name: dl.suggestedFilename(), bytes: readFileSync(path) };
-}
+const waitResult = (page, before, what) => waitResultWithin(page, before, what, JOB_TIMEOUT);
+const download = (page, what) => downloadGcode(page, join(OUT, what));
 
 async function dropFile(page, name, buffer, mimeType = "application/octet-stream") {
   await page.setInputFiles("#file", { name, mimeType, buffer });

@@ -45,22 +45,23 @@ fn dist2_to_segment(p: DVec2, a: DVec2, b: DVec2) -> f64 {
     (a + d * t - p).length_squared()
 }
 
+/// The edges of closed `ring` (mm) snapped to the µm grid, zero-length ones skipped.
+pub(crate) fn ring_edges(ring: &[DVec2]) -> impl Iterator<Item = [DVec2; 2]> + '_ {
+    let n = ring.len();
+    (0..n).filter_map(move |i| {
+        let (a, b) = (to_um_grid(ring[i]), to_um_grid(ring[(i + 1) % n]));
+        (a != b).then_some([a, b])
+    })
+}
+
 impl Clipper {
     /// Prepares `regions` (mm) for clipping.
     pub fn new(regions: &[Polygon]) -> Clipper {
         let mut edges = Vec::new();
         for poly in regions {
             for ring in std::iter::once(&poly.outer).chain(poly.holes.iter()) {
-                let pts: Vec<DVec2> = ring.iter().map(|&p| to_um_grid(p)).collect();
-                let n = pts.len();
-                if n < 3 {
-                    continue;
-                }
-                for i in 0..n {
-                    let (a, b) = (pts[i], pts[(i + 1) % n]);
-                    if a != b {
-                        edges.push([a, b]);
-                    }
+                if ring.len() >= 3 {
+                    edges.extend(ring_edges(ring));
                 }
             }
         }

@@ -13,7 +13,6 @@
 //! All in integer-micrometre units (edges on the µm grid, as the loops are printed); only IEEE
 //! arithmetic and `sqrt`, so identical on every platform.
 
-use super::crop::to_um_grid;
 use crate::geom::tolerance::UNITS_PER_MM;
 use crate::geom::DVec2;
 
@@ -48,17 +47,12 @@ impl Guard {
     pub fn new(rings: &[Vec<DVec2>], line_width_mm: f64) -> Guard {
         let (mut edges, mut tags) = (Vec::new(), Vec::new());
         for (tag, ring) in rings.iter().enumerate() {
-            let pts: Vec<DVec2> = ring.iter().map(|&p| to_um_grid(p)).collect();
-            let n = pts.len();
-            if n < 2 {
+            if ring.len() < 2 {
                 continue;
             }
-            for i in 0..n {
-                let (a, b) = (pts[i], pts[(i + 1) % n]);
-                if a != b {
-                    edges.push([a, b]);
-                    tags.push(tag as u32);
-                }
+            for edge in super::crop::ring_edges(ring) {
+                edges.push(edge);
+                tags.push(tag as u32);
             }
         }
         let r = 0.5 * line_width_mm * UNITS_PER_MM + MARGIN_UM;

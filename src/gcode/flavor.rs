@@ -137,19 +137,7 @@ impl Dialect for Marlin {
 
     fn travel(&mut self, out: &mut Out, to: DVec3, options: &Options) {
         let p = &options.printer;
-        let z_feed = feed_mm_min(p.z_speed_mm_s);
-        let xy_feed = feed_mm_min(p.travel_speed_mm_s);
-        let Some(from) = out.pos else {
-            // First move of the file: where the start G-code left the head is unknown.
-            out.move_z(to.z, z_feed);
-            out.move_xy(to, xy_feed);
-            return;
-        };
-        let dxy = ((to.x - from.x) * (to.x - from.x) + (to.y - from.y) * (to.y - from.y)).sqrt();
-        let xy_moves = dxy > 1e-9;
-        if !xy_moves && (to.z - from.z).abs() <= 1e-9 {
-            return;
-        }
+        let Some(Leg { from, dxy, xy_moves, z_feed, xy_feed }) = travel_leg(out, to, options, "G1") else { return };
         let r = &p.retraction;
         let retract = r.length_mm > 0.0 && xy_moves && dxy >= r.min_travel_mm && !out.retracted;
         if retract {
@@ -226,6 +214,35 @@ fn push_code(out: &mut Out, code: &str) {
     }
 }
 
+/// A travel both dialects make, once the trivial cases are handled.
+struct Leg {
+    from: DVec3,
+    dxy: f64,
+    xy_moves: bool,
+    z_feed: u64,
+    xy_feed: u64,
+}
+
+/// Common start of a travel to `to`: the file's first move goes straight there (where the start
+/// G-code left the head is unknown: Z first with `z_code`, then XY) and a move to where the head
+/// already is does nothing; both return `None`. Otherwise the leg to plan.
+fn travel_leg(out: &mut Out, to: DVec3, options: &Options, z_code: &str) -> Option<Leg> {
+    let p = &options.printer;
+    let z_feed = feed_mm_min(p.z_speed_mm_s);
+    let xy_feed = feed_mm_min(p.travel_speed_mm_s);
+    let Some(from) = out.pos else {
+        out.move_z_with(z_code, to.z, z_feed);
+        out.move_xy(to, xy_feed);
+        return None;
+    };
+    let dxy = ((to.x - from.x) * (to.x - from.x) + (to.y - from.y) * (to.y - from.y)).sqrt();
+    let xy_moves = dxy > 1e-9;
+    if !xy_moves && (to.z - from.z).abs() <= 1e-9 {
+        return None;
+    }
+    Some(Leg { from, dxy, xy_moves, z_feed, xy_feed })
+}
+
 impl Dialect for PneumaticDialect {
     fn prologue(&mut self, out: &mut Out, _options: &Options) {
         out.line("G21 ; millimetres");
@@ -234,18 +251,7 @@ impl Dialect for PneumaticDialect {
 
     fn travel(&mut self, out: &mut Out, to: DVec3, options: &Options) {
         let p = &options.printer;
-        let z_feed = feed_mm_min(p.z_speed_mm_s);
-        let xy_feed = feed_mm_min(p.travel_speed_mm_s);
-        let Some(from) = out.pos else {
-            out.move_z_with("G0", to.z, z_feed);
-            out.move_xy(to, xy_feed);
-            return;
-        };
-        let dxy = ((to.x - from.x) * (to.x - from.x) + (to.y - from.y) * (to.y - from.y)).sqrt();
-        let xy_moves = dxy > 1e-9;
-        if !xy_moves && (to.z - from.z).abs() <= 1e-9 {
-            return;
-        }
+        let Some(Leg { from, dxy, xy_moves, z_feed, xy_feed }) = travel_leg(out, to, options, "G0") else { return };
         let r = &p.retraction;
         let hop = if xy_moves && dxy >= r.min_travel_mm && r.z_hop_mm > 0.0 { r.z_hop_mm } else { 0.0 };
         out.move_z_with("G0", (from.z + hop).max(to.z), z_feed);

@@ -235,7 +235,8 @@ const fieldViews = new Map();
 /**
  * Schema fields shown for the current design: those of its job kind whose path exists in the
  * design (so only the current pattern's, domain's, surface's and built-in shape's parameters),
- * plus each `…kind` choice and optional Section whose parent object exists.
+ * plus each `…kind` choice and optional Section whose parent object exists; a field with a `when`
+ * condition only while that other field has the stated value.
  */
 function visibleFields() {
   const design = state.design;
@@ -243,6 +244,7 @@ function visibleFields() {
   const usesInput = kind !== "lattice" || design?.job?.domain?.kind === "solid";
   const fields = schema.fields.filter((f) => {
     if (f.job && f.job !== kind) return false;
+    if (f.when && String(getPath(design, f.when.path)) !== f.when.equals) return false;
     if (!f.path.startsWith("job.")) return true;
     if (f.path.startsWith("job.input.") && !usesInput) return false;
     const parent = f.path.slice(0, f.path.lastIndexOf("."));

@@ -59,17 +59,35 @@ pub struct Field {
     /// JSON value a [`Kind::Section`] takes when switched on.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub default: Option<&'static str>,
+    /// Shown only while another field has a given value (e.g. pneumatic settings only for the
+    /// pneumatic flavour).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub when: Option<When>,
+}
+
+/// A condition on another field's value.
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct When {
+    /// Dotted path of the other field.
+    pub path: &'static str,
+    /// The value it must have (as written in JSON).
+    pub equals: &'static str,
+}
+
+const fn when(mut f: Field, path: &'static str, equals: &'static str) -> Field {
+    f.when = Some(When { path, equals });
+    f
 }
 
 #[allow(clippy::too_many_arguments)] // a table row constructor: one argument per column
 const fn num(path: &'static str, section: &'static str, label: &'static str, unit: &'static str, min: f64, max: f64, step: f64, doc: &'static str) -> Field {
-    Field { path, section, label, unit, kind: Kind::Number, min: Some(min), max: Some(max), step: Some(step), choices: &[], doc, job: None, default: None }
+    Field { path, section, label, unit, kind: Kind::Number, min: Some(min), max: Some(max), step: Some(step), choices: &[], doc, job: None, default: None, when: None }
 }
 const fn int(path: &'static str, section: &'static str, label: &'static str, min: f64, max: f64, doc: &'static str) -> Field {
-    Field { path, section, label, unit: "", kind: Kind::Integer, min: Some(min), max: Some(max), step: Some(1.0), choices: &[], doc, job: None, default: None }
+    Field { path, section, label, unit: "", kind: Kind::Integer, min: Some(min), max: Some(max), step: Some(1.0), choices: &[], doc, job: None, default: None, when: None }
 }
 const fn other(path: &'static str, section: &'static str, label: &'static str, kind: Kind, choices: &'static [&'static str], doc: &'static str) -> Field {
-    Field { path, section, label, unit: "", kind, min: None, max: None, step: None, choices, doc, job: None, default: None }
+    Field { path, section, label, unit: "", kind, min: None, max: None, step: None, choices, doc, job: None, default: None, when: None }
 }
 const fn for_job(mut f: Field, job: &'static str) -> Field {
     f.job = Some(job);
@@ -86,11 +104,11 @@ pub const FIELDS: &[Field] = &[
     num("printer.nozzle_diameter_mm", "Printer", "Nozzle diameter", "mm", 0.05, 3.0, 0.01, "d_n in GIPPO equation 4."),
     num("printer.filament_diameter_mm", "Printer", "Filament diameter", "mm", 0.5, 5.0, 0.01, "f_d in GIPPO equation 4."),
     other("printer.flavor", "Printer", "G-code flavour", Kind::Choice, &["marlin", "pneumatic"], "marlin: FDM G-code; pneumatic: .nc for pneumatic (bio)printers, valve on/off and pressure per path."),
-    other("printer.pneumatic.valve_on", "Printer", "Valve on (pneumatic)", Kind::Text, &[], "Line(s) that start the flow of each path."),
-    other("printer.pneumatic.valve_off", "Printer", "Valve off (pneumatic)", Kind::Text, &[], "Line(s) that stop the flow after each path."),
-    other("printer.pneumatic.pressure_template", "Printer", "Pressure code (pneumatic)", Kind::Text, &[], "{pressure_kpa} is replaced; empty: no pressure line."),
-    num("printer.pneumatic.pressure_kpa", "Printer", "Pressure (pneumatic)", "kPa", 0.0, 100000.0, 1.0, ""),
-    num("printer.pneumatic.short_path_pressure_factor", "Printer", "Short-path pressure (pneumatic)", "×", 0.01, 10.0, 0.05, "Multiplies the pressure of slowed-down short paths."),
+    when(other("printer.pneumatic.valve_on", "Printer", "Valve on (pneumatic)", Kind::Text, &[], "Line(s) that start the flow of each path."), "printer.flavor", "pneumatic"),
+    when(other("printer.pneumatic.valve_off", "Printer", "Valve off (pneumatic)", Kind::Text, &[], "Line(s) that stop the flow after each path."), "printer.flavor", "pneumatic"),
+    when(other("printer.pneumatic.pressure_template", "Printer", "Pressure code (pneumatic)", Kind::Text, &[], "{pressure_kpa} is replaced; empty: no pressure line."), "printer.flavor", "pneumatic"),
+    when(num("printer.pneumatic.pressure_kpa", "Printer", "Pressure (pneumatic)", "kPa", 0.0, 100000.0, 1.0, ""), "printer.flavor", "pneumatic"),
+    when(num("printer.pneumatic.short_path_pressure_factor", "Printer", "Short-path pressure (pneumatic)", "×", 0.01, 10.0, 0.05, "Multiplies the pressure of slowed-down short paths."), "printer.flavor", "pneumatic"),
     other("printer.relative_e", "Printer", "Relative extrusion (M83)", Kind::Bool, &[], "Off: absolute E (M82)."),
     num("printer.retraction.length_mm", "Printer", "Retraction length", "mm", 0.0, 20.0, 0.05, "0 disables retraction."),
     num("printer.retraction.speed_mm_s", "Printer", "Retraction speed", "mm/s", 1.0, 200.0, 1.0, ""),
@@ -109,10 +127,10 @@ pub const FIELDS: &[Field] = &[
     int("material.fan_start_layer", "Material", "Fan from layer", 0.0, 1000.0, "0-based layer index."),
     num("material.extrusion_multiplier", "Material", "Extrusion multiplier EM", "", 0.1, 3.0, 0.01, "EM in GIPPO equation 4."),
     num("material.k", "Material", "Cross-section correction k", "", 0.1, 3.0, 0.01, "k in GIPPO equation 4 (elliptical rather than rectangular strands)."),
-    num("material.flow.pre_flow_mm", "Material", "Pre-flow", "mm", 0.0, 50.0, 0.01, "Filament pushed at each path start (Marlin)."),
-    num("material.flow.post_flow_mm", "Material", "Post-flow", "mm", 0.0, 50.0, 0.01, "Filament pushed at each path end (Marlin)."),
-    num("material.flow.pre_flow_s", "Material", "Pre-flow time", "s", 0.0, 60.0, 0.01, "Valve open before moving (pneumatic)."),
-    num("material.flow.post_flow_s", "Material", "Post-flow time", "s", 0.0, 60.0, 0.01, "Valve closed this long before the path end (pneumatic)."),
+    when(num("material.flow.pre_flow_mm", "Material", "Pre-flow", "mm", 0.0, 50.0, 0.01, "Filament pushed at each path start (Marlin)."), "printer.flavor", "marlin"),
+    when(num("material.flow.post_flow_mm", "Material", "Post-flow", "mm", 0.0, 50.0, 0.01, "Filament pushed at each path end (Marlin)."), "printer.flavor", "marlin"),
+    when(num("material.flow.pre_flow_s", "Material", "Pre-flow time", "s", 0.0, 60.0, 0.01, "Valve open before moving (pneumatic)."), "printer.flavor", "pneumatic"),
+    when(num("material.flow.post_flow_s", "Material", "Post-flow time", "s", 0.0, 60.0, 0.01, "Valve closed this long before the path end (pneumatic)."), "printer.flavor", "pneumatic"),
     num("speeds.external_perimeter_mm_s", "Speeds", "External perimeter", "mm/s", 1.0, 500.0, 1.0, ""),
     num("speeds.perimeter_mm_s", "Speeds", "Perimeters", "mm/s", 1.0, 500.0, 1.0, ""),
     num("speeds.infill_mm_s", "Speeds", "Infill", "mm/s", 1.0, 500.0, 1.0, ""),

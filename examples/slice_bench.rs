@@ -13,7 +13,7 @@ fn main() {
     let t = Instant::now();
     let s = weft::slice::slice(&mesh, &Default::default(), &mut |_| {}).expect("slices");
     let dt = t.elapsed();
-    let paths: usize = s.toolpath.layers.iter().map(|l| l.paths.len()).sum();
+    let paths: usize = s.toolpath.passes.iter().map(|l| l.paths.len()).sum();
     println!(
         "{} layers, {paths} paths, {:.0} mm extruded, report {:?}",
         s.layers.len(),

@@ -4,7 +4,7 @@
 use std::time::Instant;
 use weft::analyze::{analyze, Options as AOptions};
 use weft::gcode::{write_gcode, Options};
-use weft::geom::{DVec3, Feature, Path, Toolpath, ToolpathLayer};
+use weft::geom::{DVec3, Feature, Path, Toolpath, Pass};
 
 fn big_toolpath(layers: usize) -> Toolpath {
     let mut tp = Toolpath::default();
@@ -20,7 +20,7 @@ fn big_toolpath(layers: usize) -> Toolpath {
                     DVec3::new(r * t.cos(), r * t.sin(), z)
                 })
                 .collect();
-            paths.push(Path { points: pts, feature: Feature::Perimeter, width: 0.45, speed_factor: 1.0, approach: None });
+            paths.push(Path { points: pts, feature: Feature::Perimeter, width: 0.45, speed_factor: 1.0, approach: None, data: None });
         }
         // Zig-zag infill inside, 1 mm segments.
         let mut pts = Vec::new();
@@ -31,8 +31,8 @@ fn big_toolpath(layers: usize) -> Toolpath {
                 pts.push(DVec3::new(x, y, z));
             }
         }
-        paths.push(Path { points: pts, feature: Feature::Infill, width: 0.45, speed_factor: 1.0, approach: None });
-        tp.layers.push(ToolpathLayer { z, height: 0.2, paths });
+        paths.push(Path { points: pts, feature: Feature::Infill, width: 0.45, speed_factor: 1.0, approach: None, data: None });
+        tp.passes.push(Pass::layer(z, 0.2, paths));
     }
     tp
 }

@@ -2,7 +2,7 @@
 
 use weft::analyze::{analyze, Options as AOptions};
 use weft::gcode::{write_gcode, Flavor, Options, Origin, Printer};
-use weft::geom::{DVec3, Feature, Path, Toolpath, ToolpathLayer};
+use weft::geom::{DVec3, Feature, Path, Toolpath, Pass};
 
 fn p(x: f64, y: f64, z: f64) -> DVec3 {
     DVec3::new(x, y, z)
@@ -37,7 +37,7 @@ fn layers_body(text: &str) -> Vec<&str> {
 }
 
 fn one_layer(paths: Vec<Path>) -> Toolpath {
-    Toolpath { layers: vec![ToolpathLayer { z: 0.2, height: 0.2, paths }] }
+    Toolpath { passes: vec![Pass::layer(0.2, 0.2, paths)] }
 }
 
 #[test]
@@ -98,9 +98,9 @@ fn approach_across_layers_moves_z_in_the_g1() {
     let mut b = path(vec![p(10.0, 0.0, 0.4), p(0.0, 0.0, 0.4)]);
     b.approach = Some(vec![]);
     let tp = Toolpath {
-        layers: vec![
-            ToolpathLayer { z: 0.2, height: 0.2, paths: vec![a] },
-            ToolpathLayer { z: 0.4, height: 0.2, paths: vec![b] },
+        passes: vec![
+            Pass::layer(0.2, 0.2, vec![a]),
+            Pass::layer(0.4, 0.2, vec![b]),
         ],
     };
     let g = write_gcode(&tp, &o).unwrap();
@@ -159,9 +159,9 @@ fn short_paths_use_the_speed_factor() {
     let mut c = path(vec![p(10.0, 1.0, 0.4), p(0.0, 1.0, 0.4)]);
     c.feature = Feature::Contour;
     let tp = Toolpath {
-        layers: vec![
-            ToolpathLayer { z: 0.2, height: 0.2, paths: vec![path(vec![p(0.0, 0.0, 0.2), p(0.0, 1.0, 0.2)])] },
-            ToolpathLayer { z: 0.4, height: 0.2, paths: vec![a, b, c] },
+        passes: vec![
+            Pass::layer(0.2, 0.2, vec![path(vec![p(0.0, 0.0, 0.2), p(0.0, 1.0, 0.2)])]),
+            Pass::layer(0.4, 0.2, vec![a, b, c]),
         ],
     };
     o.speeds.lattice_mm_s = 25.0;
@@ -301,10 +301,10 @@ fn pneumatic_on_layer_comments_and_multi_line_codes() {
     o.printer.pneumatic.valve_on = "M42 P0 S255\nG4 P10\n".into();
     o.printer.pneumatic.valve_off = "M42 P0 S0".into();
     let tp = Toolpath {
-        layers: (0..3)
+        passes: (0..3)
             .map(|i| {
                 let z = 0.2 * (i + 1) as f64;
-                ToolpathLayer { z, height: 0.2, paths: vec![path(vec![p(0.0, 0.0, z), p(5.0, 0.0, z)])] }
+                Pass::layer(z, 0.2, vec![path(vec![p(0.0, 0.0, z), p(5.0, 0.0, z)])])
             })
             .collect(),
     };

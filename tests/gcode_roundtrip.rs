@@ -2,7 +2,7 @@
 
 use weft::analyze::{analyze, Options as AOptions};
 use weft::gcode::{equation4_e, write_gcode, Options};
-use weft::geom::{DVec3, Feature, Path, Toolpath, ToolpathLayer};
+use weft::geom::{DVec3, Feature, Pass, PassKind, Path, Toolpath};
 
 /// A small lattice-like layer: a zig-zag strut path, a square contour and a diagonal strut.
 fn toolpath(layers: usize) -> Toolpath {
@@ -18,13 +18,14 @@ fn toolpath(layers: usize) -> Toolpath {
             DVec3::new(-25.0, -15.0, z),
         ];
         let diag = vec![DVec3::new(-24.0, 14.0, z), DVec3::new(-21.0, 11.5, z)];
-        tp.layers.push(ToolpathLayer {
+        tp.passes.push(Pass {
+            kind: PassKind::Layer,
             z,
             height: 0.2,
             paths: vec![
-                Path { points: zig, feature: Feature::Lattice, width: 0.4, speed_factor: 1.0, approach: None },
-                Path { points: square, feature: Feature::Contour, width: 0.45, speed_factor: 1.0, approach: None },
-                Path { points: diag, feature: Feature::Lattice, width: 0.4, speed_factor: 0.6, approach: None },
+                Path { points: zig, feature: Feature::Lattice, width: 0.4, speed_factor: 1.0, approach: None, data: None },
+                Path { points: square, feature: Feature::Contour, width: 0.45, speed_factor: 1.0, approach: None, data: None },
+                Path { points: diag, feature: Feature::Lattice, width: 0.4, speed_factor: 0.6, approach: None, data: None },
             ],
         });
     }
@@ -33,7 +34,7 @@ fn toolpath(layers: usize) -> Toolpath {
 
 fn sum_eq4(tp: &Toolpath, o: &Options) -> f64 {
     let mut e = 0.0;
-    for l in &tp.layers {
+    for l in &tp.passes {
         for p in &l.paths {
             for w in p.points.windows(2) {
                 e += equation4_e(w[0].distance(w[1]), l.height, p.width, o.material.extrusion_multiplier, o.material.k, o.printer.filament_diameter_mm);

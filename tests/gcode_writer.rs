@@ -1,7 +1,7 @@
 //! G-code writer: exact lines for small inputs.
 
 use weft::gcode::{write_gcode, Error, Options, Origin};
-use weft::geom::{DVec3, Feature, Path, Toolpath, ToolpathLayer};
+use weft::geom::{DVec3, Feature, Path, Toolpath, Pass};
 
 fn square(z: f64, side: f64, at: (f64, f64)) -> Path {
     let (x, y) = at;
@@ -17,11 +17,12 @@ fn square(z: f64, side: f64, at: (f64, f64)) -> Path {
         width: 0.4,
         speed_factor: 1.0,
         approach: None,
+        data: None,
     }
 }
 
 fn one_layer() -> Toolpath {
-    Toolpath { layers: vec![ToolpathLayer { z: 0.2, height: 0.2, paths: vec![square(0.2, 10.0, (-5.0, -5.0))] }] }
+    Toolpath { passes: vec![Pass::layer(0.2, 0.2, vec![square(0.2, 10.0, (-5.0, -5.0))])] }
 }
 
 fn plain_options() -> Options {
@@ -104,7 +105,7 @@ fn relative_e_and_retraction_with_z_hop() {
     b.points = vec![DVec3::new(2.0, 5.0, 0.2), DVec3::new(0.0, 5.0, 0.2)];
     b.speed_factor = 0.5;
     b.width = 0.5;
-    let tp = Toolpath { layers: vec![ToolpathLayer { z: 0.2, height: 0.2, paths: vec![a, b] }] };
+    let tp = Toolpath { passes: vec![Pass::layer(0.2, 0.2, vec![a, b])] };
     let g = write_gcode(&tp, &o).unwrap();
     let f = |v: f64| weft::gcode::format::fixed(v, 5);
     let expected = vec![
@@ -140,9 +141,9 @@ fn short_travel_is_not_retracted_and_layers_advance() {
     o.printer.retraction.length_mm = 0.0;
     o.printer.origin = Origin::Center;
     o.material.fan_start_layer = 1;
-    let l0 = ToolpathLayer { z: 0.2, height: 0.2, paths: vec![Path { points: vec![DVec3::new(0.0, 0.0, 0.2), DVec3::new(1.0, 0.0, 0.2)], feature: Feature::Perimeter, width: 0.4, speed_factor: 1.0, approach: None }] };
-    let l1 = ToolpathLayer { z: 0.4, height: 0.2, paths: vec![Path { points: vec![DVec3::new(1.0, 0.0, 0.4), DVec3::new(0.0, 0.0, 0.4)], feature: Feature::Perimeter, width: 0.4, speed_factor: 1.0, approach: None }] };
-    let g = write_gcode(&Toolpath { layers: vec![l0, l1] }, &o).unwrap();
+    let l0 = Pass::layer(0.2, 0.2, vec![Path { points: vec![DVec3::new(0.0, 0.0, 0.2), DVec3::new(1.0, 0.0, 0.2)], feature: Feature::Perimeter, width: 0.4, speed_factor: 1.0, approach: None, data: None }]);
+    let l1 = Pass::layer(0.4, 0.2, vec![Path { points: vec![DVec3::new(1.0, 0.0, 0.4), DVec3::new(0.0, 0.0, 0.4)], feature: Feature::Perimeter, width: 0.4, speed_factor: 1.0, approach: None, data: None }]);
+    let g = write_gcode(&Toolpath { passes: vec![l0, l1] }, &o).unwrap();
     let f = |v: f64| weft::gcode::format::fixed(v, 5);
     let e = eq4(1.0, 0.2, 0.4);
     let b = body(&g.text);

@@ -1,7 +1,7 @@
 //! Non-planar projection: spheres, cylinders, meshes.
 
 use weft::geom::shapes::Shape;
-use weft::geom::{DVec3, Feature, Mesh, Path, Toolpath, ToolpathLayer};
+use weft::geom::{DVec3, Feature, Mesh, Path, Toolpath, Pass};
 use weft::nonplanar::{project, Error, Options, Surface};
 
 const H: f64 = 0.2;
@@ -20,7 +20,7 @@ fn grid(layers: usize, n: usize, half: f64) -> Toolpath {
                 paths.push(Path::new(vec![DVec3::new(c, -half, z), DVec3::new(c, half, z)], Feature::Lattice, 0.4));
             }
         }
-        tp.layers.push(ToolpathLayer { z, height: H, paths });
+        tp.passes.push(Pass::layer(z, H, paths));
     }
     tp
 }
@@ -30,7 +30,7 @@ fn sphere(r: f64, c: [f64; 3]) -> Options {
 }
 
 fn all_points(tp: &Toolpath) -> impl Iterator<Item = (usize, &DVec3)> {
-    tp.layers.iter().enumerate().flat_map(|(i, l)| l.paths.iter().flat_map(move |p| p.points.iter().map(move |q| (i, q))))
+    tp.passes.iter().enumerate().flat_map(|(i, l)| l.paths.iter().flat_map(move |p| p.points.iter().map(move |q| (i, q))))
 }
 
 /// Expected image of planar (x, y) on layer i over an analytic sphere.
@@ -51,8 +51,8 @@ fn sphere_points_lie_on_offset_spheres() {
         assert!(((*q - c).length() - want).abs() < 1e-6, "layer {i}: {q}");
     }
     // Layers, paths and features are kept; heights too; z is the layer's top.
-    assert_eq!(out.toolpath.layers.len(), 4);
-    for (a, b) in tp.layers.iter().zip(&out.toolpath.layers) {
+    assert_eq!(out.toolpath.passes.len(), 4);
+    for (a, b) in tp.passes.iter().zip(&out.toolpath.passes) {
         assert_eq!(a.paths.len(), b.paths.len());
         assert_eq!(b.height, H);
         let top = b.paths.iter().flat_map(|p| &p.points).map(|p| p.z).fold(f64::NEG_INFINITY, f64::max);
@@ -69,7 +69,7 @@ fn segments_are_split_and_z_follows_the_surface() {
     for max in [0.25, 0.1, 1.0] {
         let o = Options { max_segment_mm: max, ..sphere(8.0, [0.0, 0.0, -4.0]) };
         let out = project(&tp, None, &o).unwrap();
-        for l in &out.toolpath.layers {
+        for l in &out.toolpath.passes {
             for p in &l.paths {
                 for w in p.points.windows(2) {
                     assert!(w[0].distance(w[1]) <= max + 1e-12, "{} > {max}", w[0].distance(w[1]));
@@ -88,9 +88,9 @@ fn segments_are_split_and_z_follows_the_surface() {
 fn point_order_is_preserved() {
     let c = DVec3::new(0.0, 0.0, -6.0);
     let mut tp = grid(2, 4, 3.0);
-    tp.layers[1].paths[2].speed_factor = 0.6;
+    tp.passes[1].paths[2].speed_factor = 0.6;
     let out = project(&tp, None, &sphere(10.0, c.to_array())).unwrap();
-    for (i, (a, b)) in tp.layers.iter().zip(&out.toolpath.layers).enumerate() {
+    for (i, (a, b)) in tp.passes.iter().zip(&out.toolpath.passes).enumerate() {
         for (pa, pb) in a.paths.iter().zip(&b.paths) {
             assert_eq!(pa.feature, pb.feature);
             assert_eq!(pa.speed_factor, pb.speed_factor);
@@ -123,11 +123,11 @@ fn cylinder_points_lie_on_offset_cylinders() {
         assert!((r - (6.0 + (i + 1) as f64 * H)).abs() < 1e-6, "layer {i}: {q}");
     }
     // Lines along X stay at constant Z (the cylinder lies along X); lines along Y do not.
-    let l0 = &out.toolpath.layers[0];
+    let l0 = &out.toolpath.passes[0];
     for p in &l0.paths {
         assert!(p.points.iter().all(|q| (q.z - p.points[0].z).abs() < 1e-12));
     }
-    let l1 = &out.toolpath.layers[1];
+    let l1 = &out.toolpath.passes[1];
     assert!(l1.paths.iter().all(|p| p.points.iter().any(|q| (q.z - p.points[0].z).abs() > 0.5)));
 }
 
@@ -163,7 +163,7 @@ fn flat_and_tilted_plane_meshes() {
         assert!((q.z - (1.0 + (i + 1) as f64 * H)).abs() < 1e-6, "{q}");
     }
     // The input points keep their XY exactly.
-    assert_eq!(out.toolpath.layers[0].paths[0].points[0].truncate(), tp.layers[0].paths[0].points[0].truncate());
+    assert_eq!(out.toolpath.passes[0].paths[0].points[0].truncate(), tp.passes[0].paths[0].points[0].truncate());
     // Tilted 30°: every point is (i + 1) h from the plane along its normal.
     let slope = libm::tan(std::f64::consts::PI / 6.0);
     let tilted = plane_mesh(6.0, 7, 0.5, slope);
@@ -175,7 +175,7 @@ fn flat_and_tilted_plane_meshes() {
         let dist = (*q - DVec3::new(0.0, 0.0, 0.5)).dot(n);
         assert!((dist - (i + 1) as f64 * H).abs() < 1e-5, "layer {i}: {q} at {dist}");
     }
-    for l in &out.toolpath.layers {
+    for l in &out.toolpath.passes {
         for p in &l.paths {
             for w in p.points.windows(2) {
                 assert!(w[0].distance(w[1]) <= 0.25 + 1e-12);
@@ -206,7 +206,7 @@ fn sphere_mesh_matches_the_analytic_sphere() {
     }
     assert!(worst > 0.0);
     // The input points map to nearly the same places.
-    for (la, lm) in a.toolpath.layers.iter().zip(&m.toolpath.layers) {
+    for (la, lm) in a.toolpath.passes.iter().zip(&m.toolpath.passes) {
         for (pa, pm) in la.paths.iter().zip(&lm.paths) {
             assert!(pa.points[0].distance(pm.points[0]) <= 4.0 * sagitta + 1e-3);
             assert!(pa.points.last().unwrap().distance(*pm.points.last().unwrap()) <= 4.0 * sagitta + 1e-3);
@@ -223,7 +223,7 @@ fn missed_points_are_counted_and_kept_at_the_lowest_hit() {
     // Points of 3 lines at y = -5, 0, 5: all 6 ends miss, the middles at y = ±5 too.
     assert_eq!(out.report.missed_points, 8);
     let floor = 3.0; // only (0, 0) hits: its surface Z is the lowest hit
-    for p in &out.toolpath.layers[0].paths {
+    for p in &out.toolpath.passes[0].paths {
         let first = p.points[0];
         assert_eq!(first, DVec3::new(-5.0, first.y, floor + H));
     }
@@ -236,21 +236,21 @@ fn missed_points_are_counted_and_kept_at_the_lowest_hit() {
 fn approach_routes_are_projected() {
     let mut tp = grid(1, 2, 3.0);
     // Second line reached along a route over the first one's end.
-    tp.layers[0].paths[1].approach = Some(vec![DVec3::new(3.0, 0.0, H)]);
+    tp.passes[0].paths[1].approach = Some(vec![DVec3::new(3.0, 0.0, H)]);
     let c = DVec3::new(0.0, 0.0, -5.0);
     let out = project(&tp, None, &sphere(10.0, c.to_array())).unwrap();
-    let p = &out.toolpath.layers[0].paths[1];
+    let p = &out.toolpath.passes[0].paths[1];
     let route = p.approach.as_ref().unwrap();
     // Legs (3,-3) → (3,0) → (-3,3) are split; the interior points form the route.
     assert!(route.len() > 10);
-    let mut prev = *out.toolpath.layers[0].paths[0].points.last().unwrap();
+    let mut prev = *out.toolpath.passes[0].paths[0].points.last().unwrap();
     for q in route.iter().chain(std::iter::once(&p.points[0])) {
         assert!(((*q - c).length() - (10.0 + H)).abs() < 1e-6);
         assert!(prev.distance(*q) <= 0.25 + 1e-12);
         prev = *q;
     }
     assert!(route.iter().any(|q| q.distance(on_sphere(3.0, 0.0, 0, 10.0, c)) < 1e-9));
-    assert_eq!(out.toolpath.layers[0].paths[0].approach, None);
+    assert_eq!(out.toolpath.passes[0].paths[0].approach, None);
 }
 
 #[test]

@@ -180,7 +180,7 @@ fn graph_segments(g: &Graph) -> Vec<Seg> {
 
 fn printed_segments(tp: &Toolpath, layer: usize) -> Vec<Seg> {
     let mut v = Vec::new();
-    for p in &tp.layers[layer].paths {
+    for p in &tp.passes[layer].paths {
         assert!(p.points.len() >= 2);
         for w in p.points.windows(2) {
             v.push(seg_key((w[0].x, w[0].y), (w[1].x, w[1].y)));
@@ -205,7 +205,7 @@ fn every_method_prints_every_edge_exactly_once() {
             let out = run(&l, m, 1);
             let got = printed_segments(&out.toolpath, 0);
             assert_eq!(got, want, "{name} {m:?}");
-            let tl = &out.toolpath.layers[0];
+            let tl = &out.toolpath.passes[0];
             assert_eq!(tl.z, 0.3);
             assert_eq!(tl.height, 0.2);
             for p in &tl.paths {
@@ -276,7 +276,7 @@ fn continuous_is_one_chain_per_component_along_struts() {
         for order in [Order::LongestFirst, Order::MinTravel] {
             let options = Options { method: Method::Continuous, order, ..Options::default() };
             let out = optimise(std::slice::from_ref(&l), &options, 0.4, 3, &mut |_| {}).unwrap();
-            let paths = &out.toolpath.layers[0].paths;
+            let paths = &out.toolpath.passes[0].paths;
             let free = paths.iter().filter(|p| p.approach.is_none()).count();
             assert_eq!(free, g.components, "{name}");
             assert!(paths[0].approach.is_none());
@@ -318,7 +318,7 @@ fn gippo_is_deterministic_and_seed_dependent() {
         let b = optimise(&layers, &options, 0.4, 9, &mut |_| {}).unwrap();
         assert_eq!(a.toolpath, b.toolpath);
         assert_eq!(a.report, b.report);
-        assert_eq!(a.toolpath.layers.len(), 3);
+        assert_eq!(a.toolpath.passes.len(), 3);
         for (i, l) in layers.iter().enumerate() {
             assert_eq!(printed_segments(&a.toolpath, i), graph_segments(&build_graph(l, TOL)));
         }
@@ -334,7 +334,7 @@ fn gippo_best_score_and_scores() {
     assert!(r.iteration_scores.iter().all(|&s| s <= r.score));
     assert!(r.iteration_scores.contains(&r.score));
     // Report score is equation 1 over the printed paths.
-    let tl = &out.toolpath.layers[0];
+    let tl = &out.toolpath.passes[0];
     let total: f64 = tl.paths.iter().map(|p| p.length()).sum();
     let eq1: f64 =
         tl.paths.iter().map(|p| p.length() * (p.points.len() - 1) as f64).sum::<f64>() / (total * tl.paths.len() as f64);
@@ -419,7 +419,7 @@ fn short_paths_are_slowed() {
     ]);
     for m in METHODS {
         let out = run(&l, m, 0);
-        let paths = &out.toolpath.layers[0].paths;
+        let paths = &out.toolpath.passes[0].paths;
         assert_eq!(paths.len(), 2, "{m:?}");
         for p in paths {
             let segs = p.points.len() - 1;
@@ -429,7 +429,7 @@ fn short_paths_are_slowed() {
     }
     let options = Options { short_path_speed_factor: 0.5, short_path_segments: 7, ..Options::default() };
     let out = optimise(&[l], &options, 0.4, 0, &mut |_| {}).unwrap();
-    assert!(out.toolpath.layers[0].paths.iter().all(|p| p.speed_factor == 0.5));
+    assert!(out.toolpath.passes[0].paths.iter().all(|p| p.speed_factor == 0.5));
 }
 
 #[test]
@@ -439,10 +439,10 @@ fn majority_feature_and_min_travel_order() {
         Stroke { points: vec![DVec2::new(5.0, 0.0), DVec2::new(5.0, 1.0)], feature: Feature::Contour },
     ]);
     let out = run(&l, Method::Euler, 0);
-    assert_eq!(out.toolpath.layers[0].paths.len(), 1);
-    assert_eq!(out.toolpath.layers[0].paths[0].feature, Feature::Lattice);
+    assert_eq!(out.toolpath.passes[0].paths.len(), 1);
+    assert_eq!(out.toolpath.passes[0].paths[0].feature, Feature::Lattice);
     l.strokes[1].points[1] = DVec2::new(5.0, 9.0);
-    assert_eq!(run(&l, Method::Euler, 0).toolpath.layers[0].paths[0].feature, Feature::Contour);
+    assert_eq!(run(&l, Method::Euler, 0).toolpath.passes[0].paths[0].feature, Feature::Contour);
 
     // Min-travel beats longest-first on scattered single edges.
     let scattered = crossings(1, 1);
@@ -486,8 +486,8 @@ fn options_are_validated_and_progress_reported() {
     let mut seen = Vec::new();
     let out = optimise(&l, &Options::default(), 0.4, 0, &mut |f| seen.push(f)).unwrap();
     assert_eq!(seen, vec![1.0 / 3.0, 2.0 / 3.0, 1.0]);
-    assert_eq!(out.toolpath.layers.len(), 3);
-    assert!(out.toolpath.layers[2].paths.is_empty());
+    assert_eq!(out.toolpath.passes.len(), 3);
+    assert!(out.toolpath.passes[2].paths.is_empty());
     assert_eq!(out.report.layers[2], weft::paths::LayerPaths::default());
     assert_eq!(out.report.layers[1].paths, 1);
     assert_eq!(out.report.layers[1].lower_bound_paths, 1);

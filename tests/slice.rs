@@ -72,7 +72,7 @@ fn cube_20mm_has_100_square_layers() {
     let s = run(&cube([20.0, 20.0, 20.0]), &Options::default());
     assert_eq!(s.layers.len(), 100);
     assert_eq!(s.report.layers, 100);
-    assert_eq!(s.toolpath.layers.len(), 100);
+    assert_eq!(s.toolpath.passes.len(), 100);
     for (i, l) in s.layers.iter().enumerate() {
         assert_eq!(l.regions.len(), 1, "layer {i}");
         assert!(l.regions[0].holes.is_empty());
@@ -84,7 +84,7 @@ fn cube_20mm_has_100_square_layers() {
     assert_eq!(s.report.gaps_closed, 0);
     assert_eq!(s.report.open_contours_dropped, 0);
     assert_eq!(s.report.layers_with_overlaps, 0);
-    let tl = &s.toolpath.layers[5];
+    let tl = &s.toolpath.passes[5];
     assert!((tl.z - 1.2).abs() < 1e-9 && (tl.height - 0.2).abs() < 1e-12);
     for p in &tl.paths {
         assert_eq!(p.width, 0.4);
@@ -214,7 +214,7 @@ fn tube_has_a_hole() {
         assert!((l.regions[0].area() - (ring(10.0) - ring(5.0))).abs() < 0.01);
     }
     // No toolpath point falls in the hole.
-    for tl in &s.toolpath.layers {
+    for tl in &s.toolpath.passes {
         for p in &tl.paths {
             for q in &p.points {
                 assert!(q.truncate().length() > 5.0 - 1e-6, "{q:?} in the hole");
@@ -228,7 +228,7 @@ fn solid_infill_covers_the_inner_area() {
     let o = Options { infill_density: 1.0, ..Default::default() };
     let s = run(&cube([20.0, 20.0, 4.0]), &o);
     let inner = (20.0 - 4.0 * 0.4) * (20.0 - 4.0 * 0.4);
-    for tl in &s.toolpath.layers {
+    for tl in &s.toolpath.passes {
         let len: f64 = tl.paths.iter().filter(|p| p.feature == Feature::SolidInfill).map(|p| p.length()).sum();
         assert!((len * 0.4 - inner).abs() < 0.1 * inner, "z {}: {} vs {inner}", tl.z, len * 0.4);
         assert!(tl.paths.iter().all(|p| p.feature != Feature::Infill));
@@ -239,16 +239,16 @@ fn solid_infill_covers_the_inner_area() {
 fn sparse_infill_between_solid_skins() {
     let o = Options::default(); // density 0.2, 3 solid layers
     let s = run(&cube([20.0, 20.0, 4.0]), &o);
-    let n = s.toolpath.layers.len();
+    let n = s.toolpath.passes.len();
     assert_eq!(n, 20);
-    let count = |i: usize, f: Feature| s.toolpath.layers[i].paths.iter().filter(|p| p.feature == f).count();
+    let count = |i: usize, f: Feature| s.toolpath.passes[i].paths.iter().filter(|p| p.feature == f).count();
     for i in 0..n {
         let solid = i < 3 || i >= n - 3;
         assert_eq!(count(i, Feature::SolidInfill) > 0, solid, "layer {i}");
         assert_eq!(count(i, Feature::Infill) > 0, !solid, "layer {i}");
     }
     // Sparse: about density × inner area, plus the zig-zag connectors along the boundary.
-    let len: f64 = s.toolpath.layers[10].paths.iter().filter(|p| p.feature == Feature::Infill).map(|p| p.length()).sum();
+    let len: f64 = s.toolpath.passes[10].paths.iter().filter(|p| p.feature == Feature::Infill).map(|p| p.length()).sum();
     let inner = 18.4 * 18.4;
     assert!(len * 0.4 > 0.2 * inner * 0.95 && len * 0.4 < 0.2 * inner * 1.3, "{}", len * 0.4);
 }
@@ -261,7 +261,7 @@ fn top_skin_of_a_step_is_solid() {
     let s = run(&m, &Options { solid_layers: 2, ..Default::default() });
     // Layer 8 (top at 1.8 mm) is within 2 layers of the base's top: its ring outside the tower
     // is solid, the part under the tower (covered above and below) is sparse.
-    let l = &s.toolpath.layers[8];
+    let l = &s.toolpath.passes[8];
     let solid: Vec<_> = l.paths.iter().filter(|p| p.feature == Feature::SolidInfill).collect();
     let sparse: Vec<_> = l.paths.iter().filter(|p| p.feature == Feature::Infill).collect();
     assert!(!solid.is_empty() && !sparse.is_empty());
@@ -279,7 +279,7 @@ fn infill_angle_alternates() {
     let dominant = |i: usize| {
         // Direction of the longest infill segment, in degrees modulo 180.
         let mut best = (0.0, 0.0);
-        for p in s.toolpath.layers[i].paths.iter().filter(|p| p.feature == Feature::SolidInfill) {
+        for p in s.toolpath.passes[i].paths.iter().filter(|p| p.feature == Feature::SolidInfill) {
             for w in p.points.windows(2) {
                 let d = w[1] - w[0];
                 let len = d.truncate().length();
@@ -300,7 +300,7 @@ fn infill_angle_alternates() {
 fn perimeter_count_and_order() {
     let o = Options { perimeters: 3, ..Default::default() };
     let s = run(&Shape::Cylinder { radius: 10.0, height: 2.0, segments: 64 }.mesh(), &o);
-    for tl in &s.toolpath.layers {
+    for tl in &s.toolpath.passes {
         let per: Vec<_> = tl
             .paths
             .iter()
@@ -327,7 +327,7 @@ fn toolpath_stays_inside_regions() {
     let mut m = Shape::Sphere { radius: 8.0, segments: 64 }.mesh();
     m.append(&moved(cube([6.0, 20.0, 5.0]), [6.0, 0.0, 0.0]));
     let s = run(&m, &Options::default());
-    for (l, tl) in s.layers.iter().zip(&s.toolpath.layers) {
+    for (l, tl) in s.layers.iter().zip(&s.toolpath.passes) {
         for p in &tl.paths {
             for q in &p.points {
                 let q2 = q.truncate();
@@ -419,7 +419,7 @@ fn deterministic_and_progress_reported() {
 fn no_infill_when_hollow_and_no_skins() {
     let o = Options { infill_density: 0.0, solid_layers: 0, ..Default::default() };
     let s = run(&cube([20.0, 20.0, 2.0]), &o);
-    for tl in &s.toolpath.layers {
+    for tl in &s.toolpath.passes {
         assert_eq!(tl.paths.len(), 2);
     }
 }

@@ -144,7 +144,7 @@ fn bed_offset(options: &Options) -> DVec3 {
 fn check_bed(toolpath: &Toolpath, options: &Options, offset: DVec3) -> Result<(), Error> {
     let mut min = DVec3::splat(f64::INFINITY);
     let mut max = DVec3::splat(f64::NEG_INFINITY);
-    for l in &toolpath.layers {
+    for l in &toolpath.passes {
         for p in &l.paths {
             for q in p.points.iter().chain(p.approach.iter().flatten()) {
                 min = min.min(*q + offset);
@@ -169,7 +169,7 @@ fn check_bed(toolpath: &Toolpath, options: &Options, offset: DVec3) -> Result<()
 
 /// Writes the G-code; see [`super::write_gcode`].
 pub(crate) fn write(toolpath: &Toolpath, options: &Options) -> Result<Gcode, Error> {
-    if toolpath.layers.iter().all(|l| l.paths.iter().all(|p| p.points.len() < 2)) {
+    if toolpath.passes.iter().all(|l| l.paths.iter().all(|p| p.points.len() < 2)) {
         return Err(Error::Empty);
     }
     let offset = bed_offset(options);
@@ -213,7 +213,7 @@ pub(crate) fn write(toolpath: &Toolpath, options: &Options) -> Result<Gcode, Err
     let mut layers_written = 0usize;
     let mut line = String::new();
     let mut route_buf: Vec<DVec3> = Vec::new();
-    for layer in &toolpath.layers {
+    for layer in &toolpath.passes {
         if layer.paths.iter().all(|p| p.points.len() < 2) {
             continue;
         }

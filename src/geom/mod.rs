@@ -16,4 +16,4 @@ pub use glam::{DVec2, DVec3};
 pub use mesh::{Aabb, Mesh};
 pub use polygon::{Polygon, signed_area};
 pub use stroke::{Stroke, StrokeLayer};
-pub use toolpath::{Feature, Path, Toolpath, ToolpathLayer};
+pub use toolpath::{Feature, Pass, PassKind, Path, PointData, PointFlow, Toolpath};

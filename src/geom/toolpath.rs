@@ -89,12 +89,88 @@ pub struct Path {
     /// `route` (intermediate points, may be empty) *without* extruding and without retracting,
     /// e.g. along struts already printed (Chinese-postman "continuous" paths).
     pub approach: Option<Vec<DVec3>>,
+    /// Per-point values (flow, feed, tool axis, dwell) for general toolpaths; `None` for the
+    /// compact planar form, which writes exactly as before.
+    pub data: Option<Box<PointData>>,
+}
+
+/// How much material a segment deposits, per point (see [`PointData::flow`]).
+#[derive(Clone, Debug, PartialEq)]
+pub enum PointFlow {
+    /// Extruded cross-section of the segment ending at each point, mm² (entry 0 unused). The
+    /// filament fed is `k · EM · length · area / (π f_d² / 4)`; GIPPO equation 4 is the case
+    /// `area = LT · w`.
+    AreaMm2(Vec<f64>),
+    /// Filament fed per mm of the segment ending at each point, mm/mm (entry 0 unused), used
+    /// as is (no EM or k applied).
+    FilamentPerMm(Vec<f64>),
+}
+
+/// Optional per-point values of a [`Path`]. Each vector, when present, has exactly one entry
+/// per point of the path. Values that describe a segment (flow, feed) are stored at the
+/// segment's *end* point; entry 0 is unused.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct PointData {
+    /// Material per segment; absent: GIPPO equation 4 with the pass height and path width.
+    pub flow: Option<PointFlow>,
+    /// Feed of the segment ending at each point, mm/s; absent: the feature's speed × the
+    /// path's speed factor.
+    pub feed_mm_s: Option<Vec<f64>>,
+    /// Tool axis at each point: a unit vector from the nozzle tip towards the head (+Z for a
+    /// 3-axis printer). Absent: +Z.
+    pub tool_axis: Option<Vec<DVec3>>,
+    /// Dwell after reaching each point, s (0: none).
+    pub dwell_s: Option<Vec<f64>>,
+}
+
+impl PointData {
+    /// The problems of `self` for a path of `points` points (lengths, non-finite or negative
+    /// values, zero axes), empty when it is usable.
+    pub fn problems(&self, points: usize) -> Vec<String> {
+        let mut out = Vec::new();
+        let mut len = |name: &str, n: usize| {
+            if n != points {
+                out.push(format!("{name} has {n} values for {points} points"));
+            }
+        };
+        match &self.flow {
+            Some(PointFlow::AreaMm2(v)) => len("flow (mm²)", v.len()),
+            Some(PointFlow::FilamentPerMm(v)) => len("flow (filament per mm)", v.len()),
+            None => {}
+        }
+        if let Some(v) = &self.feed_mm_s {
+            len("feed", v.len());
+        }
+        if let Some(v) = &self.tool_axis {
+            len("tool axis", v.len());
+        }
+        if let Some(v) = &self.dwell_s {
+            len("dwell", v.len());
+        }
+        let bad = |v: &f64| !v.is_finite() || *v < 0.0;
+        match &self.flow {
+            Some(PointFlow::AreaMm2(v) | PointFlow::FilamentPerMm(v)) if v.iter().skip(1).any(bad) => {
+                out.push("a flow value is negative or not a number".into())
+            }
+            _ => {}
+        }
+        if self.feed_mm_s.as_ref().is_some_and(|v| v.iter().skip(1).any(|f| !(f.is_finite() && *f > 0.0))) {
+            out.push("a feed is not a positive number".into());
+        }
+        if self.dwell_s.as_ref().is_some_and(|v| v.iter().any(bad)) {
+            out.push("a dwell is negative or not a number".into());
+        }
+        if self.tool_axis.as_ref().is_some_and(|v| v.iter().any(|a| !a.is_finite() || (a.length() - 1.0).abs() > 1e-6)) {
+            out.push("a tool axis is not a unit vector".into());
+        }
+        out
+    }
 }
 
 impl Path {
     /// An extrusion at full speed reached by a free travel.
     pub fn new(points: Vec<DVec3>, feature: Feature, width: f64) -> Path {
-        Path { points, feature, width, speed_factor: 1.0, approach: None }
+        Path { points, feature, width, speed_factor: 1.0, approach: None, data: None }
     }
 
     /// Length in mm.
@@ -103,10 +179,26 @@ impl Path {
     }
 }
 
-/// The paths of one layer, in print order.
+/// What a pass is: it decides which per-layer rules of the writer apply.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum PassKind {
+    /// A planar layer (slices, lattices, projected lattices). The first such layer gets the
+    /// first-layer speed and temperature; the fan starts at `fan_start_layer` counting these.
+    #[default]
+    Layer,
+    /// A free 3D pass (a foam's endless path, a wireframe sequence): no first-layer rules,
+    /// its own speeds and flows come from the path's [`PointData`].
+    Free,
+}
+
+/// One pass of the tool, in print order: a planar layer, or a free 3D pass.
 #[derive(Clone, Debug, Default, PartialEq)]
-pub struct ToolpathLayer {
-    /// Height of the layer's top in mm (the nominal nozzle Z for planar layers).
+pub struct Pass {
+    /// What kind of pass this is.
+    pub kind: PassKind,
+    /// Height of the layer's top in mm (the nominal nozzle Z for planar layers; for a free
+    /// pass, its lowest Z).
     pub z: f64,
     /// Layer thickness in mm (LT in GIPPO equation 4).
     pub height: f64,
@@ -114,22 +206,34 @@ pub struct ToolpathLayer {
     pub paths: Vec<Path>,
 }
 
-/// A whole print: layers bottom to top.
+impl Pass {
+    /// A planar layer.
+    pub fn layer(z: f64, height: f64, paths: Vec<Path>) -> Pass {
+        Pass { kind: PassKind::Layer, z, height, paths }
+    }
+}
+
+/// A whole print: passes in print order (planar layers bottom to top).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Toolpath {
-    /// Layers bottom to top.
-    pub layers: Vec<ToolpathLayer>,
+    /// Passes in print order.
+    pub passes: Vec<Pass>,
 }
 
 impl Toolpath {
     /// Total extruded path length in mm.
     pub fn extrusion_length(&self) -> f64 {
         let mut total = 0.0;
-        for layer in &self.layers {
-            for p in &layer.paths {
+        for pass in &self.passes {
+            for p in &pass.paths {
                 total += p.length();
             }
         }
         total
+    }
+
+    /// Points (extruded and on approach routes) of every pass.
+    pub fn point_count(&self) -> usize {
+        self.passes.iter().flat_map(|l| &l.paths).map(|p| p.points.len() + p.approach.as_ref().map_or(0, Vec::len)).sum()
     }
 }

@@ -3,7 +3,7 @@
 use super::collision::collides;
 use super::surface::Caster;
 use super::{Error, Projected, ProjectionReport};
-use crate::geom::{DVec2, DVec3, Path, Toolpath, ToolpathLayer};
+use crate::geom::{DVec2, DVec3, Path, Toolpath, Pass};
 
 /// Deepest bisection of one planar piece. Where the projection jumps (a ray starts missing
 /// the surface) no split helps; the piece stops being split after this many halvings.
@@ -71,7 +71,7 @@ pub(crate) fn run(toolpath: &Toolpath, caster: &Caster, max_seg: f64) -> Result<
     // Pass 1: which input points lie over the surface, and the lowest surface Z among them.
     let mut floor = f64::INFINITY;
     let (mut total, mut missed) = (0usize, 0usize);
-    for layer in &toolpath.layers {
+    for layer in &toolpath.passes {
         for path in &layer.paths {
             for q in path.points.iter().chain(path.approach.iter().flatten()) {
                 total += 1;
@@ -95,8 +95,8 @@ pub(crate) fn run(toolpath: &Toolpath, caster: &Caster, max_seg: f64) -> Result<
     let mut report = ProjectionReport { missed_points: missed, ..Default::default() };
     let (mut zmin, mut zmax) = (f64::INFINITY, f64::NEG_INFINITY);
     let mut d_below = 0.0;
-    let mut layers = Vec::with_capacity(toolpath.layers.len());
-    for layer in &toolpath.layers {
+    let mut layers = Vec::with_capacity(toolpath.passes.len());
+    for layer in &toolpath.passes {
         let d = d_below + layer.height.max(0.0);
         let mut paths = Vec::with_capacity(layer.paths.len());
         let mut prev_end: Option<DVec2> = None;
@@ -133,9 +133,9 @@ pub(crate) fn run(toolpath: &Toolpath, caster: &Caster, max_seg: f64) -> Result<
             paths.push(Path { points, approach, ..path.clone() });
         }
         let z = if layer_top.is_finite() { layer_top } else { floor + d };
-        layers.push(ToolpathLayer { z, height: layer.height, paths });
+        layers.push(Pass::layer(z, layer.height, paths));
         d_below = d;
     }
     report.z_range_mm = if zmin.is_finite() { [zmin, zmax] } else { [0.0, 0.0] };
-    Ok(Projected { toolpath: Toolpath { layers }, report })
+    Ok(Projected { toolpath: Toolpath { passes: layers }, report })
 }

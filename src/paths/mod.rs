@@ -7,7 +7,7 @@
 
 //!
 //! Pipeline per layer: [`graph::build_graph`] → method (`gippo.rs`, `euler.rs` +
-//! `matching.rs`, `postman.rs`) → order (`order.rs`) → [`ToolpathLayer`] + [`LayerPaths`]
+//! `matching.rs`, `postman.rs`) → order (`order.rs`) → [`Pass`] + [`LayerPaths`]
 //! (`metrics.rs`). Everything is deterministic (same input and seed → identical output on
 //! native and wasm): no hash-map iteration order, no platform transcendental functions,
 //! GIPPO's RNG is `rand_pcg::Pcg64` seeded per layer.
@@ -23,7 +23,7 @@ mod postman;
 
 pub use graph::{build_graph, Edge, Graph};
 
-use crate::geom::{DVec2, DVec3, Feature, Path, StrokeLayer, Toolpath, ToolpathLayer};
+use crate::geom::{DVec2, DVec3, Feature, Path, StrokeLayer, Toolpath, Pass};
 use metrics::Run;
 use rand_core::SeedableRng;
 use rand_pcg::Pcg64;
@@ -230,7 +230,7 @@ pub fn optimise(
             }
         };
 
-        let mut out = ToolpathLayer { z: layer.z, height: layer.height, paths: Vec::new() };
+        let mut out = Pass::layer(layer.z, layer.height, Vec::new());
         let mut runs = Vec::new();
         for chain in &chains {
             emit_chain(&graph, chain, layer.z, line_width_mm, options, &mut out.paths, &mut runs);
@@ -254,7 +254,7 @@ pub fn optimise(
         if let Some(p) = out.paths.last() {
             last_end = Some(p.points.last().expect("path has points").truncate());
         }
-        toolpath.layers.push(out);
+        toolpath.passes.push(out);
         report.layers.push(stats);
         progress((li + 1) as f32 / layers.len() as f32);
     }
@@ -368,7 +368,7 @@ fn emit_chain(
         let points: Vec<DVec3> = (p0..=k).map(|i| at(chain.nodes[i])).collect();
         let speed_factor =
             if (segments as u64) < options.short_path_segments as u64 { options.short_path_speed_factor } else { 1.0 };
-        paths.push(Path { points, feature: Feature::ALL[feature], width, speed_factor, approach });
+        paths.push(Path { points, feature: Feature::ALL[feature], width, speed_factor, approach, data: None });
         runs.push(Run { length, segments });
         first = false;
     }

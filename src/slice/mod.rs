@@ -26,7 +26,7 @@ mod regions;
 mod stitch;
 
 use crate::geom::tolerance::UNITS_PER_MM;
-use crate::geom::{DVec2, Feature, Mesh, Polygon, Toolpath, ToolpathLayer};
+use crate::geom::{DVec2, Feature, Mesh, Polygon, Toolpath, Pass};
 use i_overlay::i_shape::int::shape::{IntShape, IntShapes};
 use serde::{Deserialize, Serialize};
 
@@ -300,7 +300,7 @@ pub fn slice(mesh: &Mesh, options: &Options, progress: &mut dyn FnMut(f32)) -> R
     let base_angle = o.infill_angle_deg.to_radians();
     let s = o.solid_layers as usize;
     let mut layers = Vec::with_capacity(n);
-    let mut toolpath = Toolpath { layers: Vec::with_capacity(n) };
+    let mut toolpath = Toolpath { passes: Vec::with_capacity(n) };
     let mut pos = DVec2::ZERO;
     for i in 0..n {
         let (z, h, slice_z) = stack[i];
@@ -391,7 +391,7 @@ pub fn slice(mesh: &Mesh, options: &Options, progress: &mut dyn FnMut(f32)) -> R
             }
         }
         let paths = order::order_layer(works, &mut pos, z, w);
-        toolpath.layers.push(ToolpathLayer { z, height: h, paths });
+        toolpath.passes.push(Pass::layer(z, h, paths));
         layers.push(SlicedLayer { slice_z, z, height: h, regions: regions::to_polygons(shapes) });
         tick(0.4 + 0.6 * (i + 1) as f32 / n as f32, progress);
     }

@@ -29,6 +29,7 @@ pub mod paths;
 pub mod slice;
 pub mod design;
 pub mod pipeline;
+pub mod settings;
 
 pub use design::Design;
 pub use pipeline::{run, RunOptions, RunOutput};

@@ -6,6 +6,7 @@
 //! multiplier, k the cross-section correction and f_d the filament diameter.
 
 use crate::geom::Toolpath;
+use crate::settings::{self, int, num, other, vec3, when, Field, Kind};
 use serde::{Deserialize, Serialize};
 
 mod flavor;
@@ -390,4 +391,65 @@ fn outside_bed_message(size: &[f64; 3], bed: &[f64; 3], below: f64) -> String {
 /// a non-finite number would be written as `0`.
 pub fn write_gcode(toolpath: &Toolpath, options: &Options) -> Result<Gcode, Error> {
     writer::write(toolpath, options)
+}
+
+/// Rows of [`Printer`] (paths relative to `printer`): ranges, units, help. The writer's options
+/// are checked against them ([`check_options`]) and the page's form is built from them.
+pub const PRINTER_FIELDS: &[Field] = &[
+    other("name", "Printer", "Profile name", Kind::Text, &[], "Shown in the G-code header."),
+    vec3("bed_size_mm", "Printer", "Bed size X, Y, Z", "mm", 10.0, 2000.0, 1.0, "Printable volume."),
+    other("origin", "Printer", "Origin", Kind::Choice, &["corner", "center"], "Where X = Y = 0 is: front-left corner (Cartesian) or bed centre (delta)."),
+    num("nozzle_diameter_mm", "Printer", "Nozzle diameter", "mm", 0.05, 3.0, 0.01, "d_n in GIPPO equation 4."),
+    num("filament_diameter_mm", "Printer", "Filament diameter", "mm", 0.5, 5.0, 0.01, "f_d in GIPPO equation 4."),
+    other("flavor", "Printer", "G-code flavour", Kind::Choice, &["marlin", "pneumatic"], "marlin: FDM G-code; pneumatic: .nc for pneumatic (bio)printers, valve on/off and pressure per path."),
+    when(other("pneumatic.valve_on", "Printer", "Valve on (pneumatic)", Kind::Text, &[], "Line(s) that start the flow of each path."), "flavor", "pneumatic"),
+    when(other("pneumatic.valve_off", "Printer", "Valve off (pneumatic)", Kind::Text, &[], "Line(s) that stop the flow after each path."), "flavor", "pneumatic"),
+    when(other("pneumatic.pressure_template", "Printer", "Pressure code (pneumatic)", Kind::Text, &[], "{pressure_kpa} is replaced; empty: no pressure line."), "flavor", "pneumatic"),
+    when(num("pneumatic.pressure_kpa", "Printer", "Pressure (pneumatic)", "kPa", 0.0, 100000.0, 1.0, ""), "flavor", "pneumatic"),
+    when(num("pneumatic.short_path_pressure_factor", "Printer", "Short-path pressure (pneumatic)", "×", 0.01, 10.0, 0.05, "Multiplies the pressure of slowed-down short paths."), "flavor", "pneumatic"),
+    other("relative_e", "Printer", "Relative extrusion (M83)", Kind::Bool, &[], "Off: absolute E (M82)."),
+    num("retraction.length_mm", "Printer", "Retraction length", "mm", 0.0, 20.0, 0.05, "0 disables retraction."),
+    num("retraction.speed_mm_s", "Printer", "Retraction speed", "mm/s", 1.0, 200.0, 1.0, ""),
+    num("retraction.z_hop_mm", "Printer", "Z-hop", "mm", 0.0, 10.0, 0.05, "Lift during retracted travels."),
+    num("retraction.min_travel_mm", "Printer", "Retract only above", "mm", 0.0, 100.0, 0.1, "Shorter travels are not retracted."),
+    num("travel_speed_mm_s", "Printer", "Travel speed", "mm/s", 1.0, 1000.0, 1.0, ""),
+    num("z_speed_mm_s", "Printer", "Z speed", "mm/s", 0.1, 100.0, 0.1, ""),
+    num("acceleration_mm_s2", "Printer", "Acceleration", "mm/s²", 10.0, 50000.0, 10.0, "Used for time estimates."),
+    other("start_gcode", "Printer", "Start G-code", Kind::Text, &[], "Placeholders: {nozzle_temp_c} {first_layer_nozzle_temp_c} {bed_temp_c} {bed_x_mm} {bed_y_mm} {fan_pwm} {design_name}."),
+    other("end_gcode", "Printer", "End G-code", Kind::Text, &[], "Same placeholders as the start G-code."),
+];
+
+/// Rows of [`Material`] (paths relative to `material`).
+pub const MATERIAL_FIELDS: &[Field] = &[
+    other("name", "Material", "Material", Kind::Text, &[], ""),
+    num("nozzle_temp_c", "Material", "Nozzle temperature", "°C", 0.0, 500.0, 1.0, ""),
+    num("first_layer_nozzle_temp_c", "Material", "First-layer nozzle temperature", "°C", 0.0, 500.0, 1.0, ""),
+    num("bed_temp_c", "Material", "Bed temperature", "°C", 0.0, 150.0, 1.0, ""),
+    num("fan_percent", "Material", "Fan", "%", 0.0, 100.0, 1.0, ""),
+    int("fan_start_layer", "Material", "Fan from layer", 0.0, 1000.0, "0-based layer index."),
+    num("extrusion_multiplier", "Material", "Extrusion multiplier EM", "", 0.1, 3.0, 0.01, "EM in GIPPO equation 4."),
+    num("k", "Material", "Cross-section correction k", "", 0.1, 3.0, 0.01, "k in GIPPO equation 4 (elliptical rather than rectangular strands)."),
+    when(num("flow.pre_flow_mm", "Material", "Pre-flow", "mm", 0.0, 50.0, 0.01, "Filament pushed at each path start (Marlin)."), "/printer.flavor", "marlin"),
+    when(num("flow.post_flow_mm", "Material", "Post-flow", "mm", 0.0, 50.0, 0.01, "Filament pushed at each path end (Marlin)."), "/printer.flavor", "marlin"),
+    when(num("flow.pre_flow_s", "Material", "Pre-flow time", "s", 0.0, 60.0, 0.01, "Valve open before moving (pneumatic)."), "/printer.flavor", "pneumatic"),
+    when(num("flow.post_flow_s", "Material", "Post-flow time", "s", 0.0, 60.0, 0.01, "Valve closed this long before the path end (pneumatic)."), "/printer.flavor", "pneumatic"),
+];
+
+/// Rows of [`Speeds`] (paths relative to `speeds`).
+pub const SPEED_FIELDS: &[Field] = &[
+    num("external_perimeter_mm_s", "Speeds", "External perimeter", "mm/s", 1.0, 500.0, 1.0, ""),
+    num("perimeter_mm_s", "Speeds", "Perimeters", "mm/s", 1.0, 500.0, 1.0, ""),
+    num("infill_mm_s", "Speeds", "Infill", "mm/s", 1.0, 500.0, 1.0, ""),
+    num("solid_infill_mm_s", "Speeds", "Solid infill", "mm/s", 1.0, 500.0, 1.0, ""),
+    num("lattice_mm_s", "Speeds", "Lattice", "mm/s", 1.0, 500.0, 1.0, ""),
+    num("first_layer_mm_s", "Speeds", "First layer", "mm/s", 1.0, 500.0, 1.0, ""),
+];
+
+/// Every out-of-range value of the writer's options, with paths from the design root
+/// (`printer.…`, `material.…`, `speeds.…`).
+pub fn check_options(options: &Options) -> Vec<settings::Problem> {
+    let mut out = settings::check(&options.printer, PRINTER_FIELDS, "printer");
+    out.extend(settings::check(&options.material, MATERIAL_FIELDS, "material"));
+    out.extend(settings::check(&options.speeds, SPEED_FIELDS, "speeds"));
+    out
 }

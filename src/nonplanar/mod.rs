@@ -9,6 +9,7 @@ mod collision;
 mod project;
 mod surface;
 
+use crate::settings::{num, other, vec3, Field, Kind};
 use crate::geom::{Mesh, Toolpath};
 use serde::{Deserialize, Serialize};
 
@@ -99,15 +100,12 @@ pub struct Projected {
 /// Why projection failed.
 #[derive(Debug, thiserror::Error, Clone, PartialEq)]
 pub enum Error {
-    /// A parameter is unusable.
-    #[error("{field} = {value} is not usable: {fix}")]
-    BadOption {
-        /// Option name.
-        field: &'static str,
-        /// Its value.
-        value: f64,
-        /// Remedy.
-        fix: String,
+    /// Options outside the ranges of [`FIELDS`] (every one listed; the design validator
+    /// normally reports these first, with their design paths).
+    #[error("{}", crate::settings::describe(problems))]
+    BadOptions {
+        /// Each value out of range, with the allowed range.
+        problems: Vec<crate::settings::Problem>,
     },
     /// `Surface::Mesh` without a mesh, or an empty one.
     #[error("the surface mesh is missing or empty; load a surface mesh (job.surface_input)")]
@@ -156,33 +154,18 @@ pub fn project(toolpath: &Toolpath, surface_mesh: Option<&Mesh>, options: &Optio
     project::run(toolpath, &caster, options.max_segment_mm)
 }
 
-fn bad(field: &'static str, value: f64, fix: &str) -> Error {
-    Error::BadOption { field, value, fix: fix.into() }
+fn validate(options: &Options) -> Result<(), Error> {
+    let problems = crate::settings::check(options, FIELDS, "");
+    if problems.is_empty() { Ok(()) } else { Err(Error::BadOptions { problems }) }
 }
 
-fn validate(options: &Options) -> Result<(), Error> {
-    let s = options.max_segment_mm;
-    if !(0.01..=10.0).contains(&s) {
-        return Err(bad("max_segment_mm", s, "use 0.01 to 10 mm (default 0.25)"));
-    }
-    match &options.surface {
-        Surface::Sphere { radius_mm, center_mm } => {
-            if !(radius_mm.is_finite() && *radius_mm > 0.0) {
-                return Err(bad("surface.radius_mm", *radius_mm, "use a positive radius"));
-            }
-            if let Some(c) = center_mm.iter().find(|c| !c.is_finite()) {
-                return Err(bad("surface.center_mm", *c, "use finite coordinates"));
-            }
-        }
-        Surface::Cylinder { radius_mm, axis_z_mm } => {
-            if !(radius_mm.is_finite() && *radius_mm > 0.0) {
-                return Err(bad("surface.radius_mm", *radius_mm, "use a positive radius"));
-            }
-            if !axis_z_mm.is_finite() {
-                return Err(bad("surface.axis_z_mm", *axis_z_mm, "use a finite height"));
-            }
-        }
-        Surface::Mesh => {}
-    }
-    Ok(())
-}
+/// Rows of [`Options`] (paths relative to the options, `""` is the optional block itself):
+/// ranges, units, help, shared by the design's form and [`project`]'s own check.
+pub const FIELDS: &[Field] = &[
+    Field { default: Some("{\"surface\":{\"kind\":\"sphere\"}}"), ..other("", "Non-planar", "Print on a surface", Kind::Section, &[], "Project every layer onto a surface along Z.") },
+    other("surface.kind", "Non-planar", "Surface", Kind::Choice, &["sphere", "cylinder", "mesh"], "mesh: the loaded surface file."),
+    num("surface.radius_mm", "Non-planar", "Radius", "mm", 0.1, 10000.0, 0.1, ""),
+    vec3("surface.center_mm", "Non-planar", "Centre X, Y, Z", "mm", -10000.0, 10000.0, 0.1, ""),
+    num("surface.axis_z_mm", "Non-planar", "Axis height", "mm", -10000.0, 10000.0, 0.1, "The cylinder lies along X."),
+    num("max_segment_mm", "Non-planar", "Longest segment", "mm", 0.01, 10.0, 0.01, "Segments are split so Z follows the surface."),
+];

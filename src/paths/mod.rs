@@ -23,6 +23,7 @@ mod postman;
 
 pub use graph::{build_graph, Edge, Graph};
 
+use crate::settings::{int, num, other, Field, Kind};
 use crate::geom::{DVec2, DVec3, Feature, Path, StrokeLayer, Toolpath, Pass};
 use metrics::Run;
 use rand_core::SeedableRng;
@@ -158,15 +159,12 @@ pub struct Optimised {
 /// Why optimisation failed.
 #[derive(Debug, thiserror::Error, Clone, PartialEq)]
 pub enum Error {
-    /// An option is unusable.
-    #[error("{field} = {value} is not usable: {fix}")]
-    BadOption {
-        /// Option name.
-        field: &'static str,
-        /// Its value.
-        value: f64,
-        /// Allowed range / remedy.
-        fix: String,
+    /// Options outside the ranges of [`FIELDS`] (every one listed; the design validator
+    /// normally reports these first, with their design paths).
+    #[error("{}", crate::settings::describe(problems))]
+    BadOptions {
+        /// Each value out of range, with the allowed range.
+        problems: Vec<crate::settings::Problem>,
     },
 }
 
@@ -270,33 +268,22 @@ pub fn layer_seed(seed: u64, index: usize) -> u64 {
     z ^ (z >> 31)
 }
 
-/// Checks the options' ranges.
+/// Checks the options against [`FIELDS`], the ranges the design's form shows.
 pub fn validate(options: &Options) -> Result<(), Error> {
-    if !(1..=100_000).contains(&options.iterations) {
-        return Err(Error::BadOption {
-            field: "iterations",
-            value: options.iterations as f64,
-            fix: "use 1 to 100000 (the paper uses 500)".into(),
-        });
-    }
-    let tol = options.merge_tolerance_mm;
-    if !(tol.is_finite() && tol > 0.0 && tol <= 1.0) {
-        return Err(Error::BadOption {
-            field: "merge_tolerance_mm",
-            value: tol,
-            fix: "use a tolerance in (0, 1] mm, e.g. 0.005".into(),
-        });
-    }
-    let f = options.short_path_speed_factor;
-    if !(f.is_finite() && f > 0.0 && f <= 1.0) {
-        return Err(Error::BadOption {
-            field: "short_path_speed_factor",
-            value: f,
-            fix: "use a factor in (0, 1], e.g. 0.6".into(),
-        });
-    }
-    Ok(())
+    let problems = crate::settings::check(options, FIELDS, "");
+    if problems.is_empty() { Ok(()) } else { Err(Error::BadOptions { problems }) }
 }
+
+/// Rows of [`Options`] (paths relative to the options): ranges, units, help, shared by the
+/// design's form and [`optimise`]'s own check.
+pub const FIELDS: &[Field] = &[
+    other("method", "Paths", "Optimiser", Kind::Choice, &["gippo_max", "gippo_min", "euler", "continuous"], "gippo_*: the paper's randomised search; euler: the proven minimum number of paths; continuous: one nozzle path per component."),
+    int("iterations", "Paths", "GIPPO iterations", 1.0, 100000.0, "The paper uses 500."),
+    other("order", "Paths", "Path order", Kind::Choice, &["longest_first", "min_travel"], "longest_first is the paper's."),
+    num("merge_tolerance_mm", "Paths", "Node merge tolerance", "mm", 0.0001, 1.0, 0.001, "Strut ends closer than this are one node."),
+    int("short_path_segments", "Paths", "Short path below", 0.0, 1000.0, "Paths with fewer segments are slowed down (the paper: 4)."),
+    num("short_path_speed_factor", "Paths", "Short path speed", "×", 0.01, 1.0, 0.05, "The paper: 0.6."),
+];
 
 /// A walk through the graph: a GIPPO / Euler path, or a continuous component walk whose
 /// `travel` steps are walked without extruding.

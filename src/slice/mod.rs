@@ -25,6 +25,7 @@ mod plane;
 mod regions;
 mod stitch;
 
+use crate::settings::{int, num, Field};
 use crate::geom::tolerance::UNITS_PER_MM;
 use crate::geom::{DVec2, Feature, Mesh, Polygon, Toolpath, Pass};
 use i_overlay::i_shape::int::shape::{IntShape, IntShapes};
@@ -132,15 +133,12 @@ pub enum Error {
     /// The mesh has no triangles.
     #[error("the mesh is empty; load a mesh with at least one triangle")]
     EmptyMesh,
-    /// An option is unusable (the design validator normally catches these first).
-    #[error("{field} = {value} is not usable: {fix}")]
-    BadOption {
-        /// Option name.
-        field: &'static str,
-        /// Its value.
-        value: f64,
-        /// Allowed range / remedy.
-        fix: String,
+    /// Options outside the ranges of [`FIELDS`] (every one listed; the design validator
+    /// normally reports these first, with their design paths).
+    #[error("{}", crate::settings::describe(problems))]
+    BadOptions {
+        /// Each value out of range, with the allowed range.
+        problems: Vec<crate::settings::Problem>,
     },
     /// The mesh lies below the plate or is too tall for the layer count limit.
     #[error("the mesh would need {layers} layers (limit {limit}); raise layer_height_mm or scale the mesh down")]
@@ -152,31 +150,24 @@ pub enum Error {
     },
 }
 
-/// Checks every option against its usable range.
+/// Checks every option against [`FIELDS`], the ranges the design's form shows.
 fn validate(o: &Options) -> Result<(), Error> {
-    fn range(field: &'static str, value: f64, lo: f64, hi: f64, lo_open: bool) -> Result<(), Error> {
-        let ok = value.is_finite() && value <= hi && if lo_open { value > lo } else { value >= lo };
-        if ok {
-            Ok(())
-        } else {
-            let fix = if lo_open {
-                format!("use a value greater than {lo} and at most {hi}")
-            } else {
-                format!("use a value from {lo} to {hi}")
-            };
-            Err(Error::BadOption { field, value, fix })
-        }
-    }
-    range("first_layer_height_mm", o.first_layer_height_mm, 0.01, 10.0, false)?;
-    range("layer_height_mm", o.layer_height_mm, 0.01, 10.0, false)?;
-    range("perimeters", o.perimeters as f64, 0.0, 100.0, false)?;
-    range("line_width_mm", o.line_width_mm, 0.05, 10.0, false)?;
-    range("infill_density", o.infill_density, 0.0, 1.0, false)?;
-    range("infill_angle_deg", o.infill_angle_deg, -360.0, 360.0, false)?;
-    range("solid_layers", o.solid_layers as f64, 0.0, 1000.0, false)?;
-    range("gap_closing_mm", o.gap_closing_mm, 0.0, 10.0, false)?;
-    Ok(())
+    let problems = crate::settings::check(o, FIELDS, "");
+    if problems.is_empty() { Ok(()) } else { Err(Error::BadOptions { problems }) }
 }
+
+/// Rows of [`Options`] (paths relative to the options): ranges, units, help, shared by the
+/// design's form and [`slice`]'s own check.
+pub const FIELDS: &[Field] = &[
+    num("first_layer_height_mm", "Slicing", "First layer height", "mm", 0.01, 2.0, 0.01, "Thicker first layers stick better."),
+    num("layer_height_mm", "Slicing", "Layer height", "mm", 0.01, 2.0, 0.01, "LT in GIPPO equation 4."),
+    int("perimeters", "Slicing", "Perimeters", 0.0, 50.0, "Loops around each region."),
+    num("line_width_mm", "Slicing", "Line width", "mm", 0.05, 5.0, 0.01, "Width of perimeters and infill."),
+    num("infill_density", "Slicing", "Infill density", "", 0.0, 1.0, 0.05, "0 = hollow, 1 = solid."),
+    num("infill_angle_deg", "Slicing", "Infill angle", "°", -360.0, 360.0, 1.0, "Odd layers add 90°."),
+    int("solid_layers", "Slicing", "Solid layers (top and bottom)", 0.0, 1000.0, ""),
+    num("gap_closing_mm", "Slicing", "Gap closing", "mm", 0.0, 5.0, 0.01, "Open contour ends closer than this are joined."),
+];
 
 /// Layer tops, heights and cutting heights for a mesh whose top is at `top` mm: layers are
 /// made while their middle is below `top`.

@@ -1,0 +1,241 @@
+//! Settings tables: one row per editable field with its unit, range and help.
+//!
+//! Each stage declares the rows of its own `Options` (paths relative to that struct) next to
+//! the struct, and checks its options against them ([`check`]); a job kind mounts its stages'
+//! rows under the design paths where their options live ([`mount`]). The page's form, the
+//! CLI's `--set` and the stage validators therefore read the same ranges from one place.
+
+use serde::Serialize;
+use serde_json::Value;
+
+/// How a field is edited.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Kind {
+    /// A real number.
+    Number,
+    /// A whole number.
+    Integer,
+    /// On/off.
+    Bool,
+    /// Free text (multi-line for G-code templates).
+    Text,
+    /// One of `choices`.
+    Choice,
+    /// Three numbers (X, Y, Z).
+    Vec3,
+    /// An optional block, present or absent (a checkbox); `default` is its JSON when switched on.
+    Section,
+}
+
+/// A condition on another field's value (paths relative to the same table).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct When {
+    /// Dotted path of the other field.
+    pub path: &'static str,
+    /// The value it must have (as written in JSON).
+    pub equals: &'static str,
+}
+
+/// One editable field, as a stage declares it (path relative to its options struct).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct Field {
+    /// Dotted path, relative to the table's struct.
+    pub path: &'static str,
+    /// Form section.
+    pub section: &'static str,
+    /// Label shown in the form.
+    pub label: &'static str,
+    /// Unit shown after the input ("" when none).
+    pub unit: &'static str,
+    /// Editor kind.
+    pub kind: Kind,
+    /// Smallest allowed value (numbers, each Vec3 component).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub min: Option<f64>,
+    /// Largest allowed value.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub max: Option<f64>,
+    /// Form step.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub step: Option<f64>,
+    /// Allowed values of a choice.
+    #[serde(skip_serializing_if = "<[_]>::is_empty")]
+    pub choices: &'static [&'static str],
+    /// Help text: one line of plain words.
+    pub doc: &'static str,
+    /// JSON value a [`Kind::Section`] takes when switched on.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub default: Option<&'static str>,
+    /// Shown only while another field has a given value.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub when: Option<When>,
+}
+
+/// A real number in `min..=max` with a form `step`.
+#[allow(clippy::too_many_arguments)] // a table row constructor: one argument per column
+pub const fn num(path: &'static str, section: &'static str, label: &'static str, unit: &'static str, min: f64, max: f64, step: f64, doc: &'static str) -> Field {
+    Field { path, section, label, unit, kind: Kind::Number, min: Some(min), max: Some(max), step: Some(step), choices: &[], doc, default: None, when: None }
+}
+/// A whole number in `min..=max`.
+pub const fn int(path: &'static str, section: &'static str, label: &'static str, min: f64, max: f64, doc: &'static str) -> Field {
+    Field { path, section, label, unit: "", kind: Kind::Integer, min: Some(min), max: Some(max), step: Some(1.0), choices: &[], doc, default: None, when: None }
+}
+/// A field without a numeric range (bool, text, choice, section).
+pub const fn other(path: &'static str, section: &'static str, label: &'static str, kind: Kind, choices: &'static [&'static str], doc: &'static str) -> Field {
+    Field { path, section, label, unit: "", kind, min: None, max: None, step: None, choices, doc, default: None, when: None }
+}
+/// Three numbers, each in `min..=max`.
+pub const fn vec3(path: &'static str, section: &'static str, label: &'static str, unit: &'static str, min: f64, max: f64, step: f64, doc: &'static str) -> Field {
+    Field { path, section, label, unit, kind: Kind::Vec3, min: Some(min), max: Some(max), step: Some(step), choices: &[], doc, default: None, when: None }
+}
+/// `f`, shown only while `path` equals `equals`.
+pub const fn when(mut f: Field, path: &'static str, equals: &'static str) -> Field {
+    f.when = Some(When { path, equals });
+    f
+}
+
+/// A row mounted at its place in the design (absolute dotted path), as the page and the
+/// validator see it.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Row {
+    /// Absolute dotted path in the design.
+    pub path: String,
+    /// The row.
+    #[serde(flatten)]
+    pub field: Field,
+    /// Absolute path of the `when` condition's field.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub when_path: Option<String>,
+    /// Only for this job kind.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub job: Option<&'static str>,
+}
+
+/// `fields` mounted under `prefix` (e.g. `job.slice`; empty for the root).
+pub fn mount(prefix: &str, fields: &[Field]) -> Vec<Row> {
+    let join = |p: &str| if prefix.is_empty() { p.to_string() } else if p.is_empty() { prefix.to_string() } else { format!("{prefix}.{p}") };
+    fields
+        .iter()
+        .map(|f| Row {
+            path: join(f.path),
+            field: *f,
+            // A leading `/` names a field from the design root (a material row that depends on
+            // the printer's flavour).
+            when_path: f.when.map(|w| w.path.strip_prefix('/').map_or_else(|| join(w.path), str::to_string)),
+            job: None,
+        })
+        .collect()
+}
+
+/// One problem found in a design or in a stage's options.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Problem {
+    /// Dotted field path, e.g. `printer.nozzle_diameter_mm`.
+    pub path: String,
+    /// What is wrong and what is allowed.
+    pub message: String,
+}
+
+/// The problems as one message, one per line (`path: message`).
+pub fn describe(problems: &[Problem]) -> String {
+    problems.iter().map(|p| if p.path.is_empty() { p.message.clone() } else { format!("{}: {}", p.path, p.message) }).collect::<Vec<_>>().join("\n")
+}
+
+/// Formats a limit the way people write it (`0.01`, `2`, `1e20`).
+pub fn fmt(x: f64) -> String {
+    if x.abs() >= 1e15 { format!("{x:e}") } else { format!("{x}") }
+}
+
+fn lookup<'a>(root: &'a Value, path: &str) -> Option<&'a Value> {
+    if path.is_empty() {
+        return Some(root);
+    }
+    path.split('.').try_fold(root, |v, key| v.get(key))
+}
+
+fn check_number(path: &str, v: f64, f: &Field, out: &mut Vec<Problem>) {
+    let (lo, hi) = (f.min.unwrap_or(f64::MIN), f.max.unwrap_or(f64::MAX));
+    if !v.is_finite() || v < lo || v > hi {
+        let unit = if f.unit.is_empty() { String::new() } else { format!(" {}", f.unit) };
+        let what = if f.kind == Kind::Integer { "a whole number" } else { "a number" };
+        out.push(Problem { path: path.to_string(), message: format!("{} is out of range: {} must be {what} from {} to {}{unit}", fmt(v), f.label, fmt(lo), fmt(hi)) });
+    } else if f.kind == Kind::Integer && v.fract() != 0.0 {
+        out.push(Problem { path: path.to_string(), message: format!("{} must be a whole number (got {})", f.label, fmt(v)) });
+    }
+}
+
+/// Range and choice checks of every row against `root` (absolute paths; absent fields are not
+/// checked: serde gives them their defaults).
+pub fn check_rows(root: &Value, rows: &[Row], out: &mut Vec<Problem>) {
+    for r in rows {
+        check_one(root, &r.path, &r.field, out);
+    }
+}
+
+/// Checks `value` (a stage's options serialised) against its own table; `prefix` is prepended
+/// to the paths in the problems.
+pub fn check<T: Serialize>(value: &T, fields: &[Field], prefix: &str) -> Vec<Problem> {
+    let mut out = Vec::new();
+    let Ok(root) = serde_json::to_value(value) else { return out };
+    for f in fields {
+        let Some(_) = lookup(&root, f.path) else { continue };
+        let mut local = Vec::new();
+        check_one(&root, f.path, f, &mut local);
+        for mut p in local {
+            if !prefix.is_empty() {
+                p.path = format!("{prefix}.{}", p.path);
+            }
+            out.push(p);
+        }
+    }
+    out
+}
+
+fn check_one(root: &Value, path: &str, f: &Field, out: &mut Vec<Problem>) {
+    let Some(v) = lookup(root, path) else { return };
+    match f.kind {
+        Kind::Number | Kind::Integer => {
+            if let Some(x) = v.as_f64() {
+                check_number(path, x, f, out);
+            }
+        }
+        Kind::Vec3 => {
+            if let Some(items) = v.as_array() {
+                for (i, x) in items.iter().enumerate() {
+                    if let Some(x) = x.as_f64() {
+                        check_number(&format!("{path}.{i}"), x, f, out);
+                    }
+                }
+            }
+        }
+        Kind::Choice => {
+            if let Some(s) = v.as_str() {
+                if !f.choices.is_empty() && !f.choices.contains(&s) {
+                    out.push(Problem { path: path.to_string(), message: format!("'{s}' is not one of {}", f.choices.join(", ")) });
+                }
+            }
+        }
+        _ => {}
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn mounted_rows_check_absolute_paths() {
+        const F: &[Field] = &[num("a", "S", "A", "mm", 0.0, 1.0, 0.1, ""), int("n", "S", "N", 0.0, 5.0, "")];
+        let rows = mount("job.x", F);
+        assert_eq!(rows[0].path, "job.x.a");
+        let root = serde_json::json!({"job": {"x": {"a": 2.0, "n": 1.5}}});
+        let mut out = Vec::new();
+        check_rows(&root, &rows, &mut out);
+        assert_eq!(out.len(), 2, "{out:?}");
+        assert!(out[0].message.contains("0 to 1 mm"), "{}", out[0].message);
+        assert!(out[1].message.contains("whole number"), "{}", out[1].message);
+        let local = check(&serde_json::json!({"a": -1.0}), F, "job.x");
+        assert_eq!(local[0].path, "job.x.a");
+    }
+}

@@ -1,7 +1,8 @@
 //! Benchmark workloads, shared by `weft bench` (native timing) and the browser worker
 //! (timed with `performance.now()` in `tests/e2e/bench.mjs`), so both measure the same work.
 
-use crate::design::{Design, Input, Job};
+use crate::design::{Design, Input};
+use crate::jobs::{lattice::LatticeJob, slice::SliceJob};
 use crate::geom::shapes::uv_sphere;
 use crate::geom::Mesh;
 
@@ -16,13 +17,10 @@ pub fn bench_mesh(triangles: usize) -> Mesh {
 
 /// The slicing benchmark's design: the default printer, 0.2 mm layers, slicing `bench.stl`.
 pub fn bench_design() -> Design {
-    let mut d = Design { name: "bench".into(), ..Design::default() };
-    d.job.set_input(Input::File { name: "bench.stl".into(), embedded: None });
-    if let Job::Slice(job) = &mut d.job {
-        job.slice.layer_height_mm = 0.2;
-        job.slice.first_layer_height_mm = 0.2;
-    }
-    d
+    let mut job = SliceJob { input: Input::File { name: "bench.stl".into(), embedded: None }, ..SliceJob::default() };
+    job.slice.layer_height_mm = 0.2;
+    job.slice.first_layer_height_mm = 0.2;
+    Design { name: "bench".into(), job: crate::design::Job::new("slice", &job), ..Design::default() }
 }
 
 /// G-code of at least `bytes` bytes: `seed` repeated.
@@ -74,7 +72,6 @@ pub struct LatticeRunStats {
 impl LatticeBench {
     /// Prepares a workload by name: builds the design and generates its first layer's strokes.
     pub fn prepare(which: &str) -> Result<LatticeBench, String> {
-        use crate::design::Job;
         use crate::paths::Method;
         let (name, json, euler_square) = match which {
             "honeycomb-10mm" | "honeycomb" => ("honeycomb-10mm", HONEYCOMB_10MM_JSON, None),
@@ -83,7 +80,7 @@ impl LatticeBench {
             other => return Err(format!("unknown lattice workload '{other}' (one of {})", LATTICE_WORKLOADS.join(", "))),
         };
         let mut design = Design::from_json(name, json).map_err(|e| e.to_string())?;
-        let Job::Lattice(job) = &mut design.job else { return Err(format!("{name}: not a lattice design")) };
+        let mut job: LatticeJob = design.job.settings().ok_or_else(|| format!("{name}: not a lattice design"))?;
         job.lattice.layers = 1;
         job.paths.iterations = 500;
         job.paths.method = Method::GippoMax;
@@ -92,8 +89,8 @@ impl LatticeBench {
             job.paths.method = Method::Euler;
         }
         let options = job.paths.clone();
-        let (mut strokes, _) = crate::pipeline::lattice_strokes(&design, &Default::default(), &mut |_, _| {})
-            .map_err(|e| e.to_string())?;
+        design.job = crate::design::Job::new("lattice", &job);
+        let mut strokes = crate::jobs::lattice::lattice_strokes(&design, &Default::default()).map_err(|e| e.to_string())?;
         strokes.truncate(1);
         Ok(LatticeBench { name, strokes, options, line_width_mm: design.printer.nozzle_diameter_mm, seed: design.seed })
     }
@@ -132,7 +129,7 @@ pub use native::{run_all, run_lattice};
 #[cfg(not(target_arch = "wasm32"))]
 mod native {
     use super::*;
-    use crate::pipeline::{self, Files, RunOptions, RunOutput, Stage};
+    use crate::pipeline::{self, Files, RunOptions, RunOutput};
     use std::time::Instant;
 
     /// Analyzer passes per configuration; the fastest is reported (the machine may be shared).
@@ -165,7 +162,7 @@ mod native {
     }
 
     struct Timed {
-        stages: Vec<(Stage, f64)>,
+        stages: Vec<(String, f64)>,
         total: f64,
         peak_mb: Option<f64>,
         peak_is_job: bool,
@@ -175,13 +172,12 @@ mod native {
         let design = bench_design();
         let peak_is_job = reset_peak_rss();
         let mut stage_start = Instant::now();
-        let mut current = Stage::Import;
-        let mut stages: Vec<(Stage, f64)> = Vec::new();
+        let mut current = String::from("import");
+        let mut stages: Vec<(String, f64)> = Vec::new();
         let t = Instant::now();
         let output = pipeline::run(&design, files, &RunOptions { collect_preview }, &mut |stage, _| {
             if stage != current {
-                stages.push((current, stage_start.elapsed().as_secs_f64()));
-                current = stage;
+                stages.push((std::mem::replace(&mut current, stage.to_string()), stage_start.elapsed().as_secs_f64()));
                 stage_start = Instant::now();
             }
         })
@@ -236,7 +232,7 @@ mod native {
         ));
         out.push_str("| stage | seconds (no preview, CLI) | seconds (with preview, as the page) |\n|---|---|---|\n");
         for ((stage, a), (_, b)) in plain.stages.iter().zip(&preview.stages) {
-            out.push_str(&format!("| {} | {a:.3} | {b:.3} |\n", stage.name()));
+            out.push_str(&format!("| {} | {a:.3} | {b:.3} |\n", stage));
         }
         out.push_str(&format!("| **total** | **{:.3}** | **{:.3}** |\n\n", plain.total, preview.total));
         let rss = |t: &Timed| match t.peak_mb {

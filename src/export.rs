@@ -8,7 +8,8 @@
 //! an angle overlap instead of leaving a notch. Boxes are not unioned (slicers union the
 //! overlapping volumes themselves).
 
-use crate::design::{Design, Job};
+use crate::design::Design;
+use crate::jobs::lattice::LatticeJob;
 use crate::geom::Mesh;
 use crate::pipeline::{self, Files};
 
@@ -29,7 +30,7 @@ pub struct Exported {
 pub enum Error {
     /// Not a lattice job.
     #[error("export-stl takes a lattice design, this is a {0} job")]
-    NotLattice(&'static str),
+    NotLattice(String),
     /// Generating the lattice failed.
     #[error(transparent)]
     Pipeline(#[from] pipeline::Error),
@@ -37,8 +38,8 @@ pub enum Error {
 
 /// Builds the STL of `design`'s struts.
 pub fn lattice_stl(design: &Design) -> Result<Exported, Error> {
-    let Job::Lattice(job) = &design.job else { return Err(Error::NotLattice(design.job.kind())) };
-    let (layers, _) = pipeline::lattice_strokes(design, &Files::new(), &mut |_, _| {})?;
+    let job: LatticeJob = design.job.settings().ok_or_else(|| Error::NotLattice(design.job.kind().to_string()))?;
+    let layers = crate::jobs::lattice::lattice_strokes(design, &Files::new())?;
     let w = design.printer.nozzle_diameter_mm;
     let mut mesh = Mesh::default();
     let mut struts = 0;

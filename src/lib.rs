@@ -30,6 +30,8 @@ pub mod slice;
 pub mod design;
 pub mod pipeline;
 pub mod settings;
+pub mod jobs;
+pub mod report;
 
 pub use design::Design;
 pub use pipeline::{run, RunOptions, RunOutput};

@@ -5,7 +5,8 @@ use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use weft::design::{share, Design, Input};
-use weft::pipeline::{self, Files, RunOptions, Stage};
+use weft::jobs::Registry;
+use weft::pipeline::{self, Files, RunOptions};
 
 #[derive(Parser)]
 #[command(
@@ -16,6 +17,7 @@ use weft::pipeline::{self, Files, RunOptions, Stage};
   weft new > cube.json                               write a default design (20 mm cube)
   weft run cube.json --out cube.gcode                slice it
   weft run cube.json --input part.stl --out part.gcode --report part.json
+  weft run dome.json --input surface=dome.stl        fill a named input slot (weft jobs lists them)
   weft run cube.json --out dense.gcode --set job.slice.infill_density=0.5 --set name=dense
   weft analyze part.gcode --json                     measure any slicer's G-code
   weft share cube.json                               print a share-link fragment
@@ -38,9 +40,10 @@ enum Command {
         /// Also write the run report (JSON) here.
         #[arg(long)]
         report: Option<PathBuf>,
-        /// Mesh file replacing the design's main input.
-        #[arg(long)]
-        input: Option<PathBuf>,
+        /// An input file for a slot of the job: SLOT=FILE (e.g. surface=dome.stl), or FILE for
+        /// the job's first slot (repeatable). `weft slots` lists each job kind's slots.
+        #[arg(long, value_name = "[SLOT=]FILE")]
+        input: Vec<String>,
         /// Override a design field: PATH=VALUE (repeatable), e.g. job.slice.layer_height_mm=0.1.
         #[arg(long = "set", value_name = "PATH=VALUE")]
         set: Vec<String>,
@@ -62,10 +65,12 @@ enum Command {
     Share {
         /// The design (JSON).
         design: PathBuf,
-        /// The mesh the design slices (embedded when small enough).
-        #[arg(long)]
-        input: Option<PathBuf>,
+        /// Input files, as for `run` (embedded when small enough).
+        #[arg(long, value_name = "[SLOT=]FILE")]
+        input: Vec<String>,
     },
+    /// List the job kinds with their stages and input slots.
+    Jobs,
     /// Run the benchmarks (release build recommended).
     Bench {
         /// Triangles in the slicing benchmark mesh.
@@ -110,11 +115,40 @@ fn load_design(arg: &str) -> Result<Design, String> {
     Design::from_json(&file_name(path), &text).map_err(|e| e.to_string())
 }
 
+/// Reads each `--input [SLOT=]FILE`, puts it in its slot of the design and in `files`.
+fn apply_inputs(design: &mut Design, inputs: &[String], files: &mut Files) -> Result<(), String> {
+    let registry = Registry::builtin();
+    for arg in inputs {
+        let kind = registry.get(design.job.kind()).ok_or_else(|| format!("unknown job kind '{}'", design.job.kind()))?;
+        let (slot, path) = match arg.split_once('=') {
+            Some((slot, path)) if kind.slots().iter().any(|s| s.name == slot) => (slot.to_string(), PathBuf::from(path)),
+            Some((slot, _)) if !Path::new(arg).exists() => {
+                let names: Vec<&str> = kind.slots().iter().map(|s| s.name).collect();
+                return Err(format!(
+                    "--input {arg}: a {} job has no input slot '{slot}'; its slots are {}",
+                    design.job.kind(),
+                    if names.is_empty() { "none".into() } else { names.join(", ") }
+                ));
+            }
+            _ => {
+                let first = kind.slots().first().ok_or_else(|| format!("--input: a {} job takes no input file", design.job.kind()))?;
+                (first.name.to_string(), PathBuf::from(arg))
+            }
+        };
+        let name = file_name(&path);
+        files.insert(name.clone(), read(&path)?);
+        *design = design
+            .with_slot_input(&registry, &slot, Input::File { name, embedded: None })
+            .map_err(|e| format!("--input {arg}: {e}"))?;
+    }
+    Ok(())
+}
+
 fn cmd_run(
     design: &str,
     out: Option<PathBuf>,
     report: Option<PathBuf>,
-    input: Option<PathBuf>,
+    inputs: &[String],
     set: &[String],
     quiet: bool,
 ) -> Result<(), String> {
@@ -123,25 +157,19 @@ fn cmd_run(
         design = design.with_overrides(set).map_err(|e| e.to_string())?;
     }
     let mut files = Files::new();
-    if let Some(path) = input {
-        let name = file_name(&path);
-        files.insert(name.clone(), read(&path)?);
-        let kind = design.job.kind();
-        let slot = design.job.input_mut().ok_or_else(|| format!("--input: a {kind} job takes no input file"))?;
-        *slot = Input::File { name, embedded: None };
-    }
+    apply_inputs(&mut design, inputs, &mut files)?;
     let show = !quiet && std::io::stderr().is_terminal();
-    let mut last = (Stage::Import, -1i32);
-    let mut progress = |stage: Stage, f: f32| {
+    let mut last = (String::new(), -1i32);
+    let mut progress = |stage: &str, f: f32| {
         let pct = (f * 100.0) as i32;
         if show && (stage != last.0 || pct / 10 != last.1 / 10) {
-            eprint!("\r{:<8} {:>3}%", stage.name(), pct);
-            last = (stage, pct);
+            eprint!("\r{:<10} {:>3}%", stage, pct);
+            last = (stage.to_string(), pct);
         }
     };
     let result = pipeline::run(&design, &files, &RunOptions::default(), &mut progress);
     if show {
-        eprint!("\r              \r");
+        eprint!("\r                \r");
     }
     let output = result.map_err(|e| e.to_string())?;
     let out = out.unwrap_or_else(|| PathBuf::from(format!("{}.{}", design.name, design.printer.flavor.file_extension())));
@@ -191,19 +219,12 @@ fn cmd_analyze(file: &Path, json: bool) -> Result<(), String> {
     Ok(())
 }
 
-fn cmd_share(design: &Path, input: Option<PathBuf>) -> Result<(), String> {
+fn cmd_share(design: &Path, inputs: &[String]) -> Result<(), String> {
     let mut d = load_design(&design.display().to_string())?;
-    let bytes = match input {
-        Some(p) => {
-            let b = read(&p)?;
-            if let Some(slot) = d.job.input_mut() {
-                *slot = Input::File { name: file_name(&p), embedded: None };
-            }
-            Some(b)
-        }
-        None => None,
-    };
-    let link = share::encode(&d, bytes.as_deref());
+    let mut files = Files::new();
+    apply_inputs(&mut d, inputs, &mut files)?;
+    let list: Vec<(&str, &[u8])> = files.names().filter_map(|n| files.get(n).map(|b| (n, b))).collect();
+    let link = share::encode(&d, &list);
     println!("{}", link.fragment);
     if !link.note.is_empty() {
         eprintln!("note: {}", link.note);
@@ -211,16 +232,31 @@ fn cmd_share(design: &Path, input: Option<PathBuf>) -> Result<(), String> {
     Ok(())
 }
 
+fn cmd_jobs() {
+    for k in Registry::builtin().kinds() {
+        println!("{:<10} {}", k.name(), k.doc());
+        let stages: Vec<&str> = k.stages().iter().map(|s| s.name).collect();
+        println!("  stages: {} → gcode → analyze", stages.join(" → "));
+        for s in k.slots() {
+            println!("  --input {}=FILE   {} ({}): {}", s.name, s.label, s.kind.accept().join(" "), s.doc);
+        }
+    }
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
-        Command::Run { design, out, report, input, set, quiet } => cmd_run(&design, out, report, input, &set, quiet),
+        Command::Run { design, out, report, input, set, quiet } => cmd_run(&design, out, report, &input, &set, quiet),
         Command::Analyze { file, json } => cmd_analyze(&file, json),
         Command::New => {
             print!("{}", Design::default().to_json_pretty());
             Ok(())
         }
-        Command::Share { design, input } => cmd_share(&design, input),
+        Command::Share { design, input } => cmd_share(&design, &input),
+        Command::Jobs => {
+            cmd_jobs();
+            Ok(())
+        }
         Command::Bench { triangles, gcode_mb, lattice } => {
             let all = if lattice { Ok(String::new()) } else { weft::bench::run_all(triangles, gcode_mb) };
             all.and_then(|a| weft::bench::run_lattice().map(|l| println!("{a}\n{l}")))

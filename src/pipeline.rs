@@ -1,57 +1,269 @@
-//! Runs a [`Design`] end to end: resolve input → import → slice → G-code → analyze.
+//! Runs a [`Design`]: its job kind's stages ([`crate::jobs`]), then G-code and analysis.
 //!
-//! The CLI and the wasm binding both call [`run`]; nothing else orchestrates stages.
+//! The CLI and the wasm binding both call [`run`] (or [`run_in`] with a cache and a
+//! registry); nothing else orchestrates stages. Every stage goes through [`Ctx::stage`], which
+//! keys its output by a hash of the design parts the stage reads and of its upstream keys: a
+//! [`Cache`] kept between runs (the page's worker keeps one) then recomputes only the stages
+//! whose inputs changed — a temperature edit re-runs only G-code and analysis.
 
 use crate::analyze::{self, Preview};
-use crate::design::{share, Design, Input, Job, LatticeJob};
-use crate::geom::{StrokeLayer, Toolpath};
-use crate::lattice::{self, LatticeReport};
-use crate::nonplanar::{self, ProjectionReport};
-use crate::paths::{self, PathsReport};
+use crate::design::{share, Design, Input};
 use crate::gcode::{self, GcodeStats};
-use crate::geom::{DVec3, Mesh};
+use crate::geom::{DVec3, Mesh, Toolpath};
 use crate::import::{self, ImportReport};
-use crate::slice::{self, SliceReport};
+use crate::jobs::{Inspection, Product, Registry};
+use crate::report::StageReport;
 use serde::Serialize;
+use std::any::Any;
 use std::collections::BTreeMap;
+use std::sync::Arc;
 
-/// Pipeline stages, in order, for progress reports.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Stage {
-    /// Reading the input mesh.
-    Import,
-    /// Slicing and filling layers.
-    Slice,
-    /// Generating the lattice of every layer.
-    Lattice,
-    /// Optimising print paths.
-    Paths,
-    /// Projecting onto a non-planar surface.
-    NonPlanar,
-    /// Writing G-code.
-    Gcode,
-    /// Measuring the G-code (and building the preview).
-    Analyze,
+/// A loaded file and the hash of its bytes (computed once, for cache keys).
+#[derive(Clone, Debug)]
+struct FileEntry {
+    bytes: Arc<Vec<u8>>,
+    hash: Key,
 }
 
-impl Stage {
-    /// Lower-case name shown in progress bars.
-    pub fn name(self) -> &'static str {
-        match self {
-            Stage::Import => "import",
-            Stage::Slice => "slice",
-            Stage::Lattice => "lattice",
-            Stage::Paths => "paths",
-            Stage::NonPlanar => "nonplanar",
-            Stage::Gcode => "gcode",
-            Stage::Analyze => "analyze",
-        }
+/// Files available to a run, by name (uploaded on the page, `--input` on the CLI). Each is
+/// stored once and hashed once; stages parse them lazily through [`Ctx::mesh`].
+#[derive(Clone, Debug, Default)]
+pub struct Files {
+    map: BTreeMap<String, FileEntry>,
+}
+
+impl Files {
+    /// No files.
+    pub fn new() -> Files {
+        Files::default()
+    }
+
+    /// Adds (or replaces) `name`.
+    pub fn insert(&mut self, name: String, bytes: Vec<u8>) {
+        let hash = Key::of_bytes(&bytes);
+        self.map.insert(name, FileEntry { bytes: Arc::new(bytes), hash });
+    }
+
+    /// Removes `name`; whether it was there.
+    pub fn remove(&mut self, name: &str) -> bool {
+        self.map.remove(name).is_some()
+    }
+
+    /// The bytes of `name`.
+    pub fn get(&self, name: &str) -> Option<&[u8]> {
+        self.map.get(name).map(|e| e.bytes.as_slice())
+    }
+
+    /// Whether `name` is loaded.
+    pub fn contains(&self, name: &str) -> bool {
+        self.map.contains_key(name)
+    }
+
+    /// Names, sorted.
+    pub fn names(&self) -> impl Iterator<Item = &str> {
+        self.map.keys().map(String::as_str)
+    }
+
+    fn hash(&self, name: &str) -> Option<Key> {
+        self.map.get(name).map(|e| e.hash)
     }
 }
 
-/// Files available to a run, by name (uploaded on the page, `--input` on the CLI).
-pub type Files = BTreeMap<String, Vec<u8>>;
+/// A stage output's identity: a 128-bit hash of what it was computed from.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub struct Key(u64, u64);
+
+impl Key {
+    /// Hash of `bytes` (two independent 64-bit multiply–rotate streams, 8 bytes at a time;
+    /// deterministic on every target, fast enough for 200 MB inputs).
+    pub fn of_bytes(bytes: &[u8]) -> Key {
+        const K1: u64 = 0x9E37_79B9_7F4A_7C15;
+        const K2: u64 = 0xC2B2_AE3D_27D4_EB4F;
+        let (mut a, mut b) = (0x243F_6A88_85A3_08D3u64 ^ bytes.len() as u64, 0x1319_8A2E_0370_7344u64);
+        let mut chunks = bytes.chunks_exact(8);
+        for c in &mut chunks {
+            let w = u64::from_le_bytes([c[0], c[1], c[2], c[3], c[4], c[5], c[6], c[7]]);
+            a = (a ^ w).wrapping_mul(K1).rotate_left(29);
+            b = (b ^ w.rotate_left(17)).wrapping_mul(K2).rotate_left(31);
+        }
+        for &byte in chunks.remainder() {
+            a = (a ^ byte as u64).wrapping_mul(K1).rotate_left(29);
+            b = (b ^ byte as u64).wrapping_mul(K2).rotate_left(31);
+        }
+        Key(fmix(a ^ b.rotate_left(32)), fmix(b ^ a))
+    }
+
+    /// Hash of a stage name, its design parts (as JSON) and its upstream keys.
+    pub fn of(stage: &str, parts: &impl Serialize, upstream: &[Key]) -> Key {
+        let mut bytes = stage.as_bytes().to_vec();
+        bytes.push(0);
+        bytes.extend(serde_json::to_vec(parts).unwrap_or_default());
+        for k in upstream {
+            bytes.extend(k.0.to_le_bytes());
+            bytes.extend(k.1.to_le_bytes());
+        }
+        Key::of_bytes(&bytes)
+    }
+}
+
+fn fmix(mut z: u64) -> u64 {
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^ (z >> 31)
+}
+
+struct Entry {
+    key: Key,
+    value: Arc<dyn Any + Send + Sync>,
+    report: Option<StageReport>,
+}
+
+/// Stage outputs kept between runs: the newest output of each stage (by cache id), with the
+/// key it was computed for. A run reuses an entry only when its key matches exactly.
+#[derive(Default)]
+pub struct Cache {
+    entries: BTreeMap<String, Entry>,
+    enabled: bool,
+}
+
+impl Cache {
+    /// A cache that keeps outputs between runs (the page's worker).
+    pub fn new() -> Cache {
+        Cache { entries: BTreeMap::new(), enabled: true }
+    }
+
+    /// No caching: every stage runs and nothing is kept after the run (the CLI, one run).
+    pub fn disabled() -> Cache {
+        Cache::default()
+    }
+
+    /// Drops every output.
+    pub fn clear(&mut self) {
+        self.entries.clear();
+    }
+
+    /// Cache ids held (for tests and diagnostics).
+    pub fn ids(&self) -> Vec<String> {
+        self.entries.keys().cloned().collect()
+    }
+}
+
+/// A stage's output with its key (pass the key on as the upstream of the next stage).
+pub struct Out<T> {
+    /// The output (shared with the cache).
+    pub value: Arc<T>,
+    /// What it was computed from.
+    pub key: Key,
+}
+
+impl<T> Clone for Out<T> {
+    fn clone(&self) -> Self {
+        Out { value: self.value.clone(), key: self.key }
+    }
+}
+
+impl<T> std::ops::Deref for Out<T> {
+    type Target = T;
+    fn deref(&self) -> &T {
+        &self.value
+    }
+}
+
+/// What a job kind's run sees: the design, the files, progress, the stage cache and the
+/// reports so far.
+pub struct Ctx<'a> {
+    /// The design being run.
+    pub design: &'a Design,
+    /// Loaded files.
+    pub files: &'a Files,
+    cache: &'a mut Cache,
+    progress: &'a mut dyn FnMut(&str, f32),
+    /// Stage reports, in run order.
+    pub reports: Vec<StageReport>,
+    /// Cancellation: a stage boundary checks it ([`Error::Cancelled`]).
+    pub cancel: Option<&'a dyn Fn() -> bool>,
+}
+
+impl<'a> Ctx<'a> {
+    /// A context over `design` and `files` with `cache`.
+    pub fn new(design: &'a Design, files: &'a Files, cache: &'a mut Cache, progress: &'a mut dyn FnMut(&str, f32)) -> Ctx<'a> {
+        Ctx { design, files, cache, progress, reports: Vec::new(), cancel: None }
+    }
+
+    /// Runs stage `name` (cache id `id`, usually the name) unless the cache holds its output
+    /// for the same key: `parts` are the design parts it reads, `upstream` the keys of the
+    /// outputs it reads. `f` gets a progress callback (0..1 within the stage) and returns the
+    /// output and its report (pushed to [`Ctx::reports`], marked `cached` when reused).
+    pub fn stage<T, P, F>(&mut self, name: &str, id: &str, parts: &P, upstream: &[Key], f: F) -> Result<Out<T>, Error>
+    where
+        T: Any + Send + Sync,
+        P: Serialize + ?Sized,
+        F: FnOnce(&mut dyn FnMut(f32)) -> Result<(T, Option<StageReport>), Error>,
+    {
+        if self.cancel.is_some_and(|c| c()) {
+            return Err(Error::Cancelled);
+        }
+        let key = Key::of(id, &parts, upstream);
+        if let Some(e) = self.cache.entries.get(id) {
+            if e.key == key {
+                if let Ok(value) = e.value.clone().downcast::<T>() {
+                    if let Some(mut r) = e.report.clone() {
+                        r.cached = true;
+                        self.reports.push(r);
+                    }
+                    (self.progress)(name, 1.0);
+                    return Ok(Out { value, key });
+                }
+            }
+        }
+        // Free the stale output first: peak memory is then one copy, not two.
+        self.cache.entries.remove(id);
+        (self.progress)(name, 0.0);
+        let progress = &mut *self.progress;
+        let (value, report) = f(&mut |x| progress(name, x))?;
+        (self.progress)(name, 1.0);
+        let value = Arc::new(value);
+        if let Some(r) = &report {
+            self.reports.push(r.clone());
+        }
+        if self.cache.enabled {
+            self.cache.entries.insert(id.to_string(), Entry { key, value: value.clone(), report });
+        }
+        Ok(Out { value, key })
+    }
+
+    /// The mesh of `input` (a slot's [`Input`]), imported once per file content and placed on
+    /// the plate: XY centred on 0, lowest point at Z = 0. `slot` names the slot for messages
+    /// and for the cache id.
+    pub fn mesh(&mut self, slot: &str, input: &Input) -> Result<Out<Mesh>, Error> {
+        let (parts, file_key) = match input {
+            Input::Builtin(_) => (serde_json::to_value(input).unwrap_or_default(), None),
+            Input::File { name, embedded } => match self.files.hash(name) {
+                Some(h) => (serde_json::json!({ "file": name }), Some(h)),
+                None if embedded.is_some() => (serde_json::to_value(input).unwrap_or_default(), None),
+                None => return Err(Error::MissingInput { name: name.clone(), slot: slot.to_string() }),
+            },
+            Input::Files(_) => return Err(Error::NoInput(format!("the {slot} input takes one mesh file, not several"))),
+        };
+        let files = self.files;
+        let id = format!("import:{slot}");
+        let upstream: Vec<Key> = file_key.into_iter().collect();
+        self.stage("import", &id, &parts, &upstream, |_| {
+            let (mesh, report) = load_input(input, files)?;
+            let stage = report.as_ref().map(|r| {
+                StageReport::new("import", "Reading the mesh", r)
+                    .metric("triangles", "Triangles", r.triangles as f64, "", "Facets in the mesh after repairs.")
+                    .metric("open_edges", "Open edges", r.open_edges as f64, "", "Edges with one facet: holes in the surface (0 for a closed, printable mesh).")
+            });
+            Ok((mesh, stage))
+        })
+    }
+
+    /// Reports progress of a stage that does not go through [`Ctx::stage`].
+    pub fn progress(&mut self, stage: &str, fraction: f32) {
+        (self.progress)(stage, fraction);
+    }
+}
 
 /// Run options that are not part of the design.
 #[derive(Clone, Debug, Default)]
@@ -60,28 +272,16 @@ pub struct RunOptions {
     pub collect_preview: bool,
 }
 
-/// Everything a run reports (`weft run --report`).
+/// Everything a run reports (`weft run --report`): the stages' reports in run order, the
+/// writer's totals and the analyzer's reading of the G-code.
 #[derive(Clone, Debug, Serialize)]
 pub struct RunReport {
     /// Design name.
     pub name: String,
     /// Job kind.
-    pub job: &'static str,
-    /// Import repairs, when the input was a file.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub import: Option<ImportReport>,
-    /// Slicer repairs and counts.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub slice: Option<SliceReport>,
-    /// Lattice generation.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub lattice: Option<LatticeReport>,
-    /// Path optimisation per layer (scores, bounds, classes).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub paths: Option<PathsReport>,
-    /// Non-planar projection.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub nonplanar: Option<ProjectionReport>,
+    pub job: String,
+    /// Each stage's report, in run order.
+    pub stages: Vec<StageReport>,
     /// Writer totals.
     pub gcode: GcodeStats,
     /// The analyzer's reading of the written G-code.
@@ -89,19 +289,14 @@ pub struct RunReport {
 }
 
 impl RunReport {
-    /// An empty report for `design`, filled stage by stage.
-    fn new(design: &Design) -> RunReport {
-        RunReport {
-            name: design.name.clone(),
-            job: design.job.kind(),
-            import: None,
-            slice: None,
-            lattice: None,
-            paths: None,
-            nonplanar: None,
-            gcode: GcodeStats::default(),
-            analysis: analyze::Report::default(),
-        }
+    /// The raw typed report of stage `name` (its `data`), if it ran.
+    pub fn stage_data(&self, name: &str) -> Option<&serde_json::Value> {
+        self.stages.iter().find(|s| s.stage == name).map(|s| &s.data)
+    }
+
+    /// The typed report of stage `name`.
+    pub fn stage<T: serde::de::DeserializeOwned>(&self, name: &str) -> Option<T> {
+        self.stage_data(name).and_then(|v| serde_json::from_value(v.clone()).ok())
     }
 }
 
@@ -109,52 +304,80 @@ impl RunReport {
 #[derive(Clone, Debug)]
 pub struct RunOutput {
     /// The G-code.
-    pub gcode: String,
+    pub gcode: Arc<String>,
     /// The report.
     pub report: RunReport,
     /// Preview buffers, when asked for.
-    pub preview: Option<Preview>,
+    pub preview: Option<Arc<Preview>>,
 }
 
 /// Why a run failed.
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
     /// The design names a file that was not given.
-    #[error("the design slices '{name}', which is not loaded; load {name} (drop it on the page, or pass --input {name})")]
+    #[error("the design's {slot} input is '{name}', which is not loaded; load {name} (drop it on the page, or pass --input {slot}={name})")]
     MissingInput {
         /// File name.
         name: String,
+        /// The slot.
+        slot: String,
     },
-    /// The embedded mesh in a share link is damaged.
-    #[error("the mesh embedded in the design is damaged: {0}")]
+    /// The embedded file in a share link is damaged.
+    #[error("the file embedded in the design is damaged: {0}")]
     Embedded(share::Error),
     /// Import failed.
     #[error(transparent)]
     Import(#[from] import::Error),
-    /// Slicing failed.
-    #[error("slicing: {0}")]
-    Slice(#[from] slice::Error),
-    /// Lattice generation failed.
-    #[error("lattice: {0}")]
-    Lattice(#[from] lattice::Error),
-    /// Path optimisation failed.
-    #[error("paths: {0}")]
-    Paths(#[from] paths::Error),
-    /// Projection failed.
-    #[error("non-planar: {0}")]
-    NonPlanar(#[from] nonplanar::Error),
+    /// A stage of the job failed (`stage` says which; `source` is the stage's own error).
+    #[error("{stage}: {source}")]
+    Stage {
+        /// Stage name as the user reads it (`slicing`, `lattice`).
+        stage: &'static str,
+        /// The stage's error.
+        source: Box<dyn std::error::Error + Send + Sync>,
+    },
     /// A job that needs an input has none.
     #[error("{0}")]
     NoInput(String),
+    /// The job settings do not fit the kind (a bug: designs are normalised when read).
+    #[error("the job settings cannot be read: {0}")]
+    BadJob(String),
+    /// The design's job kind is not known to this build.
+    #[error("unknown job kind '{kind}'; this weft knows {known}")]
+    UnknownKind {
+        /// The kind.
+        kind: String,
+        /// The known ones.
+        known: String,
+    },
+    /// An `inspect` request names a view the job does not have.
+    #[error("a {job} job has no view '{view}'")]
+    UnknownView {
+        /// The view.
+        view: String,
+        /// The job kind.
+        job: &'static str,
+    },
     /// Writing failed.
     #[error("G-code: {0}")]
     Gcode(#[from] gcode::Error),
     /// Reading back failed (a bug: weft's own G-code must always analyse).
     #[error("analysing the written G-code: {0}")]
     Analyze(#[from] analyze::Error),
+    /// Cancelled at a stage boundary.
+    #[error("cancelled")]
+    Cancelled,
 }
 
-/// Resolves an input to a mesh placed on the plate: XY centred on 0, lowest point at Z = 0.
+impl Error {
+    /// Wraps a stage's own error.
+    pub fn stage(stage: &'static str, source: impl std::error::Error + Send + Sync + 'static) -> Error {
+        Error::Stage { stage, source: Box::new(source) }
+    }
+}
+
+/// Resolves a mesh input: the built-in shape, or the file (loaded, or embedded in a share
+/// link) imported; placed on the plate: XY centred on 0, lowest point at Z = 0.
 pub fn load_input(input: &Input, files: &Files) -> Result<(Mesh, Option<ImportReport>), Error> {
     let (mut mesh, report) = match input {
         Input::Builtin(shape) => (shape.mesh(), None),
@@ -166,11 +389,12 @@ pub fn load_input(input: &Input, files: &Files) -> Result<(Mesh, Option<ImportRe
                     unpacked = share::unpack(e).map_err(Error::Embedded)?;
                     &unpacked
                 }
-                (None, None) => return Err(Error::MissingInput { name: name.clone() }),
+                (None, None) => return Err(Error::MissingInput { name: name.clone(), slot: "mesh".into() }),
             };
             let imported = import::read_mesh(name, bytes, &import::Options::default())?;
             (imported.mesh, Some(imported.report))
         }
+        Input::Files(_) => return Err(Error::NoInput("a mesh input takes one file, not several".into())),
     };
     if let Some(b) = mesh.bounds() {
         let c = (b.min + b.max) * 0.5;
@@ -179,146 +403,93 @@ pub fn load_input(input: &Input, files: &Files) -> Result<(Mesh, Option<ImportRe
     Ok((mesh, report))
 }
 
-/// Runs the design. `progress(stage, fraction_of_stage)` is called as work proceeds.
-pub fn run(
+/// Runs the design with the built-in job kinds and no cache. `progress(stage, fraction)` is
+/// called as work proceeds.
+pub fn run(design: &Design, files: &Files, options: &RunOptions, progress: &mut dyn FnMut(&str, f32)) -> Result<RunOutput, Error> {
+    run_in(&Registry::builtin(), &mut Cache::disabled(), design, files, options, progress)
+}
+
+/// The G-code written by the writer stage and its totals.
+struct Written {
+    text: Arc<String>,
+    stats: GcodeStats,
+}
+
+/// What the analyzer stage keeps.
+struct Analysed {
+    report: analyze::Report,
+    preview: Option<Arc<Preview>>,
+}
+
+/// Runs the design with `registry`'s job kinds, reusing `cache`'s outputs whose inputs did
+/// not change.
+pub fn run_in(
+    registry: &Registry,
+    cache: &mut Cache,
     design: &Design,
     files: &Files,
     options: &RunOptions,
-    progress: &mut dyn FnMut(Stage, f32),
+    progress: &mut dyn FnMut(&str, f32),
 ) -> Result<RunOutput, Error> {
-    let mut report = RunReport::new(design);
-    let toolpath = match &design.job {
-        Job::Slice(job) => {
-            progress(Stage::Import, 0.0);
-            let (mesh, import_report) = load_input(&job.input, files)?;
-            report.import = import_report;
-            progress(Stage::Import, 1.0);
-            progress(Stage::Slice, 0.0);
-            let sliced = slice::slice(&mesh, &job.slice, &mut |f| progress(Stage::Slice, f))?;
-            progress(Stage::Slice, 1.0);
-            report.slice = Some(sliced.report);
-            sliced.toolpath
-        }
-        Job::Lattice(job) => run_lattice(design, job, files, &mut report, progress)?,
-    };
-    progress(Stage::Gcode, 0.0);
-    let written = gcode::write_gcode(
-        &toolpath,
-        &gcode::Options {
-            printer: design.printer.clone(),
-            material: design.material.clone(),
-            speeds: design.speeds.clone(),
-            design_name: design.name.clone(),
-        },
-    )?;
+    let kind = registry
+        .get(design.job.kind())
+        .ok_or_else(|| Error::UnknownKind { kind: design.job.kind().into(), known: registry.names().join(", ") })?;
+    let mut ctx = Ctx::new(design, files, cache, progress);
+    let Product::Toolpath(toolpath) = kind.run(&mut ctx)?;
+    let written = write_stage(&mut ctx, &toolpath)?;
     drop(toolpath);
-    progress(Stage::Gcode, 1.0);
-    progress(Stage::Analyze, 0.0);
-    let analysis = analyze::analyze(
-        &format!("{}.gcode", design.name),
-        written.text.as_bytes(),
-        &analyze::Options {
-            collect_preview: options.collect_preview,
-            default_line_width_mm: design.printer.nozzle_diameter_mm,
-            filament_diameter_mm: design.printer.filament_diameter_mm,
-        },
-    )?;
-    progress(Stage::Analyze, 1.0);
-    report.gcode = written.stats;
-    report.analysis = analysis.report;
-    Ok(RunOutput { gcode: written.text, report, preview: analysis.preview })
+    let analysed = analyze_stage(&mut ctx, &written, options)?;
+    let reports = std::mem::take(&mut ctx.reports);
+    let report = RunReport {
+        name: design.name.clone(),
+        job: design.job.kind().into(),
+        stages: reports,
+        gcode: written.stats.clone(),
+        analysis: analysed.report.clone(),
+    };
+    Ok(RunOutput { gcode: written.text.clone(), report, preview: analysed.preview.clone() })
 }
 
-/// The strut width of lattices: the nozzle diameter (d_n of equation 4).
-fn lattice_line_width(design: &Design) -> f64 {
-    design.printer.nozzle_diameter_mm
-}
-
-/// The domain of every layer: built-in planar shapes directly, a solid by slicing it every
-/// layer thickness (regions only).
-fn lattice_domains(
-    job: &LatticeJob,
-    files: &Files,
-    report: &mut RunReport,
-    progress: &mut dyn FnMut(Stage, f32),
-) -> Result<Vec<lattice::LayerDomain>, Error> {
-    if let Some(domains) = lattice::planar_domains(&job.domain, &job.lattice) {
-        return Ok(domains);
+/// The printer, material, speeds and name: what the writer reads of the design.
+fn writer_options(design: &Design) -> gcode::Options {
+    gcode::Options {
+        printer: design.printer.clone(),
+        material: design.material.clone(),
+        speeds: design.speeds.clone(),
+        design_name: design.name.clone(),
     }
-    let input = job
-        .input
-        .as_ref()
-        .ok_or_else(|| Error::NoInput("a solid lattice domain needs a mesh: load one, or pass --input".into()))?;
-    progress(Stage::Import, 0.0);
-    let (mesh, import_report) = load_input(input, files)?;
-    report.import = import_report;
-    progress(Stage::Import, 1.0);
-    let t = job.lattice.layer_thickness_mm;
-    let options = slice::Options {
-        first_layer_height_mm: t,
-        layer_height_mm: t,
-        perimeters: 0,
-        infill_density: 0.0,
-        solid_layers: 0,
-        ..slice::Options::default()
-    };
-    progress(Stage::Slice, 0.0);
-    let sliced = slice::slice(&mesh, &options, &mut |f| progress(Stage::Slice, f))?;
-    progress(Stage::Slice, 1.0);
-    report.slice = Some(sliced.report);
-    Ok(sliced
-        .layers
-        .into_iter()
-        .map(|l| lattice::LayerDomain { z: l.z, height: l.height, regions: l.regions, handles: Vec::new() })
-        .collect())
 }
 
-/// Generates the lattice strokes of every layer (the page's 2D preview uses this too).
-pub fn lattice_strokes(
-    design: &Design,
-    files: &Files,
-    progress: &mut dyn FnMut(Stage, f32),
-) -> Result<(Vec<StrokeLayer>, RunReport), Error> {
-    let Job::Lattice(job) = &design.job else {
-        return Err(Error::NoInput(format!("a {} job has no lattice", design.job.kind())));
-    };
-    let mut report = RunReport::new(design);
-    let domains = lattice_domains(job, files, &mut report, progress)?;
-    progress(Stage::Lattice, 0.0);
-    let generated = lattice::generate(&domains, &job.lattice, lattice_line_width(design), design.seed, &mut |f| {
-        progress(Stage::Lattice, f)
-    })?;
-    progress(Stage::Lattice, 1.0);
-    report.lattice = Some(generated.report);
-    Ok((generated.layers, report))
+fn write_stage(ctx: &mut Ctx, toolpath: &Out<Toolpath>) -> Result<Out<Written>, Error> {
+    let design = ctx.design;
+    let parts = (&design.printer, &design.material, &design.speeds, &design.name);
+    ctx.stage("gcode", "gcode", &parts, &[toolpath.key], |_| {
+        let g = gcode::write_gcode(toolpath, &writer_options(design))?;
+        Ok((Written { text: Arc::new(g.text), stats: g.stats }, None))
+    })
 }
 
-fn run_lattice(
-    design: &Design,
-    job: &LatticeJob,
-    files: &Files,
-    report: &mut RunReport,
-    progress: &mut dyn FnMut(Stage, f32),
-) -> Result<Toolpath, Error> {
-    let (strokes, partial) = lattice_strokes(design, files, progress)?;
-    report.import = partial.import;
-    report.slice = partial.slice;
-    report.lattice = partial.lattice;
-    progress(Stage::Paths, 0.0);
-    let optimised = paths::optimise(&strokes, &job.paths, lattice_line_width(design), design.seed, &mut |f| {
-        progress(Stage::Paths, f)
-    })?;
-    drop(strokes);
-    progress(Stage::Paths, 1.0);
-    report.paths = Some(optimised.report);
-    let Some(np) = &job.nonplanar else { return Ok(optimised.toolpath) };
-    progress(Stage::NonPlanar, 0.0);
-    let surface = match (&np.surface, &job.surface_input) {
-        (nonplanar::Surface::Mesh, Some(input)) => Some(load_input(input, files)?.0),
-        _ => None,
+fn analyze_stage(ctx: &mut Ctx, written: &Out<Written>, options: &RunOptions) -> Result<Out<Analysed>, Error> {
+    let design = ctx.design;
+    let a_options = analyze::Options {
+        collect_preview: options.collect_preview,
+        default_line_width_mm: design.printer.nozzle_diameter_mm,
+        filament_diameter_mm: design.printer.filament_diameter_mm,
     };
-    let projected = nonplanar::project(&optimised.toolpath, surface.as_ref(), np)?;
-    progress(Stage::NonPlanar, 1.0);
-    report.nonplanar = Some(projected.report);
-    Ok(projected.toolpath)
+    let parts = (options.collect_preview, a_options.default_line_width_mm, a_options.filament_diameter_mm, &design.name);
+    ctx.stage("analyze", "analyze", &parts, &[written.key], |_| {
+        let a = analyze::analyze(&format!("{}.gcode", design.name), written.text.as_bytes(), &a_options)?;
+        Ok((Analysed { report: a.report, preview: a.preview.map(Arc::new) }, None))
+    })
+}
+
+/// Data of view `view` at `index` of the design's job (the page's extra views), computed
+/// through the same cached stages as a run.
+pub fn inspect(registry: &Registry, cache: &mut Cache, design: &Design, files: &Files, view: &str, index: usize) -> Result<Inspection, Error> {
+    let kind = registry
+        .get(design.job.kind())
+        .ok_or_else(|| Error::UnknownKind { kind: design.job.kind().into(), known: registry.names().join(", ") })?;
+    let mut quiet = |_: &str, _: f32| {};
+    let mut ctx = Ctx::new(design, files, cache, &mut quiet);
+    kind.inspect(&mut ctx, view, index)
 }

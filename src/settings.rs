@@ -70,24 +70,32 @@ pub struct Field {
     /// Shown only while another field has a given value.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub when: Option<When>,
+    /// A special editor the page offers for this field (`pattern_picker`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub widget: Option<&'static str>,
 }
 
 /// A real number in `min..=max` with a form `step`.
 #[allow(clippy::too_many_arguments)] // a table row constructor: one argument per column
 pub const fn num(path: &'static str, section: &'static str, label: &'static str, unit: &'static str, min: f64, max: f64, step: f64, doc: &'static str) -> Field {
-    Field { path, section, label, unit, kind: Kind::Number, min: Some(min), max: Some(max), step: Some(step), choices: &[], doc, default: None, when: None }
+    Field { path, section, label, unit, kind: Kind::Number, min: Some(min), max: Some(max), step: Some(step), choices: &[], doc, default: None, when: None, widget: None }
 }
 /// A whole number in `min..=max`.
 pub const fn int(path: &'static str, section: &'static str, label: &'static str, min: f64, max: f64, doc: &'static str) -> Field {
-    Field { path, section, label, unit: "", kind: Kind::Integer, min: Some(min), max: Some(max), step: Some(1.0), choices: &[], doc, default: None, when: None }
+    Field { path, section, label, unit: "", kind: Kind::Integer, min: Some(min), max: Some(max), step: Some(1.0), choices: &[], doc, default: None, when: None, widget: None }
 }
 /// A field without a numeric range (bool, text, choice, section).
 pub const fn other(path: &'static str, section: &'static str, label: &'static str, kind: Kind, choices: &'static [&'static str], doc: &'static str) -> Field {
-    Field { path, section, label, unit: "", kind, min: None, max: None, step: None, choices, doc, default: None, when: None }
+    Field { path, section, label, unit: "", kind, min: None, max: None, step: None, choices, doc, default: None, when: None, widget: None }
 }
 /// Three numbers, each in `min..=max`.
 pub const fn vec3(path: &'static str, section: &'static str, label: &'static str, unit: &'static str, min: f64, max: f64, step: f64, doc: &'static str) -> Field {
-    Field { path, section, label, unit, kind: Kind::Vec3, min: Some(min), max: Some(max), step: Some(step), choices: &[], doc, default: None, when: None }
+    Field { path, section, label, unit, kind: Kind::Vec3, min: Some(min), max: Some(max), step: Some(step), choices: &[], doc, default: None, when: None, widget: None }
+}
+/// `f`, edited with the page's `widget`.
+pub const fn widget(mut f: Field, widget: &'static str) -> Field {
+    f.widget = Some(widget);
+    f
 }
 /// `f`, shown only while `path` equals `equals`.
 pub const fn when(mut f: Field, path: &'static str, equals: &'static str) -> Field {

@@ -11,6 +11,9 @@ use crate::gcode::{Material, Printer, Speeds};
 use crate::geom::shapes::Shape;
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
+use crate::jobs::Registry;
+
+pub use crate::settings::Problem;
 
 /// The only version this build reads and writes.
 pub const DESIGN_VERSION: u32 = 1;
@@ -39,92 +42,60 @@ pub struct Design {
     pub job: Job,
 }
 
-/// The kinds of job. Each later kind is one more variant with its own settings struct.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(tag = "kind", rename_all = "snake_case")]
-pub enum Job {
-    /// Slice a solid: perimeters plus rectilinear infill.
-    Slice(SliceJob),
-    /// A lattice from the atlas, printed along optimised paths (GIPPO), optionally non-planar.
-    Lattice(LatticeJob),
+/// The job: a `kind` and that kind's settings, as JSON normalised by the kind
+/// ([`crate::jobs::JobKind::normalize`]: every default filled in, unknown fields refused).
+/// Kinds read their typed settings with [`Job::settings`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct Job {
+    /// The `job` object, `kind` first.
+    pub value: Value,
 }
 
 impl Job {
-    /// The kind's name as written in JSON.
-    pub fn kind(&self) -> &'static str {
-        match self {
-            Job::Slice(_) => "slice",
-            Job::Lattice(_) => "lattice",
-        }
+    /// The kind's name as written in JSON (`slice`, `lattice`).
+    pub fn kind(&self) -> &str {
+        self.value.get("kind").and_then(Value::as_str).unwrap_or("")
     }
 
-    /// The job's main input, if it has one.
-    pub fn input(&self) -> Option<&Input> {
-        match self {
-            Job::Slice(j) => Some(&j.input),
-            Job::Lattice(j) => j.input.as_ref(),
-        }
+    /// The typed settings of the job, when it is of the kind `T` belongs to.
+    pub fn settings<T: serde::de::DeserializeOwned>(&self) -> Option<T> {
+        crate::jobs::settings(&self.value).ok()
     }
 
-    /// Mutable main input.
-    pub fn input_mut(&mut self) -> Option<&mut Input> {
-        match self {
-            Job::Slice(j) => Some(&mut j.input),
-            Job::Lattice(j) => j.input.as_mut(),
+    /// A job of kind `kind` with `settings`.
+    pub fn new(kind: &str, settings: &impl Serialize) -> Job {
+        let mut v = serde_json::to_value(settings).unwrap_or(Value::Null);
+        if let Value::Object(m) = &mut v {
+            let mut out = serde_json::Map::new();
+            out.insert("kind".into(), Value::String(kind.into()));
+            out.append(m);
+            v = Value::Object(out);
         }
+        Job { value: v }
     }
 
-    /// Replaces the main input (`--input`, a file dropped on the page). A lattice job then fills
-    /// the layers of that solid (its domain becomes `solid`).
-    pub fn set_input(&mut self, input: Input) {
-        match self {
-            Job::Slice(j) => j.input = input,
-            Job::Lattice(j) => {
-                j.input = Some(input);
-                j.domain = crate::lattice::Domain::Solid;
-            }
-        }
+    /// The input at the design path `path` (a slot's path, e.g. `job.input`).
+    pub fn input_at(&self, path: &str) -> Option<Input> {
+        let rel = path.strip_prefix("job.")?;
+        let v = rel.split('.').try_fold(&self.value, |v, k| v.get(k))?;
+        serde_json::from_value(v.clone()).ok()
     }
 }
 
-/// Settings of a `slice` job.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct SliceJob {
-    /// The solid to slice. Default: a 20 mm cube.
-    #[serde(default = "default_slice_input")]
-    pub input: Input,
-    /// Layer heights, perimeters, infill.
-    #[serde(default)]
-    pub slice: crate::slice::Options,
+impl Serialize for Job {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        self.value.serialize(s)
+    }
 }
 
-/// Settings of a `lattice` job.
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct LatticeJob {
-    /// Where the lattice goes: a built-in planar domain, or the layers of `input`.
-    #[serde(default)]
-    pub domain: crate::lattice::Domain,
-    /// The solid whose layers are filled when `domain` is `solid`.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub input: Option<Input>,
-    /// Pattern, layers, rotation, overrides, contour.
-    #[serde(default)]
-    pub lattice: crate::lattice::Options,
-    /// Path optimisation.
-    #[serde(default)]
-    pub paths: crate::paths::Options,
-    /// Projection onto a non-planar surface (off when absent).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub nonplanar: Option<crate::nonplanar::Options>,
-    /// The surface mesh when `nonplanar.surface` is `mesh`.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub surface_input: Option<Input>,
-}
-
-fn default_slice_input() -> Input {
-    Input::Builtin(Shape::Cube { size: [20.0, 20.0, 20.0] })
+impl<'de> Deserialize<'de> for Job {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Job, D::Error> {
+        let value = Value::deserialize(d)?;
+        match value.get("kind") {
+            Some(Value::String(_)) => Ok(Job { value }),
+            _ => Err(serde::de::Error::custom("job needs a \"kind\" (e.g. \"slice\" or \"lattice\")")),
+        }
+    }
 }
 
 /// Where a mesh comes from.
@@ -142,15 +113,8 @@ pub enum Input {
         #[serde(default, skip_serializing_if = "Option::is_none")]
         embedded: Option<String>,
     },
-}
-
-/// One problem found in a design.
-#[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct Problem {
-    /// Dotted field path, e.g. `printer.nozzle_diameter_mm`.
-    pub path: String,
-    /// What is wrong and what is allowed.
-    pub message: String,
+    /// Several loaded files, by name (a DICOM series, labelled meshes).
+    Files(Vec<String>),
 }
 
 /// Why a design could not be read.
@@ -203,14 +167,20 @@ impl Default for Design {
             printer: Printer::default(),
             material: Material::default(),
             speeds: Speeds::default(),
-            job: Job::Slice(SliceJob { input: default_slice_input(), slice: Default::default() }),
+            job: Job::new("slice", &crate::jobs::slice::SliceJob::default()),
         }
     }
 }
 
 impl Design {
-    /// Parses and validates a design. `source_name` names it in messages.
+    /// Parses and validates a design with the built-in job kinds. `source_name` names it in
+    /// messages.
     pub fn from_json(source_name: &str, text: &str) -> Result<Design, Error> {
+        Design::from_json_in(&Registry::builtin(), source_name, text)
+    }
+
+    /// Parses and validates a design whose job kind is one of `registry`'s.
+    pub fn from_json_in(registry: &Registry, source_name: &str, text: &str) -> Result<Design, Error> {
         let syntax = |e: serde_json::Error| Error::Syntax {
             source_name: source_name.into(),
             line: e.line(),
@@ -220,11 +190,16 @@ impl Design {
         let value: Value = serde_json::from_str(text).map_err(syntax)?;
         check_version(source_name, &value)?;
         let design: Design = serde_json::from_str(text).map_err(syntax)?;
-        design.validated(source_name)
+        design.normalized(registry, source_name)?.validated(registry, source_name)
     }
 
     /// Builds a design from a JSON value (used after overrides).
     pub fn from_value(source_name: &str, value: Value) -> Result<Design, Error> {
+        Design::from_value_in(&Registry::builtin(), source_name, value)
+    }
+
+    /// [`Design::from_value`] with the job kinds of `registry`.
+    pub fn from_value_in(registry: &Registry, source_name: &str, value: Value) -> Result<Design, Error> {
         check_version(source_name, &value)?;
         let design: Design = serde_json::from_value(value).map_err(|e| Error::Syntax {
             source_name: source_name.into(),
@@ -232,7 +207,17 @@ impl Design {
             column: 0,
             message: strip_position(&e.to_string()),
         })?;
-        design.validated(source_name)
+        design.normalized(registry, source_name)?.validated(registry, source_name)
+    }
+
+    /// The job object rewritten by its kind: defaults filled in, unknown fields refused.
+    fn normalized(mut self, registry: &Registry, source_name: &str) -> Result<Design, Error> {
+        let syntax = |message: String| Error::Syntax { source_name: source_name.into(), line: 0, column: 0, message };
+        let kind = registry.get(self.job.kind()).ok_or_else(|| {
+            syntax(format!("job.kind: unknown job kind '{}'; use one of {}", self.job.kind(), registry.names().join(", ")))
+        })?;
+        self.job.value = kind.normalize(&self.job.value).map_err(|e| syntax(format!("job: {}", strip_position(&e.to_string()))))?;
+        Ok(self)
     }
 
     /// Pretty JSON (the on-disk form).
@@ -242,11 +227,11 @@ impl Design {
 
     /// Every out-of-range value, empty when the design is valid.
     pub fn validate(&self) -> Vec<Problem> {
-        schema::validate(self)
+        schema::validate(self, &Registry::builtin())
     }
 
-    fn validated(self, source_name: &str) -> Result<Design, Error> {
-        let problems = self.validate();
+    fn validated(self, registry: &Registry, source_name: &str) -> Result<Design, Error> {
+        let problems = schema::validate(&self, registry);
         if problems.is_empty() {
             Ok(self)
         } else {
@@ -257,6 +242,11 @@ impl Design {
     /// Applies `path=value` overrides (e.g. `job.slice.infill_density=0.3`). The value is read
     /// as JSON when it parses (numbers, booleans, objects), else as a string.
     pub fn with_overrides(&self, assignments: &[String]) -> Result<Design, Error> {
+        self.with_overrides_in(&Registry::builtin(), assignments)
+    }
+
+    /// [`Design::with_overrides`] with the job kinds of `registry`.
+    pub fn with_overrides_in(&self, registry: &Registry, assignments: &[String]) -> Result<Design, Error> {
         let mut value = serde_json::to_value(self).map_err(|e| Error::Override {
             assignment: String::new(),
             message: e.to_string(),
@@ -270,7 +260,27 @@ impl Design {
             set_path(&mut value, path.trim(), new)
                 .map_err(|message| Error::Override { assignment: a.clone(), message })?;
         }
-        Design::from_value("--set", value)
+        Design::from_value_in(registry, "--set", value)
+    }
+
+    /// The design with `input` in the slot at design path `slot_path` (e.g. `job.input`),
+    /// after the job kind's own rule for a filled slot (a lattice fills a loaded solid).
+    pub fn with_slot_input(&self, registry: &Registry, slot: &str, input: Input) -> Result<Design, Error> {
+        let kind_name = self.job.kind().to_string();
+        let kind = registry.get(&kind_name).ok_or_else(|| Error::Override { assignment: slot.into(), message: format!("unknown job kind '{kind_name}'") })?;
+        let spec = kind.slots().iter().find(|s| s.name == slot).ok_or_else(|| Error::Override {
+            assignment: slot.into(),
+            message: format!(
+                "a {kind_name} job has no input slot '{slot}'; its slots are {}",
+                if kind.slots().is_empty() { "none".to_string() } else { kind.slots().iter().map(|s| s.name).collect::<Vec<_>>().join(", ") }
+            ),
+        })?;
+        let mut value = serde_json::to_value(self).unwrap_or(Value::Null);
+        let new = serde_json::to_value(&input).unwrap_or(Value::Null);
+        set_path(&mut value, spec.path, new).map_err(|message| Error::Override { assignment: slot.into(), message })?;
+        let job = value.get("job").cloned().unwrap_or(Value::Null);
+        value["job"] = kind.slot_filled(slot, job);
+        Design::from_value_in(registry, "design", value)
     }
 }
 

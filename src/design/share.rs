@@ -7,7 +7,7 @@ use super::{Design, Input};
 use base64::Engine;
 use base64::engine::general_purpose::URL_SAFE_NO_PAD;
 
-/// Largest mesh file embedded in a share link, bytes (256 KiB).
+/// Largest total size of the files embedded in a share link, bytes (256 KiB).
 pub const MAX_EMBED_BYTES: usize = 256 * 1024;
 /// Longest fragment accepted when opening a link, characters (2 MiB, Chromium's URL limit).
 pub const MAX_FRAGMENT_CHARS: usize = 2 * 1024 * 1024;
@@ -21,8 +21,10 @@ pub const FRAGMENT_KEY: &str = "d=";
 pub struct ShareLink {
     /// `#d=…`, to put after the page URL.
     pub fragment: String,
-    /// Whether the mesh file is inside the link.
-    pub embedded: bool,
+    /// Files inside the link.
+    pub embedded: Vec<String>,
+    /// Files the design names that are not inside the link (too large, or not loaded).
+    pub missing: Vec<String>,
     /// Plain-language note for the user ("" when nothing to say).
     pub note: String,
 }
@@ -77,35 +79,59 @@ pub fn unpack(text: &str) -> Result<Vec<u8>, Error> {
     })
 }
 
-/// Makes a link fragment for `design`. `file` is the loaded mesh the design's input names, if any.
-pub fn encode(design: &Design, file: Option<&[u8]>) -> ShareLink {
-    let mut d = design.clone();
-    let mut embedded = false;
-    let mut note = String::new();
-    if let Some(Input::File { name, embedded: slot }) = d.job.input_mut() {
-        match file {
-            Some(bytes) if bytes.len() <= MAX_EMBED_BYTES => {
-                *slot = Some(pack(bytes));
-                embedded = true;
-            }
-            Some(bytes) => {
-                *slot = None;
-                note = format!(
-                    "the mesh {name} ({}) is larger than the {} KiB share limit and is not in the link; whoever opens it must load {name}",
-                    human_bytes(bytes.len()),
-                    MAX_EMBED_BYTES / 1024
-                );
-            }
-            None => {
-                embedded = slot.is_some();
-                if !embedded {
-                    note = format!("the mesh {name} is not in the link; whoever opens it must load {name}");
+/// Makes a link fragment for `design`. `files` are the loaded files (name, bytes); each
+/// slot's file travels inside the link while the files embedded so far stay within
+/// [`MAX_EMBED_BYTES`] in total (slots in the job kind's order); the others are listed in
+/// [`ShareLink::missing`] and named in the note.
+pub fn encode(design: &Design, files: &[(&str, &[u8])]) -> ShareLink {
+    let mut value = serde_json::to_value(design).unwrap_or_default();
+    let mut embedded = Vec::new();
+    let mut missing = Vec::new();
+    let mut used = 0usize;
+    let registry = crate::jobs::Registry::builtin();
+    let slots = registry.get(design.job.kind()).map(|k| k.slots()).unwrap_or(&[]);
+    for slot in slots {
+        match design.job.input_at(slot.path) {
+            Some(Input::File { name, embedded: already }) => {
+                let packed = match files.iter().find(|(n, _)| *n == name) {
+                    Some((_, bytes)) if used + bytes.len() <= MAX_EMBED_BYTES => {
+                        used += bytes.len();
+                        Some(pack(bytes))
+                    }
+                    Some(_) => None,
+                    None => already,
+                };
+                match packed {
+                    Some(p) => {
+                        embedded.push(name.clone());
+                        let _ = super::set_path(&mut value, slot.path, serde_json::to_value(Input::File { name, embedded: Some(p) }).unwrap_or_default());
+                    }
+                    None => missing.push(name),
                 }
             }
+            Some(Input::Files(names)) => missing.extend(names),
+            _ => {}
         }
     }
-    let json = serde_json::to_string(&d).unwrap_or_default();
-    ShareLink { fragment: format!("#{FRAGMENT_KEY}{}", pack(json.as_bytes())), embedded, note }
+    let note = if missing.is_empty() {
+        String::new()
+    } else {
+        let sizes: Vec<String> = missing
+            .iter()
+            .map(|n| match files.iter().find(|(f, _)| f == n) {
+                Some((_, b)) => format!("{n} ({})", human_bytes(b.len())),
+                None => n.clone(),
+            })
+            .collect();
+        format!(
+            "{} not in the link (files travel inside a link up to {} KiB in total); whoever opens it must load {}",
+            sizes.join(", "),
+            MAX_EMBED_BYTES / 1024,
+            if missing.len() == 1 { "it" } else { "them" }
+        )
+    };
+    let json = serde_json::to_string(&value).unwrap_or_default();
+    ShareLink { fragment: format!("#{FRAGMENT_KEY}{}", pack(json.as_bytes())), embedded, missing, note }
 }
 
 /// Reads a design from a link fragment (with or without the leading `#`, or a whole URL).
@@ -138,7 +164,7 @@ mod tests {
     #[test]
     fn round_trip() {
         let d = Design::default();
-        let link = encode(&d, None);
+        let link = encode(&d, &[]);
         assert!(link.fragment.starts_with("#d="));
         assert_eq!(decode(&link.fragment).unwrap(), d);
         assert_eq!(decode(&format!("http://localhost/www/{}", link.fragment)).unwrap(), d);
@@ -146,18 +172,26 @@ mod tests {
 
     #[test]
     fn small_mesh_is_embedded_and_large_is_not() {
-        let mut d = Design::default();
-        *d.job.input_mut().unwrap() = Input::File { name: "part.stl".into(), embedded: None };
+        let registry = crate::jobs::Registry::builtin();
+        let d = Design::default().with_slot_input(&registry, "mesh", Input::File { name: "part.stl".into(), embedded: None }).unwrap();
         let small = vec![7u8; 1000];
-        let link = encode(&d, Some(&small));
-        assert!(link.embedded && link.note.is_empty());
+        let link = encode(&d, &[("part.stl", &small)]);
+        assert!(link.embedded == ["part.stl"] && link.missing.is_empty() && link.note.is_empty());
         let back = decode(&link.fragment).unwrap();
-        let Some(Input::File { embedded: Some(e), .. }) = back.job.input() else { panic!() };
-        assert_eq!(unpack(e).unwrap(), small);
+        let Some(Input::File { embedded: Some(e), .. }) = back.job.input_at("job.input") else { panic!() };
+        assert_eq!(unpack(&e).unwrap(), small);
         let big = vec![1u8; MAX_EMBED_BYTES + 1];
-        let link = encode(&d, Some(&big));
-        assert!(!link.embedded);
+        let link = encode(&d, &[("part.stl", &big)]);
+        assert!(link.embedded.is_empty() && link.missing == ["part.stl"]);
         assert!(link.note.contains("part.stl") && link.note.contains("256 KiB"), "{}", link.note);
+        // Two slots share one limit: the solid fits, the surface after it does not.
+        let mut l = Design::from_json("t", include_str!("../../examples/honeycomb-10mm.json")).unwrap();
+        l = l.with_slot_input(&registry, "mesh", Input::File { name: "a.stl".into(), embedded: None }).unwrap();
+        l = l.with_overrides(&[r#"job.surface_input={"file":{"name":"b.stl"}}"#.into()]).unwrap();
+        let a = vec![3u8; MAX_EMBED_BYTES - 10];
+        let b = vec![4u8; 100];
+        let link = encode(&l, &[("a.stl", &a), ("b.stl", &b)]);
+        assert_eq!((link.embedded, link.missing), (vec!["a.stl".to_string()], vec!["b.stl".to_string()]));
     }
 
     #[test]
@@ -165,7 +199,7 @@ mod tests {
         assert!(matches!(decode("#d=!!!!"), Err(Error::NotBase64 { position: 1 })));
         assert!(matches!(decode("#x=abc"), Err(Error::Missing)));
         assert!(matches!(decode("#d=AAAA"), Err(Error::Corrupt { .. })));
-        let link = encode(&Design::default(), None);
+        let link = encode(&Design::default(), &[]);
         let cut = &link.fragment[..link.fragment.len() / 2];
         assert!(decode(cut).is_err());
         let long = format!("#d={}", "A".repeat(MAX_FRAGMENT_CHARS + 1));

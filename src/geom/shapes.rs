@@ -49,7 +49,26 @@ fn default_segments() -> u32 {
     64
 }
 
+/// Form rows of a built-in shape input (paths relative to the [`crate::design::Input`]).
+pub const FIELDS: &[crate::settings::Field] = &[
+    crate::settings::vec3("builtin.size", "Input", "Cube size X, Y, Z", "mm", 0.01, 2000.0, 0.1, ""),
+    crate::settings::num("builtin.radius", "Input", "Radius", "mm", 0.01, 1000.0, 0.1, ""),
+    crate::settings::num("builtin.height", "Input", "Height", "mm", 0.01, 2000.0, 0.1, ""),
+    crate::settings::num("builtin.dish_depth", "Input", "Dish depth", "mm", 0.0, 2000.0, 0.1, "Depth of the concave top at the centre."),
+    crate::settings::int("builtin.segments", "Input", "Facets around", 8.0, 512.0, "More facets: a smoother round part."),
+];
+
 impl Shape {
+    /// One shape of each kind with its default size (the page's shape menu): name, label, shape.
+    pub fn defaults() -> Vec<(&'static str, &'static str, Shape)> {
+        vec![
+            ("cube", "Cube", Shape::Cube { size: [20.0, 20.0, 20.0] }),
+            ("sphere", "Sphere", Shape::Sphere { radius: 10.0, segments: 64 }),
+            ("cylinder", "Cylinder", Shape::Cylinder { radius: 10.0, height: 20.0, segments: 64 }),
+            ("concave_cylinder", "Concave cylinder", Shape::ConcaveCylinder { radius: 10.0, height: 10.0, dish_depth: 4.0, segments: 64 }),
+        ]
+    }
+
     /// Triangulates the shape.
     pub fn mesh(&self) -> Mesh {
         match *self {

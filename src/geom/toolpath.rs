@@ -66,6 +66,34 @@ impl Feature {
         })
     }
 
+    /// Key as written in JSON (`external_perimeter`).
+    pub fn key(self) -> &'static str {
+        match self {
+            Feature::ExternalPerimeter => "external_perimeter",
+            Feature::Perimeter => "perimeter",
+            Feature::Infill => "infill",
+            Feature::SolidInfill => "solid_infill",
+            Feature::Lattice => "lattice",
+            Feature::Contour => "contour",
+            Feature::Handle => "handle",
+            Feature::Skirt => "skirt",
+        }
+    }
+
+    /// Colour in previews (PrusaSlicer's where it has the feature), `#rrggbb`.
+    pub fn color(self) -> &'static str {
+        match self {
+            Feature::ExternalPerimeter => "#ff7d38",
+            Feature::Perimeter => "#ffe64d",
+            Feature::Infill => "#b03029",
+            Feature::SolidInfill => "#9654cc",
+            Feature::Lattice => "#29a3d6",
+            Feature::Contour => "#1fb04c",
+            Feature::Handle => "#a0a0a0",
+            Feature::Skirt => "#00876e",
+        }
+    }
+
     /// Index in [`Feature::ALL`].
     pub fn code(self) -> u8 {
         Feature::ALL.iter().position(|f| *f == self).unwrap_or(0) as u8

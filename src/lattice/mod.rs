@@ -69,6 +69,30 @@ pub const DEFAULT_LAYERS: u32 = 1;
 /// Default rotation between consecutive layers, degrees.
 pub const DEFAULT_ROTATION_DEG: f64 = 0.0;
 
+/// Rows of [`Options`] (paths relative to the options, i.e. `job.lattice`): ranges, units,
+/// help, shared by the design's form and [`generate`]'s own check. Pattern sizes use
+/// [`MIN_CELL_MM`]..[`MAX_CELL_MM`], the range [`validate`] checks override patterns against.
+pub const FIELDS: &[crate::settings::Field] = {
+    use crate::settings::{int, num, other, Kind};
+    &[
+        num("pattern.hexagon_radius_mm", "Lattice", "Hexagon radius", "mm", MIN_CELL_MM, MAX_CELL_MM, 0.05, "Distance from a hexagon's centre to its corners."),
+        num("pattern.density_per_mm2", "Lattice", "Seed points", "/mm²", 0.0001, MAX_VORONOI_DENSITY, 0.01, "Voronoi seed points per mm² (placed by the random seed)."),
+        num("pattern.cell_size_mm", "Lattice", "Cell size", "mm", MIN_CELL_MM, MAX_CELL_MM, 0.05, ""),
+        num("pattern.cell_width_mm", "Lattice", "Unit-cell width", "mm", MIN_CELL_MM, MAX_CELL_MM, 0.05, ""),
+        num("pattern.cell_height_mm", "Lattice", "Unit-cell height", "mm", MIN_CELL_MM, MAX_CELL_MM, 0.05, ""),
+        num("pattern.strand_distance_mm", "Lattice", "Strand distance", "mm", MIN_CELL_MM, MAX_CELL_MM, 0.05, "Centre to centre."),
+        num("layer_thickness_mm", "Lattice", "Layer thickness", "mm", 0.01, 2.0, 0.001, "LT in GIPPO equation 4."),
+        int("layers", "Lattice", "Layers", 1.0, 10000.0, "Ignored for a solid domain (it has as many as it slices to)."),
+        num("rotation_deg", "Lattice", "Rotation per layer", "°", -360.0, 360.0, 1.0, "Each layer turns the pattern by this much more than the one below."),
+        other("contour", "Lattice", "Add the contour", Kind::Bool, &[], "Print each region's outline, joined into the graph."),
+    ]
+};
+
+/// The atlas, by `kind` name.
+pub const PATTERNS: &[&str] = &[
+    "honeycomb", "voronoi", "penrose", "snub_square", "arrowhead", "reentrant_honeycomb", "rectilinear", "square_grid", "triangle_grid",
+];
+
 /// A pattern of the atlas with its parameters (mm).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
@@ -241,6 +265,13 @@ pub struct Lattice {
 /// Why a lattice could not be generated.
 #[derive(Debug, thiserror::Error, Clone, PartialEq)]
 pub enum Error {
+    /// Options outside the ranges of [`FIELDS`] (the design validator normally reports these
+    /// first, with their design paths).
+    #[error("{problems}")]
+    BadOptions {
+        /// Each value out of range, with the allowed range.
+        problems: String,
+    },
     /// A pattern parameter is unusable.
     #[error("{field} = {value} is not usable: {fix}")]
     BadParameter {
@@ -301,12 +332,9 @@ pub fn generate(
             fix: "use a line width in (0, 100] mm".into(),
         });
     }
-    if !options.rotation_deg.is_finite() {
-        return Err(Error::BadParameter {
-            field: "rotation_deg",
-            value: options.rotation_deg,
-            fix: "use a finite rotation in degrees".into(),
-        });
+    let problems = crate::settings::check(options, FIELDS, "");
+    if !problems.is_empty() {
+        return Err(Error::BadOptions { problems: crate::settings::describe(&problems) });
     }
     validate(&options.pattern)?;
     for o in &options.overrides {

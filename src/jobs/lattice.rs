@@ -1,0 +1,364 @@
+//! The `lattice` job (the GIPPO method): a lattice from the atlas fills a domain layer by
+//! layer, each layer becomes a graph printed along optimised paths, optionally projected onto
+//! a non-planar surface.
+//!
+//! Stages: `import` + `slice` (only for a solid domain: its layers are the domains),
+//! `lattice`, `paths`, `nonplanar` (when set). The report draws the score of every GIPPO
+//! iteration (the paper's Fig. 2(i)), the path classes and a table of paths per layer.
+
+use super::{Inspection, Kind, Product, Shape, Slot, SlotKind, StageInfo, ViewInfo};
+use crate::design::{Design, Input};
+use crate::geom::shapes;
+use crate::geom::StrokeLayer;
+use crate::lattice::{self, Domain, LayerDomain};
+use crate::nonplanar;
+use crate::paths::{self, PathsReport};
+use crate::pipeline::{Ctx, Error, Out};
+use crate::report::{Axis, Column, Plot, PlotKind, Row as TableRow, Series, StageReport, Table};
+use crate::settings::{mount, other, widget, Field, Kind as FieldKind, Problem, Row};
+use crate::slice;
+use serde::{Deserialize, Serialize};
+
+/// Settings of a `lattice` job.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LatticeJob {
+    /// Where the lattice goes: a built-in planar domain, or the layers of `input`.
+    #[serde(default)]
+    pub domain: Domain,
+    /// The solid whose layers are filled when `domain` is `solid`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub input: Option<Input>,
+    /// Pattern, layers, rotation, overrides, contour.
+    #[serde(default)]
+    pub lattice: lattice::Options,
+    /// Path optimisation.
+    #[serde(default)]
+    pub paths: paths::Options,
+    /// Projection onto a non-planar surface (off when absent).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub nonplanar: Option<nonplanar::Options>,
+    /// The surface mesh when `nonplanar.surface` is `mesh`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub surface_input: Option<Input>,
+}
+
+/// The `lattice` job kind.
+pub struct LatticeKind;
+
+const SLOTS: &[Slot] = &[
+    Slot {
+        name: "mesh",
+        label: "Solid to fill",
+        kind: SlotKind::Mesh,
+        path: "job.input",
+        required: false,
+        doc: "A solid whose every layer is filled with the lattice (the domain becomes 'solid').",
+    },
+    Slot {
+        name: "surface",
+        label: "Surface to print on",
+        kind: SlotKind::Mesh,
+        path: "job.surface_input",
+        required: false,
+        doc: "A surface mesh the layers are projected onto (non-planar printing on a mesh).",
+    },
+];
+
+const STAGES: &[StageInfo] = &[
+    StageInfo { name: "import", label: "Reading the mesh" },
+    StageInfo { name: "slice", label: "Slicing the solid" },
+    StageInfo { name: "lattice", label: "Generating the lattice" },
+    StageInfo { name: "paths", label: "Optimising print paths" },
+    StageInfo { name: "nonplanar", label: "Projecting onto the surface" },
+];
+
+const VIEWS: &[ViewInfo] = &[ViewInfo {
+    id: "layer2d",
+    stage: "lattice",
+    label: "Lattice layer",
+    shape: Shape::Lines2d,
+    index_label: "Layer",
+    doc: "The struts of one layer as generated, before path optimisation (mm).",
+}];
+
+/// Rows of the domain (paths relative to `job.domain`).
+const DOMAIN_FIELDS: &[Field] = &[
+    other("kind", "Domain", "Domain", FieldKind::Choice, &["rectangle", "disc", "tensile_specimen", "solid"], "Where the lattice goes: a built-in shape, or the layers of a loaded solid."),
+    crate::settings::num("width_mm", "Domain", "Width", "mm", 0.1, 2000.0, 0.1, ""),
+    crate::settings::num("height_mm", "Domain", "Height", "mm", 0.1, 2000.0, 0.1, ""),
+    crate::settings::num("diameter_mm", "Domain", "Diameter", "mm", 0.1, 2000.0, 0.1, ""),
+    crate::settings::num("length_mm", "Domain", "Lattice length", "mm", 0.1, 2000.0, 0.1, "Between the handles."),
+    crate::settings::num("handle_length_mm", "Domain", "Handle length", "mm", 0.1, 1000.0, 0.1, "Solid handle at each end."),
+];
+
+/// The pattern choice row, edited with the page's pattern picker.
+const PATTERN_FIELD: &[Field] = &[widget(other("pattern.kind", "Lattice", "Pattern", FieldKind::Choice, lattice::PATTERNS, "The atlas pattern."), "pattern_picker")];
+
+/// The strut width of lattices: the nozzle diameter (d_n of equation 4).
+fn line_width(design: &Design) -> f64 {
+    design.printer.nozzle_diameter_mm
+}
+
+impl Kind for LatticeKind {
+    type Settings = LatticeJob;
+    const NAME: &'static str = "lattice";
+    const LABEL: &'static str = "Lattice (GIPPO)";
+    const DOC: &'static str = "A lattice from the atlas, every strut printed once along optimised paths (GIPPO), optionally on a curved surface.";
+    const SLOTS: &'static [Slot] = SLOTS;
+    const STAGES: &'static [StageInfo] = STAGES;
+    const VIEWS: &'static [ViewInfo] = VIEWS;
+
+    fn fields() -> Vec<Row> {
+        let mut rows = mount("job.domain", DOMAIN_FIELDS);
+        rows.extend(mount("job.lattice", PATTERN_FIELD));
+        rows.extend(mount("job.lattice", lattice::FIELDS));
+        rows.extend(mount("job.paths", paths::FIELDS));
+        rows.extend(mount("job.nonplanar", nonplanar::FIELDS));
+        rows.extend(mount("job.input", shapes::FIELDS));
+        rows
+    }
+
+    fn validate(design: &Design, j: &LatticeJob, out: &mut Vec<Problem>) {
+        let nozzle = design.printer.nozzle_diameter_mm;
+        let t = j.lattice.layer_thickness_mm;
+        if t > nozzle {
+            out.push(Problem {
+                path: "job.lattice.layer_thickness_mm".into(),
+                message: format!("{} mm is thicker than the {} mm nozzle: use at most the nozzle diameter", crate::settings::fmt(t), crate::settings::fmt(nozzle)),
+            });
+        }
+        if j.domain == Domain::Solid && j.input.is_none() {
+            out.push(Problem { path: "job.input".into(), message: "a solid domain needs a solid: load a mesh or set job.input".into() });
+        }
+        if let Some(np) = &j.nonplanar {
+            if np.surface == nonplanar::Surface::Mesh && j.surface_input.is_none() {
+                out.push(Problem { path: "job.surface_input".into(), message: "a mesh surface needs a mesh: load the surface file or set job.surface_input".into() });
+            }
+        }
+        for o in &j.lattice.overrides {
+            if o.layer >= j.lattice.layers && j.domain != Domain::Solid {
+                out.push(Problem {
+                    path: "job.lattice.overrides".into(),
+                    message: format!("layer {} does not exist (the lattice has {} layers, numbered from 0)", o.layer, j.lattice.layers),
+                });
+            }
+        }
+    }
+
+    /// A solid loaded into the `mesh` slot is filled: the domain becomes `solid`.
+    fn slot_filled(slot: &str, mut j: LatticeJob) -> LatticeJob {
+        if slot == "mesh" {
+            j.domain = Domain::Solid;
+        }
+        j
+    }
+
+    fn run(j: &LatticeJob, ctx: &mut Ctx) -> Result<Product, Error> {
+        let strokes = strokes(j, ctx)?;
+        let design = ctx.design;
+        let optimised = ctx.stage("paths", "paths", &(&j.paths, line_width(design), design.seed), &[strokes.key], |progress| {
+            let o = paths::optimise(&strokes, &j.paths, line_width(design), design.seed, progress).map_err(|e| Error::stage("paths", e))?;
+            let report = paths_report(&o.report);
+            Ok((o.toolpath, Some(report)))
+        })?;
+        drop(strokes);
+        let Some(np) = &j.nonplanar else { return Ok(Product::Toolpath(optimised)) };
+        let surface = match (&np.surface, &j.surface_input) {
+            (nonplanar::Surface::Mesh, Some(input)) => Some(ctx.mesh("surface", input)?),
+            _ => None,
+        };
+        let upstream: Vec<_> = std::iter::once(optimised.key).chain(surface.as_ref().map(|s| s.key)).collect();
+        let projected = ctx.stage("nonplanar", "nonplanar", np, &upstream, |_| {
+            let p = nonplanar::project(&optimised, surface.as_deref(), np).map_err(|e| Error::stage("non-planar", e))?;
+            let r = &p.report;
+            let report = StageReport::new("nonplanar", "Projecting onto the surface", r)
+                .metric("missed_points", "Points off the surface", r.missed_points as f64, "", "Points with no surface under them (kept at the lowest surface height).")
+                .metric("collisions", "Digging segments", r.collisions as f64, "", "Moves that would cut into the layer below; 0 is safe.");
+            Ok((p.toolpath, Some(report)))
+        })?;
+        Ok(Product::Toolpath(projected))
+    }
+
+    fn inspect(j: &LatticeJob, ctx: &mut Ctx, view: &str, index: usize) -> Result<Inspection, Error> {
+        if view != "layer2d" {
+            return Err(Error::UnknownView { view: view.into(), job: Self::NAME });
+        }
+        let strokes = strokes(j, ctx)?;
+        let count = strokes.len();
+        let index = index.min(count.saturating_sub(1));
+        let mut data = Vec::new();
+        if let Some(l) = strokes.get(index) {
+            for s in &l.strokes {
+                for w in s.points.windows(2) {
+                    data.extend_from_slice(&[w[0].x as f32, w[0].y as f32, w[1].x as f32, w[1].y as f32, s.feature.code() as f32]);
+                }
+            }
+        }
+        let z = strokes.get(index).map_or(0.0, |l| l.z);
+        Ok(Inspection { view: view.into(), shape: Shape::Lines2d, index, count, stride: Shape::Lines2d.stride(), data, meta: serde_json::json!({ "z_mm": z }) })
+    }
+}
+
+/// The lattice strokes of every layer of a lattice design (for `export-stl` and benchmarks):
+/// the same stages as a run, without a cache.
+pub fn lattice_strokes(design: &Design, files: &crate::pipeline::Files) -> Result<Vec<StrokeLayer>, Error> {
+    let j: LatticeJob = design.job.settings().ok_or_else(|| Error::BadJob(format!("a {} job has no lattice", design.job.kind())))?;
+    let mut cache = crate::pipeline::Cache::disabled();
+    let mut quiet = |_: &str, _: f32| {};
+    let mut ctx = Ctx::new(design, files, &mut cache, &mut quiet);
+    let out = strokes(&j, &mut ctx)?;
+    Ok(std::sync::Arc::try_unwrap(out.value).unwrap_or_else(|a| (*a).clone()))
+}
+
+/// The domain of every layer (built-in planar shapes directly, a solid by slicing it every
+/// layer thickness) and the lattice strokes on them.
+fn strokes(j: &LatticeJob, ctx: &mut Ctx) -> Result<Out<Vec<StrokeLayer>>, Error> {
+    let design = ctx.design;
+    let domains: Out<Vec<LayerDomain>> = match lattice::planar_domains(&j.domain, &j.lattice) {
+        Some(d) => ctx.stage("domains", "domains", &(&j.domain, &j.lattice), &[], |_| Ok((d, None)))?,
+        None => {
+            let input = j.input.as_ref().ok_or_else(|| Error::NoInput("a solid lattice domain needs a mesh: load one, or pass --input mesh=FILE".into()))?;
+            let mesh = ctx.mesh("mesh", input)?;
+            let t = j.lattice.layer_thickness_mm;
+            let options = slice::Options { first_layer_height_mm: t, layer_height_mm: t, perimeters: 0, infill_density: 0.0, solid_layers: 0, ..slice::Options::default() };
+            ctx.stage("slice", "domains", &options, &[mesh.key], |progress| {
+                let sliced = slice::slice(&mesh, &options, progress).map_err(|e| Error::stage("slicing", e))?;
+                let r = &sliced.report;
+                let report = StageReport::new("slice", "Slicing the solid", r).metric("layers", "Layers", r.layers as f64, "", "Layers of the solid, one lattice layer each.");
+                let domains = sliced.layers.into_iter().map(|l| LayerDomain { z: l.z, height: l.height, regions: l.regions, handles: Vec::new() }).collect();
+                Ok((domains, Some(report)))
+            })?
+        }
+    };
+    let parts = (&j.lattice, line_width(design), design.seed);
+    ctx.stage("lattice", "lattice", &parts, &[domains.key], |progress| {
+        let g = lattice::generate(&domains, &j.lattice, line_width(design), design.seed, progress).map_err(|e| Error::stage("lattice", e))?;
+        let r = &g.report;
+        let struts: usize = r.struts_per_layer.iter().sum();
+        let mean_pore = if r.pore_fraction_per_layer.is_empty() { 0.0 } else { r.pore_fraction_per_layer.iter().sum::<f64>() / r.pore_fraction_per_layer.len() as f64 };
+        let report = StageReport::new("lattice", "Generating the lattice", r)
+            .metric("layers", "Layers", r.layers as f64, "", "Lattice layers generated.")
+            .metric("struts", "Struts", struts as f64, "", "Straight strut pieces over all layers, before path optimisation.")
+            .metric("pore_fraction", "Pores", 100.0 * mean_pore, "%", "Open area of a layer: the part of the domain no strut covers (mean over layers).");
+        Ok((g.layers, Some(report)))
+    })
+}
+
+/// The optimiser's report as the page draws it: the score of every GIPPO iteration per layer
+/// (Fig. 2(i) of the paper) with the best so far and the proven lower bound, the path
+/// classes, and a table of paths per layer.
+fn paths_report(r: &PathsReport) -> StageReport {
+    let total: usize = r.layers.iter().map(|l| l.paths).sum();
+    let bound: usize = r.layers.iter().map(|l| l.lower_bound_paths).sum();
+    let mut report = StageReport::new("paths", "Optimising print paths", r)
+        .metric("paths", "Paths", total as f64, "", "Extrusion paths over all layers: fewer means fewer starts and stops.")
+        .metric("lower_bound", "Lower bound", bound as f64, "", "The proven minimum number of paths (half the odd-degree nodes of each connected part, at least one).");
+    for (i, l) in r.layers.iter().enumerate() {
+        for (key, label, value, unit, hint) in [
+            ("score", "Score", l.score, "", "GIPPO equation 1: higher means longer paths and fewer of them."),
+            ("lts", "LTS", l.lts_percent, "%", "Equation 2: share of struts printed in long paths (5 nodes or more)."),
+            ("oe", "OE", l.oe_percent, "%", "Equation 3: how close the path count is to the lower bound (100 % = optimal)."),
+            ("travel", "Travel", l.travel_mm, "mm", "Moves between paths without extruding."),
+        ] {
+            report.metrics.push(crate::report::Metric { key: key.into(), label: label.into(), value, unit: unit.into(), hint: hint.into(), group_index: Some(i) });
+        }
+    }
+    let mut scores = Plot {
+        key: "scores".into(),
+        title: "GIPPO score per iteration".into(),
+        kind: PlotKind::Line,
+        x: Axis::new("Iteration", ""),
+        y: Axis::new("Score (eq. 1)", ""),
+        group: Some("Layer".into()),
+        series: Vec::new(),
+    };
+    for (i, l) in r.layers.iter().enumerate() {
+        if l.iteration_scores.is_empty() {
+            continue;
+        }
+        let x: Vec<f64> = (1..=l.iteration_scores.len()).map(|k| k as f64).collect();
+        let mut best = Vec::with_capacity(l.iteration_scores.len());
+        let mut m = f64::NEG_INFINITY;
+        for &s in &l.iteration_scores {
+            m = m.max(s);
+            best.push(m);
+        }
+        scores.series.push(Series::xy("score", x.clone(), l.iteration_scores.clone()).in_group(i));
+        scores.series.push(Series::xy("best so far", x, best).in_group(i));
+        scores.series.push(Series::hline("kept solution", l.score).in_group(i));
+    }
+    if !scores.series.is_empty() {
+        report.plots.push(scores);
+    }
+    let mut classes = Plot {
+        key: "classes".into(),
+        title: "Path classes".into(),
+        kind: PlotKind::Bars,
+        x: Axis::new("Class", ""),
+        y: Axis::new("Paths", ""),
+        group: Some("Layer".into()),
+        series: Vec::new(),
+    };
+    for (i, l) in r.layers.iter().enumerate() {
+        classes.series.push(
+            Series::bars("paths", &["long (≥ 15 nodes)", "medium (5–14)", "short (< 5)"], vec![l.long_paths as f64, l.medium_paths as f64, l.short_paths as f64]).in_group(i),
+        );
+    }
+    report.plots.push(classes);
+    let mut bound = Plot {
+        key: "bound".into(),
+        title: "Paths against the proven minimum".into(),
+        kind: PlotKind::Bars,
+        x: Axis::new("", ""),
+        y: Axis::new("Paths", ""),
+        group: Some("Layer".into()),
+        series: Vec::new(),
+    };
+    for (i, l) in r.layers.iter().enumerate() {
+        bound.series.push(Series::bars("paths", &["lower bound", "printed"], vec![l.lower_bound_paths as f64, l.paths as f64]).in_group(i));
+    }
+    report.plots.push(bound);
+    report.tables.push(Table {
+        key: "layers".into(),
+        title: "Paths per layer".into(),
+        group: None,
+        columns: ["Layer", "Struts", "Odd nodes", "Lower bound", "Paths", "Score", "Travel", "Retractions"]
+            .iter()
+            .zip(["", "", "", "", "", "", "mm", ""])
+            .map(|(label, unit)| Column { label: (*label).into(), unit: unit.into() })
+            .collect(),
+        rows: r
+            .layers
+            .iter()
+            .enumerate()
+            .map(|(i, l)| TableRow {
+                group_index: None,
+                cells: vec![
+                    i.into(),
+                    l.edges.into(),
+                    l.odd_nodes.into(),
+                    l.lower_bound_paths.into(),
+                    l.paths.into(),
+                    serde_json::json!((l.score * 1e4).round() / 1e4),
+                    serde_json::json!((l.travel_mm * 100.0).round() / 100.0),
+                    l.retractions.into(),
+                ],
+            })
+            .collect(),
+    });
+    report
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn solid_slot_switches_the_domain() {
+        let j = <LatticeKind as Kind>::slot_filled("mesh", LatticeJob::default());
+        assert_eq!(j.domain, Domain::Solid);
+        let j = <LatticeKind as Kind>::slot_filled("surface", LatticeJob::default());
+        assert_ne!(j.domain, Domain::Solid);
+    }
+}

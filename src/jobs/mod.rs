@@ -1,0 +1,337 @@
+//! Job kinds as plug-ins. Each kind is one module that declares, in one place, its settings
+//! (serde) and their form rows, its input slots, its stages (for progress), its validation
+//! rules, its extra views and its run function. [`Registry::builtin`] lists them: adding a
+//! kind is one new module plus one line there; the design, the pipeline, the CLI and the page
+//! read everything else from the kind.
+//!
+//! ```text
+//!  Design.job {kind, …} ──► Registry::get(kind) ──► JobKind::run(ctx) ──► Product (toolpath)
+//!                                                      │ ctx.stage(name, key, …)  (cached per stage)
+//!                                                      ▼
+//!                                       pipeline: gcode ─► analyze ─► RunReport
+//! ```
+
+pub mod lattice;
+pub mod slice;
+
+use crate::design::Design;
+use crate::geom::Toolpath;
+use crate::pipeline::{Ctx, Error, Out};
+use crate::settings::{Problem, Row};
+use serde::de::DeserializeOwned;
+use serde::Serialize;
+use serde_json::Value;
+
+/// What a slot holds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SlotKind {
+    /// One mesh: STL, OBJ or 3MF.
+    Mesh,
+    /// Several meshes, each with a label (foam regions).
+    Meshes,
+    /// A volume: a DICOM series (many files, a folder or a `.zip`), NRRD, raw + header.
+    Volume,
+    /// Another slicer's G-code, to edit.
+    Gcode,
+    /// A wireframe: JSON, OBJ `l` lines, CSV.
+    Frame,
+}
+
+impl SlotKind {
+    /// File name extensions a slot of this kind accepts (lower case, with the dot).
+    pub fn accept(self) -> &'static [&'static str] {
+        match self {
+            SlotKind::Mesh | SlotKind::Meshes => &[".stl", ".obj", ".3mf"],
+            SlotKind::Volume => &[".dcm", ".zip", ".nrrd", ".nhdr", ".raw"],
+            SlotKind::Gcode => &[".gcode", ".gco", ".g", ".nc"],
+            SlotKind::Frame => &[".json", ".obj", ".csv"],
+        }
+    }
+
+    /// Several files at once.
+    pub fn multiple(self) -> bool {
+        matches!(self, SlotKind::Meshes | SlotKind::Volume)
+    }
+}
+
+/// A named input of a job kind.
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct Slot {
+    /// Name (`mesh`, `surface`), used by `--input SLOT=FILE`.
+    pub name: &'static str,
+    /// Label on the page's drop zone.
+    pub label: &'static str,
+    /// What it holds.
+    pub kind: SlotKind,
+    /// Dotted design path of the [`crate::design::Input`] it fills.
+    pub path: &'static str,
+    /// The job cannot run without it (with the current settings, the job's validation says).
+    pub required: bool,
+    /// One line on what the slot is for.
+    pub doc: &'static str,
+}
+
+/// A stage of a job kind, in run order (the progress bar's steps).
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct StageInfo {
+    /// Name reported with progress (`slice`).
+    pub name: &'static str,
+    /// Label shown to the user.
+    pub label: &'static str,
+}
+
+/// The shapes of [`Inspection`] data the page has generic viewers for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Shape {
+    /// 2D segments: `x0 y0 x1 y1 feature_code` (mm), stride 5.
+    Lines2d,
+    /// 3D segments: `x0 y0 z0 x1 y1 z1 feature_code` (mm), stride 7.
+    Lines3d,
+    /// A scalar image, `width × height` values row by row (`meta` gives the size).
+    Image,
+    /// Triangles: 9 floats each (mm).
+    Mesh,
+}
+
+impl Shape {
+    /// Floats per item.
+    pub fn stride(self) -> usize {
+        match self {
+            Shape::Lines2d => 5,
+            Shape::Lines3d => 7,
+            Shape::Image => 1,
+            Shape::Mesh => 9,
+        }
+    }
+}
+
+/// An extra view of a stage's output (the lattice's 2D layer, a CT slice, …).
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct ViewInfo {
+    /// Id used in `inspect` requests.
+    pub id: &'static str,
+    /// The stage whose output it shows.
+    pub stage: &'static str,
+    /// Label of the view's card.
+    pub label: &'static str,
+    /// Data shape.
+    pub shape: Shape,
+    /// What the index counts (`Layer`).
+    pub index_label: &'static str,
+    /// One line on what it shows.
+    pub doc: &'static str,
+}
+
+/// The answer to an `inspect(view, index)` request.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Inspection {
+    /// The view.
+    pub view: String,
+    /// Data shape.
+    pub shape: Shape,
+    /// The index shown (clamped to `0..count`).
+    pub index: usize,
+    /// How many indices there are.
+    pub count: usize,
+    /// Floats per item.
+    pub stride: usize,
+    /// The data.
+    #[serde(skip)]
+    pub data: Vec<f32>,
+    /// Shape-specific facts (an image's `width` and `height`, value range, …).
+    pub meta: Value,
+}
+
+/// What a job produces for the writer.
+pub enum Product {
+    /// A toolpath (a stage output, with its key), written by the G-code stage.
+    Toolpath(Out<Toolpath>),
+}
+
+/// A job kind, as the pipeline, the design and the page see it. Implement [`Kind`] (typed)
+/// rather than this.
+pub trait JobKind: Sync {
+    /// Name written in `job.kind`.
+    fn name(&self) -> &'static str;
+    /// Label in the page's job menu.
+    fn label(&self) -> &'static str;
+    /// One line on what the job makes.
+    fn doc(&self) -> &'static str;
+    /// Form rows of its settings, mounted at their design paths (`job.…`).
+    fn fields(&self) -> Vec<Row>;
+    /// Input slots.
+    fn slots(&self) -> &'static [Slot];
+    /// Stages in run order (the pipeline adds `gcode` and `analyze`).
+    fn stages(&self) -> &'static [StageInfo];
+    /// Extra views.
+    fn views(&self) -> &'static [ViewInfo];
+    /// The default `job` object (with `kind`).
+    fn default_job(&self) -> Value;
+    /// The `job` object parsed and written back with every default filled in, or serde's
+    /// message (which names the field).
+    fn normalize(&self, job: &Value) -> Result<Value, serde_json::Error>;
+    /// Rules that tie fields together (ranges are checked from [`JobKind::fields`]).
+    fn validate(&self, design: &Design, job: &Value, out: &mut Vec<Problem>);
+    /// `job` after a file was put in `slot` (a lattice fills a loaded solid).
+    fn slot_filled(&self, _slot: &str, job: Value) -> Value {
+        job
+    }
+    /// Runs the job's own stages.
+    fn run(&self, ctx: &mut Ctx) -> Result<Product, Error>;
+    /// Data of view `view` at `index`.
+    fn inspect(&self, ctx: &mut Ctx, view: &str, index: usize) -> Result<Inspection, Error>;
+}
+
+/// A job kind with typed settings; every `Kind` is a [`JobKind`].
+pub trait Kind: Sync {
+    /// The settings: the `job` object without `kind`.
+    type Settings: Serialize + DeserializeOwned + Default;
+    /// Name written in `job.kind`.
+    const NAME: &'static str;
+    /// Label in the page's job menu.
+    const LABEL: &'static str;
+    /// One line on what the job makes.
+    const DOC: &'static str;
+    /// Input slots.
+    const SLOTS: &'static [Slot];
+    /// Stages in run order.
+    const STAGES: &'static [StageInfo];
+    /// Extra views.
+    const VIEWS: &'static [ViewInfo] = &[];
+    /// Form rows (mounted at design paths, e.g. with [`crate::settings::mount`]).
+    fn fields() -> Vec<Row>;
+    /// Cross-field rules.
+    fn validate(_design: &Design, _settings: &Self::Settings, _out: &mut Vec<Problem>) {}
+    /// The settings after a file was put in `slot`.
+    fn slot_filled(_slot: &str, settings: Self::Settings) -> Self::Settings {
+        settings
+    }
+    /// Runs the job's stages.
+    fn run(settings: &Self::Settings, ctx: &mut Ctx) -> Result<Product, Error>;
+    /// Data of a view.
+    fn inspect(_settings: &Self::Settings, _ctx: &mut Ctx, view: &str, _index: usize) -> Result<Inspection, Error> {
+        Err(Error::UnknownView { view: view.into(), job: Self::NAME })
+    }
+}
+
+/// The typed settings of `job` (a normalised `job` object).
+pub fn settings<T: DeserializeOwned>(job: &Value) -> Result<T, Error> {
+    let mut v = job.clone();
+    if let Value::Object(m) = &mut v {
+        m.remove("kind");
+    }
+    serde_json::from_value(v).map_err(|e| Error::BadJob(e.to_string()))
+}
+
+fn with_kind(name: &str, settings: &impl Serialize) -> Result<Value, serde_json::Error> {
+    let mut v = serde_json::to_value(settings)?;
+    if let Value::Object(m) = &mut v {
+        // `kind` first, as people write it.
+        let mut out = serde_json::Map::new();
+        out.insert("kind".into(), Value::String(name.into()));
+        out.append(m);
+        return Ok(Value::Object(out));
+    }
+    Ok(v)
+}
+
+impl<K: Kind> JobKind for K {
+    fn name(&self) -> &'static str {
+        K::NAME
+    }
+    fn label(&self) -> &'static str {
+        K::LABEL
+    }
+    fn doc(&self) -> &'static str {
+        K::DOC
+    }
+    fn fields(&self) -> Vec<Row> {
+        let mut rows = K::fields();
+        for r in &mut rows {
+            r.job = Some(K::NAME);
+        }
+        rows
+    }
+    fn slots(&self) -> &'static [Slot] {
+        K::SLOTS
+    }
+    fn stages(&self) -> &'static [StageInfo] {
+        K::STAGES
+    }
+    fn views(&self) -> &'static [ViewInfo] {
+        K::VIEWS
+    }
+    fn default_job(&self) -> Value {
+        with_kind(K::NAME, &K::Settings::default()).unwrap_or(Value::Null)
+    }
+    fn normalize(&self, job: &Value) -> Result<Value, serde_json::Error> {
+        let mut v = job.clone();
+        if let Value::Object(m) = &mut v {
+            m.remove("kind");
+        }
+        let s: K::Settings = serde_json::from_value(v)?;
+        with_kind(K::NAME, &s)
+    }
+    fn validate(&self, design: &Design, job: &Value, out: &mut Vec<Problem>) {
+        if let Ok(s) = settings::<K::Settings>(job) {
+            K::validate(design, &s, out);
+        }
+    }
+    fn slot_filled(&self, slot: &str, job: Value) -> Value {
+        match settings::<K::Settings>(&job) {
+            Ok(s) => with_kind(K::NAME, &K::slot_filled(slot, s)).unwrap_or(job),
+            Err(_) => job,
+        }
+    }
+    fn run(&self, ctx: &mut Ctx) -> Result<Product, Error> {
+        let s: K::Settings = settings(&ctx.design.job.value)?;
+        K::run(&s, ctx)
+    }
+    fn inspect(&self, ctx: &mut Ctx, view: &str, index: usize) -> Result<Inspection, Error> {
+        let s: K::Settings = settings(&ctx.design.job.value)?;
+        K::inspect(&s, ctx, view, index)
+    }
+}
+
+/// The job kinds a build knows.
+#[derive(Clone)]
+pub struct Registry {
+    kinds: Vec<&'static dyn JobKind>,
+}
+
+impl Registry {
+    /// The kinds built into weft. **Register a new kind here** (one line).
+    pub fn builtin() -> Registry {
+        Registry { kinds: vec![&slice::SliceKind, &lattice::LatticeKind] }
+    }
+
+    /// This registry plus `kind` (a kind defined outside the crate, e.g. in a test).
+    pub fn with(mut self, kind: &'static dyn JobKind) -> Registry {
+        self.kinds.retain(|k| k.name() != kind.name());
+        self.kinds.push(kind);
+        self
+    }
+
+    /// The kind named `name`.
+    pub fn get(&self, name: &str) -> Option<&'static dyn JobKind> {
+        self.kinds.iter().copied().find(|k| k.name() == name)
+    }
+
+    /// Every kind, in menu order.
+    pub fn kinds(&self) -> &[&'static dyn JobKind] {
+        &self.kinds
+    }
+
+    /// Names of every kind.
+    pub fn names(&self) -> Vec<&'static str> {
+        self.kinds.iter().map(|k| k.name()).collect()
+    }
+}
+
+impl Default for Registry {
+    fn default() -> Self {
+        Registry::builtin()
+    }
+}

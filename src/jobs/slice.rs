@@ -1,0 +1,91 @@
+//! The `slice` job: a solid sliced into planar layers of perimeters and rectilinear infill.
+
+use super::{Kind, Product, Slot, SlotKind, StageInfo};
+use crate::design::Input;
+use crate::geom::shapes::{self, Shape};
+use crate::pipeline::{Ctx, Error};
+use crate::report::StageReport;
+use crate::settings::{mount, Row};
+use crate::slice;
+use serde::{Deserialize, Serialize};
+
+/// Settings of a `slice` job.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SliceJob {
+    /// The solid to slice. Default: a 20 mm cube.
+    #[serde(default = "default_input")]
+    pub input: Input,
+    /// Layer heights, perimeters, infill.
+    #[serde(default)]
+    pub slice: slice::Options,
+}
+
+impl Default for SliceJob {
+    fn default() -> Self {
+        SliceJob { input: default_input(), slice: slice::Options::default() }
+    }
+}
+
+fn default_input() -> Input {
+    Input::Builtin(Shape::Cube { size: [20.0, 20.0, 20.0] })
+}
+
+/// The `slice` job kind.
+pub struct SliceKind;
+
+const SLOTS: &[Slot] = &[Slot {
+    name: "mesh",
+    label: "Part",
+    kind: SlotKind::Mesh,
+    path: "job.input",
+    required: false,
+    doc: "The solid to slice (STL, OBJ or 3MF); without one, the built-in shape is sliced.",
+}];
+
+const STAGES: &[StageInfo] = &[
+    StageInfo { name: "import", label: "Reading the mesh" },
+    StageInfo { name: "slice", label: "Slicing layers" },
+];
+
+impl Kind for SliceKind {
+    type Settings = SliceJob;
+    const NAME: &'static str = "slice";
+    const LABEL: &'static str = "Slice a part";
+    const DOC: &'static str = "Planar layers of perimeters and rectilinear infill, like any slicer.";
+    const SLOTS: &'static [Slot] = SLOTS;
+    const STAGES: &'static [StageInfo] = STAGES;
+
+    fn fields() -> Vec<Row> {
+        let mut rows = mount("job.slice", slice::FIELDS);
+        rows.extend(mount("job.input", shapes::FIELDS));
+        rows
+    }
+
+    fn validate(design: &crate::design::Design, s: &SliceJob, out: &mut Vec<crate::settings::Problem>) {
+        let nozzle = design.printer.nozzle_diameter_mm;
+        for (path, h) in [("job.slice.layer_height_mm", s.slice.layer_height_mm), ("job.slice.first_layer_height_mm", s.slice.first_layer_height_mm)] {
+            if h > nozzle {
+                out.push(crate::settings::Problem {
+                    path: path.into(),
+                    message: format!(
+                        "{} mm is thicker than the {} mm nozzle: use at most the nozzle diameter",
+                        crate::settings::fmt(h),
+                        crate::settings::fmt(nozzle)
+                    ),
+                });
+            }
+        }
+    }
+
+    fn run(s: &SliceJob, ctx: &mut Ctx) -> Result<Product, Error> {
+        let mesh = ctx.mesh("mesh", &s.input)?;
+        let sliced = ctx.stage("slice", "slice", &s.slice, &[mesh.key], |progress| {
+            let sliced = slice::slice(&mesh, &s.slice, progress).map_err(|e| Error::stage("slicing", e))?;
+            let r = &sliced.report;
+            let report = StageReport::new("slice", "Slicing layers", r).metric("layers", "Layers", r.layers as f64, "", "Planar layers cut from the part.");
+            Ok((sliced.toolpath, Some(report)))
+        })?;
+        Ok(Product::Toolpath(sliced))
+    }
+}

@@ -1,14 +1,19 @@
 //! The only module that knows about JavaScript (compiled for wasm32 only).
 //!
 //! Free functions serve the page's cheap synchronous needs (schema, validation, share
-//! links); [`Session`] lives in the Web Worker, holds loaded files and the last result, and
-//! hands out preview buffers as typed arrays (copied once out of wasm memory, then
-//! transferred, not copied, to the page).
+//! links); [`Session`] lives in the Web Worker and holds the loaded files, the stage cache
+//! (so an edit re-runs only the stages it affects) and the last result. Structured values
+//! (schema, reports, inspections) cross as plain JS objects through serde-wasm-bindgen; bulk
+//! data leaves as typed arrays copied once out of wasm memory, which the worker then
+//! transfers (not copies) to the page.
 
-use crate::analyze;
-use crate::design::{schema, share, Design};
-use crate::import;
-use crate::pipeline::{self, Files, RunOptions};
+use crate::analyze::{self, Preview};
+use crate::design::{schema, share, Design, Input};
+
+use crate::jobs::{Registry, SlotKind};
+use crate::pipeline::{self, Cache, Files, RunOptions};
+use serde::Serialize;
+use std::sync::Arc;
 use wasm_bindgen::prelude::*;
 
 #[wasm_bindgen(start)]
@@ -20,16 +25,21 @@ fn js_err(e: impl std::fmt::Display) -> JsError {
     JsError::new(&e.to_string())
 }
 
+/// A plain JS object (maps as objects, not `Map`s) from a Rust value.
+fn to_js<T: Serialize + ?Sized>(value: &T) -> Result<JsValue, JsError> {
+    value.serialize(&serde_wasm_bindgen::Serializer::json_compatible()).map_err(js_err)
+}
+
 /// A default design (pretty JSON).
 #[wasm_bindgen(js_name = defaultDesign)]
 pub fn default_design() -> String {
     Design::default().to_json_pretty()
 }
 
-/// The field table the form is built from (JSON).
+/// Everything the page builds its form, menus, progress and colours from (an object).
 #[wasm_bindgen(js_name = designSchema)]
-pub fn design_schema() -> String {
-    schema::schema_json()
+pub fn design_schema() -> Result<JsValue, JsError> {
+    to_js(&schema::schema(&Registry::builtin()))
 }
 
 /// Parses and validates a design; returns it normalised (pretty JSON).
@@ -49,15 +59,35 @@ pub fn set_field(json: &str, path: &str, value: &str) -> Result<String, JsError>
     })
 }
 
-/// A share-link fragment for the design (JSON `{fragment, embedded, note}`).
+/// Puts a loaded file (or several, for a slot that takes several) in `slot` of the design
+/// and applies the job kind's rule for a filled slot; returns the new design (pretty JSON).
+#[wasm_bindgen(js_name = fillSlot)]
+pub fn fill_slot(json: &str, slot: &str, names: Vec<String>) -> Result<String, JsError> {
+    let d = Design::from_json("design", json).map_err(js_err)?;
+    let input = match names.as_slice() {
+        [one] => Input::File { name: one.clone(), embedded: None },
+        _ => Input::Files(names),
+    };
+    d.with_slot_input(&Registry::builtin(), slot, input).map(|d| d.to_json_pretty()).map_err(js_err)
+}
+
+/// A share-link fragment for the design with the given files (`[{slot, name, bytes}]`);
+/// returns `{fragment, embedded: [names], missing: [names], note}`.
 #[wasm_bindgen(js_name = encodeShare)]
-pub fn encode_share(design_json: &str, file_name: Option<String>, file_bytes: Option<Vec<u8>>) -> Result<String, JsError> {
-    let mut d = Design::from_json("design", design_json).map_err(js_err)?;
-    if let (Some(name), Some(slot)) = (file_name, d.job.input_mut()) {
-        *slot = crate::design::Input::File { name, embedded: None };
+pub fn encode_share(design_json: &str, files: JsValue) -> Result<JsValue, JsError> {
+    let d = Design::from_json("design", design_json).map_err(js_err)?;
+    let mut owned: Vec<(String, Vec<u8>)> = Vec::new();
+    if let Some(list) = files.dyn_ref::<js_sys::Array>() {
+        for item in list.iter() {
+            let name = js_sys::Reflect::get(&item, &"name".into()).ok().and_then(|v| v.as_string());
+            let bytes = js_sys::Reflect::get(&item, &"bytes".into()).ok().filter(|b| b.is_object());
+            if let (Some(name), Some(bytes)) = (name, bytes) {
+                owned.push((name, js_sys::Uint8Array::new(&bytes).to_vec()));
+            }
+        }
     }
-    let link = share::encode(&d, file_bytes.as_deref());
-    serde_json::to_string(&link).map_err(js_err)
+    let list: Vec<(&str, &[u8])> = owned.iter().map(|(n, b)| (n.as_str(), b.as_slice())).collect();
+    to_js(&share::encode(&d, &list))
 }
 
 /// The design in a share-link fragment (pretty JSON).
@@ -66,12 +96,24 @@ pub fn decode_share(fragment: &str) -> Result<String, JsError> {
     share::decode(fragment).map(|d| d.to_json_pretty()).map_err(js_err)
 }
 
-/// State held by the worker: loaded files and the last result.
+/// What `addFile` says about a file.
+#[derive(Serialize)]
+struct Loaded {
+    slot: String,
+    name: String,
+    kind: SlotKind,
+    summary: String,
+    report: serde_json::Value,
+}
+
+/// State held by the worker: loaded files, the stage cache and the last result.
 #[wasm_bindgen]
 pub struct Session {
+    registry: Registry,
     files: Files,
-    gcode: Vec<u8>,
-    preview: analyze::Preview,
+    cache: Cache,
+    gcode: Arc<String>,
+    preview: Arc<Preview>,
     bed: [f64; 3],
 }
 
@@ -81,120 +123,216 @@ impl Default for Session {
     }
 }
 
+fn f32_array(v: &[f32]) -> js_sys::Float32Array {
+    js_sys::Float32Array::from(v)
+}
+
+fn u32_array(v: &[u32]) -> js_sys::Uint32Array {
+    js_sys::Uint32Array::from(v)
+}
+
 #[wasm_bindgen]
 impl Session {
     /// An empty session.
     #[wasm_bindgen(constructor)]
     pub fn new() -> Session {
-        Session { files: Files::new(), gcode: Vec::new(), preview: Default::default(), bed: Design::default().printer.bed_size_mm }
+        Session {
+            registry: Registry::builtin(),
+            files: Files::new(),
+            cache: Cache::new(),
+            gcode: Arc::default(),
+            preview: Arc::default(),
+            bed: Design::default().printer.bed_size_mm,
+        }
     }
 
-    /// Reads a mesh now (so a bad file is reported at once) and keeps it; returns the import report.
+    /// Keeps a file for `slot` and reads it now with the slot kind's reader, so a bad file is
+    /// reported at once (a mesh is imported into the stage cache: the run does not read it
+    /// again). Returns `{slot, name, kind, summary, report}`.
     #[wasm_bindgen(js_name = addFile)]
-    pub fn add_file(&mut self, name: &str, bytes: Vec<u8>) -> Result<String, JsError> {
-        let imported = import::read_mesh(name, &bytes, &import::Options::default()).map_err(js_err)?;
+    pub fn add_file(&mut self, slot: &str, name: &str, bytes: Vec<u8>) -> Result<JsValue, JsError> {
+        let kind = self
+            .registry
+            .kinds()
+            .iter()
+            .flat_map(|k| k.slots())
+            .find(|s| s.name == slot)
+            .map(|s| s.kind)
+            .ok_or_else(|| JsError::new(&format!("no job kind has an input slot '{slot}'")))?;
+        let size = bytes.len();
         self.files.insert(name.to_string(), bytes);
-        serde_json::to_string(&imported.report).map_err(js_err)
+        let (summary, report) = match kind {
+            SlotKind::Mesh | SlotKind::Meshes => {
+                let design = Design::default();
+                let mut quiet = |_: &str, _: f32| {};
+                let mut ctx = pipeline::Ctx::new(&design, &self.files, &mut self.cache, &mut quiet);
+                let input = Input::File { name: name.to_string(), embedded: None };
+                match ctx.mesh(slot, &input) {
+                    Ok(mesh) => {
+                        let report = ctx.reports.first().map(|r| r.data.clone()).unwrap_or_default();
+                        let size = mesh.bounds().map(|b| b.max - b.min).unwrap_or_default();
+                        let tris = mesh.triangles.len();
+                        (format!("{} triangles, {:.1} × {:.1} × {:.1} mm", group(tris), size.x, size.y, size.z), report)
+                    }
+                    Err(e) => {
+                        self.files.remove(name);
+                        return Err(js_err(e));
+                    }
+                }
+            }
+            SlotKind::Gcode => {
+                let a = analyze::analyze(name, self.files.get(name).unwrap_or_default(), &analyze::Options::default());
+                match a {
+                    Ok(a) => (format!("{} layers, {:.0} mm extruded", a.report.layers, a.report.extruded_mm), serde_json::to_value(&a.report).unwrap_or_default()),
+                    Err(e) => {
+                        self.files.remove(name);
+                        return Err(js_err(e));
+                    }
+                }
+            }
+            // Read by the job kinds that use them (volumes, wireframes), when they run.
+            SlotKind::Volume | SlotKind::Frame => (format!("{} bytes", group(size)), serde_json::Value::Null),
+        };
+        to_js(&Loaded { slot: slot.into(), name: name.into(), kind, summary, report })
     }
 
-    /// Runs a design; `on_progress(stage, fraction)`; returns the run report (JSON).
-    pub fn run(&mut self, design_json: &str, on_progress: &js_sys::Function) -> Result<String, JsError> {
+    /// Forgets a file (and the stage outputs made from it at the next run).
+    #[wasm_bindgen(js_name = removeFile)]
+    pub fn remove_file(&mut self, name: &str) -> bool {
+        self.files.remove(name)
+    }
+
+    /// Runs a design; `on_progress(stage, fraction)`; returns the run report (an object).
+    pub fn run(&mut self, design_json: &str, on_progress: &js_sys::Function) -> Result<JsValue, JsError> {
         let design = Design::from_json("design", design_json).map_err(js_err)?;
-        let mut progress = |stage: pipeline::Stage, f: f32| {
-            let _ = on_progress.call2(&JsValue::NULL, &JsValue::from_str(stage.name()), &JsValue::from_f64(f as f64));
+        let mut progress = |stage: &str, f: f32| {
+            let _ = on_progress.call2(&JsValue::NULL, &JsValue::from_str(stage), &JsValue::from_f64(f as f64));
         };
-        let out = pipeline::run(&design, &self.files, &RunOptions { collect_preview: true }, &mut progress).map_err(js_err)?;
-        self.gcode = out.gcode.into_bytes();
+        let out = pipeline::run_in(&self.registry, &mut self.cache, &design, &self.files, &RunOptions { collect_preview: true }, &mut progress)
+            .map_err(js_err)?;
+        self.gcode = out.gcode;
         self.preview = out.preview.unwrap_or_default();
         self.bed = design.printer.bed_size_mm;
-        serde_json::to_string(&out.report).map_err(js_err)
+        to_js(&out.report)
     }
 
-    /// Analyses a G-code file and makes it the current result; returns `{analysis}` (JSON).
+    /// Data of view `view` at `index` of the design's job: `{view, shape, index, count,
+    /// stride, data: Float32Array, meta}`.
+    pub fn inspect(&mut self, design_json: &str, view: &str, index: usize) -> Result<JsValue, JsError> {
+        let design = Design::from_json("design", design_json).map_err(js_err)?;
+        let found = pipeline::inspect(&self.registry, &mut self.cache, &design, &self.files, view, index).map_err(js_err)?;
+        let obj = to_js(&found)?;
+        js_sys::Reflect::set(&obj, &"data".into(), &f32_array(&found.data)).map_err(|_| JsError::new("inspect: cannot build the answer"))?;
+        Ok(obj)
+    }
+
+    /// Analyses a G-code file and makes it the current result; returns `{analysis}`.
     #[wasm_bindgen(js_name = analyzeGcode)]
-    pub fn analyze_gcode(&mut self, name: &str, bytes: Vec<u8>) -> Result<String, JsError> {
+    pub fn analyze_gcode(&mut self, name: &str, bytes: Vec<u8>) -> Result<JsValue, JsError> {
         let options = analyze::Options { collect_preview: true, ..Default::default() };
         let a = analyze::analyze(name, &bytes, &options).map_err(js_err)?;
-        self.gcode = bytes;
-        self.preview = a.preview.unwrap_or_default();
-        #[derive(serde::Serialize)]
+        self.gcode = Arc::new(String::from_utf8_lossy(&bytes).into_owned());
+        self.preview = Arc::new(a.preview.unwrap_or_default());
+        #[derive(Serialize)]
         struct Out<'a> {
             analysis: &'a analyze::Report,
         }
-        serde_json::to_string(&Out { analysis: &a.report }).map_err(js_err)
-    }
-
-    /// The lattice strokes of layer `layer` (0-based) of a lattice design, for the page's 2D
-    /// preview: 5 floats per segment, x0 y0 x1 y1 feature-code (mm, model coordinates).
-    #[wasm_bindgen(js_name = latticeLayer)]
-    pub fn lattice_layer(&self, design_json: &str, layer: usize) -> Result<Vec<f32>, JsError> {
-        let design = Design::from_json("design", design_json).map_err(js_err)?;
-        let (layers, _) = pipeline::lattice_strokes(&design, &self.files, &mut |_, _| {}).map_err(js_err)?;
-        let mut out = Vec::new();
-        if let Some(l) = layers.get(layer.min(layers.len().saturating_sub(1))) {
-            for s in &l.strokes {
-                for w in s.points.windows(2) {
-                    out.extend_from_slice(&[w[0].x as f32, w[0].y as f32, w[1].x as f32, w[1].y as f32, s.feature.code() as f32]);
-                }
-            }
-        }
-        Ok(out)
+        to_js(&Out { analysis: &a.report })
     }
 
     /// G-code bytes of the last result.
-    pub fn gcode(&self) -> Vec<u8> {
-        self.gcode.clone()
+    pub fn gcode(&self) -> js_sys::Uint8Array {
+        js_sys::Uint8Array::from(self.gcode.as_bytes())
     }
     /// Extrusion segments, 6 floats each (mm).
     #[wasm_bindgen(js_name = previewPositions)]
-    pub fn preview_positions(&self) -> Vec<f32> {
-        self.preview.positions.clone()
+    pub fn preview_positions(&self) -> js_sys::Float32Array {
+        f32_array(&self.preview.positions)
     }
     /// Feature code per segment.
     #[wasm_bindgen(js_name = previewFeature)]
-    pub fn preview_feature(&self) -> Vec<u8> {
-        self.preview.feature.clone()
+    pub fn preview_feature(&self) -> js_sys::Uint8Array {
+        js_sys::Uint8Array::from(self.preview.feature.as_slice())
     }
     /// Path index per segment.
     #[wasm_bindgen(js_name = previewPath)]
-    pub fn preview_path(&self) -> Vec<u32> {
-        self.preview.path.clone()
+    pub fn preview_path(&self) -> js_sys::Uint32Array {
+        u32_array(&self.preview.path)
     }
     /// Volumetric flow per segment, mm³/s.
     #[wasm_bindgen(js_name = previewFlow)]
-    pub fn preview_flow(&self) -> Vec<f32> {
-        self.preview.flow.clone()
+    pub fn preview_flow(&self) -> js_sys::Float32Array {
+        f32_array(&self.preview.flow)
     }
     /// Width per segment, mm.
     #[wasm_bindgen(js_name = previewWidth)]
-    pub fn preview_width(&self) -> Vec<f32> {
-        self.preview.width.clone()
+    pub fn preview_width(&self) -> js_sys::Float32Array {
+        f32_array(&self.preview.width)
     }
     /// First segment of each layer, plus the end.
     #[wasm_bindgen(js_name = previewLayerStart)]
-    pub fn preview_layer_start(&self) -> Vec<u32> {
-        self.preview.layer_segment_start.clone()
+    pub fn preview_layer_start(&self) -> js_sys::Uint32Array {
+        u32_array(&self.preview.layer_segment_start)
     }
     /// Travel segments, 6 floats each (mm).
     #[wasm_bindgen(js_name = previewTravel)]
-    pub fn preview_travel(&self) -> Vec<f32> {
-        self.preview.travel_positions.clone()
+    pub fn preview_travel(&self) -> js_sys::Float32Array {
+        f32_array(&self.preview.travel_positions)
     }
     /// First travel segment of each layer, plus the end.
     #[wasm_bindgen(js_name = previewTravelLayerStart)]
-    pub fn preview_travel_layer_start(&self) -> Vec<u32> {
-        self.preview.layer_travel_start.clone()
+    pub fn preview_travel_layer_start(&self) -> js_sys::Uint32Array {
+        u32_array(&self.preview.layer_travel_start)
     }
     /// Z of each layer, mm.
     #[wasm_bindgen(js_name = previewLayerZ)]
-    pub fn preview_layer_z(&self) -> Vec<f32> {
-        self.preview.layer_z.clone()
+    pub fn preview_layer_z(&self) -> js_sys::Float32Array {
+        f32_array(&self.preview.layer_z)
+    }
+    /// Tool axis at the end of each extrusion segment (3 floats), empty without tool axes.
+    #[wasm_bindgen(js_name = previewAxis)]
+    pub fn preview_axis(&self) -> js_sys::Float32Array {
+        f32_array(preview_axis(&self.preview))
+    }
+    /// Per extrusion segment, the index of the G-code move it came from.
+    #[wasm_bindgen(js_name = previewSegmentMove)]
+    pub fn preview_segment_move(&self) -> js_sys::Uint32Array {
+        u32_array(preview_segment_move(&self.preview))
+    }
+    /// Per travel segment, the index of the G-code move it came from.
+    #[wasm_bindgen(js_name = previewTravelMove)]
+    pub fn preview_travel_move(&self) -> js_sys::Uint32Array {
+        u32_array(preview_travel_move(&self.preview))
     }
     /// Bed size of the last run's printer, mm.
     #[wasm_bindgen(js_name = bedSize)]
     pub fn bed_size(&self) -> Vec<f64> {
         self.bed.to_vec()
     }
+}
+
+// The analyzer's print-order and tool-axis buffers (filled once the analyzer provides them).
+fn preview_axis(_p: &Preview) -> &[f32] {
+    &[]
+}
+fn preview_segment_move(_p: &Preview) -> &[u32] {
+    &[]
+}
+fn preview_travel_move(_p: &Preview) -> &[u32] {
+    &[]
+}
+
+/// `1234567` → `1,234,567`.
+fn group(n: usize) -> String {
+    let s = n.to_string();
+    let mut out = String::new();
+    for (i, c) in s.chars().enumerate() {
+        if i > 0 && (s.len() - i) % 3 == 0 {
+            out.push(',');
+        }
+        out.push(c);
+    }
+    out
 }
 
 /// Segments (x0 y0 x1 y1, mm, centred on 0) of `pattern` (JSON, e.g. `{"kind":"voronoi"}`)
@@ -205,52 +343,60 @@ pub fn pattern_thumbnail(pattern_json: &str, size_mm: f64, seed: u64) -> Result<
     Ok(crate::lattice::thumbnail(&pattern, size_mm, seed).into_iter().flat_map(|s| s.map(|x| x as f32)).collect())
 }
 
-/// Benchmark workload: binary STL of the benchmark mesh (about `triangles` triangles).
-#[wasm_bindgen(js_name = benchMeshStl)]
-pub fn bench_mesh_stl(triangles: usize) -> Vec<u8> {
-    crate::bench::bench_mesh(triangles).to_stl_binary()
-}
+/// Benchmark workloads, built only with `--features bench` (the benchmark page's wasm), so
+/// the production module does not carry them.
+#[cfg(feature = "bench")]
+mod bench_exports {
+    use super::*;
 
-/// Benchmark workload: the slicing benchmark design (JSON).
-#[wasm_bindgen(js_name = benchDesign)]
-pub fn bench_design() -> String {
-    crate::bench::bench_design().to_json_pretty()
-}
-
-/// Benchmark workload: analyses `gcode` without preview; returns the report JSON.
-#[wasm_bindgen(js_name = benchAnalyze)]
-pub fn bench_analyze(gcode: &[u8]) -> Result<String, JsError> {
-    let a = analyze::analyze("bench.gcode", gcode, &Default::default()).map_err(js_err)?;
-    serde_json::to_string(&a.report).map_err(js_err)
-}
-
-/// Benchmark workload: one lattice path-optimisation layer (`src/bench.rs`), prepared by
-/// [`BenchLattice::new`] (not timed); [`BenchLattice::run`] is the part timed in the worker.
-#[wasm_bindgen]
-pub struct BenchLattice(crate::bench::LatticeBench);
-
-#[wasm_bindgen]
-impl BenchLattice {
-    /// Prepares `which` (`honeycomb-10mm`, `disc-48mm` or `euler-100k`).
-    #[wasm_bindgen(constructor)]
-    pub fn new(which: &str) -> Result<BenchLattice, JsError> {
-        crate::bench::LatticeBench::prepare(which).map(BenchLattice).map_err(js_err)
+    /// Benchmark workload: binary STL of the benchmark mesh (about `triangles` triangles).
+    #[wasm_bindgen(js_name = benchMeshStl)]
+    pub fn bench_mesh_stl(triangles: usize) -> Vec<u8> {
+        crate::bench::bench_mesh(triangles).to_stl_binary()
     }
 
-    /// Runs `paths::optimise` once; returns `{edges, paths, score}` as JSON.
-    pub fn run(&self) -> Result<String, JsError> {
-        let s = self.0.run().map_err(js_err)?;
-        Ok(format!(r#"{{"edges":{},"paths":{},"score":{}}}"#, s.edges, s.paths, s.score))
+    /// Benchmark workload: the slicing benchmark design (JSON).
+    #[wasm_bindgen(js_name = benchDesign)]
+    pub fn bench_design() -> String {
+        crate::bench::bench_design().to_json_pretty()
     }
 
-    /// The method (`gippo_max` or `euler`).
-    pub fn method(&self) -> String {
-        self.0.method().into()
+    /// Benchmark workload: analyses `gcode` without preview; returns the report JSON.
+    #[wasm_bindgen(js_name = benchAnalyze)]
+    pub fn bench_analyze(gcode: &[u8]) -> Result<String, JsError> {
+        let a = analyze::analyze("bench.gcode", gcode, &Default::default()).map_err(js_err)?;
+        serde_json::to_string(&a.report).map_err(js_err)
     }
 
-    /// The issue's target, ms.
-    #[wasm_bindgen(js_name = targetMs)]
-    pub fn target_ms(&self) -> f64 {
-        self.0.target_ms()
+    /// Benchmark workload: one lattice path-optimisation layer (`src/bench.rs`), prepared by
+    /// [`BenchLattice::new`] (not timed); [`BenchLattice::run`] is the part timed in the worker.
+    #[wasm_bindgen]
+    pub struct BenchLattice(crate::bench::LatticeBench);
+
+    #[wasm_bindgen]
+    impl BenchLattice {
+        /// Prepares `which` (`honeycomb-10mm`, `disc-48mm` or `euler-100k`).
+        #[wasm_bindgen(constructor)]
+        pub fn new(which: &str) -> Result<BenchLattice, JsError> {
+            crate::bench::LatticeBench::prepare(which).map(BenchLattice).map_err(js_err)
+        }
+
+        /// Runs `paths::optimise` once; returns `{edges, paths, score}` as JSON.
+        pub fn run(&self) -> Result<String, JsError> {
+            let s = self.0.run().map_err(js_err)?;
+            Ok(format!(r#"{{"edges":{},"paths":{},"score":{}}}"#, s.edges, s.paths, s.score))
+        }
+
+        /// The method (`gippo_max` or `euler`).
+        pub fn method(&self) -> String {
+            self.0.method().into()
+        }
+
+        /// The issue's target, ms.
+        #[wasm_bindgen(js_name = targetMs)]
+        pub fn target_ms(&self) -> f64 {
+            self.0.target_ms()
+        }
     }
 }
+

@@ -5,6 +5,10 @@
 # Usage: scripts/bench.sh                 (CARGO_TARGET_DIR is honoured; default ./target)
 #        BENCH_TRIANGLES=200000 BENCH_GCODE_MB=20 scripts/bench.sh   (a quick run)
 #        BENCH_LATTICE_ONLY=1 scripts/bench.sh   (only the lattice path-optimisation benchmarks)
+# The wasm is built with the cargo feature `bench` (the benchmark exports the worker calls:
+# benchMeshStl, benchDesign, benchAnalyze, BenchLattice) into its own directory, default
+# <target dir>/pkg-bench (WEFT_PKG_DIR overrides), which tests/e2e/bench.mjs serves as /pkg/;
+# the production ./pkg (scripts/build-www.sh without features) is left as it is.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 root=$(pwd)
@@ -13,8 +17,9 @@ say() { printf '[bench] %s\n' "$*" >&2; }
 
 say "cargo build --release --bin weft"
 cargo build --release --bin weft >&2
-say "scripts/build-www.sh"
-bash scripts/build-www.sh >&2
+export WEFT_PKG_DIR="${WEFT_PKG_DIR:-$target_dir/pkg-bench}"
+say "WEFT_WASM_FEATURES=bench WEFT_PKG_DIR=$WEFT_PKG_DIR scripts/build-www.sh"
+WEFT_WASM_FEATURES=bench bash scripts/build-www.sh >&2
 
 say "machine: $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2- | sed 's/^ //'), $(nproc) cores, $(free -g | awk '/^Mem:/{print $2}') GiB RAM; load: $(cut -d' ' -f1-3 /proc/loadavg)"
 WEFT_BIN="${WEFT_BIN:-$target_dir/release/weft}" node tests/e2e/bench.mjs

@@ -1,23 +1,47 @@
 #!/usr/bin/env bash
 # Builds everything the static page needs, idempotently, installing what is missing:
-#   pkg/weft.js + pkg/weft_bg.wasm   (cargo --profile wasm → wasm-bindgen --target web → wasm-opt -Oz)
+#   pkg/weft.js + pkg/weft_bg.wasm   (cargo --profile wasm → wasm-bindgen --target web →
+#                                     wasm-opt -Oz from the npm package binaryen)
 #   www/vendor/                      (three.js module build + OrbitControls, from node_modules)
 #   www/examples/                    (examples/*.json + index.json)
 # Usage: scripts/build-www.sh            (CARGO_TARGET_DIR is honoured; default ./target)
 #        SKIP_WASM=1 scripts/build-www.sh  (only vendor + examples)
+# Environment (the production build, used by the tests and the served app, sets neither):
+#   WEFT_WASM_FEATURES  cargo features of the wasm build, e.g. "bench" (scripts/bench.sh)
+#   WEFT_PKG_DIR        output directory of the wasm build instead of ./pkg (the variable
+#                       tests/e2e/run.mjs and bench.mjs read to serve it as /pkg/)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 root=$(pwd)
 target_dir=${CARGO_TARGET_DIR:-$root/target}
 bindgen_version=0.2.130
+features=${WEFT_WASM_FEATURES:-}
+pkg_dir=${WEFT_PKG_DIR:-pkg}
+wasm_opt=$root/node_modules/.bin/wasm-opt
 say() { printf '[build-www] %s\n' "$*"; }
 
-# --- JS dependencies (three.js, playwright-core) -------------------------------------------
-if [ ! -d node_modules/three ] || [ ! -d node_modules/playwright-core ]; then
+# --- JS dependencies (three.js, playwright-core, binaryen's wasm-opt) ----------------------
+# Every devDependency of package.json must be in node_modules at its pinned version (a
+# dependency given as a range only needs to be there); otherwise `npm ci` installs them all.
+js_deps_ok() {
+  node --input-type=commonjs -e '
+    const fs = require("fs");
+    const deps = JSON.parse(fs.readFileSync("package.json", "utf8")).devDependencies ?? {};
+    for (const [name, spec] of Object.entries(deps)) {
+      let have;
+      try { have = JSON.parse(fs.readFileSync(`node_modules/${name}/package.json`, "utf8")).version; }
+      catch { process.exit(1); }
+      if (/^\d+\.\d+\.\d+$/.test(spec) && have !== spec) process.exit(1);
+    }' && [ -x "$wasm_opt" ]
+}
+if ! js_deps_ok; then
+  say "installing JS dependencies (npm)"
   if [ -f package-lock.json ]; then npm ci --no-audit --no-fund; else npm install --no-audit --no-fund; fi
 fi
 
 # --- wasm --------------------------------------------------------------------------------
+gz_bytes() { gzip -9 -c "$1" | wc -c | tr -d ' '; }
+raw_bytes() { wc -c < "$1" | tr -d ' '; }
 if [ -z "${SKIP_WASM:-}" ]; then
   if ! rustup target list --installed 2>/dev/null | grep -qx wasm32-unknown-unknown; then
     say "adding rust target wasm32-unknown-unknown"
@@ -28,38 +52,33 @@ if [ -z "${SKIP_WASM:-}" ]; then
     say "installing wasm-bindgen-cli $bindgen_version"
     cargo install wasm-bindgen-cli --version "$bindgen_version"
   fi
-  if ! command -v wasm-opt >/dev/null 2>&1; then
-    say "wasm-opt missing; trying apt-get install binaryen"
-    sudo_cmd=""; [ "$(id -u)" -ne 0 ] && command -v sudo >/dev/null 2>&1 && sudo_cmd="sudo -n"
-    { $sudo_cmd apt-get install -y binaryen >/dev/null 2>&1 \
-      || { $sudo_cmd apt-get update >/dev/null 2>&1 && $sudo_cmd apt-get install -y binaryen >/dev/null 2>&1; }; } \
-      || say "could not install binaryen; continuing without wasm-opt (bigger wasm)"
-  fi
 
-  say "cargo build --lib --profile wasm --target wasm32-unknown-unknown"
-  cargo build --lib --profile wasm --target wasm32-unknown-unknown
-  mkdir -p pkg
-  wasm-bindgen --target web --out-dir pkg --out-name weft \
+  feature_args=()
+  [ -n "$features" ] && feature_args=(--features "$features")
+  say "cargo build --lib --profile wasm --target wasm32-unknown-unknown${features:+ --features $features}"
+  cargo build --lib --profile wasm --target wasm32-unknown-unknown "${feature_args[@]}"
+  mkdir -p "$pkg_dir"
+  wasm-bindgen --target web --out-dir "$pkg_dir" --out-name weft \
     "$target_dir/wasm32-unknown-unknown/wasm/weft.wasm"
-  if command -v wasm-opt >/dev/null 2>&1; then
-    # Features rustc enables by default for wasm32-unknown-unknown (bulk memory, saturating
-    # float→int, sign extension, mutable globals, multi-value, reference types): wasm-opt must
-    # accept every one the module uses. An old wasm-opt (Debian bookworm's binaryen 108 cannot
-    # read the table.fill that wasm-bindgen emits for reference types) fails to parse the
-    # module: the unoptimised module is kept then, it works the same, only larger.
-    if wasm-opt -Oz --enable-bulk-memory --enable-nontrapping-float-to-int --enable-sign-ext \
-      --enable-mutable-globals --enable-multivalue --enable-reference-types \
-      -o pkg/weft_bg.wasm.opt pkg/weft_bg.wasm 2>pkg/wasm-opt.log; then
-      mv pkg/weft_bg.wasm.opt pkg/weft_bg.wasm
-      rm -f pkg/wasm-opt.log
-    else
-      rm -f pkg/weft_bg.wasm.opt
-      say "wasm-opt $(wasm-opt --version 2>/dev/null | awk '{print $3}') could not optimise the module" \
-        "($(head -c 200 pkg/wasm-opt.log | tr '\n' ' ')); keeping it unoptimised"
-      rm -f pkg/wasm-opt.log
-    fi
+  wasm=$pkg_dir/weft_bg.wasm
+  before="$(raw_bytes "$wasm") B (gzip -9: $(gz_bytes "$wasm") B)"
+  # Features rustc enables by default for wasm32-unknown-unknown (bulk memory, saturating
+  # float→int, sign extension, mutable globals, multi-value, reference types): wasm-opt must
+  # accept every one the module uses. Debian's binaryen is too old for the table.fill that
+  # wasm-bindgen emits for reference types, hence the npm build (runs under node), pinned in
+  # package.json. A failure here is an error: the module would ship unoptimised.
+  if ! "$wasm_opt" -Oz --enable-bulk-memory --enable-nontrapping-float-to-int --enable-sign-ext \
+    --enable-mutable-globals --enable-multivalue --enable-reference-types \
+    -o "$wasm.opt" "$wasm"; then
+    rm -f "$wasm.opt"
+    say "wasm-opt ($("$wasm_opt" --version 2>/dev/null)) failed on $wasm"
+    exit 1
   fi
-  say "pkg/weft_bg.wasm: $(du -k pkg/weft_bg.wasm | cut -f1) KiB"
+  mv "$wasm.opt" "$wasm"
+  after="$(raw_bytes "$wasm") B (gzip -9: $(gz_bytes "$wasm") B)"
+  binaryen_version=$(node -p 'require("./node_modules/binaryen/package.json").version')
+  say "$wasm${features:+ [features: $features]}: $before before wasm-opt -Oz, $after after" \
+    "(binaryen $binaryen_version)"
 fi
 
 # --- three.js ----------------------------------------------------------------------------

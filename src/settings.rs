@@ -40,7 +40,9 @@ pub struct When {
 /// One editable field, as a stage declares it (path relative to its options struct).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct Field {
-    /// Dotted path, relative to the table's struct.
+    /// Dotted path, relative to the table's struct (not serialised: a mounted [`Row`] writes
+    /// its absolute path).
+    #[serde(skip)]
     pub path: &'static str,
     /// Form section.
     pub section: &'static str,
@@ -202,17 +204,21 @@ pub fn check<T: Serialize>(value: &T, fields: &[Field], prefix: &str) -> Vec<Pro
 
 fn check_one(root: &Value, path: &str, f: &Field, out: &mut Vec<Problem>) {
     let Some(v) = lookup(root, path) else { return };
+    // serde_json writes NaN and infinities as null.
+    let not_a_number = |p: String, out: &mut Vec<Problem>| out.push(Problem { path: p, message: format!("{} must be a finite number", f.label) });
     match f.kind {
-        Kind::Number | Kind::Integer => {
-            if let Some(x) = v.as_f64() {
-                check_number(path, x, f, out);
-            }
-        }
+        Kind::Number | Kind::Integer => match v.as_f64() {
+            Some(x) => check_number(path, x, f, out),
+            None if v.is_null() => not_a_number(path.to_string(), out),
+            None => {}
+        },
         Kind::Vec3 => {
             if let Some(items) = v.as_array() {
                 for (i, x) in items.iter().enumerate() {
-                    if let Some(x) = x.as_f64() {
-                        check_number(&format!("{path}.{i}"), x, f, out);
+                    match x.as_f64() {
+                        Some(x) => check_number(&format!("{path}.{i}"), x, f, out),
+                        None if x.is_null() => not_a_number(format!("{path}.{i}"), out),
+                        None => {}
                     }
                 }
             }

@@ -46,7 +46,7 @@ fn mutated_designs_and_links_never_panic() {
     let rounds: usize = std::env::var("WEFT_FUZZ_ROUNDS").ok().and_then(|s| s.parse().ok()).unwrap_or(1);
     let mut accepted = 0;
     for seed in seeds() {
-        let link = share::encode(&Design::from_json("seed", &seed).unwrap(), None).fragment;
+        let link = share::encode(&Design::from_json("seed", &seed).unwrap(), &[]).fragment;
         for _ in 0..200 * rounds {
             let mut bytes = seed.clone().into_bytes();
             for _ in 0..1 + rng.next_u32() % 4 {

@@ -4,7 +4,9 @@
 
 use std::collections::BTreeMap;
 use weft::design::Job;
-use weft::paths::{build_graph, Method};
+use weft::jobs::lattice::{lattice_strokes, LatticeJob};
+use weft::nonplanar::ProjectionReport;
+use weft::paths::{build_graph, Method, PathsReport};
 use weft::pipeline::{self, Files, RunOptions};
 use weft::Design;
 
@@ -14,9 +16,10 @@ fn example(name: &str) -> Design {
 }
 
 fn with_method(mut d: Design, method: Method, iterations: u32) -> Design {
-    let Job::Lattice(j) = &mut d.job else { panic!("{} is not a lattice job", d.name) };
+    let mut j: LatticeJob = d.job.settings().unwrap_or_else(|| panic!("{} is not a lattice job", d.name));
     j.paths.method = method;
     j.paths.iterations = iterations;
+    d.job = Job::new("lattice", &j);
     d
 }
 
@@ -70,10 +73,10 @@ impl Snap {
 /// G-code are exactly the graph's edges, each once. Returns the run output.
 fn assert_every_edge_once(design: &Design) -> weft::RunOutput {
     let files = Files::new();
-    let (strokes, _) = pipeline::lattice_strokes(design, &files, &mut |_, _| {}).unwrap();
+    let strokes = lattice_strokes(design, &files).unwrap();
     let out = pipeline::run(design, &files, &RunOptions { collect_preview: true }, &mut |_, _| {})
         .unwrap_or_else(|e| panic!("{}: {e}", design.name));
-    let Job::Lattice(job) = &design.job else { unreachable!() };
+    let job: LatticeJob = design.job.settings().unwrap();
     let preview = out.preview.as_ref().unwrap();
     let (ox, oy) = (design.printer.bed_size_mm[0] / 2.0, design.printer.bed_size_mm[1] / 2.0);
     assert_eq!(preview.layer_segment_start.len(), strokes.len() + 1, "{}: layers", design.name);
@@ -126,7 +129,7 @@ fn euler_reaches_the_proven_bound_on_every_layer() {
     for name in PLANAR {
         let d = with_method(example(name), Method::Euler, 1);
         let out = assert_every_edge_once(&d);
-        let paths = out.report.paths.as_ref().unwrap();
+        let paths = &out.report.stage::<PathsReport>("paths").unwrap();
         for (li, (layer, read)) in paths.layers.iter().zip(&out.report.analysis.per_layer).enumerate() {
             assert_eq!(layer.paths, layer.lower_bound_paths, "{name} layer {li}: euler paths vs bound");
             // Read back from the G-code: one extrusion run per path.
@@ -139,7 +142,7 @@ fn euler_reaches_the_proven_bound_on_every_layer() {
 fn continuous_needs_no_retraction_inside_a_component() {
     for name in ["honeycomb-10mm", "penrose-10mm", "ball-burst-disc-48mm"] {
         let out = assert_every_edge_once(&with_method(example(name), Method::Continuous, 1));
-        let paths = out.report.paths.as_ref().unwrap();
+        let paths = &out.report.stage::<PathsReport>("paths").unwrap();
         for (li, layer) in paths.layers.iter().enumerate() {
             assert!(layer.retractions < layer.components.max(1), "{name} layer {li}: {} retractions, {} components", layer.retractions, layer.components);
         }
@@ -150,7 +153,8 @@ fn continuous_needs_no_retraction_inside_a_component() {
 fn gippo_reports_scores_and_beats_its_iterations() {
     let d = with_method(example("honeycomb-10mm"), Method::GippoMax, 500);
     let out = pipeline::run(&d, &Files::new(), &RunOptions::default(), &mut |_, _| {}).unwrap();
-    let layer = &out.report.paths.as_ref().unwrap().layers[0];
+    let paths = out.report.stage::<PathsReport>("paths").unwrap();
+    let layer = &paths.layers[0];
     assert_eq!(layer.iteration_scores.len(), 500);
     assert!(layer.iteration_scores.iter().all(|&s| s <= layer.score + 1e-12));
     assert!(layer.paths >= layer.lower_bound_paths);
@@ -167,7 +171,7 @@ fn same_seed_same_bytes_and_random_patterns_follow_the_seed() {
         let mut other = d.clone();
         other.seed += 1;
         if name == "voronoi-10mm" {
-            let strokes = |d: &Design| pipeline::lattice_strokes(d, &Files::new(), &mut |_, _| {}).unwrap().0;
+            let strokes = |d: &Design| lattice_strokes(d, &Files::new()).unwrap();
             assert_ne!(strokes(&d), strokes(&other), "voronoi ignores the seed");
         }
     }
@@ -177,7 +181,7 @@ fn same_seed_same_bytes_and_random_patterns_follow_the_seed() {
 fn cylinder_on_sphere_follows_the_surface() {
     let d = example("cylinder-on-sphere");
     let out = pipeline::run(&d, &Files::new(), &RunOptions { collect_preview: true }, &mut |_, _| {}).unwrap();
-    let np = out.report.nonplanar.as_ref().unwrap();
+    let np: ProjectionReport = out.report.stage("nonplanar").unwrap();
     assert_eq!(np.missed_points, 0);
     assert_eq!(np.collisions, 0);
     assert!(np.z_range_mm[1] - np.z_range_mm[0] > 0.5, "Z should vary: {:?}", np.z_range_mm);

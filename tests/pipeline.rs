@@ -1,6 +1,9 @@
 //! The whole pipeline on fixture meshes: every run's G-code is read back by the analyzer.
 
-use weft::design::{Input, Job};
+use weft::design::Input;
+use weft::import::ImportReport;
+use weft::jobs::Registry;
+use weft::slice::SliceReport;
 use weft::pipeline::{self, Files, RunOptions};
 use weft::Design;
 
@@ -11,13 +14,13 @@ fn fixture(name: &str) -> Vec<u8> {
 
 fn run_file(name: &str) -> weft::RunOutput {
     let mut design = Design { name: name.into(), ..Design::default() };
-    *design.job.input_mut().unwrap() = Input::File { name: name.into(), embedded: None };
+    design = design.with_slot_input(&Registry::builtin(), "mesh", Input::File { name: name.into(), embedded: None }).unwrap();
     let mut files = Files::new();
     files.insert(name.into(), fixture(name));
     let mut stages = Vec::new();
     let out = pipeline::run(&design, &files, &RunOptions { collect_preview: true }, &mut |s, _| {
-        if stages.last() != Some(&s) {
-            stages.push(s)
+        if stages.last().map(String::as_str) != Some(s) {
+            stages.push(s.to_string())
         }
     })
     .unwrap_or_else(|e| panic!("{name}: {e}"));
@@ -38,7 +41,7 @@ fn fixtures_slice_end_to_end() {
         let p = out.preview.as_ref().unwrap();
         assert_eq!(p.layer_segment_start.len(), a.layers + 1, "{name}");
         assert_eq!(p.positions.len(), 6 * p.feature.len(), "{name}");
-        assert!(out.report.import.is_some(), "{name}");
+        assert!(out.report.stage_data("import").is_some(), "{name}");
     }
 }
 
@@ -58,9 +61,9 @@ fn cube_formats_agree() {
 #[test]
 fn repairs_are_reported() {
     let open = run_file("open-box.stl");
-    assert!(open.report.import.as_ref().unwrap().open_edges > 0);
+    assert!(open.report.stage::<ImportReport>("import").unwrap().open_edges > 0);
     let shells = run_file("overlapping-shells.stl");
-    assert!(shells.report.slice.as_ref().unwrap().layers_with_overlaps > 0);
+    assert!(shells.report.stage::<SliceReport>("slice").unwrap().layers_with_overlaps > 0);
     assert_eq!(shells.report.analysis.overlap_mm, 0.0, "unioned shells print each line once");
 }
 
@@ -70,7 +73,7 @@ fn seed_and_design_determine_the_bytes() {
     let run = |d: &Design| pipeline::run(d, &Files::new(), &RunOptions::default(), &mut |_, _| {}).unwrap().gcode;
     let a = run(&design);
     assert_eq!(a, run(&design));
-    assert!(matches!(design.job, Job::Slice(_)));
+    assert_eq!(design.job.kind(), "slice");
     let mut other = design.clone();
     other.material.extrusion_multiplier = 1.1;
     assert_ne!(a, run(&other));

@@ -1,28 +1,32 @@
-// The page: design form, files, worker management, results. UI only: everything that can
-// take time runs in worker.js; the cheap synchronous calls (schema, validation, share codec)
-// use a wasm instance of our own.
-import { MSG, STAGES, JOB_STAGES, LAYER2D_STRIDE } from "./protocol.js";
-import { drawSegments2d, renderScorePlot, renderPathClasses, renderPathTable, FEATURE_COLORS_2D } from "./lattice.js";
+// The page: design form, input slots, worker management, results. UI only: everything that
+// can take time runs in worker.js; the cheap synchronous calls (schema, validation, share
+// codec) use a wasm instance of our own.
+//
+// Nothing here knows a job kind: the form, the job selector, the input slots, the progress
+// stages, feature names and colours, the views and the pattern picker come from
+// designSchema(); stage cards, metrics, plots and tables come from the run report.
+import { MSG, plain } from "./protocol.js";
+import { drawSegments2d, drawView, featureStyles } from "./views.js";
+import { renderReport } from "./report.js";
+import { formatNumber } from "./plot.js";
 
 const $ = (id) => document.getElementById(id);
 const STORAGE_KEY = "weft.design";
 const UNDO_LIMIT = 200;
 const PROGRESS_DELAY_MS = 500;
-const MESH_EXT = ["stl", "obj", "3mf"];
-const GCODE_EXT = ["gcode", "gco", "g"];
-const LAYER2D_DEBOUNCE_MS = 200;
+/** Extensions of G-code files analysed and previewed when no input slot takes them. */
+const GCODE_EXT = ["gcode", "gco", "g", "nc"];
+const INSPECT_DEBOUNCE_MS = 200;
 /** Side of the square a pattern thumbnail shows, mm. */
 const THUMB_MM = 6;
-/** Parameters of the built-in shapes when the schema does not give defaults. */
-const SHAPE_DEFAULTS = {
-  cube: { shape: "cube", size: [20, 20, 20] },
-  sphere: { shape: "sphere", radius: 10, segments: 64 },
-  cylinder: { shape: "cylinder", radius: 10, height: 20, segments: 64 },
-};
+/** Stroke colour of the pattern thumbnails. */
+const THUMB_COLOR = "#29a3d6";
 
 let weft; // the wasm module (main-thread instance)
 let preview = null;
-let schema = { fields: [], job_kinds: ["slice"], builtin_shapes: Object.keys(SHAPE_DEFAULTS) };
+let schema = { version: 1, fields: [], features: [], job_kinds: [], builtin_shapes: [], patterns: [] };
+/** feature code → {label, color} (schema.features) */
+let styles = new Map();
 
 const state = {
   /** current design, normalized JSON (the source of truth) and its parse */
@@ -30,12 +34,15 @@ const state = {
   design: null,
   undo: [],
   redo: [],
-  /** loaded mesh files: name → ArrayBuffer (the page's copy; the worker gets copies) */
+  /**
+   * Loaded files: name → {slot, name, bytes: ArrayBuffer, info}. The page's one copy (kept
+   * for worker restarts and share links); the worker gets a transferred copy.
+   */
   files: new Map(),
   /** last result shown: {report, gcode: Uint8Array, fileName, ms} */
   result: null,
-  /** import reports of loaded files: name → report */
-  imports: {},
+  /** chosen group (e.g. layer) per stage card */
+  groups: new Map(),
 };
 
 // ---------------------------------------------------------------------------------------
@@ -46,6 +53,7 @@ ready.catch(() => {}); // reported in #error
 window.weft = {
   ready,
   get design() { return state.json; },
+  get schema() { return schema; },
   get result() { return state.result; },
   get resultCount() { return resultCount; },
   get files() { return [...state.files.keys()]; },
@@ -53,9 +61,21 @@ window.weft = {
   get busy() { return jobs.active.size > 0; },
   get preview() { return preview; },
   run: () => runDesign(),
-  /** Completed 2D layer previews (and the segments drawn by the last one). */
-  get layer2dCount() { return lattice2d.drawn; },
-  get layer2dSegments() { return lattice2d.segments; },
+  /** Input slots of the current job kind and the files each holds. */
+  get slots() {
+    return currentSlots().map((s) => ({ name: s.name, kind: s.kind, accept: s.accept ?? [], multiple: Boolean(s.multiple), files: filesOf(s).map((f) => f.name) }));
+  },
+  /** Stage cards shown: [{stage, label, cached, plots: [kind], tables}] */
+  get reportCards() {
+    return [...document.querySelectorAll("#report .stage-card")].map((c) => ({
+      stage: c.dataset.stage, cached: c.dataset.cached === "true", group: c.dataset.group,
+      plots: [...c.querySelectorAll("svg[data-plot-kind]")].map((s) => s.dataset.plotKind),
+    }));
+  },
+  /** Views of the current job kind: [{id, shape, index, count, answers, items}] */
+  get views() {
+    return [...viewCards.values()].map((v) => ({ id: v.view.id, shape: v.last?.shape ?? v.view.shape, index: v.last?.index ?? null, count: v.count, answers: v.answers, items: v.items }));
+  },
   get thumbnails() { return [...thumbs.cache.keys()]; },
 };
 
@@ -69,23 +89,24 @@ async function start() {
     throw err;
   }
   try {
-    schema = { ...schema, ...JSON.parse(weft.designSchema()) };
+    schema = { ...schema, ...plain(weft.designSchema()) };
   } catch (err) {
     showError(`designSchema() failed: ${messageOf(err)}`);
   }
+  styles = featureStyles(schema.features);
   wireUi();
   try {
     const { Preview } = await import("./preview.js");
     preview = new Preview($("preview"), {
       colorBy: $("color-by"), showTravel: $("show-travel"), showStarts: $("show-starts"), layerMin: $("layer-min"),
       layerMax: $("layer-max"), layerLabel: $("layer-label"), legend: $("legend"),
-    });
+      moveMax: $("move-max"), moveLabel: $("move-label"), showAxis: $("show-axis"),
+    }, { features: schema.features });
   } catch (err) {
     showError(`The 3D preview could not start (${messageOf(err)}); slicing and downloads still work.`);
   }
   workers.start();
   loadInitialDesign();
-  renderLatticeResult();
   fillExamples();
   if ("serviceWorker" in navigator && window.isSecureContext) {
     navigator.serviceWorker.register("sw.js").catch(() => {});
@@ -115,7 +136,7 @@ function storedDesign() {
   }
 }
 
-/** Restores a design from a share fragment; runs it when everything it needs is at hand. */
+/** Restores a design from a share fragment; runs it when every file it names is at hand. */
 function openShare(fragment) {
   let json;
   try {
@@ -125,13 +146,18 @@ function openShare(fragment) {
     return;
   }
   setDesign(json);
-  const file = usedInputFile();
-  if (file && !file.embedded && !state.files.has(file.name)) {
-    showNotice(`This design slices ${file.name}, which is not in the link: load ${file.name} ` +
-      "(Open… or drop it on the page) and it will be sliced.");
-    return;
-  }
+  if (askForMissing("This design")) return;
   runDesign();
+}
+
+/** Says which named files are missing (and where they go); true when some are. */
+function askForMissing(what) {
+  const missing = missingFiles();
+  if (!missing.length) return false;
+  const list = missing.map(({ slot, name }) => `${name} (${slot.label ?? slot.name})`).join(", ");
+  showNotice(`${what} uses ${list}, not in the link or loaded here: load ${missing.length > 1 ? "them" : "it"} ` +
+    "(drop on the page or on its input) and it will run.");
+  return true;
 }
 
 // ---------------------------------------------------------------------------------------
@@ -156,7 +182,7 @@ function setDesign(json, { record = true } = {}) {
   } catch { /* quota or disabled: the design stays in memory */ }
   renderForm();
   updateButtons();
-  scheduleLayer2d();
+  scheduleInspect();
 }
 
 function undo() {
@@ -185,26 +211,6 @@ function changeDesign(mutate) {
   }
 }
 
-function inputFile() {
-  return state.design?.job?.input?.file ?? null;
-}
-
-/** The loaded-file input the current design really reads (a lattice reads it only on a solid domain). */
-function usedInputFile() {
-  const job = state.design?.job;
-  if (job?.kind === "lattice" && job.domain?.kind !== "solid") return null;
-  return inputFile();
-}
-
-function isLattice() {
-  return state.design?.job?.kind === "lattice";
-}
-
-/** Extension of the output: `.nc` for pneumatic (CNC-style) controllers, else `.gcode`. */
-function gcodeExtension() {
-  return state.design?.printer?.flavor === "pneumatic" ? "nc" : "gcode";
-}
-
 /**
  * Sets several fields through the Rust side (which resets a tagged object when its `kind`
  * changes) and makes the result the design in one undo step; returns the problem or null.
@@ -221,9 +227,63 @@ function setFields(assignments) {
   return null;
 }
 
+/** Extension of the output: `.nc` for pneumatic (CNC-style) controllers, else `.gcode`. */
+function gcodeExtension() {
+  return state.design?.printer?.flavor === "pneumatic" ? "nc" : "gcode";
+}
+
 function designName() {
   const name = String(state.design?.name ?? "").trim() || "weft";
   return name.replace(/[\\/:*?"<>|\u0000-\u001f]+/g, "_");
+}
+
+// --- the job kind, its slots and files --------------------------------------------------
+function jobKind() {
+  const name = state.design?.job?.kind;
+  return schema.job_kinds.find((k) => k.name === name) ?? { name, label: name, stages: [], slots: [], views: [] };
+}
+
+function currentSlots() {
+  return jobKind().slots ?? [];
+}
+
+/** Files the page holds for a slot. */
+function filesOf(slot) {
+  return [...state.files.values()].filter((f) => f.slot === slot.name);
+}
+
+/**
+ * Files named by the design at a slot's path: `{file: {name, embedded?}}` or
+ * `{files: [name | {name, embedded?}]}`.
+ * @returns {Array<{name: string, embedded: boolean}>}
+ */
+function namedFiles(value) {
+  if (!value || typeof value !== "object") return [];
+  const one = (f) => (typeof f === "string" ? { name: f, embedded: false }
+    : f && typeof f.name === "string" ? { name: f.name, embedded: f.embedded !== undefined && f.embedded !== null } : null);
+  const list = value.file ? [value.file] : Array.isArray(value.files) ? value.files : [];
+  return list.map(one).filter(Boolean);
+}
+
+/** Files the design names (current job kind's slots) that are neither embedded nor loaded. */
+function missingFiles() {
+  const out = [];
+  for (const slot of currentSlots()) {
+    for (const f of namedFiles(getPath(state.design, slot.path))) {
+      if (!f.embedded && !state.files.has(f.name)) out.push({ slot, name: f.name });
+    }
+  }
+  return out;
+}
+
+function extOf(name) {
+  const i = name.lastIndexOf(".");
+  return i < 0 ? "" : name.slice(i).toLowerCase();
+}
+
+function accepts(slot, name) {
+  const ext = extOf(name);
+  return (slot.accept ?? []).some((a) => a.toLowerCase() === ext);
 }
 
 // ---------------------------------------------------------------------------------------
@@ -235,18 +295,18 @@ const fieldViews = new Map();
 /**
  * Schema fields shown for the current design: those of its job kind whose path exists in the
  * design (so only the current pattern's, domain's, surface's and built-in shape's parameters),
- * plus each `…kind` choice and optional Section whose parent object exists; a field with a `when`
- * condition only while that other field has the stated value.
+ * plus each `…kind` choice and optional Section whose parent object exists; a field with a
+ * `when` condition only while the field at `when_path` has the stated value.
  */
 function visibleFields() {
   const design = state.design;
   const kind = design?.job?.kind;
-  const usesInput = kind !== "lattice" || design?.job?.domain?.kind === "solid";
   const fields = schema.fields.filter((f) => {
     if (f.job && f.job !== kind) return false;
-    if (f.when && String(getPath(design, f.when.path)) !== f.when.equals) return false;
+    const whenPath = f.when_path ?? f.when?.path;
+    if (whenPath && f.when && String(getPath(design, whenPath)) !== String(f.when.equals)) return false;
+    if (f.path === "job.kind") return true;
     if (!f.path.startsWith("job.")) return true;
-    if (f.path.startsWith("job.input.") && !usesInput) return false;
     const parent = f.path.slice(0, f.path.lastIndexOf("."));
     if (f.kind === "section" || (f.kind === "choice" && f.path.endsWith(".kind"))) {
       const p = getPath(design, parent);
@@ -257,50 +317,50 @@ function visibleFields() {
   if (!fields.some((f) => f.path === "name")) {
     fields.unshift({ path: "name", section: "Design", label: "Name", kind: "text", unit: "", doc: "Used for the downloaded file name." });
   }
-  if ((schema.job_kinds?.length ?? 0) > 1 && !fields.some((f) => f.path === "job.kind")) {
-    fields.unshift({ path: "job.kind", section: "Design", label: "Job", kind: "choice", choices: schema.job_kinds, unit: "", doc: "What to make" });
+  if (schema.job_kinds.length > 1 && !fields.some((f) => f.path === "job.kind")) {
+    fields.splice(1, 0, { path: "job.kind", section: "Design", label: "Job", kind: "choice", unit: "", doc: "What to make" });
   }
   return fields;
 }
 
-function renderForm() {
-  const fields = visibleFields();
-  const key = fields.map((f) => f.path).join(",");
-  if (key !== formKey) buildForm(fields, key);
-  for (const [path, view] of fieldViews) writeField(view, getPath(state.design, path));
-  renderInput();
-  renderPatternPicker();
-  $("slice").textContent = isLattice() ? "Run" : "Slice";
-  $("download").textContent = `Download ${gcodeExtension() === "nc" ? ".nc" : "G-code"}`;
-  $("lattice-panel").hidden = !isLattice() && !state.result?.report?.paths;
-}
-
-/** Sections with a fixed place in the "Design" fieldset; the others get their own. */
-const SECTION_HOSTS = { design: "input-fields", input: "input-params" };
 let formKey = null;
 
-function buildForm(fields, key) {
+function renderForm() {
+  const fields = visibleFields();
+  const slots = currentSlots();
+  const key = `${jobKind().name}|${slots.map((s) => s.name).join(",")}|${fields.map((f) => f.path).join(",")}`;
+  if (key !== formKey) buildForm(fields, slots, key);
+  for (const [path, view] of fieldViews) writeField(view, getPath(state.design, path));
+  renderSlots();
+  renderPatternPickers();
+  $("download").textContent = `Download ${gcodeExtension() === "nc" ? ".nc" : "G-code"}`;
+  if (viewsKey !== jobKind().name) buildViews();
+}
+
+function buildForm(fields, slots, key) {
   formKey = key;
   fieldViews.clear();
   const host = $("schema-fields");
   host.replaceChildren();
-  const sections = new Map();
-  for (const id of Object.values(SECTION_HOSTS)) $(id).replaceChildren();
+  $("design-fields").replaceChildren();
+  buildSlots(slots);
+  const sections = new Map([["design", $("design-fields")]]);
   for (const f of fields) {
+    const slot = slots.find((s) => f.path.startsWith(`${s.path}.`));
+    if (slot) {
+      slotCards.get(slot.name)?.fields.append(buildField(f));
+      continue;
+    }
     const name = (f.section || "other").toLowerCase();
     if (!sections.has(name)) {
-      if (SECTION_HOSTS[name]) {
-        sections.set(name, $(SECTION_HOSTS[name]));
-      } else {
-        const fs = document.createElement("fieldset");
-        fs.className = "section";
-        fs.id = `section-${name.replace(/[^a-z0-9]+/g, "-")}`;
-        const legend = document.createElement("legend");
-        legend.textContent = titleCase(f.section || "other");
-        fs.append(legend);
-        sections.set(name, fs);
-        host.append(fs);
-      }
+      const fs = document.createElement("fieldset");
+      fs.className = "section";
+      fs.id = `section-${name.replace(/[^a-z0-9]+/g, "-")}`;
+      const legend = document.createElement("legend");
+      legend.textContent = titleCase(f.section || "other");
+      fs.append(legend);
+      sections.set(name, fs);
+      host.append(fs);
     }
     sections.get(name).append(buildField(f));
   }
@@ -348,10 +408,15 @@ function buildField(f) {
     }
     case "choice": {
       const el = make("select");
-      for (const c of f.choices ?? []) {
+      // The job selector lists the schema's job kinds by label.
+      const options = f.path === "job.kind"
+        ? schema.job_kinds.map((k) => [k.name, k.label ?? k.name, k.doc])
+        : (f.choices ?? []).map((c) => (typeof c === "object" && c !== null ? [c.value ?? c.name, c.label ?? c.name, c.doc] : [c, String(c)]));
+      for (const [value, text, doc] of options) {
         const o = document.createElement("option");
-        o.value = JSON.stringify(c);
-        o.textContent = String(c);
+        o.value = JSON.stringify(value);
+        o.textContent = String(text).replace(/_/g, " ");
+        if (doc) o.title = doc;
         el.append(o);
       }
       break;
@@ -412,7 +477,7 @@ function readField({ f, inputs }) {
   switch (f.kind) {
     case "bool": return String(inputs[0].checked);
     // An optional block: its default JSON when switched on; null (→ absent) when off.
-    case "section": return inputs[0].checked ? (f.default ?? "{}") : "null";
+    case "section": return inputs[0].checked ? (typeof f.default === "string" ? f.default : JSON.stringify(f.default ?? {})) : "null";
     case "choice": return inputs[0].value;
     case "text": return JSON.stringify(inputs[0].value);
     case "vec3": return `[${inputs.map((el) => el.value.trim() || "null").join(",")}]`;
@@ -422,19 +487,11 @@ function readField({ f, inputs }) {
 
 function commitField(view) {
   let next;
-  const value = readField(view);
   try {
-    if (view.f.path === "job.domain.kind" && value === '"solid"' && isLattice() && !state.design.job.input) {
-      // A solid domain needs a solid: the last loaded mesh, else a built-in cube.
-      const name = [...state.files.keys()].pop();
-      const input = name ? { file: { name } } : { builtin: shapeDefaults("cube") };
-      next = weft.setField(weft.setField(state.json, "job.input", JSON.stringify(input)), view.f.path, value);
-    } else {
-      next = weft.setField(state.json, view.f.path, value);
-    }
+    next = weft.setField(state.json, view.f.path, readField(view));
   } catch (err) {
     view.dirty = true;
-    // setField reuses the CLI's `--set path=value` parser, whose messages start with "--set:".
+    // setField reuses the CLI's `--set path=value` parser, whose messages may start with "--set:".
     setFieldError(view, messageOf(err).replace(/^--set:\s*/gm, ""));
     return;
   }
@@ -453,315 +510,531 @@ function setFieldError(view, message) {
   }
 }
 
-// --- the job input: built-in shape or loaded file ---------------------------------------
-function shapeNames() {
-  return (schema.builtin_shapes?.length ? schema.builtin_shapes : Object.keys(SHAPE_DEFAULTS))
-    .map((s) => (typeof s === "string" ? s : s.shape));
-}
+// --- input slots: one drop zone per slot of the job kind ---------------------------------
+/** slot name → {slot, card, fields, source, extra, list, note, input} */
+const slotCards = new Map();
 
-function shapeDefaults(shape) {
-  const fromSchema = (schema.builtin_shapes ?? []).find((s) => typeof s === "object" && s.shape === shape);
-  return structuredClone(fromSchema ?? SHAPE_DEFAULTS[shape] ?? { shape });
-}
-
-function renderInput() {
-  const input = state.design?.job?.input ?? {};
-  const select = $("input-kind");
-  const planar = isLattice() && state.design.job.domain?.kind !== "solid";
-  select.closest(".field").hidden = planar;
-  $("input-extra").hidden = planar;
-  $("input-info").hidden = planar;
-  const options = [];
-  for (const shape of shapeNames()) options.push([`builtin:${shape}`, `Built-in ${shape}`]);
-  const names = new Set(state.files.keys());
-  if (input.file?.name) names.add(input.file.name);
-  for (const name of names) {
-    const missing = !state.files.has(name) && !(input.file?.name === name && input.file.embedded);
-    options.push([`file:${name}`, `File: ${name}${missing ? " (not loaded)" : ""}`]);
-  }
-  options.push(["open", "Load a file…"]);
-  select.replaceChildren(...options.map(([value, text]) => new Option(text, value)));
-  select.value = input.builtin ? `builtin:${input.builtin.shape}` : input.file ? `file:${input.file.name}` : "";
-
-  // Shape parameters come from the schema (job.input.builtin.*); any it lacks get a plain input.
-  const extra = $("input-extra");
-  extra.replaceChildren();
-  const info = $("input-info");
-  info.textContent = "";
-  info.classList.remove("field-error");
-  if (input.builtin) {
-    for (const [key, value] of Object.entries(input.builtin)) {
-      if (key === "shape" || fieldViews.has(`job.input.builtin.${key}`)) continue;
-      extra.append(shapeParam(key, value));
+function buildSlots(slots) {
+  const host = $("slots");
+  slotCards.clear();
+  host.replaceChildren();
+  $("slots-section").hidden = slots.length === 0;
+  for (const slot of slots) {
+    const card = document.createElement("div");
+    card.className = "slot";
+    card.dataset.slot = slot.name;
+    card.dataset.kind = slot.kind ?? "";
+    if (slot.doc) card.title = slot.doc;
+    const head = document.createElement("div");
+    head.className = "slot-head";
+    const label = document.createElement("span");
+    label.className = "slot-label";
+    label.textContent = slot.label ?? slot.name;
+    const accept = document.createElement("span");
+    accept.className = "slot-accept";
+    accept.textContent = (slot.accept ?? []).join(" ") + (slot.multiple ? " · several files" : "");
+    head.append(label, accept);
+    if (slot.required) {
+      const req = document.createElement("span");
+      req.className = "slot-required";
+      req.textContent = "required";
+      head.append(req);
     }
-  } else if (input.file) {
-    const f = input.file;
-    const bytes = state.files.get(f.name)?.byteLength;
-    info.textContent = bytes !== undefined ? `${f.name}: ${formatBytes(bytes)} loaded`
-      : f.embedded ? `${f.name} is embedded in the shared link`
-        : `${f.name} is not loaded: open or drop it to slice`;
+
+    // A single mesh slot can also hold a built-in shape (schema.builtin_shapes).
+    let source = null;
+    if (slot.kind === "mesh" && !slot.multiple && schema.builtin_shapes.length) {
+      const wrap = document.createElement("div");
+      wrap.className = "field slot-source";
+      const l = document.createElement("label");
+      const id = `slot-${slot.name}-source`;
+      l.htmlFor = id;
+      l.textContent = "Part";
+      const control = document.createElement("span");
+      control.className = "control";
+      source = document.createElement("select");
+      source.id = id;
+      source.addEventListener("change", () => onSourceChange(slot, source));
+      control.append(source);
+      wrap.append(l, control);
+      source.wrap = wrap;
+    }
+    const fields = document.createElement("div");
+    fields.className = "slot-fields";
+    const extra = document.createElement("div");
+    extra.className = "slot-extra";
+    const list = document.createElement("ul");
+    list.className = "slot-files";
+    const input = document.createElement("input");
+    input.type = "file";
+    input.className = "visually-hidden";
+    input.id = `slot-${slot.name}-file`;
+    input.accept = (slot.accept ?? []).join(",");
+    input.multiple = Boolean(slot.multiple);
+    input.addEventListener("change", async () => {
+      const files = [...input.files];
+      input.value = "";
+      if (files.length) await loadIntoSlot(slot, files);
+    });
+    const drop = document.createElement("label");
+    drop.className = "slot-drop";
+    drop.htmlFor = input.id;
+    drop.tabIndex = 0;
+    drop.addEventListener("keydown", (e) => {
+      if (e.key === "Enter" || e.key === " ") {
+        e.preventDefault();
+        input.click();
+      }
+    });
+    drop.append(`Drop ${slot.multiple ? "files" : "a file"} here or `);
+    const browse = document.createElement("u");
+    browse.textContent = "browse";
+    drop.append(browse, input);
+    const note = document.createElement("p");
+    note.className = "slot-note hint";
+    card.append(head);
+    if (source) card.append(source.wrap);
+    card.append(fields, extra, list, drop, note);
+
+    card.addEventListener("dragover", (e) => {
+      if (![...(e.dataTransfer?.types ?? [])].includes("Files")) return;
+      e.preventDefault();
+      card.classList.add("over");
+    });
+    card.addEventListener("dragleave", () => card.classList.remove("over"));
+    card.addEventListener("drop", (e) => {
+      e.preventDefault();
+      e.stopPropagation();
+      card.classList.remove("over");
+      dropState.reset();
+      const files = [...(e.dataTransfer?.files ?? [])];
+      if (files.length) loadIntoSlot(slot, files);
+    });
+    host.append(card);
+    slotCards.set(slot.name, { slot, card, fields, source, extra, list, note, input });
   }
 }
 
-function shapeParam(key, value) {
+/** Updates every slot card from the design and the loaded files. */
+function renderSlots() {
+  const accept = new Set([".json", ...GCODE_EXT.map((e) => `.${e}`)]);
+  for (const { slot, card, source, extra, list, note } of slotCards.values()) {
+    for (const a of slot.accept ?? []) accept.add(a);
+    const value = getPath(state.design, slot.path);
+    const named = namedFiles(value);
+    const held = filesOf(slot);
+    const unused = value === undefined || value === null;
+    card.classList.toggle("unused", unused);
+    if (source) source.wrap.hidden = unused;
+
+    if (source) {
+      const options = schema.builtin_shapes.map((b, k) => [`builtin:${k}`, `Built-in ${b.label ?? b.kind ?? b.shape}`]);
+      const names = new Set([...held.map((f) => f.name), ...named.map((f) => f.name)]);
+      for (const name of names) options.push([`file:${name}`, `File: ${name}${state.files.has(name) || named.find((f) => f.name === name)?.embedded ? "" : " (not loaded)"}`]);
+      options.push(["open", "Load a file…"]);
+      source.replaceChildren(...options.map(([v, t]) => new Option(t, v)));
+      const b = value?.builtin;
+      const k = b ? schema.builtin_shapes.findIndex((s) => s.value?.builtin?.shape === b.shape || (s.kind ?? s.shape) === b.shape) : -1;
+      source.value = k >= 0 ? `builtin:${k}` : named[0] ? `file:${named[0].name}` : "";
+    }
+
+    // Shape parameters the schema does not list get a plain input.
+    extra.replaceChildren();
+    if (value?.builtin && typeof value.builtin === "object") {
+      for (const [key, v] of Object.entries(value.builtin)) {
+        if (key === "shape" || fieldViews.has(`${slot.path}.builtin.${key}`)) continue;
+        if (typeof v === "number" || (Array.isArray(v) && v.every((x) => typeof x === "number"))) extra.append(shapeParam(slot, key, v, note));
+      }
+    }
+
+    const rows = [];
+    const inDesign = new Set(named.map((f) => f.name));
+    for (const f of held) {
+      const li = document.createElement("li");
+      li.dataset.file = f.name;
+      li.classList.toggle("idle", !inDesign.has(f.name));
+      const name = document.createElement("span");
+      name.className = "file-name";
+      name.textContent = f.name;
+      const summary = document.createElement("span");
+      summary.className = "file-summary";
+      summary.textContent = f.info?.summary ?? formatBytes(f.bytes.byteLength);
+      const remove = document.createElement("button");
+      remove.type = "button";
+      remove.className = "remove";
+      remove.textContent = "×";
+      remove.title = `Remove ${f.name}`;
+      remove.setAttribute("aria-label", `Remove ${f.name}`);
+      remove.addEventListener("click", () => removeFromSlot(slot, f.name));
+      li.append(name, summary, remove);
+      if (!inDesign.has(f.name)) {
+        li.title = "Loaded but not used by the design: click to use it";
+        name.addEventListener("click", () => useFiles(slot, [f.name]));
+      }
+      rows.push(li);
+    }
+    for (const f of named) {
+      if (state.files.has(f.name)) continue;
+      const li = document.createElement("li");
+      li.dataset.file = f.name;
+      li.className = f.embedded ? "embedded" : "missing";
+      const name = document.createElement("span");
+      name.className = "file-name";
+      name.textContent = f.name;
+      const summary = document.createElement("span");
+      summary.className = "file-summary";
+      summary.textContent = f.embedded ? "in the shared link" : "not loaded: drop it here";
+      li.append(name, summary);
+      rows.push(li);
+    }
+    list.replaceChildren(...rows);
+    list.hidden = rows.length === 0;
+    if (!note.classList.contains("field-error")) {
+      note.textContent = value === undefined || value === null ? "Not used by the design as it is set now." : "";
+    }
+  }
+  $("file").accept = [...accept].join(",");
+}
+
+function shapeParam(slot, key, value, note) {
   const wrap = document.createElement("div");
   wrap.className = "field";
-  const id = `shape-${key}`;
+  const id = `slot-${slot.name}-${key}`;
   const label = document.createElement("label");
   label.htmlFor = Array.isArray(value) ? `${id}-0` : id;
   label.textContent = titleCase(key.replace(/_/g, " "));
   const control = document.createElement("span");
   control.className = "control";
-  const error = $("input-info");
   const values = Array.isArray(value) ? value : [value];
   const inputs = values.map((v, i) => {
     const el = document.createElement("input");
     el.type = "number";
     el.id = Array.isArray(value) ? `${id}-${i}` : id;
-    el.step = key === "segments" ? "1" : "any";
-    el.min = key === "segments" ? "3" : "0";
+    el.step = "any";
     el.value = String(v);
     if (Array.isArray(value)) el.setAttribute("aria-label", `${key} ${"xyz"[i]}`);
     el.addEventListener("change", () => {
       const nums = inputs.map((x) => Number(x.value));
-      const problem = changeDesign((d) => {
-        d.job.input.builtin[key] = Array.isArray(value) ? nums : nums[0];
-      });
-      error.textContent = problem ?? "";
-      error.classList.toggle("field-error", Boolean(problem));
+      const problem = setFields([[`${slot.path}.builtin.${key}`, JSON.stringify(Array.isArray(value) ? nums : nums[0])]]);
+      note.textContent = problem ?? "";
+      note.classList.toggle("field-error", Boolean(problem));
     });
     control.append(el);
     return el;
   });
-  const unit = document.createElement("span");
-  unit.className = "unit";
-  unit.textContent = key === "segments" ? "" : "mm";
-  control.append(unit);
   wrap.append(label, control);
   return wrap;
 }
 
-function onInputKindChange() {
-  const value = $("input-kind").value;
-  if (value === "open") {
-    renderInput();
-    $("file").click();
+function onSourceChange(slot, select) {
+  const v = select.value;
+  if (v === "open") {
+    renderSlots();
+    slotCards.get(slot.name)?.input.click();
     return;
   }
-  const problem = changeDesign((d) => {
-    if (value.startsWith("builtin:")) d.job.input = { builtin: shapeDefaults(value.slice(8)) };
-    else d.job.input = { file: { name: value.slice(5) } };
-  });
+  const value = v.startsWith("builtin:") ? schema.builtin_shapes[Number(v.slice(8))]?.value : { file: { name: v.slice(5) } };
+  const problem = value ? setFields([[slot.path, JSON.stringify(value)]]) : null;
   if (problem) showError(problem);
 }
 
-// ---------------------------------------------------------------------------------------
-// Lattice jobs: pattern picker, 2D layer preview, path-optimisation results
-// ---------------------------------------------------------------------------------------
-/** The 2D preview of one layer (#layer2d), fed by `layer2d` requests to the worker. */
-const lattice2d = {
-  timer: 0,
-  seq: 0, // newest request sent; older answers are dropped
-  drawn: 0, // answers drawn (for tests)
-  segments: 0, // segments in the last drawing
-  last: null, // {segments: Float32Array, layer}
-};
-
-function layerCount() {
-  const job = state.design?.job;
-  if (job?.kind !== "lattice") return 1;
-  if (job.domain?.kind === "solid") return Math.max(1, state.result?.report?.lattice?.layers ?? 1);
-  return Math.max(1, job.lattice?.layers ?? 1);
+/**
+ * Points the slot's design field at these files (added to a `multiple` slot's list), through
+ * fillSlot, which also applies the job kind's rule for a filled slot (e.g. a lattice's domain
+ * becomes the loaded solid); setField when the module has no fillSlot.
+ */
+function useFiles(slot, names) {
+  const had = namedFiles(getPath(state.design, slot.path)).map((f) => f.name);
+  const all = slot.multiple ? [...new Set([...had, ...names])] : [names[names.length - 1]];
+  if (typeof weft.fillSlot === "function") {
+    try {
+      setDesign(weft.fillSlot(state.json, slot.name, all));
+      return null;
+    } catch (err) {
+      return messageOf(err);
+    }
+  }
+  const value = slot.multiple ? { files: all } : { file: { name: all[0] } };
+  return setFields([[slot.path, JSON.stringify(value)]]);
 }
 
-/** Asks the worker for the chosen layer's strokes after `delay` ms without further edits. */
-function scheduleLayer2d(delay = LAYER2D_DEBOUNCE_MS) {
-  clearTimeout(lattice2d.timer);
-  if (!isLattice()) return;
-  const input = $("layer2d-layer");
-  const count = layerCount();
-  input.max = String(count);
-  const layer = Math.min(count, Math.max(1, Math.round(input.valueAsNumber) || 1));
-  if (String(layer) !== input.value) input.value = String(layer);
-  lattice2d.timer = setTimeout(() => requestLayer2d(layer - 1), delay);
-}
-
-async function requestLayer2d(layer) {
-  const mine = ++lattice2d.seq;
-  const info = $("layer2d-info");
-  const file = usedInputFile();
-  if (file && !file.embedded && !state.files.has(file.name)) {
-    info.textContent = `load ${file.name} to see its layers`;
+/** Reads files into a slot (worker first, so a bad file is refused at once), then uses them. */
+async function loadIntoSlot(slot, fileList) {
+  hideError();
+  const files = slot.multiple ? fileList : fileList.slice(-1);
+  const wrong = files.filter((f) => !accepts(slot, f.name));
+  if (wrong.length) {
+    showError(`${wrong.map((f) => f.name).join(", ")}: ${slot.label ?? slot.name} takes ${(slot.accept ?? []).join(", ")} files.`);
     return;
   }
-  info.textContent = "…";
+  const loaded = [];
+  for (const file of files) {
+    const token = jobs.begin(`reading ${file.name}`);
+    try {
+      const bytes = await file.arrayBuffer();
+      // Transfer a copy; keep ours for worker restarts and share links.
+      const res = await workers.request({ type: MSG.LOAD, slot: slot.name, name: file.name, bytes: bytes.slice(0) });
+      state.files.set(file.name, { slot: slot.name, name: file.name, bytes, info: res.info ?? {} });
+      loaded.push(file.name);
+    } catch (err) {
+      if (!err.cancelled) showError(messageOf(err));
+    } finally {
+      jobs.end(token);
+    }
+  }
+  if (!loaded.length) return;
+  if (!slot.multiple) {
+    // One file per slot: the one loaded replaces the others.
+    for (const f of filesOf(slot)) if (!loaded.includes(f.name)) forgetFile(f.name);
+  }
+  const problem = useFiles(slot, loaded);
+  renderSlots();
+  if (problem) {
+    showError(problem);
+    return;
+  }
+  if (!missingFiles().length) runDesign();
+}
+
+function forgetFile(name) {
+  if (!state.files.delete(name)) return;
+  workers.post({ type: MSG.UNLOAD, name });
+}
+
+/** Removes a file from its slot; the design falls back to the default value of the slot. */
+function removeFromSlot(slot, name) {
+  forgetFile(name);
+  const value = getPath(state.design, slot.path);
+  const named = namedFiles(value).map((f) => f.name);
+  if (named.includes(name)) {
+    let next;
+    if (slot.multiple) next = { files: named.filter((n) => n !== name) };
+    else {
+      const fallback = getPath(JSON.parse(weft.defaultDesign()), slot.path);
+      next = fallback && !namedFiles(fallback).length ? fallback : schema.builtin_shapes[0]?.value ?? null;
+    }
+    const problem = setFields([[slot.path, JSON.stringify(next)]]);
+    if (problem) showNotice(`${name} was removed; the design still names it (${problem}).`);
+  }
+  renderSlots();
+}
+
+// ---------------------------------------------------------------------------------------
+// Views (schema.job_kinds[].views): one card each, fed by `inspect` requests
+// ---------------------------------------------------------------------------------------
+/** view id → {view, card, canvas, range, number, info, legend, last, seq, timer, count, answers, items} */
+const viewCards = new Map();
+let viewsKey = null;
+
+function buildViews() {
+  viewsKey = jobKind().name;
+  for (const v of viewCards.values()) clearTimeout(v.timer);
+  viewCards.clear();
+  const host = $("views");
+  host.replaceChildren();
+  for (const view of jobKind().views ?? []) {
+    const card = document.createElement("section");
+    card.className = "card view-card";
+    card.dataset.view = view.id;
+    card.dataset.shape = view.shape;
+    const head = document.createElement("div");
+    head.className = "card-head";
+    const h2 = document.createElement("h2");
+    h2.textContent = view.label ?? view.id;
+    if (view.doc) h2.title = view.doc;
+    const id = `view-${view.id}-index`;
+    const label = document.createElement("label");
+    label.className = "inline";
+    label.htmlFor = id;
+    label.textContent = (view.index_label ?? "index").toLowerCase();
+    const number = document.createElement("input");
+    number.type = "number";
+    number.id = id;
+    number.min = "1";
+    number.max = "1";
+    number.step = "1";
+    number.value = "1";
+    number.inputMode = "numeric";
+    const info = document.createElement("output");
+    info.className = "hint";
+    info.htmlFor = id;
+    head.append(h2, label, number, info);
+    const range = document.createElement("input");
+    range.type = "range";
+    range.className = "view-range";
+    range.min = "1";
+    range.max = "1";
+    range.value = "1";
+    range.setAttribute("aria-label", `${view.label ?? view.id}: ${view.index_label ?? "index"}`);
+    const box = document.createElement("div");
+    box.className = "canvas-box";
+    const canvas = document.createElement("canvas");
+    canvas.setAttribute("aria-label", `${view.label ?? view.id}${view.doc ? `: ${view.doc}` : ""}`);
+    box.append(canvas);
+    const legend = document.createElement("div");
+    legend.className = "mini-legend";
+    card.append(head, range, box, legend);
+    host.append(card);
+    const v = { view, card, canvas, range, number, info, legend, last: null, seq: 0, timer: 0, count: 0, answers: 0, items: 0 };
+    number.addEventListener("change", () => { range.value = number.value; scheduleInspect(0, v); });
+    range.addEventListener("input", () => { number.value = range.value; scheduleInspect(INSPECT_DEBOUNCE_MS / 2, v); });
+    new ResizeObserver(() => redrawView(v)).observe(box);
+    viewCards.set(view.id, v);
+  }
+  host.hidden = viewCards.size === 0;
+}
+
+/** Asks the worker for each view (or one) after `delay` ms without further edits. */
+function scheduleInspect(delay = INSPECT_DEBOUNCE_MS, only = null) {
+  for (const v of only ? [only] : viewCards.values()) {
+    clearTimeout(v.timer);
+    v.timer = setTimeout(() => requestInspect(v), delay);
+  }
+}
+
+async function requestInspect(v) {
+  const mine = ++v.seq;
+  const missing = missingFiles();
+  if (missing.length) {
+    v.info.textContent = `load ${missing.map((m) => m.name).join(", ")} to see this`;
+    return;
+  }
+  const index = Math.max(0, Math.round(v.number.valueAsNumber || 1) - 1);
+  v.info.textContent = "…";
+  v.info.classList.remove("field-error");
   let res;
   try {
-    res = await workers.request({ type: MSG.LAYER2D, design: state.json, layer, key: "preview" });
+    res = await workers.request({ type: MSG.INSPECT, design: state.json, view: v.view.id, index, key: `view:${v.view.id}` });
   } catch (err) {
-    if (mine === lattice2d.seq && !err.cancelled) {
-      info.textContent = messageOf(err);
-      info.classList.add("field-error");
+    if (mine === v.seq && !err.cancelled) {
+      v.info.textContent = messageOf(err);
+      v.info.classList.add("field-error");
     }
     return;
   }
-  if (mine !== lattice2d.seq || res.stale) return; // a newer request is on its way
-  info.classList.remove("field-error");
-  lattice2d.last = { segments: res.segments, layer };
-  lattice2d.drawn++;
-  redrawLattice2d();
-  const n = res.segments.length / LAYER2D_STRIDE;
-  info.textContent = `of ${layerCount()} · ${n.toLocaleString("en-US")} segments · ${Math.round(res.ms)} ms`;
+  if (mine !== v.seq || res.stale) return; // a newer request is on its way
+  v.last = res;
+  v.answers++;
+  v.count = res.count;
+  const max = String(Math.max(1, res.count));
+  for (const el of [v.number, v.range]) el.max = max;
+  v.range.hidden = res.count < 2;
+  if (res.index !== index && document.activeElement !== v.number) v.number.value = v.range.value = String(res.index + 1);
+  redrawView(v);
+  const what = res.shape === "image" ? `${res.meta?.width ?? 0} × ${res.meta?.height ?? 0} px`
+    : `${v.items.toLocaleString("en-US")} ${res.shape === "mesh" ? "triangles" : "segments"}`;
+  v.info.textContent = `of ${Math.max(1, res.count)} · ${what} · ${Math.round(res.ms)} ms`;
 }
 
-function redrawLattice2d() {
-  if ($("lattice-panel").hidden) return;
-  const { counts, segments } = drawSegments2d($("layer2d"), lattice2d.last?.segments ?? null, { stride: LAYER2D_STRIDE, scaleBar: true });
-  lattice2d.segments = segments;
-  const names = { 4: "lattice", 5: "contour", 6: "handle" };
-  $("layer2d-legend").replaceChildren(...Object.keys(counts).map((code) => {
+function redrawView(v) {
+  if (!v.card.isConnected) return;
+  const r = drawView(v.canvas, v.last, styles);
+  v.items = r.items;
+  const entries = Object.keys(r.counts).map((code) => [styles.get(Number(code))?.color ?? "#e0b84d", styles.get(Number(code))?.label ?? `feature ${code}`]);
+  if (r.range) entries.push([null, `${formatNumber(r.range[0], 4)} … ${formatNumber(r.range[1], 4)}${v.last?.meta?.unit ? ` ${v.last.meta.unit}` : ""}`]);
+  v.legend.replaceChildren(...entries.map(([color, text]) => {
     const el = document.createElement("span");
-    const sw = document.createElement("span");
-    sw.className = "swatch";
-    sw.style.background = FEATURE_COLORS_2D[code] ?? "#e0b84d";
-    el.append(sw, ` ${names[code] ?? `feature ${code}`}`);
+    if (color) {
+      const sw = document.createElement("span");
+      sw.className = "swatch";
+      sw.style.background = color;
+      el.append(sw, " ");
+    } else {
+      const ramp = document.createElement("span");
+      ramp.className = "ramp grey";
+      el.append(ramp, " ");
+    }
+    el.append(text);
     return el;
   }));
 }
 
-/** Pattern thumbnails: name → {segments, stride}, drawn once per pattern and seed. */
-const thumbs = { cache: new Map(), seed: null, pending: new Set() };
+// ---------------------------------------------------------------------------------------
+// Pattern picker: any field with widget "pattern_picker", thumbnails of schema.patterns
+// ---------------------------------------------------------------------------------------
+/** Pattern thumbnails: kind → {segments}, drawn once per pattern and seed. */
+const thumbs = { cache: new Map(), seed: null };
 
 function thumbnailSeed() {
   return Number(state.design?.seed ?? 1);
 }
 
-/** Segments of a pattern's thumbnail: `patternThumbnail` when the module has it, else the worker. */
-function loadThumbnail(kind) {
-  const cached = thumbs.cache.get(kind);
-  if ((cached && !(cached.failedAt < Date.now() - 10000)) || thumbs.pending.has(kind)) return;
+function loadThumbnail(p) {
+  if (thumbs.cache.has(p.kind)) return;
   const seed = thumbnailSeed();
-  if (typeof weft.patternThumbnail === "function") {
-    const pattern = JSON.stringify({ kind });
-    let segments = null;
-    for (const s of [seed, BigInt(seed)]) { // u64 seeds cross as BigInt
-      try {
-        segments = weft.patternThumbnail(pattern, THUMB_MM, s);
-        break;
-      } catch { /* try the other seed type, then the worker */ }
-    }
-    if (segments) {
-      thumbs.cache.set(kind, { segments, stride: 4 });
-      return;
-    }
+  let segments = new Float32Array(0);
+  for (const s of [seed, BigInt(seed)]) { // u64 seeds cross as BigInt
+    try {
+      segments = weft.patternThumbnail(JSON.stringify(p.value ?? { kind: p.kind }), THUMB_MM, s);
+      break;
+    } catch { /* try the other seed type; drawn blank otherwise */ }
   }
-  // Fallback: the 2D preview of a default lattice design with this pattern.
-  let design;
-  try {
-    design = weft.setField(weft.defaultDesign(), "job.kind", '"lattice"');
-    for (const [path, value] of [
-      ["seed", String(seed)],
-      ["job.domain", JSON.stringify({ kind: "rectangle", width_mm: THUMB_MM, height_mm: THUMB_MM })],
-      ["job.lattice.pattern", JSON.stringify({ kind })],
-    ]) design = weft.setField(design, path, value);
-  } catch {
-    return;
-  }
-  thumbs.pending.add(kind);
-  workers.request({ type: MSG.LAYER2D, design, layer: 0, key: `thumb:${kind}` })
-    .then((res) => {
-      if (!res.stale) thumbs.cache.set(kind, { segments: res.segments, stride: LAYER2D_STRIDE });
-      drawThumbnail(kind);
-    })
-    // Drawn blank; tried again on a later form update.
-    .catch(() => thumbs.cache.set(kind, { segments: new Float32Array(0), stride: LAYER2D_STRIDE, failedAt: Date.now() }))
-    .finally(() => thumbs.pending.delete(kind));
+  thumbs.cache.set(p.kind, { segments });
 }
 
 function drawThumbnail(kind) {
-  const canvas = document.querySelector(`#pattern-picker canvas[data-pattern="${kind}"]`);
+  const canvas = document.querySelector(`.pattern-picker canvas[data-pattern="${kind}"]`);
   const t = thumbs.cache.get(kind);
   if (!canvas || !t) return;
   const half = THUMB_MM / 2;
-  const frame = t.stride === 4 ? [-half, -half, half, half] : null;
-  drawSegments2d(canvas, t.segments, { stride: t.stride, frame, lineWidth: 1, color: FEATURE_COLORS_2D[4] });
+  drawSegments2d(canvas, t.segments, { stride: 4, frame: [-half, -half, half, half], lineWidth: 1, color: THUMB_COLOR });
 }
 
-/** The atlas as a grid of thumbnails under the pattern choice; a click sets the pattern. */
-function renderPatternPicker() {
-  const view = fieldViews.get("job.lattice.pattern.kind");
+function patternOf(view) {
+  const v = getPath(state.design, view.f.path);
+  return view.f.kind === "choice" ? v : v?.kind;
+}
+
+function renderPatternPickers() {
   const patterns = schema.patterns ?? [];
-  let picker = $("pattern-picker");
-  if (!view || !patterns.length) {
-    picker?.remove();
-    return;
-  }
+  const views = [...fieldViews.values()].filter((v) => v.f.widget === "pattern_picker");
+  document.querySelectorAll(".pattern-picker").forEach((el) => {
+    if (!views.some((v) => v.picker === el && el.previousElementSibling === v.wrap)) el.remove();
+  });
+  if (!views.length || !patterns.length) return;
   if (thumbs.seed !== thumbnailSeed()) {
     // Voronoi depends on the seed: redraw all with the design's.
     thumbs.cache.clear();
     thumbs.seed = thumbnailSeed();
   }
-  if (!picker || picker.previousElementSibling !== view.wrap) {
-    picker?.remove();
-    picker = document.createElement("div");
-    picker.id = "pattern-picker";
-    picker.className = "pattern-picker";
-    picker.setAttribute("role", "group");
-    picker.setAttribute("aria-label", "Lattice patterns");
-    for (const kind of patterns) {
-      const b = document.createElement("button");
-      b.type = "button";
-      b.className = "pattern";
-      b.dataset.pattern = kind;
-      b.title = kind.replace(/_/g, " ");
-      const c = document.createElement("canvas");
-      c.dataset.pattern = kind;
-      c.width = 64;
-      c.height = 64;
-      drawSegments2d(c, null); // background until the thumbnail arrives
-      const label = document.createElement("span");
-      label.textContent = kind.replace(/_/g, " ");
-      b.append(c, label);
-      b.addEventListener("click", () => {
-        const problem = setFields([["job.lattice.pattern.kind", JSON.stringify(kind)]]);
-        if (problem) showError(problem);
-      });
-      picker.append(b);
+  views.forEach((view, n) => {
+    if (!view.picker || !view.picker.isConnected) {
+      const picker = document.createElement("div");
+      picker.id = n === 0 ? "pattern-picker" : `pattern-picker-${n}`;
+      picker.className = "pattern-picker";
+      picker.setAttribute("role", "group");
+      picker.setAttribute("aria-label", view.f.label ?? "Patterns");
+      for (const p of patterns) {
+        const b = document.createElement("button");
+        b.type = "button";
+        b.className = "pattern";
+        b.dataset.pattern = p.kind;
+        b.title = p.label ?? p.kind;
+        const c = document.createElement("canvas");
+        c.dataset.pattern = p.kind;
+        c.width = 64;
+        c.height = 64;
+        drawSegments2d(c, null); // background until the thumbnail is drawn
+        const label = document.createElement("span");
+        label.textContent = p.label ?? p.kind.replace(/_/g, " ");
+        b.append(c, label);
+        b.addEventListener("click", () => {
+          const value = view.f.kind === "choice" ? p.kind : (p.value ?? { kind: p.kind });
+          const problem = setFields([[view.f.path, JSON.stringify(value)]]);
+          if (problem) showError(problem);
+        });
+        picker.append(b);
+      }
+      view.wrap.after(picker);
+      view.picker = picker;
     }
-    view.wrap.after(picker);
+    const current = patternOf(view);
+    for (const b of view.picker.querySelectorAll("button")) b.setAttribute("aria-pressed", String(b.dataset.pattern === current));
+  });
+  for (const p of patterns) {
+    loadThumbnail(p);
+    drawThumbnail(p.kind);
   }
-  const current = state.design?.job?.lattice?.pattern?.kind;
-  for (const b of picker.querySelectorAll("button")) b.setAttribute("aria-pressed", String(b.dataset.pattern === current));
-  for (const kind of patterns) {
-    loadThumbnail(kind);
-    drawThumbnail(kind);
-  }
-}
-
-/** Score plot, path classes and numbers of the chosen layer of the last result. */
-function renderLatticeResult() {
-  const report = state.result?.report;
-  const layers = report?.paths?.layers ?? [];
-  const panel = $("lattice-panel");
-  panel.hidden = !isLattice() && !layers.length;
-  const select = $("paths-layer");
-  if (select.options.length !== layers.length) {
-    const keep = select.value;
-    select.replaceChildren(...layers.map((_, i) => new Option(`${i + 1} of ${layers.length}`, String(i))));
-    if (keep && Number(keep) < layers.length) select.value = keep;
-  }
-  select.hidden = layers.length < 2;
-  select.previousElementSibling.hidden = select.hidden;
-  const i = Math.min(layers.length - 1, Math.max(0, Number(select.value) || 0));
-  const layer = layers[i] ?? null;
-  $("score-title").textContent = renderScorePlot($("score-plot"), layer, report?.paths?.method ?? null);
-  renderPathClasses($("path-classes"), layer);
-  renderPathTable($("path-table"), layer, { pores: report?.lattice?.pore_fraction_per_layer?.[i] });
-  const np = report?.nonplanar;
-  $("paths-title").textContent = layer
-    ? `Paths${layers.length > 1 ? ` · layer ${i + 1}` : ""}${np ? ` · non-planar: ${np.missed_points ?? 0} missed, ${np.collisions ?? 0} collisions` : ""}`
-    : "Paths";
-  if (state.design?.job?.domain?.kind === "solid") scheduleLayer2d(0); // its layer count is known now
 }
 
 // ---------------------------------------------------------------------------------------
@@ -788,9 +1061,9 @@ const workers = {
     w.onmessageerror = () => {
       if (w === this.worker) this.crashed("a message could not be read");
     };
-    // Give the new worker every file the page holds (copies: the page keeps its own).
-    for (const [name, bytes] of state.files) {
-      this.request({ type: MSG.LOAD, name, bytes: bytes.slice(0), silent: true }).catch(() => {});
+    // Give the new worker every file the page holds, in its slot (copies: the page keeps its own).
+    for (const f of state.files.values()) {
+      this.request({ type: MSG.LOAD, slot: f.slot, name: f.name, bytes: f.bytes.slice(0) }).catch(() => {});
     }
   },
 
@@ -834,6 +1107,13 @@ const workers = {
     });
   },
 
+  /** Sends a message that is not answered (unload, cancel). */
+  post(msg) {
+    if (!this.worker) return;
+    msg.id = this.nextId++;
+    this.worker.postMessage(msg);
+  },
+
   onMessage(w, msg) {
     if (w !== this.worker) return; // a terminated worker's late message
     if (msg.type === MSG.READY) return;
@@ -848,16 +1128,21 @@ const workers = {
       p?.onProgress?.(msg.stage, msg.fraction);
       return;
     }
+    if (!p) {
+      if (msg.type === MSG.ERROR) showError(msg.message); // e.g. a failed unload
+      return;
+    }
     this.pending.delete(msg.id);
-    if (msg.type === MSG.ERROR) p?.reject(new Error(msg.message));
-    else p?.resolve(msg);
+    if (msg.type === MSG.ERROR) p.reject(new Error(msg.message));
+    else p.resolve(msg);
   },
 };
 
 // --- jobs and the progress bar ----------------------------------------------------------
 const jobs = {
   active: new Map(), // token → label
-  stages: null, // stage names of the running job (JOB_STAGES), for the overall bar
+  /** stages of the running job ([{name, label}] from the job kind), for the overall bar */
+  stages: [],
   timer: 0,
   nextToken: 1,
   begin(label) {
@@ -884,19 +1169,20 @@ const jobs = {
   endAll() {
     for (const t of [...this.active.keys()]) this.end(t);
   },
-  /** stage progress → overall bar + "slice 42%" label */
+  /** stage progress → overall bar + "Slicing layers… 42%" label */
   progress(stage, fraction) {
     const bar = $("progress-bar");
+    const i = this.stages.findIndex((s) => s.name === stage);
+    const label = i >= 0 ? this.stages[i].label ?? stage : stage;
     if (fraction === null) {
       bar.removeAttribute("value"); // indeterminate
-      $("progress-label").textContent = `${stage}…`;
+      $("progress-label").textContent = `${label}…`;
       return;
     }
-    const stages = this.stages ?? STAGES;
-    const i = stages.indexOf(stage);
-    const overall = i < 0 ? fraction : (i + Math.min(1, Math.max(0, fraction))) / stages.length;
+    const overall = i < 0 ? fraction : (i + Math.min(1, Math.max(0, fraction))) / this.stages.length;
     bar.value = overall;
-    $("progress-label").textContent = `${stage}… ${Math.round(overall * 100)}%`;
+    $("progress-label").textContent = `${label}… ${Math.round(overall * 100)}%`;
+    $("progress-label").dataset.stage = stage;
   },
 };
 
@@ -913,16 +1199,18 @@ function cancel() {
 let latestRun = 0;
 
 async function runDesign() {
-  const file = usedInputFile();
-  if (file && !file.embedded && !state.files.has(file.name)) {
-    showError(`The design slices ${file.name}, which is not loaded: open or drop ${file.name} first, or pick a built-in shape.`);
+  const missing = missingFiles();
+  if (missing.length) {
+    const { slot, name } = missing[0];
+    showError(`The design uses ${name}, which is not loaded: load it into “${slot.label ?? slot.name}” ` +
+      `(drop it on the page)${slot.kind === "mesh" && schema.builtin_shapes.length ? " or pick a built-in shape" : ""}.`);
     return;
   }
   const token = jobs.begin("starting");
   const mine = ++latestRun;
   const name = designName();
   const ext = gcodeExtension();
-  jobs.stages = JOB_STAGES[state.design?.job?.kind] ?? STAGES;
+  jobs.stages = jobKind().stages ?? [];
   try {
     const res = await workers.request({ type: MSG.RUN, design: state.json }, (s, f) => jobs.progress(s, f));
     if (mine === latestRun) showResult(res, `${name}.${ext}`);
@@ -933,13 +1221,34 @@ async function runDesign() {
   }
 }
 
-/** Opens files from the picker or a drop: designs, meshes, G-code. */
+/** Opens files from the picker or a drop: designs, slot files, G-code. */
 async function openFiles(fileList) {
-  for (const file of fileList) await openFile(file);
+  // Files for the same slot travel together (a `multiple` slot takes them all at once).
+  const bySlot = new Map();
+  for (const file of fileList) {
+    const slot = slotFor(file.name);
+    if (slot) {
+      if (!bySlot.has(slot)) bySlot.set(slot, []);
+      bySlot.get(slot).push(file);
+    } else {
+      await openFile(file);
+    }
+  }
+  for (const [slot, files] of bySlot) await loadIntoSlot(slot, files);
+}
+
+/**
+ * The slot a file goes to: the one whose design field names it, else the first slot of the
+ * job kind that accepts its extension.
+ */
+function slotFor(name) {
+  const slots = currentSlots();
+  return slots.find((s) => accepts(s, name) && namedFiles(getPath(state.design, s.path)).some((f) => f.name === name))
+    ?? slots.find((s) => accepts(s, name)) ?? null;
 }
 
 async function openFile(file) {
-  const ext = file.name.toLowerCase().split(".").pop();
+  const ext = extOf(file.name).slice(1);
   hideError();
   if (ext === "json") {
     try {
@@ -953,6 +1262,7 @@ async function openFile(file) {
   if (GCODE_EXT.includes(ext)) {
     const token = jobs.begin(`reading ${file.name}`);
     latestRun++;
+    jobs.stages = [];
     try {
       const bytes = await file.arrayBuffer();
       const res = await workers.request({ type: MSG.ANALYZE, name: file.name, bytes }, (s, f) => jobs.progress(s, f));
@@ -964,36 +1274,8 @@ async function openFile(file) {
     }
     return;
   }
-  if (!MESH_EXT.includes(ext)) {
-    showError(`${file.name}: weft opens meshes (.stl, .obj, .3mf), G-code (.gcode) and designs (.json).`);
-    return;
-  }
-  const token = jobs.begin(`reading ${file.name}`);
-  let report;
-  let bytes;
-  try {
-    bytes = await file.arrayBuffer();
-    // Transfer a copy; keep ours for worker restarts and share links.
-    const res = await workers.request({ type: MSG.LOAD, name: file.name, bytes: bytes.slice(0) });
-    report = res.report;
-  } catch (err) {
-    if (!err.cancelled) showError(messageOf(err));
-    return;
-  } finally {
-    jobs.end(token);
-  }
-  state.files.set(file.name, bytes);
-  state.imports = { ...state.imports, [file.name]: report };
-  // A lattice job fills the layers of the loaded solid (its domain becomes `solid`).
-  const problem = isLattice()
-    ? setFields([["job.input", JSON.stringify({ file: { name: file.name } })], ["job.domain.kind", '"solid"']])
-    : changeDesign((d) => { d.job.input = { file: { name: file.name } }; });
-  if (problem) {
-    showError(problem);
-    return;
-  }
-  renderInput();
-  runDesign();
+  const takes = currentSlots().map((s) => `${s.label ?? s.name} (${(s.accept ?? []).join(", ")})`);
+  showError(`${file.name}: this job opens ${[...takes, "G-code (.gcode)", "designs (.json)"].join(", ")}.`);
 }
 
 let resultCount = 0;
@@ -1005,7 +1287,8 @@ function showResult(res, fileName) {
   const origin = state.design?.printer?.origin;
   preview?.setResult(buffers, { origin: typeof origin === "string" ? origin : "corner" });
   renderStats(report, gcode, res.ms);
-  renderLatticeResult();
+  renderReport($("report"), report, state);
+  if (res.request === "run") scheduleInspect(0); // views of a loaded solid know their count now
   hideErrorUnlessCrash();
 }
 
@@ -1027,12 +1310,9 @@ function renderStats(report, gcode, ms) {
     ["Estimated time", formatDuration(a.estimated_time_s ?? g.estimated_time_s), "h:m:s"],
     ["G-code", gcode ? formatBytes(gcode.byteLength) : "–", ""],
   ];
-  const imp = report?.import;
-  if (imp && typeof imp === "object") {
-    rows.push(["Mesh", num(imp.triangles, 0), "triangles"]);
-    if (imp.open_edges) rows.push(["Open edges", num(imp.open_edges, 0), ""]);
-  }
   if (typeof ms === "number") rows.push(["Worker time", num(ms / 1000, 2), "s"]);
+  const reused = (report?.stages ?? []).filter((s) => s.cached).length;
+  if (reused) rows.push(["Stages reused", `${reused} of ${report.stages.length}`, ""]);
   const dl = document.createElement("dl");
   for (const [k, v, unit] of rows) {
     const div = document.createElement("div");
@@ -1064,11 +1344,11 @@ function download(data, name, type) {
 }
 
 async function share() {
-  const file = inputFile();
-  const bytes = file && state.files.has(file.name) ? new Uint8Array(state.files.get(file.name)) : undefined;
+  // Every loaded file with its slot; Rust keeps the ones the design names, small ones inside.
+  const files = [...state.files.values()].map((f) => ({ slot: f.slot, name: f.name, bytes: new Uint8Array(f.bytes) }));
   let res;
   try {
-    res = JSON.parse(weft.encodeShare(state.json, bytes ? file.name : undefined, bytes));
+    res = plain(weft.encodeShare(state.json, files));
   } catch (err) {
     showError(`Could not make a share link: ${messageOf(err)}`);
     return;
@@ -1081,13 +1361,25 @@ async function share() {
     copied = true;
   } catch { /* no clipboard permission: the address bar holds the link */ }
   const head = copied ? "Link copied to the clipboard" : "The link is in the address bar";
-  const size = `${url.length.toLocaleString("en-US")} characters`;
-  showNotice(`${head} (${size}${res.embedded ? `, ${file.name} included` : ""}).${res.note ? ` Note: ${res.note}.` : ""}`, url);
+  const embedded = res.embedded ?? [];
+  const missing = res.missing ?? [];
+  const size = `${url.length.toLocaleString("en-US")} characters${embedded.length ? `, ${embedded.join(", ")} included` : ""}`;
+  const left = missing.length ? ` Not in the link (too large): ${missing.join(", ")}; whoever opens it is asked to load ${missing.length > 1 ? "them" : "it"}.` : "";
+  showNotice(`${head} (${size}).${left}${res.note ? ` Note: ${res.note}.` : ""}`, url);
 }
 
 // ---------------------------------------------------------------------------------------
 // UI wiring
 // ---------------------------------------------------------------------------------------
+/** Drag-and-drop over the whole page. */
+const dropState = {
+  depth: 0,
+  reset() {
+    this.depth = 0;
+    $("drop-hint").hidden = true;
+  },
+};
+
 function wireUi() {
   $("slice").addEventListener("click", () => runDesign());
   $("cancel").addEventListener("click", cancel);
@@ -1104,11 +1396,7 @@ function wireUi() {
     e.target.value = "";
     await openFiles(files);
   });
-  $("input-kind").addEventListener("change", onInputKindChange);
   $("examples").addEventListener("change", openExample);
-  $("layer2d-layer").addEventListener("change", () => scheduleLayer2d(0));
-  $("paths-layer").addEventListener("change", renderLatticeResult);
-  new ResizeObserver(() => redrawLattice2d()).observe($("layer2d"));
   $("error-close").addEventListener("click", hideError);
   $("notice-close").addEventListener("click", () => { $("notice").hidden = true; });
   $("design-form").addEventListener("submit", (e) => e.preventDefault());
@@ -1135,14 +1423,15 @@ function wireUi() {
     }
   });
 
-  // Drop anywhere on the page.
-  let depth = 0;
+  // Drop anywhere on the page: to the slot that takes the file (see openFiles).
   const hint = $("drop-hint");
   const hasFiles = (e) => [...(e.dataTransfer?.types ?? [])].includes("Files");
   window.addEventListener("dragenter", (e) => {
     if (!hasFiles(e)) return;
     e.preventDefault();
-    depth++;
+    dropState.depth++;
+    const takes = currentSlots().map((s) => `${s.label ?? s.name} (${(s.accept ?? []).join(" ")})`);
+    hint.textContent = `Drop ${[...takes, "G-code", "a design (.json)"].join(", ")}`;
     hint.hidden = false;
   });
   window.addEventListener("dragover", (e) => {
@@ -1151,13 +1440,12 @@ function wireUi() {
     e.dataTransfer.dropEffect = "copy";
   });
   window.addEventListener("dragleave", () => {
-    depth = Math.max(0, depth - 1);
-    if (!depth) hint.hidden = true;
+    dropState.depth = Math.max(0, dropState.depth - 1);
+    if (!dropState.depth) hint.hidden = true;
   });
   window.addEventListener("drop", (e) => {
     e.preventDefault();
-    depth = 0;
-    hint.hidden = true;
+    dropState.reset();
     const files = [...(e.dataTransfer?.files ?? [])];
     if (files.length) openFiles(files);
   });
@@ -1194,9 +1482,7 @@ async function openExample() {
     showError(`Example ${file} could not be opened: ${messageOf(err)}`);
     return;
   }
-  const f = usedInputFile();
-  if (!f || f.embedded || state.files.has(f.name)) runDesign();
-  else showNotice(`This example slices ${f.name}: load ${f.name} to run it.`);
+  if (!askForMissing("This example")) runDesign();
 }
 
 // ---------------------------------------------------------------------------------------

@@ -2,31 +2,21 @@
 //
 // Built for millions of segments: the transferred Float32Array is the position attribute
 // as is; colours are Uint8 normalized attributes computed once per colour mode and cached;
-// the layer range is a drawRange (two array lookups per change); nothing is allocated per
-// frame and a frame is drawn only when something changed (no animation loop).
+// the layer range and the print-order limit are one drawRange (a few array lookups per
+// change); nothing is allocated per frame and a frame is drawn only when something changed
+// (no animation loop). Feature names and colours come from the schema (setFeatures).
 import * as THREE from "./vendor/three.module.js";
 import { OrbitControls } from "./vendor/OrbitControls.js";
-import { FEATURES, FEATURE_UNKNOWN } from "./protocol.js";
 
 // Colours are given in sRGB and drawn as they are: no colour management.
 THREE.ColorManagement.enabled = false;
 
 const BACKGROUND = 0x1f232a;
 const DEFAULT_BED = [200, 200, 200];
-/** Feature colours (PrusaSlicer's where it has the feature), sRGB bytes; index = code. */
-export const FEATURE_COLORS = [
-  [255, 125, 56], // External perimeter
-  [255, 230, 77], // Perimeter
-  [176, 48, 41], // Internal infill
-  [150, 84, 204], // Solid infill
-  [41, 163, 214], // Lattice
-  [31, 176, 76], // Contour
-  [160, 160, 160], // Handle
-  [0, 135, 110], // Skirt/Brim
-];
 const UNKNOWN_COLOR = [190, 190, 190];
 const TRAVEL_COLOR = 0x5aa0ff;
 const START_COLOR = 0xffffff;
+const AXIS_COLOR = 0xf2f2f2;
 /** Size of a path-start marker, CSS pixels. */
 const START_SIZE_PX = 7;
 
@@ -38,9 +28,11 @@ export class Preview {
    * @param {HTMLCanvasElement} canvas
    * @param {{colorBy: HTMLSelectElement, showTravel: HTMLInputElement,
    *          showStarts?: HTMLInputElement, layerMin: HTMLInputElement, layerMax: HTMLInputElement,
-   *          layerLabel: HTMLElement, legend: HTMLElement}} ui
+   *          layerLabel: HTMLElement, legend: HTMLElement, moveMax?: HTMLInputElement,
+   *          moveLabel?: HTMLElement, showAxis?: HTMLInputElement}} ui
+   * @param {{features?: Array<{code: number, label?: string, name?: string, color: string}>}} [options]
    */
-  constructor(canvas, ui) {
+  constructor(canvas, ui, options = {}) {
     this.canvas = canvas;
     this.ui = ui;
     this.renderer = new THREE.WebGLRenderer({ canvas, antialias: true, preserveDrawingBuffer: true });
@@ -82,14 +74,30 @@ export class Preview {
     this.starts.frustumCulled = false;
     this.starts.renderOrder = 2;
     this.starts.visible = Boolean(ui.showStarts?.checked);
-    /** first start marker of each layer, plus the end */
-    this.startLayerStart = new Uint32Array(0);
-    this.scene.add(this.extrusion, this.travel, this.starts);
+    // Tool axis: a short line along the axis at the end of every extrusion segment.
+    this.axis = new THREE.LineSegments(
+      new THREE.BufferGeometry(),
+      new THREE.LineBasicMaterial({ color: AXIS_COLOR, transparent: true, opacity: 0.55 }),
+    );
+    this.axis.frustumCulled = false;
+    this.axis.visible = Boolean(ui.showAxis?.checked);
+    this.scene.add(this.extrusion, this.travel, this.starts, this.axis);
+    /** segment index of every path-start marker (increasing) */
+    this.startSegment = new Uint32Array(0);
+    /** layers shown, and the last G-code move shown (Infinity: all) */
+    this.range = { lo: 0, hi: -1, move: Infinity };
+    /** segments drawn now (for tests and the legend) */
+    this.drawn = { extrusion: 0, travel: 0 };
+    /** feature code → sRGB bytes and label (setFeatures) */
+    this.featureRgb = new Array(256).fill(null);
+    this.featureLabel = new Array(256).fill(null);
+    this.featureOrder = [];
 
     /** @type {import("./protocol.js").PreviewBuffers|null} */
     this.data = null;
     /** @type {Map<string, THREE.BufferAttribute>} colour attribute per mode, built on demand */
     this.colorCache = new Map();
+    this.setFeatures(options.features ?? []);
     this.layers = 0;
     this.bedKey = "";
     this.frameRequested = false;
@@ -103,6 +111,14 @@ export class Preview {
       this.starts.visible = ui.showStarts.checked;
       this.updateLegend(ui.colorBy.value, this.data ? this.data.positions.length / 6 : 0);
       this.requestRender();
+    });
+    ui.showAxis?.addEventListener("change", () => {
+      this.axis.visible = ui.showAxis.checked;
+      this.requestRender();
+    });
+    ui.moveMax?.addEventListener("input", () => {
+      const v = ui.moveMax.valueAsNumber;
+      this.setMoveLimit(v >= Number(ui.moveMax.max) ? Infinity : v);
     });
     ui.showTravel.addEventListener("change", () => {
       this.travel.visible = ui.showTravel.checked;
@@ -153,6 +169,7 @@ export class Preview {
     geometry.dispose();
     travelGeometry.dispose();
     this.starts.geometry.dispose();
+    this.axis.geometry.dispose();
     this.colorCache.clear(); // their GPU buffers go with the disposed geometry / GC
     this.data = data;
     this.featureCounts = null;
@@ -182,6 +199,8 @@ export class Preview {
     layerMin.value = "0";
     layerMax.value = String(Math.max(0, this.layers - 1));
     this.buildStarts();
+    this.buildAxis(segments);
+    this.setupMoves(segments);
 
     const bed = data?.bedSize && data.bedSize.length >= 2 && data.bedSize[0] > 0 ? data.bedSize : DEFAULT_BED;
     this.setBed(bed, options.origin ?? "corner");
@@ -192,32 +211,154 @@ export class Preview {
     this.requestRender();
   }
 
-  /** Shows layers lo..hi (0-based, inclusive): O(1). */
+  /** Shows layers lo..hi (0-based, inclusive): O(log n). */
   setLayerRange(lo, hi) {
+    this.range.lo = lo;
+    this.range.hi = hi;
+    this.applyRange();
+  }
+
+  /** Shows only what the G-code does up to move `move` (Infinity: everything). */
+  setMoveLimit(move) {
+    this.range.move = move;
+    const ui = this.ui;
+    if (ui.moveMax && move === Infinity) ui.moveMax.value = ui.moveMax.max;
+    else if (ui.moveMax) ui.moveMax.value = String(move);
+    this.applyRange();
+  }
+
+  /** Draw ranges of extrusion, travel, starts and axis from the layer range and move limit. */
+  applyRange() {
     const d = this.data;
     const label = this.ui.layerLabel;
+    const { lo, hi, move } = this.range;
     if (!d || this.layers === 0) {
-      this.extrusion.geometry.setDrawRange(0, 0);
-      this.travel.geometry.setDrawRange(0, 0);
+      for (const o of [this.extrusion, this.travel, this.starts, this.axis]) o.geometry.setDrawRange(0, 0);
+      this.drawn = { extrusion: 0, travel: 0 };
       label.textContent = "no layers";
+      this.updateMoveLabel();
       this.requestRender();
       return;
     }
+    const segments = d.positions.length / 6;
     const start = d.layerStart[lo];
-    const end = d.layerStart[hi + 1];
+    let end = d.layerStart[hi + 1];
+    const limited = move !== Infinity;
+    if (limited && this.bySegment) end = Math.max(start, Math.min(end, move + 1));
+    else if (limited) end = Math.max(start, Math.min(end, upperBound(d.segmentMove, move)));
     this.extrusion.geometry.setDrawRange(start * 2, (end - start) * 2);
-    const sl = this.startLayerStart;
-    if (sl.length > hi + 1) this.starts.geometry.setDrawRange(sl[lo], sl[hi + 1] - sl[lo]);
+    if (this.axisSegments) this.axis.geometry.setDrawRange(start * 2, (end - start) * 2);
+    const s0 = lowerBound(this.startSegment, start);
+    const s1 = lowerBound(this.startSegment, end);
+    this.starts.geometry.setDrawRange(s0, s1 - s0);
     const ts = d.travelLayerStart;
+    const travels = d.travel.length / 6;
+    let t0 = 0;
+    let t1 = travels;
     if (ts && ts.length > hi + 1) {
-      this.travel.geometry.setDrawRange(ts[lo] * 2, (ts[hi + 1] - ts[lo]) * 2);
-    } else {
-      this.travel.geometry.setDrawRange(0, Infinity);
+      t0 = ts[lo];
+      t1 = ts[hi + 1];
     }
+    if (limited && !this.bySegment && d.travelMove?.length === travels) {
+      t1 = Math.max(t0, Math.min(t1, upperBound(d.travelMove, move)));
+    } else if (limited && this.bySegment && ts && ts.length > hi + 1) {
+      // No move indices: the travels of the layers up to the one being printed.
+      const layer = Math.max(0, upperBound(d.layerStart, move) - 1);
+      t1 = Math.max(t0, Math.min(t1, ts[Math.min(layer + 1, ts.length - 1)]));
+    }
+    this.travel.geometry.setDrawRange(t0 * 2, (t1 - t0) * 2);
+    this.drawn = { extrusion: end - start, travel: t1 - t0 };
     const z = d.layerZ;
     const zText = z && z.length > hi ? ` · z ${z[lo].toFixed(2)}–${z[hi].toFixed(2)} mm` : "";
     label.textContent = `layers ${lo + 1}–${hi + 1} of ${this.layers}${zText}`;
+    this.updateMoveLabel();
     this.requestRender();
+  }
+
+  /**
+   * The print-order slider: 0 … last G-code move of the result. Without move indices
+   * (segmentMove empty) it steps through the extrusion segments, which are in print order.
+   */
+  setupMoves(segments) {
+    const d = this.data;
+    const ui = this.ui;
+    const travels = d ? d.travel.length / 6 : 0;
+    this.bySegment = !(d?.segmentMove?.length === segments && segments > 0);
+    if (this.bySegment) {
+      this.lastMove = segments - 1;
+    } else {
+      const tm = d.travelMove?.length === travels && travels > 0 ? d.travelMove[travels - 1] : -1;
+      this.lastMove = Math.max(d.segmentMove[segments - 1], tm);
+    }
+    this.range.move = Infinity;
+    if (!ui.moveMax) return;
+    const wrap = ui.moveMax.closest("[data-moves]") ?? ui.moveMax;
+    wrap.hidden = this.lastMove < 1;
+    ui.moveMax.min = "0";
+    ui.moveMax.max = String(Math.max(0, this.lastMove));
+    ui.moveMax.value = ui.moveMax.max;
+    ui.moveMax.disabled = this.lastMove < 1;
+  }
+
+  updateMoveLabel() {
+    const out = this.ui.moveLabel;
+    if (!out) return;
+    const { move } = this.range;
+    const total = Math.max(0, this.lastMove ?? -1) + 1;
+    const what = this.bySegment ? "segment" : "move";
+    out.textContent = !total ? "" : move === Infinity ? `all ${total.toLocaleString("en-US")} ${what}s`
+      : `${what} ${(move + 1).toLocaleString("en-US")} of ${total.toLocaleString("en-US")}`;
+  }
+
+  /** Tool-axis lines (2 vertices per segment) when the result has an axis per segment. */
+  buildAxis(segments) {
+    const d = this.data;
+    const axis = d?.axis;
+    this.axis.geometry = new THREE.BufferGeometry();
+    this.axisSegments = 0;
+    const has = Boolean(axis && segments > 0 && axis.length >= segments * 3);
+    const toggle = this.ui.showAxis;
+    if (toggle) (toggle.closest("label") ?? toggle).hidden = !has;
+    if (!has) {
+      this.axis.geometry.setAttribute("position", new THREE.BufferAttribute(new Float32Array(0), 3));
+      return;
+    }
+    const b = boundsOf(d.positions);
+    const len = Math.max(0.3, Math.min(5, b.getSize(new THREE.Vector3()).length() * 0.02));
+    const p = d.positions;
+    const out = new Float32Array(segments * 6);
+    for (let i = 0; i < segments; i++) {
+      const ax = axis[i * 3], ay = axis[i * 3 + 1], az = axis[i * 3 + 2];
+      const n = Math.hypot(ax, ay, az) || 1;
+      const x = p[i * 6 + 3], y = p[i * 6 + 4], z = p[i * 6 + 5];
+      out[i * 6] = x;
+      out[i * 6 + 1] = y;
+      out[i * 6 + 2] = z;
+      out[i * 6 + 3] = x + (ax / n) * len;
+      out[i * 6 + 4] = y + (ay / n) * len;
+      out[i * 6 + 5] = z + (az / n) * len;
+    }
+    this.axis.geometry.setAttribute("position", new THREE.BufferAttribute(out, 3));
+    this.axisSegments = segments;
+  }
+
+  /**
+   * Feature names and colours (schema.features: {code, label, color "#rrggbb"}).
+   * @param {Array<{code: number, label?: string, name?: string, color?: string}>} features
+   */
+  setFeatures(features) {
+    this.featureRgb.fill(null);
+    this.featureLabel.fill(null);
+    this.featureOrder = [];
+    for (const f of features ?? []) {
+      const code = Number(f.code);
+      if (!(code >= 0 && code < 256)) continue;
+      this.featureRgb[code] = hexRgb(f.color) ?? UNKNOWN_COLOR;
+      this.featureLabel[code] = f.label ?? f.name ?? `feature ${code}`;
+      this.featureOrder.push(code);
+    }
+    this.colorCache.delete("feature");
+    if (this.data) this.applyColors();
   }
 
   /**
@@ -230,28 +371,24 @@ export class Preview {
     const path = d?.path;
     this.starts.geometry = new THREE.BufferGeometry();
     if (!segments || !path || path.length < segments) {
-      this.startLayerStart = new Uint32Array(0);
+      this.startSegment = new Uint32Array(0);
       this.starts.geometry.setAttribute("position", new THREE.BufferAttribute(new Float32Array(0), 3));
       return;
     }
     let count = 0;
     for (let i = 0; i < segments; i++) if (i === 0 || path[i] !== path[i - 1]) count++;
     const pos = new Float32Array(count * 3);
-    const layerStart = d.layerStart;
-    const sl = new Uint32Array(this.layers + 1);
+    const startSegment = new Uint32Array(count);
     let k = 0;
-    let layer = 0;
     for (let i = 0; i < segments; i++) {
-      while (layer < this.layers && layerStart[layer] <= i) sl[layer++] = k; // layers starting here
       if (i === 0 || path[i] !== path[i - 1]) {
         pos[k * 3] = d.positions[i * 6];
         pos[k * 3 + 1] = d.positions[i * 6 + 1];
         pos[k * 3 + 2] = d.positions[i * 6 + 2];
-        k++;
+        startSegment[k++] = i;
       }
     }
-    while (layer <= this.layers) sl[layer++] = k;
-    this.startLayerStart = sl;
+    this.startSegment = startSegment;
     this.starts.geometry.setAttribute("position", new THREE.BufferAttribute(pos, 3));
   }
 
@@ -284,7 +421,7 @@ export class Preview {
     };
     if (mode === "feature" && d.feature.length >= segments) {
       for (let i = 0; i < segments; i++) {
-        const c = FEATURE_COLORS[d.feature[i]] ?? UNKNOWN_COLOR;
+        const c = this.featureRgb[d.feature[i]] ?? UNKNOWN_COLOR;
         put(i, c[0], c[1], c[2]);
       }
     } else if (mode === "flow" && d.flow.length >= segments) {
@@ -341,10 +478,12 @@ export class Preview {
     }
     if (mode === "feature") {
       const counts = this.getFeatureCounts();
-      FEATURES.forEach((name, code) => {
-        if (counts[code] > 0) legend.append(item(FEATURE_COLORS[code], name));
-      });
-      if (counts[FEATURE_UNKNOWN] > 0) legend.append(item(UNKNOWN_COLOR, "unknown"));
+      for (const code of this.featureOrder) {
+        if (counts[code] > 0) legend.append(item(this.featureRgb[code], this.featureLabel[code]));
+      }
+      let unknown = 0;
+      for (let code = 0; code < 256; code++) if (!this.featureRgb[code]) unknown += counts[code];
+      if (unknown > 0) legend.append(item(UNKNOWN_COLOR, "unknown"));
     } else if (mode === "flow") {
       const [lo, hi] = this.getFlowRange();
       const bar = document.createElement("span");
@@ -516,3 +655,35 @@ const PATH_PALETTE = (() => {
   }
   return out;
 })();
+
+/** "#rrggbb" → [r, g, b], or null. */
+function hexRgb(hex) {
+  const m = /^#?([0-9a-f]{6})$/i.exec(String(hex ?? "").trim());
+  if (!m) return null;
+  const v = parseInt(m[1], 16);
+  return [(v >> 16) & 255, (v >> 8) & 255, v & 255];
+}
+
+/** First index whose value is >= x (sorted array). */
+function lowerBound(a, x) {
+  let lo = 0;
+  let hi = a.length;
+  while (lo < hi) {
+    const mid = (lo + hi) >>> 1;
+    if (a[mid] < x) lo = mid + 1;
+    else hi = mid;
+  }
+  return lo;
+}
+
+/** First index whose value is > x (sorted array). */
+function upperBound(a, x) {
+  let lo = 0;
+  let hi = a.length;
+  while (lo < hi) {
+    const mid = (lo + hi) >>> 1;
+    if (a[mid] <= x) lo = mid + 1;
+    else hi = mid;
+  }
+  return lo;
+}

@@ -1,22 +1,28 @@
 // Messages between the page (main.js) and the wasm worker (worker.js).
 //
 // Every request from the page carries an `id`; the worker answers each request with exactly
-// one `loaded` / `result` / `layer2d` / `error` message bearing the same id (plus any number of `progress`
-// messages for `run` and `analyze`). Bytes travel in ArrayBuffers listed in the transfer list
-// of postMessage, so they move between threads instead of being copied.
+// one `loaded` / `result` / `inspected` / `error` message bearing the same id (plus any number
+// of `progress` messages for `run` and `analyze`); `unload` and `cancel` are not answered
+// unless they fail. Bytes travel in ArrayBuffers listed in the transfer list of postMessage,
+// so they move between threads instead of being copied.
+//
+// Nothing here knows a job kind, a stage or a feature: those come from designSchema() and
+// the run report.
 
 /** Message types. */
 export const MSG = Object.freeze({
   // page → worker
-  /** Parse a mesh file and keep it in the session. @see LoadRequest */
+  /** Parse a file into an input slot and keep it in the session. @see LoadRequest */
   LOAD: "load",
-  /** Run a design (slice job). @see RunRequest */
+  /** Forget a loaded file. @see UnloadRequest */
+  UNLOAD: "unload",
+  /** Run a design. @see RunRequest */
   RUN: "run",
   /** Analyse a G-code file. @see AnalyzeRequest */
   ANALYZE: "analyze",
-  /** Lattice strokes of one layer for the 2D preview (answered by `layer2d`). @see Layer2dRequest */
-  LAYER2D: "layer2d",
-  /** Advisory: the page stops work by terminating the worker; see main.js. @see CancelRequest */
+  /** One index of one of the job kind's views (answered by `inspected`). @see InspectRequest */
+  INSPECT: "inspect",
+  /** Advisory: the page stops work by terminating the worker; see main.js. */
   CANCEL: "cancel",
   // worker → page
   /** The wasm module is initialised; queued requests are being handled. */
@@ -25,30 +31,18 @@ export const MSG = Object.freeze({
   LOADED: "loaded",
   /** Stage progress of a `run` / `analyze`. @see ProgressMessage */
   PROGRESS: "progress",
-  /** Answer to `layer2d` (same type name). @see Layer2dMessage */
-  LAYER2D_RESULT: "layer2d",
   /** Answer to `run` / `analyze`. @see ResultMessage */
   RESULT: "result",
+  /** Answer to `inspect`. @see InspectedMessage */
+  INSPECTED: "inspected",
   /** A request failed (or the module could not start). @see ErrorMessage */
   ERROR: "error",
 });
 
-/** Pipeline stage names reported by Session.run, in order. */
-export const STAGES = Object.freeze(["import", "slice", "lattice", "paths", "nonplanar", "gcode", "analyze"]);
-
-/** The stages each job kind goes through, in order (for the overall progress bar). */
-export const JOB_STAGES = Object.freeze({
-  slice: Object.freeze(["import", "slice", "gcode", "analyze"]),
-  lattice: Object.freeze(["import", "slice", "lattice", "paths", "nonplanar", "gcode", "analyze"]),
-});
-
-/** Floats per segment of a `layer2d` answer: x0 y0 x1 y1 feature-code (mm). */
-export const LAYER2D_STRIDE = 5;
-
 /**
  * Preview buffers of a result: message key → [Session method, typed array constructor].
  * The worker copies nothing: each typed array returned by wasm-bindgen owns its buffer,
- * which is transferred.
+ * which is transferred. A getter the module lacks gives an empty array.
  */
 export const PREVIEW_BUFFERS = Object.freeze({
   positions: ["previewPositions", Float32Array],
@@ -61,28 +55,24 @@ export const PREVIEW_BUFFERS = Object.freeze({
   travelLayerStart: ["previewTravelLayerStart", Uint32Array],
   layerZ: ["previewLayerZ", Float32Array],
   bedSize: ["bedSize", Float64Array],
+  axis: ["previewAxis", Float32Array],
+  segmentMove: ["previewSegmentMove", Uint32Array],
+  travelMove: ["previewTravelMove", Uint32Array],
 });
-
-/** Feature codes of previewFeature(), index = code (255 = unknown). */
-export const FEATURES = Object.freeze([
-  "External perimeter",
-  "Perimeter",
-  "Internal infill",
-  "Solid infill",
-  "Lattice",
-  "Contour",
-  "Handle",
-  "Skirt/Brim",
-]);
-export const FEATURE_UNKNOWN = 255;
 
 /**
  * @typedef {Object} LoadRequest
  * @property {"load"} type
  * @property {number} id
+ * @property {string} slot     input slot name of the job kind (schema.job_kinds[].slots[].name)
  * @property {string} name     file name, e.g. "part.stl"
- * @property {ArrayBuffer} bytes  transferred (the page keeps its own copy for restarts)
- * @property {boolean} [silent]  re-load after a worker restart: no UI feedback wanted
+ * @property {ArrayBuffer} bytes  transferred (the page keeps its own copy for restarts and links)
+ */
+/**
+ * @typedef {Object} UnloadRequest
+ * @property {"unload"} type
+ * @property {number} id
+ * @property {string} name
  */
 /**
  * @typedef {Object} RunRequest
@@ -98,46 +88,48 @@ export const FEATURE_UNKNOWN = 255;
  * @property {ArrayBuffer} bytes  G-code, transferred
  */
 /**
- * @typedef {Object} Layer2dRequest
- * @property {"layer2d"} type
+ * @typedef {Object} InspectRequest
+ * @property {"inspect"} type
  * @property {number} id
- * @property {string} design   design JSON (a lattice job)
- * @property {number} layer    0-based layer (clamped to the last layer by the worker)
+ * @property {string} design   design JSON
+ * @property {string} view     a view id of the design's job kind (schema.job_kinds[].views[].id)
+ * @property {number} index    0-based index (layer, slice, …)
  * @property {string} [key]    requests with the same key supersede each other: when a newer
  *                             one is already waiting, the older is answered `stale` unrun
- */
-/**
- * @typedef {Object} CancelRequest
- * @property {"cancel"} type
- * @property {number} id  the request to cancel
  */
 /**
  * @typedef {Object} LoadedMessage
  * @property {"loaded"} type
  * @property {number} id
+ * @property {string} slot
  * @property {string} name
- * @property {Object} report  import report {format, triangles, vertices, open_edges, ...}
+ * @property {{slot: string, name: string, kind: string, summary: string, report: Object}} info
  */
 /**
  * @typedef {Object} ProgressMessage
  * @property {"progress"} type
  * @property {number} id
- * @property {string} stage     one of STAGES
+ * @property {string} stage     a stage name of the job kind
  * @property {number} fraction  0..1 within the stage
  */
 /**
- * @typedef {Object} Layer2dMessage
- * @property {"layer2d"} type
+ * @typedef {Object} InspectedMessage
+ * @property {"inspected"} type
  * @property {number} id
- * @property {number} layer
- * @property {Float32Array} segments  LAYER2D_STRIDE floats per segment (transferred); empty when stale
- * @property {boolean} [stale]        skipped because a newer request with the same key was waiting
+ * @property {string} view
+ * @property {number} index     the index answered
+ * @property {string} shape     "lines2d" | "lines3d" | "image" | "mesh"
+ * @property {number} stride    floats per item
+ * @property {number} count     valid indices are 0..count-1
+ * @property {Float32Array} data  transferred; empty when stale
+ * @property {Object} meta
+ * @property {boolean} [stale]  skipped because a newer request with the same key was waiting
  * @property {number} ms
  */
 /**
  * @typedef {Object} PreviewBuffers
  * @property {Float32Array} positions   extrusion segments, x0 y0 z0 x1 y1 z1 (mm)
- * @property {Uint8Array} feature       per segment feature code (FEATURES)
+ * @property {Uint8Array} feature       per segment feature code (schema.features)
  * @property {Uint32Array} path         per segment path index
  * @property {Float32Array} flow        per segment volumetric flow, mm³/s
  * @property {Float32Array} width       per segment width, mm
@@ -146,13 +138,16 @@ export const FEATURE_UNKNOWN = 255;
  * @property {Uint32Array} travelLayerStart
  * @property {Float32Array} layerZ
  * @property {Float64Array} bedSize     [x, y, z] mm
+ * @property {Float32Array} axis        3 floats per segment: tool axis at its end (empty: none)
+ * @property {Uint32Array} segmentMove  per segment, index of its G-code move (increasing)
+ * @property {Uint32Array} travelMove   per travel segment, index of its G-code move
  */
 /**
  * @typedef {Object} ResultMessage
  * @property {"result"} type
  * @property {number} id
  * @property {"run"|"analyze"} request
- * @property {Object} report       the run / analysis report (parsed JSON)
+ * @property {Object} report       the run report ({name, job, stages, gcode, analysis}) or {analysis}
  * @property {PreviewBuffers} preview  every buffer transferred
  * @property {Uint8Array} gcode    transferred
  * @property {number} ms           worker time spent
@@ -161,7 +156,7 @@ export const FEATURE_UNKNOWN = 255;
  * @typedef {Object} ErrorMessage
  * @property {"error"} type
  * @property {number|null} id   the failed request (null: module start-up)
- * @property {string} request   "load" | "run" | "analyze" | "layer2d" | "init"
+ * @property {string} request   the failed request's type, or "init"
  * @property {string} message   the message from Rust (or JS)
  * @property {string} [name]    file name for load / analyze
  * @property {boolean} [fatal]  the wasm instance trapped or ran out of memory: restart the worker
@@ -176,4 +171,34 @@ export function transferList(views) {
   const seen = new Set();
   for (const v of views) if (v && v.buffer && v.buffer.byteLength > 0) seen.add(v.buffer);
   return [...seen];
+}
+
+/**
+ * A value from wasm as plain data: JSON text parsed, `Map`s (serde-wasm-bindgen's default for
+ * maps) turned into objects. Typed arrays are kept as they are.
+ */
+export function plain(value) {
+  if (typeof value === "string") {
+    try {
+      return JSON.parse(value);
+    } catch {
+      return value;
+    }
+  }
+  return unmap(value);
+}
+
+function unmap(v) {
+  if (v instanceof Map) {
+    const o = {};
+    for (const [k, x] of v) o[k] = unmap(x);
+    return o;
+  }
+  if (Array.isArray(v)) return v.map(unmap);
+  if (v && typeof v === "object" && !ArrayBuffer.isView(v) && !(v instanceof ArrayBuffer)) {
+    const o = {};
+    for (const k of Object.keys(v)) o[k] = unmap(v[k]);
+    return o;
+  }
+  return v;
 }

@@ -1,9 +1,10 @@
 // Service worker: keeps the app shell, the wasm package and three.js so the page works
 // offline once it has been opened. Network first (a rebuilt page is seen at once), the cache
 // when the network fails. Only same-origin GETs are handled; nothing leaves the origin.
-const CACHE = "weft-v1";
+const CACHE = "weft-v2";
 const SHELL = [
   "./", "index.html", "style.css", "main.js", "worker.js", "protocol.js", "preview.js",
+  "plot.js", "report.js", "views.js",
   "vendor/three.module.js", "vendor/three.core.js", "vendor/OrbitControls.js",
   "examples/index.json", "../pkg/weft.js", "../pkg/weft_bg.wasm",
 ];

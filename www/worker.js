@@ -2,7 +2,7 @@
 // initialised, then handled one at a time (every wasm call is synchronous). Cancel is done by
 // the page terminating this worker; see main.js.
 import init, { Session } from "../pkg/weft.js";
-import { MSG, PREVIEW_BUFFERS, transferList } from "./protocol.js";
+import { MSG, PREVIEW_BUFFERS, plain, transferList } from "./protocol.js";
 
 /** @type {Session|null} */
 let session = null;
@@ -10,13 +10,13 @@ let session = null;
 let queue = [];
 /** @type {WebAssembly.Memory|null} */
 let memory = null;
-/** key → id of the newest `layer2d` request received with that key */
-const newestLayer2d = new Map();
+/** key → id of the newest `inspect` request received with that key */
+const newestInspect = new Map();
 
 self.onmessage = ({ data }) => {
-  if (data?.type === MSG.LAYER2D) newestLayer2d.set(data.key ?? "", data.id);
+  if (data?.type === MSG.INSPECT) newestInspect.set(data.key ?? "", data.id);
   if (queue) queue.push(data);
-  else if (data?.type === MSG.LAYER2D) setTimeout(() => handle(data), 0); // let newer ones arrive first
+  else if (data?.type === MSG.INSPECT) setTimeout(() => handle(data), 0); // let newer ones arrive first
   else handle(data);
 };
 
@@ -40,34 +40,42 @@ function handle(msg) {
   try {
     switch (msg.type) {
       case MSG.LOAD: {
-        const report = JSON.parse(session.addFile(msg.name, new Uint8Array(msg.bytes)));
-        self.postMessage({ type: MSG.LOADED, id: msg.id, name: msg.name, report });
+        const info = plain(session.addFile(msg.slot, msg.name, new Uint8Array(msg.bytes)));
+        self.postMessage({ type: MSG.LOADED, id: msg.id, slot: msg.slot, name: msg.name, info });
         break;
       }
+      case MSG.UNLOAD:
+        session.removeFile(msg.name);
+        break;
       case MSG.RUN: {
         const t0 = performance.now();
-        const report = JSON.parse(session.run(msg.design, progressReporter(msg.id)));
+        const report = plain(session.run(msg.design, progressReporter(msg.id)));
         postResult(msg.id, "run", report, t0);
         break;
       }
       case MSG.ANALYZE: {
         const t0 = performance.now();
         self.postMessage({ type: MSG.PROGRESS, id: msg.id, stage: "analyze", fraction: 0 });
-        const report = JSON.parse(session.analyzeGcode(msg.name, new Uint8Array(msg.bytes)));
+        const report = plain(session.analyzeGcode(msg.name, new Uint8Array(msg.bytes)));
         postResult(msg.id, "analyze", report, t0);
         break;
       }
-      case MSG.LAYER2D: {
+      case MSG.INSPECT: {
         const t0 = performance.now();
-        if (newestLayer2d.get(msg.key ?? "") !== msg.id) {
-          self.postMessage({ type: MSG.LAYER2D_RESULT, id: msg.id, layer: msg.layer, segments: new Float32Array(0), stale: true, ms: 0 });
+        if (newestInspect.get(msg.key ?? "") !== msg.id) {
+          self.postMessage({
+            type: MSG.INSPECTED, id: msg.id, view: msg.view, index: msg.index, shape: "", stride: 1, count: 0,
+            data: new Float32Array(0), meta: {}, stale: true, ms: 0,
+          });
           break;
         }
-        const segments = owned(session.latticeLayer(msg.design, Math.max(0, msg.layer | 0)), Float32Array);
-        self.postMessage(
-          { type: MSG.LAYER2D_RESULT, id: msg.id, layer: msg.layer, segments, ms: performance.now() - t0 },
-          transferList([segments]),
-        );
+        const raw = session.inspect(msg.design, msg.view, Math.max(0, msg.index | 0));
+        const r = raw instanceof Map ? Object.fromEntries(raw) : raw;
+        const data = owned(r.data, Float32Array);
+        self.postMessage({
+          type: MSG.INSPECTED, id: msg.id, view: r.view ?? msg.view, index: r.index ?? msg.index, shape: r.shape,
+          stride: r.stride ?? 1, count: r.count ?? 0, data, meta: plain(r.meta ?? {}), ms: performance.now() - t0,
+        }, transferList([data]));
         break;
       }
       case MSG.CANCEL:
@@ -103,7 +111,7 @@ function progressReporter(id) {
 function postResult(id, request, report, t0) {
   const preview = {};
   for (const [key, [method, Type]] of Object.entries(PREVIEW_BUFFERS)) {
-    preview[key] = owned(session[method](), Type);
+    preview[key] = typeof session[method] === "function" ? owned(session[method](), Type) : new Type(0);
   }
   const gcode = owned(session.gcode(), Uint8Array);
   self.postMessage(

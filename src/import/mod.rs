@@ -37,7 +37,7 @@ impl Default for Options {
 }
 
 /// File formats weft reads.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, serde::Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Format {
     /// Binary STL.
@@ -51,7 +51,7 @@ pub enum Format {
 }
 
 /// What the importer found and repaired.
-#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, serde::Deserialize)]
 pub struct ImportReport {
     /// Detected format.
     pub format: Option<Format>,

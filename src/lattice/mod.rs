@@ -236,7 +236,7 @@ pub struct LayerDomain {
 }
 
 /// What the generator did.
-#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, serde::Deserialize)]
 pub struct LatticeReport {
     /// Layers generated.
     pub layers: usize,

@@ -76,7 +76,7 @@ fn d_seg() -> f64 {
 }
 
 /// What projection found.
-#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, serde::Deserialize)]
 pub struct ProjectionReport {
     /// Points whose vertical ray missed the surface (kept at the surface's lowest point; fix: a
     /// larger surface or a smaller lattice).

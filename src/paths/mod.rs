@@ -95,7 +95,7 @@ impl Default for Options {
 }
 
 /// Numbers for one layer (what the page plots).
-#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, serde::Deserialize)]
 pub struct LayerPaths {
     /// Nodes after merging.
     pub nodes: usize,
@@ -139,7 +139,7 @@ pub struct LayerPaths {
 }
 
 /// The optimiser's report.
-#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, serde::Deserialize)]
 pub struct PathsReport {
     /// Method used.
     pub method: Option<Method>,

@@ -102,7 +102,7 @@ pub struct SlicedLayer {
 }
 
 /// What the slicer found and repaired.
-#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, serde::Deserialize)]
 pub struct SliceReport {
     /// Layers produced.
     pub layers: usize,
@@ -410,7 +410,7 @@ mod tests {
     fn bad_options_are_rejected() {
         let o = Options { layer_height_mm: 0.0, ..Default::default() };
         let e = validate(&o).unwrap_err();
-        assert!(matches!(e, Error::BadOption { field: "layer_height_mm", .. }), "{e}");
+        assert!(matches!(&e, Error::BadOptions { problems } if problems[0].path == "layer_height_mm"), "{e}");
         let o = Options { infill_density: f64::NAN, ..Default::default() };
         assert!(validate(&o).is_err());
         assert!(validate(&Options::default()).is_ok());

@@ -69,7 +69,7 @@ self.onmessage = async ({ data }) => {
     // Import (Session.addFile reads the mesh once to report problems, and keeps the bytes).
     const session = new Session();
     let t = performance.now();
-    session.addFile("bench.stl", stl);
+    session.addFile("mesh", "bench.stl", stl); // (slot, name, bytes): the slice job's mesh slot
     const addFileMs = performance.now() - t;
     stl = null; // the JS copy is no longer needed
     const memAfterAddFile = mem();
@@ -89,7 +89,8 @@ self.onmessage = async ({ data }) => {
     const design = benchDesign();
     t = performance.now();
     stageStart = t;
-    const report = JSON.parse(session.run(design, progress));
+    const ran = session.run(design, progress); // an object (wasm API v2); JSON text before
+    const report = typeof ran === "string" ? JSON.parse(ran) : ran;
     const end = performance.now();
     if (current !== null) stages.push({ stage: current, ms: end - stageStart });
     const runMs = end - t;
@@ -104,7 +105,8 @@ self.onmessage = async ({ data }) => {
     const big = new Uint8Array(gcodeBytes * reps);
     for (let i = 0; i < reps; i++) big.set(gcode, i * gcodeBytes);
     t = performance.now();
-    const analysis = JSON.parse(benchAnalyze(big));
+    const analyzed = benchAnalyze(big);
+    const analysis = typeof analyzed === "string" ? JSON.parse(analyzed) : analyzed;
     const analyzeMs = performance.now() - t;
 
     self.postMessage({

@@ -1,6 +1,7 @@
-// Browser checks of the lattice job (GIPPO print paths): example from the menu, score plot,
-// path classes, 3D preview, euler's minimal paths, share link vs the native CLI, pattern
-// thumbnails. Called by run.mjs with its browser, server and check() so the summary line
+// Browser checks of the lattice job (GIPPO print paths): example from the menu, the paths
+// stage card's score plot and path classes drawn by the generic plot code from the run
+// report, 3D preview, the layer2d view through inspect, euler's minimal paths, share link vs
+// the native CLI, pattern thumbnails. Called by run.mjs with its browser, server and check() so the summary line
 // counts these too:
 //
 //   import { latticeChecks } from "./lattice-checks.mjs";
@@ -16,7 +17,7 @@ import { tmpdir } from "node:os";
 import { colouredPixels, downloadGcode, waitReady, waitResult } from "./page-helpers.mjs";
 
 const EXAMPLE = "honeycomb-10mm.json";
-const BACKGROUND = [0x1f, 0x23, 0x2a]; // the 2D views' background (lattice.js)
+const BACKGROUND = [0x1f, 0x23, 0x2a]; // the 2D views' background (views.js)
 const sha256 = (buf) => createHash("sha256").update(buf).digest("hex");
 
 /**
@@ -43,7 +44,7 @@ export async function latticeChecks({ browser, baseUrl, weftBin = process.env.WE
   let shared = null; // {url, designPath, gcode}
 
   try {
-    await check(n++, "lattice: honeycomb-10mm from the Examples menu runs; 500-point score plot, path classes, 3D preview", async () => {
+    await check(n++, "lattice: honeycomb-10mm from the Examples menu runs; the paths card draws the report's score plot and path classes with the generic plot code; 3D preview; layer2d view via inspect", async () => {
       await page.goto(`${baseUrl}/www/`);
       await waitReady(page);
       const before = await page.evaluate(() => window.weft.resultCount);
@@ -54,38 +55,68 @@ export async function latticeChecks({ browser, baseUrl, weftBin = process.env.WE
       await page.selectOption("#examples", EXAMPLE);
       await waitResult(page, before, `running ${EXAMPLE}`, jobTimeout);
       const report = await page.evaluate(() => window.weft.result?.report ?? null);
-      const layer = report?.paths?.layers?.[0];
-      if (!layer) throw new Error(`the run report has no paths.layers (lattice: ${JSON.stringify(report?.lattice ?? null)}): the lattice/paths stages returned nothing`);
-      const plot = await page.$eval("#score-plot", (el) => ({
-        kind: el.dataset.kind, points: Number(el.dataset.points ?? 0),
-        best: el.querySelectorAll("circle.mark-best").length, worst: el.querySelectorAll("circle.mark-worst").length,
-      }));
-      if (plot.points !== 500) {
-        throw new Error(`score plot has ${plot.points} points (kind ${plot.kind}); expected 500 (report: ${layer.iteration_scores?.length} iteration scores)`);
+      const paths = report?.stages?.find((s) => s.stage === "paths");
+      if (!paths) throw new Error(`the run report has no paths stage (stages: ${(report?.stages ?? []).map((s) => s.stage).join(", ")})`);
+      const scores = paths.plots.find((p) => p.kind === "line");
+      const iterations = scores?.series.find((s) => s.name === "score" && (s.group_index ?? 0) === 0)?.y.length ?? 0;
+      if (iterations !== 500) throw new Error(`the report's score series has ${iterations} iterations, expected 500`);
+      const shown = await page.evaluate(() => {
+        const card = document.querySelector('#report .stage-card[data-stage="paths"]');
+        if (!card) return null;
+        const line = card.querySelector('svg[data-plot-kind="line"]');
+        const classes = [...card.querySelectorAll('svg[data-plot-kind="bars"]')].find((s) => s.querySelectorAll("rect.bar").length === 3);
+        return {
+          group: card.dataset.group,
+          points: Number(line?.querySelector('.series[data-series="score"]')?.dataset.points ?? 0),
+          path: line?.querySelector('.series[data-series="score"] path')?.getAttribute("d")?.split(/[ML]/).filter(Boolean).length ?? 0,
+          hlines: line?.querySelectorAll(".series-hline line").length ?? 0,
+          axes: [...(line?.querySelectorAll(".axis-title") ?? [])].map((t) => t.textContent),
+          bars: classes ? [...classes.querySelectorAll("rect.bar")].map((r) => Number(r.getAttribute("width"))) : [],
+          labels: classes ? [...classes.querySelectorAll(".bar-label")].map((t) => t.textContent) : [],
+          table: card.querySelector("table")?.textContent ?? "",
+        };
+      });
+      if (!shown) throw new Error("no stage card for the paths stage in #report");
+      if (shown.points !== iterations || shown.path !== iterations) {
+        throw new Error(`the line plot shows ${shown.points} points (path with ${shown.path} vertices); the report has ${iterations}`);
       }
-      if (plot.best !== 1 || plot.worst !== 1) throw new Error(`best/worst marks: ${plot.best}/${plot.worst}`);
-      const bars = await page.$eval("#path-classes", (el) => ({
-        drawn: el.dataset.drawn, widths: [...el.querySelectorAll("rect:not(.bar-track)")].map((r) => Number(r.getAttribute("width"))),
-      }));
-      const classes = layer.long_paths + layer.medium_paths + layer.short_paths;
-      if (bars.widths.length !== 3 || Number(bars.drawn) !== classes || !bars.widths.some((w) => w > 0)) {
-        throw new Error(`path-class bars not drawn: ${JSON.stringify(bars)} for ${classes} paths`);
-      }
-      const table = await page.$eval("#path-table", (t) => t.textContent);
-      if (!table.includes(String(layer.lower_bound_paths))) throw new Error(`the table does not show the lower bound: ${table}`);
+      if (shown.hlines < 1) throw new Error("the score plot has no dashed reference line (hline series)");
+      if (shown.axes.length < 2) throw new Error(`axis titles: ${JSON.stringify(shown.axes)}`);
+      const layer0 = paths.plots.find((p) => p.kind === "bars" && p.series.some((s) => s.x.length === 3))
+        ?.series.find((s) => (s.group_index ?? 0) === 0);
+      if (shown.bars.length !== 3 || !shown.bars.some((w) => w > 0)) throw new Error(`path-class bars not drawn: ${JSON.stringify(shown)}`);
+      if (layer0 && shown.labels.join("|") !== layer0.x.join("|")) throw new Error(`bar labels ${shown.labels} vs report ${layer0.x}`);
       let px = 0;
       for (let tries = 0; tries < 10 && px < 300; tries++) { // a resize may clear the canvas until the next frame
         if (tries) await page.waitForTimeout(200);
         px = await colouredPixels(page);
       }
       if (px < 300) throw new Error(`only ${px} toolpath-coloured pixels in the 3D preview`);
-      const l2d = await page.evaluate(() => window.weft.layer2dSegments);
-      if (!(l2d > 0)) throw new Error("the 2D layer preview drew no segments");
+      await page.waitForFunction(() => window.weft.views.find((v) => v.id === "layer2d")?.answers > 0, null, { timeout: jobTimeout }).catch(() => {});
+      const view = await page.evaluate(() => window.weft.views.find((v) => v.id === "layer2d") ?? null);
+      if (!view) throw new Error(`no layer2d view card (views: ${JSON.stringify(await page.evaluate(() => window.weft.views))})`);
+      if (!(view.answers > 0) || !(view.items > 0) || view.shape !== "lines2d") throw new Error(`the layer2d view drew nothing: ${JSON.stringify(view)}`);
       await page.screenshot({ path: join(out, "lattice.png") });
-      return `${layer.paths} paths (bound ${layer.lower_bound_paths}), best score ${layer.score.toFixed(3)}, ${px} coloured pixels, 2D ${l2d} segments`;
+      return `${iterations} iterations plotted, bars ${shown.labels.join("/")}, ${px} coloured pixels, layer2d ${view.items} segments of ${view.count} layer(s)`;
     });
 
-    await check(n++, "lattice: optimiser euler → the page shows paths = lower bound (minimal)", async () => {
+    await check(n++, "lattice: the layer2d view's index control asks inspect for another layer", async () => {
+      await waitReady(page);
+      const v0 = await page.evaluate(() => window.weft.views.find((v) => v.id === "layer2d"));
+      if (!(v0?.count > 1)) return `only ${v0?.count} layer: nothing to step through`;
+      const input = '.view-card[data-view="layer2d"] input[type=number]';
+      await page.fill(input, "2");
+      await page.dispatchEvent(input, "change");
+      await page.waitForFunction((k) => {
+        const v = window.weft.views.find((x) => x.id === "layer2d");
+        return v.answers > k && v.index === 1;
+      }, v0.answers, { timeout: jobTimeout });
+      const v1 = await page.evaluate(() => window.weft.views.find((v) => v.id === "layer2d"));
+      if (!(v1.items > 0)) throw new Error(`layer 2 drew nothing: ${JSON.stringify(v1)}`);
+      return `layer 2 of ${v1.count}: ${v1.items} segments`;
+    });
+
+    await check(n++, "lattice: optimiser euler → the paths card shows paths = proven minimum", async () => {
       await waitReady(page);
       if (!(await page.$("#f-job-paths-method"))) throw new Error("no optimiser field (#f-job-paths-method) in the form");
       const before = await page.evaluate(() => window.weft.resultCount);
@@ -94,18 +125,14 @@ export async function latticeChecks({ browser, baseUrl, weftBin = process.env.WE
       if (method !== "euler") throw new Error(`the design's method is ${method}`);
       await page.click("#slice");
       await waitResult(page, before, "running with euler", jobTimeout);
-      const layer = await page.evaluate(() => window.weft.result?.report?.paths?.layers?.[0] ?? null);
-      if (!layer) throw new Error("no paths report");
-      const shown = await page.evaluate(() => ({
-        minimal: document.getElementById("path-table").dataset.minimal,
-        badge: document.querySelector("#path-table .badge")?.textContent ?? "",
-        kind: document.getElementById("score-plot").dataset.kind,
-        verdict: document.querySelector("#score-plot .verdict")?.textContent ?? "",
-      }));
-      if (layer.paths !== layer.lower_bound_paths) throw new Error(`euler made ${layer.paths} paths, lower bound ${layer.lower_bound_paths}`);
-      if (shown.minimal !== "true" || !/minimal/i.test(shown.badge)) throw new Error(`the table does not say minimal: ${JSON.stringify(shown)}`);
-      if (shown.kind !== "bound" || !/minimal/i.test(shown.verdict)) throw new Error(`the plot does not compare with the bound: ${JSON.stringify(shown)}`);
-      return `${layer.paths} paths = bound`;
+      const metrics = await page.evaluate(() => {
+        const card = document.querySelector('#report .stage-card[data-stage="paths"]');
+        const value = (key) => card?.querySelector(`.metrics [data-key="${key}"] dd`)?.firstChild?.textContent ?? null;
+        return { paths: value("paths"), bound: value("lower_bound"), line: Boolean(card?.querySelector('svg[data-plot-kind="line"]')) };
+      });
+      if (metrics.paths === null || metrics.bound === null) throw new Error(`the paths card lacks the paths / lower_bound metrics: ${JSON.stringify(metrics)}`);
+      if (metrics.paths !== metrics.bound) throw new Error(`euler made ${metrics.paths} paths, lower bound ${metrics.bound}`);
+      return `${metrics.paths} paths = bound${metrics.line ? "" : " (no iteration plot for euler)"}`;
     });
 
     await check(n++, "lattice: share link in a fresh browser gives the same G-code (SHA-256) as `weft run design.json`", async () => {

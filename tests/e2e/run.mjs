@@ -135,7 +135,7 @@ await check(1, "page loads without console errors; canvas exists", async () => {
   if (!res.ok()) throw new Error(`GET /www/ → ${res.status()}`);
   await waitReady(page);
   if (!(await page.$("canvas#preview"))) throw new Error("no canvas#preview");
-  for (const id of ["error", "stats", "download", "share", "examples", "color-by", "show-travel", "layer-min", "layer-max"]) {
+  for (const id of ["error", "stats", "download", "share", "examples", "color-by", "show-travel", "layer-min", "layer-max", "move-max", "slots", "report", "views"]) {
     if (!(await page.$(`#${id}`))) throw new Error(`#${id} missing`);
   }
   await page.waitForTimeout(500);
@@ -305,7 +305,116 @@ await check(7, "Cancel stops a long job, restarts the worker, and a short run wo
   }
 });
 
-await latticeChecks({ browser, baseUrl: base, weftBin: WEFT_BIN, check, newPage, outDir: OUT, first: 8 });
+await check(8, "input slots: one drop zone per schema slot for every job kind (labels, extensions)", async () => {
+  const fresh = await newPage();
+  try {
+    const p = fresh.page;
+    await p.goto(`${base}/www/`);
+    await waitReady(p);
+    const kinds = await p.evaluate(() => window.weft.schema.job_kinds.map((k) => ({
+      name: k.name, slots: k.slots.map((s) => ({ name: s.name, label: s.label, accept: s.accept, multiple: Boolean(s.multiple) })),
+    })));
+    if (!kinds.some((k) => k.name === "slice") || !kinds.some((k) => k.name === "lattice")) {
+      throw new Error(`schema job kinds: ${kinds.map((k) => k.name).join(", ")}`);
+    }
+    const seen = [];
+    for (const kind of kinds) {
+      const problem = await p.evaluate((k) => {
+        const sel = document.getElementById("f-job-kind");
+        if (!sel) return "no job selector (#f-job-kind)";
+        sel.value = JSON.stringify(k);
+        sel.dispatchEvent(new Event("change"));
+        return JSON.parse(window.weft.design).job.kind === k ? null : `the job kind did not change to ${k}`;
+      }, kind.name);
+      if (problem) throw new Error(problem);
+      const zones = await p.$$eval("#slots .slot", (els) => els.map((el) => ({
+        name: el.dataset.slot, label: el.querySelector(".slot-label")?.textContent ?? "",
+        accept: el.querySelector("input[type=file]")?.accept ?? "", multiple: el.querySelector("input[type=file]")?.multiple ?? false,
+      })));
+      const want = kind.slots.map((s) => ({ name: s.name, label: s.label, accept: s.accept.join(","), multiple: s.multiple }));
+      if (JSON.stringify(zones) !== JSON.stringify(want)) {
+        throw new Error(`${kind.name}: drop zones ${JSON.stringify(zones)}, schema slots ${JSON.stringify(want)}`);
+      }
+      seen.push(`${kind.name}: ${zones.map((z) => z.name).join("+") || "none"}`);
+    }
+    if (fresh.errors.length) throw new Error(`console errors:\n${fresh.errors.join("\n")}`);
+    return seen.join("; ");
+  } finally {
+    await fresh.context.close();
+  }
+});
+
+await check(9, "temperature change → re-run reuses every stage before gcode; G-code differs only in temperature lines", async () => {
+  // A baseline run of the design as it is now.
+  let before = await page.evaluate(() => window.weft.resultCount);
+  await page.click("#slice");
+  await waitResult(page, before, "baseline run");
+  const a = await download(page, "temp-a.gcode");
+  const field = "#f-material-nozzle_temp_c";
+  if (!(await page.$(field))) throw new Error(`no ${field} in the form`);
+  const old = Number(await page.inputValue(field));
+  await page.fill(field, String(old + 7));
+  await page.dispatchEvent(field, "change");
+  const temp = await page.evaluate(() => JSON.parse(window.weft.design).material.nozzle_temp_c);
+  if (temp !== old + 7) throw new Error(`the design's nozzle temperature is ${temp}, expected ${old + 7}`);
+  before = await page.evaluate(() => window.weft.resultCount);
+  await page.click("#slice");
+  await waitResult(page, before, "re-run after the temperature change");
+  // The stages that run before the G-code writer, in the job kind's order (the report may
+  // leave out the writer's own stages).
+  const { stages: all, order } = await page.evaluate(() => {
+    const d = JSON.parse(window.weft.design);
+    const kind = window.weft.schema.job_kinds.find((k) => k.name === d.job.kind);
+    return {
+      stages: window.weft.result.report.stages.map((s) => ({ stage: s.stage, cached: s.cached })),
+      order: kind.stages.map((s) => s.name),
+    };
+  });
+  const writer = order.indexOf("gcode");
+  const stages = all.filter((s) => order.indexOf(s.stage) >= 0 && (writer < 0 || order.indexOf(s.stage) < writer));
+  const g = stages.length;
+  if (g < 1) throw new Error(`no stages before gcode in the report: ${JSON.stringify(all)} (job stages ${order.join(", ")})`);
+  const recomputed = stages.slice(0, g).filter((s) => !s.cached).map((s) => s.stage);
+  if (recomputed.length) throw new Error(`recomputed although only the temperature changed: ${recomputed.join(", ")} (${JSON.stringify(stages)})`);
+  const cards = await page.evaluate(() => window.weft.reportCards);
+  const badges = cards.filter((c) => c.cached).map((c) => c.stage);
+  const shouldShow = stages.slice(0, g).map((s) => s.stage).filter((st) => cards.some((c) => c.stage === st));
+  if (shouldShow.some((st) => !badges.includes(st))) throw new Error(`cards without the reused badge: ${JSON.stringify(cards)}`);
+  const b = await download(page, "temp-b.gcode");
+  const la = a.bytes.toString("utf8").split("\n");
+  const lb = b.bytes.toString("utf8").split("\n");
+  if (la.length !== lb.length) throw new Error(`line count ${la.length} → ${lb.length}`);
+  const diff = [];
+  for (let i = 0; i < la.length; i++) if (la[i] !== lb[i]) diff.push([la[i], lb[i]]);
+  if (!diff.length) throw new Error("the G-code did not change");
+  const other = diff.filter(([x, y]) => !(/^M10[49]\b/.test(x) && /^M10[49]\b/.test(y)) && !/temp/i.test(x + y));
+  if (other.length) throw new Error(`non-temperature lines differ: ${JSON.stringify(other.slice(0, 3))}`);
+  return `${stages.map((s) => s.stage).join(", ")} reused; ${diff.length} line(s) differ, e.g. ${diff[0][1]}`;
+});
+
+await check(10, "print-order slider hides later moves (fewer segments drawn); the full range draws them all again", async () => {
+  const r = await page.evaluate(async () => {
+    const el = document.getElementById("move-max");
+    const wrap = el.closest("[data-moves]");
+    if (!wrap || wrap.hidden || el.disabled) return { error: "the print-order slider is hidden or disabled" };
+    const all = window.weft.preview.drawn.extrusion;
+    el.value = String(Math.floor(Number(el.max) / 3));
+    el.dispatchEvent(new Event("input"));
+    const part = window.weft.preview.drawn.extrusion;
+    const label = document.getElementById("move-label").textContent;
+    el.value = el.max;
+    el.dispatchEvent(new Event("input"));
+    return { all, part, back: window.weft.preview.drawn.extrusion, label, max: Number(el.max) };
+  });
+  if (r.error) throw new Error(r.error);
+  if (!(r.part < r.all) || !(r.part > 0)) throw new Error(`segments drawn: all ${r.all}, at a third of the moves ${r.part}`);
+  if (r.back !== r.all) throw new Error(`back to the last move draws ${r.back}, not ${r.all}`);
+  const axis = await page.$eval("#show-axis", (el) => el.closest("label").hidden);
+  if (!axis) throw new Error("the tool-axis toggle shows for a planar print with no tool axis");
+  return `${r.all} → ${r.part} segments at "${r.label}" (${r.max + 1} moves)`;
+});
+
+await latticeChecks({ browser, baseUrl: base, weftBin: WEFT_BIN, check, newPage, outDir: OUT, first: 11 });
 
 if (main.errors.length) console.log(`note: console errors in the main page:\n  ${main.errors.join("\n  ")}`);
 if (offOrigin.length) console.log(`note: blocked requests leaving the origin:\n  ${[...new Set(offOrigin)].join("\n  ")}`);

@@ -1,0 +1,286 @@
+// Generic viewers for the answers of Session.inspect, chosen by their `shape`:
+//   lines2d  stride 5: x0 y0 x1 y1 code         (mm, coloured by feature code)
+//   lines3d  stride 7: x0 y0 z0 x1 y1 z1 code   (orthographic view from the front left)
+//   image    width × height floats, row-major    (grey ramp from meta.min to meta.max)
+//   mesh     stride 9: one triangle              (orthographic, flat shaded)
+// Pure drawing on a <canvas>: main.js owns the state and the worker.
+
+export const BACKGROUND = "#1f232a";
+const OTHER_COLOR = "#e0b84d";
+const TEXT = "#e6e9ee";
+
+/**
+ * Feature styles from the schema: code → {label, color}.
+ * @param {Array<{code: number, label?: string, name?: string, color?: string}>} features
+ * @returns {Map<number, {label: string, color: string}>}
+ */
+export function featureStyles(features) {
+  const m = new Map();
+  for (const f of features ?? []) m.set(Number(f.code), { label: f.label ?? f.name ?? `feature ${f.code}`, color: f.color ?? OTHER_COLOR });
+  return m;
+}
+
+/** Sizes the canvas' backing store to its CSS box; returns the 2D context and size. */
+function setup(canvas, background = BACKGROUND) {
+  const dpr = Math.min(window.devicePixelRatio || 1, 2);
+  const w = Math.max(1, Math.round((canvas.clientWidth || canvas.width) * dpr));
+  const h = Math.max(1, Math.round((canvas.clientHeight || canvas.height) * dpr));
+  if (canvas.width !== w) canvas.width = w;
+  if (canvas.height !== h) canvas.height = h;
+  const ctx = canvas.getContext("2d");
+  ctx.setTransform(1, 0, 0, 1, 0, 0);
+  ctx.fillStyle = background;
+  ctx.fillRect(0, 0, w, h);
+  return { ctx, w, h, dpr };
+}
+
+/** A fit of [minX, minY, maxX, maxY] into the canvas with a margin, Y up. */
+function fitFrame(w, h, margin, [minX, minY, maxX, maxY]) {
+  const spanX = Math.max(maxX - minX, 1e-6);
+  const spanY = Math.max(maxY - minY, 1e-6);
+  const scale = Math.min((w - 2 * margin) / spanX, (h - 2 * margin) / spanY);
+  const ox = (w - spanX * scale) / 2 - minX * scale;
+  const oy = (h + spanY * scale) / 2 + minY * scale;
+  return { scale, sx: (x) => ox + x * scale, sy: (y) => oy - y * scale };
+}
+
+function scaleBar(ctx, w, h, dpr, scale) {
+  // A round length of about a fifth of the width, bottom right.
+  const target = (w * 0.2) / scale;
+  if (!(target > 0) || !Number.isFinite(target)) return;
+  const p = 10 ** Math.floor(Math.log10(target));
+  const len = [5, 2, 1].map((k) => k * p).find((v) => v <= target) ?? p;
+  const px = len * scale;
+  const margin = 8 * dpr;
+  const x1 = w - margin;
+  const y = h - margin;
+  ctx.strokeStyle = TEXT;
+  ctx.lineWidth = 2 * dpr;
+  ctx.beginPath();
+  ctx.moveTo(x1 - px, y);
+  ctx.lineTo(x1, y);
+  ctx.stroke();
+  ctx.fillStyle = TEXT;
+  ctx.font = `${11 * dpr}px system-ui, sans-serif`;
+  ctx.textAlign = "right";
+  ctx.textBaseline = "bottom";
+  ctx.fillText(`${Number(len.toPrecision(3))} mm`, x1, y - 3 * dpr);
+}
+
+/** Strokes segments grouped by colour (one path per colour). */
+function strokeByColor(ctx, n, colorOf, draw) {
+  const byColor = new Map();
+  for (let s = 0; s < n; s++) {
+    const c = colorOf(s);
+    let list = byColor.get(c);
+    if (!list) byColor.set(c, (list = []));
+    list.push(s);
+  }
+  for (const [c, list] of byColor) {
+    ctx.strokeStyle = c;
+    ctx.beginPath();
+    for (const s of list) draw(s);
+    ctx.stroke();
+  }
+}
+
+/**
+ * Draws 2D segments (mm) on a canvas, fitted with a margin, Y up.
+ * @param {HTMLCanvasElement} canvas
+ * @param {Float32Array|null} segments  `stride` floats per segment: x0 y0 x1 y1 [code]
+ * @param {{stride?: number, frame?: number[]|null, lineWidth?: number, scaleBar?: boolean,
+ *          background?: string, color?: string|null, styles?: Map<number, {color: string}>}} [opts]
+ *        frame: [minX, minY, maxX, maxY] to fit instead of the segments' bounds
+ * @returns {{items: number, counts: Object<number, number>}}
+ */
+export function drawSegments2d(canvas, segments, opts = {}) {
+  const { stride = 5, frame = null, lineWidth = 1.25, background = BACKGROUND, color = null, styles = new Map() } = opts;
+  const { ctx, w, h, dpr } = setup(canvas, background);
+  const n = segments ? Math.floor(segments.length / stride) : 0;
+  const counts = {};
+  if (n === 0) return { items: 0, counts };
+  let box = frame;
+  if (!box) {
+    box = [Infinity, Infinity, -Infinity, -Infinity];
+    for (let i = 0; i < n * stride; i += stride) {
+      for (const k of [0, 2]) {
+        const x = segments[i + k], y = segments[i + k + 1];
+        if (x < box[0]) box[0] = x;
+        if (x > box[2]) box[2] = x;
+        if (y < box[1]) box[1] = y;
+        if (y > box[3]) box[3] = y;
+      }
+    }
+  }
+  const { scale, sx, sy } = fitFrame(w, h, 8 * dpr, box);
+  ctx.lineCap = "round";
+  ctx.lineWidth = lineWidth * dpr;
+  strokeByColor(ctx, n, (s) => {
+    const code = stride > 4 ? segments[s * stride + 4] : -1;
+    counts[code] = (counts[code] ?? 0) + 1;
+    return color ?? styles.get(code)?.color ?? OTHER_COLOR;
+  }, (s) => {
+    const i = s * stride;
+    ctx.moveTo(sx(segments[i]), sy(segments[i + 1]));
+    ctx.lineTo(sx(segments[i + 2]), sy(segments[i + 3]));
+  });
+  if (opts.scaleBar) scaleBar(ctx, w, h, dpr, scale);
+  return { items: n, counts };
+}
+
+/** Orthographic view from the front left, above (the 3D preview's default direction). */
+const VIEW = (() => {
+  const yaw = (-30 * Math.PI) / 180;
+  const pitch = (35 * Math.PI) / 180;
+  const cy = Math.cos(yaw), sy = Math.sin(yaw), cp = Math.cos(pitch), sp = Math.sin(pitch);
+  // screen x, screen y (up) and depth (towards the viewer) of a model point
+  return {
+    u: (x, y) => cy * x - sy * y,
+    v: (x, y, z) => cp * z + sp * (sy * x + cy * y),
+    d: (x, y, z) => -cp * (sy * x + cy * y) + sp * z,
+  };
+})();
+
+/** 3D segments, stride 7 (x0 y0 z0 x1 y1 z1 code), drawn as an orthographic projection. */
+export function drawLines3d(canvas, data, { stride = 7, styles = new Map(), lineWidth = 1 } = {}) {
+  const { ctx, w, h, dpr } = setup(canvas);
+  const n = data ? Math.floor(data.length / stride) : 0;
+  const counts = {};
+  if (!n) return { items: 0, counts };
+  const u = new Float32Array(n * 2);
+  const v = new Float32Array(n * 2);
+  const box = [Infinity, Infinity, -Infinity, -Infinity];
+  for (let s = 0; s < n; s++) {
+    for (let e = 0; e < 2; e++) {
+      const i = s * stride + e * 3;
+      const a = VIEW.u(data[i], data[i + 1]);
+      const b = VIEW.v(data[i], data[i + 1], data[i + 2]);
+      u[s * 2 + e] = a;
+      v[s * 2 + e] = b;
+      if (a < box[0]) box[0] = a;
+      if (a > box[2]) box[2] = a;
+      if (b < box[1]) box[1] = b;
+      if (b > box[3]) box[3] = b;
+    }
+  }
+  const { scale, sx, sy } = fitFrame(w, h, 10 * dpr, box);
+  ctx.lineWidth = lineWidth * dpr;
+  ctx.lineCap = "round";
+  strokeByColor(ctx, n, (s) => {
+    const code = stride > 6 ? data[s * stride + 6] : -1;
+    counts[code] = (counts[code] ?? 0) + 1;
+    return styles.get(code)?.color ?? OTHER_COLOR;
+  }, (s) => {
+    ctx.moveTo(sx(u[s * 2]), sy(v[s * 2]));
+    ctx.lineTo(sx(u[s * 2 + 1]), sy(v[s * 2 + 1]));
+  });
+  scaleBar(ctx, w, h, dpr, scale);
+  return { items: n, counts };
+}
+
+/** Triangles, stride 9, flat shaded and painted back to front. */
+export function drawMesh(canvas, data, { stride = 9, color = [150, 170, 200] } = {}) {
+  const { ctx, w, h, dpr } = setup(canvas);
+  const n = data ? Math.floor(data.length / stride) : 0;
+  if (!n) return { items: 0, counts: {} };
+  const P = new Float32Array(n * 6);
+  const depth = new Float32Array(n);
+  const shade = new Float32Array(n);
+  const box = [Infinity, Infinity, -Infinity, -Infinity];
+  const light = [-0.4, -0.6, 0.7];
+  const ll = Math.hypot(...light);
+  for (let t = 0; t < n; t++) {
+    const i = t * stride;
+    let dz = 0;
+    for (let k = 0; k < 3; k++) {
+      const x = data[i + k * 3], y = data[i + k * 3 + 1], z = data[i + k * 3 + 2];
+      const a = VIEW.u(x, y);
+      const b = VIEW.v(x, y, z);
+      P[t * 6 + k * 2] = a;
+      P[t * 6 + k * 2 + 1] = b;
+      dz += VIEW.d(x, y, z);
+      if (a < box[0]) box[0] = a;
+      if (a > box[2]) box[2] = a;
+      if (b < box[1]) box[1] = b;
+      if (b > box[3]) box[3] = b;
+    }
+    depth[t] = dz;
+    const ax = data[i + 3] - data[i], ay = data[i + 4] - data[i + 1], az = data[i + 5] - data[i + 2];
+    const bx = data[i + 6] - data[i], by = data[i + 7] - data[i + 1], bz = data[i + 8] - data[i + 2];
+    const nx = ay * bz - az * by, ny = az * bx - ax * bz, nz = ax * by - ay * bx;
+    const nl = Math.hypot(nx, ny, nz) || 1;
+    shade[t] = Math.abs((nx * light[0] + ny * light[1] + nz * light[2]) / (nl * ll));
+  }
+  const order = Array.from({ length: n }, (_, t) => t).sort((a, b) => depth[a] - depth[b]);
+  const { scale, sx, sy } = fitFrame(w, h, 10 * dpr, box);
+  for (const t of order) {
+    const k = 0.35 + 0.65 * shade[t];
+    ctx.fillStyle = `rgb(${Math.round(color[0] * k)},${Math.round(color[1] * k)},${Math.round(color[2] * k)})`;
+    ctx.beginPath();
+    ctx.moveTo(sx(P[t * 6]), sy(P[t * 6 + 1]));
+    ctx.lineTo(sx(P[t * 6 + 2]), sy(P[t * 6 + 3]));
+    ctx.lineTo(sx(P[t * 6 + 4]), sy(P[t * 6 + 5]));
+    ctx.closePath();
+    ctx.fill();
+  }
+  scaleBar(ctx, w, h, dpr, scale);
+  return { items: n, counts: {} };
+}
+
+/** A scalar image (meta {width, height, min, max, pixel_mm?}) as a grey ramp, aspect kept. */
+export function drawImage(canvas, data, meta = {}) {
+  const { ctx, w, h, dpr } = setup(canvas);
+  const iw = meta.width | 0;
+  const ih = meta.height | 0;
+  if (!data || iw <= 0 || ih <= 0 || data.length < iw * ih) return { items: 0, counts: {} };
+  let lo = Number.isFinite(meta.min) ? meta.min : Infinity;
+  let hi = Number.isFinite(meta.max) ? meta.max : -Infinity;
+  if (!Number.isFinite(meta.min) || !Number.isFinite(meta.max)) {
+    for (let i = 0; i < iw * ih; i++) {
+      if (data[i] < lo) lo = data[i];
+      if (data[i] > hi) hi = data[i];
+    }
+  }
+  const k = hi > lo ? 255 / (hi - lo) : 0;
+  const img = new ImageData(iw, ih);
+  for (let i = 0; i < iw * ih; i++) {
+    const g = Math.max(0, Math.min(255, Math.round((data[i] - lo) * k)));
+    img.data[i * 4] = img.data[i * 4 + 1] = img.data[i * 4 + 2] = g;
+    img.data[i * 4 + 3] = 255;
+  }
+  const off = document.createElement("canvas");
+  off.width = iw;
+  off.height = ih;
+  off.getContext("2d").putImageData(img, 0, 0);
+  const margin = 8 * dpr;
+  const scale = Math.min((w - 2 * margin) / iw, (h - 2 * margin) / ih);
+  ctx.imageSmoothingEnabled = false;
+  ctx.drawImage(off, (w - iw * scale) / 2, (h - ih * scale) / 2, iw * scale, ih * scale);
+  if (meta.pixel_mm > 0) scaleBar(ctx, w, h, dpr, scale / meta.pixel_mm);
+  return { items: iw * ih, counts: {}, range: [lo, hi] };
+}
+
+/**
+ * Draws an inspect answer by its shape.
+ * @param {HTMLCanvasElement} canvas
+ * @param {{shape: string, stride: number, data: Float32Array, meta: Object}|null} answer
+ * @param {Map<number, {label: string, color: string}>} styles
+ * @returns {{items: number, counts: Object<number, number>, range?: number[]}}
+ */
+export function drawView(canvas, answer, styles) {
+  if (!answer) return drawSegments2d(canvas, null);
+  switch (answer.shape) {
+    case "lines2d": return drawSegments2d(canvas, answer.data, { stride: answer.stride || 5, styles, scaleBar: true });
+    case "lines3d": return drawLines3d(canvas, answer.data, { stride: answer.stride || 7, styles });
+    case "mesh": return drawMesh(canvas, answer.data, { stride: answer.stride || 9 });
+    case "image": return drawImage(canvas, answer.data, answer.meta ?? {});
+    default: {
+      const r = drawSegments2d(canvas, null);
+      const ctx = canvas.getContext("2d");
+      ctx.fillStyle = TEXT;
+      ctx.font = "12px system-ui, sans-serif";
+      ctx.fillText(`no viewer for shape "${answer.shape}"`, 10, 20);
+      return r;
+    }
+  }
+}

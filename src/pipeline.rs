@@ -465,7 +465,13 @@ fn write_stage(ctx: &mut Ctx, toolpath: &Out<Toolpath>) -> Result<Out<Written>, 
     let parts = (&design.printer, &design.material, &design.speeds, &design.name);
     ctx.stage("gcode", "gcode", &parts, &[toolpath.key], |_| {
         let g = gcode::write_gcode(toolpath, &writer_options(design))?;
-        Ok((Written { text: Arc::new(g.text), stats: g.stats }, None))
+        let st = &g.stats;
+        let report = StageReport::new("gcode", "Writing G-code", st)
+            .metric("layers", "Layers", st.layers as f64, "", "Layers (or passes) written.")
+            .metric("filament", "Filament", st.filament_mm, "mm", "Filament the print uses.")
+            .metric("time", "Estimated time", st.estimated_time_s, "s", "Print time with acceleration, as a firmware plans it.")
+            .metric("size", "File size", g.text.len() as f64, "bytes", "Size of the G-code file.");
+        Ok((Written { text: Arc::new(g.text), stats: g.stats }, Some(report)))
     })
 }
 
@@ -479,7 +485,17 @@ fn analyze_stage(ctx: &mut Ctx, written: &Out<Written>, options: &RunOptions) ->
     let parts = (options.collect_preview, a_options.default_line_width_mm, a_options.filament_diameter_mm, &design.name);
     ctx.stage("analyze", "analyze", &parts, &[written.key], |_| {
         let a = analyze::analyze(&format!("{}.gcode", design.name), written.text.as_bytes(), &a_options)?;
-        Ok((Analysed { report: a.report, preview: a.preview.map(Arc::new) }, None))
+        let r = &a.report;
+        let mut report = StageReport::new("analyze", "Measuring the G-code", &serde_json::json!({}))
+            .metric("extrusion_paths", "Extrusion paths", r.extrusion_paths as f64, "", "Runs of extrusion between travels, read back from the G-code.")
+            .metric("extruded", "Extruded", r.extruded_mm, "mm", "Length printed, read back from the G-code.")
+            .metric("travel", "Travel", r.travel_mm, "mm", "Moves without extruding.")
+            .metric("retractions", "Retractions", r.retractions as f64, "", "Times the filament is pulled back before a travel.")
+            .metric("overlap", "Overlap", r.overlap_mm, "mm", "Length printed on top of earlier lines of the same layer (0 means no strut is printed twice).")
+            .metric("gippo_score", "GIPPO score", r.gippo_score, "", "Equation 1 of the GIPPO paper over the extrusion paths: higher means longer paths, fewer stops.");
+        // The full analysis is the run report's `analysis`; the stage keeps only its summary.
+        report.data = serde_json::Value::Null;
+        Ok((Analysed { report: a.report, preview: a.preview.map(Arc::new) }, Some(report)))
     })
 }
 

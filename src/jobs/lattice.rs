@@ -291,34 +291,12 @@ fn paths_report(r: &PathsReport) -> StageReport {
     if !scores.series.is_empty() {
         report.plots.push(scores);
     }
-    let mut classes = Plot {
-        key: "classes".into(),
-        title: "Path classes".into(),
-        kind: PlotKind::Bars,
-        x: Axis::new("Class", ""),
-        y: Axis::new("Paths", ""),
-        group: Some("Layer".into()),
-        series: Vec::new(),
-    };
-    for (i, l) in r.layers.iter().enumerate() {
-        classes.series.push(
-            Series::bars("paths", &["long (≥ 15 nodes)", "medium (5–14)", "short (< 5)"], vec![l.long_paths as f64, l.medium_paths as f64, l.short_paths as f64]).in_group(i),
-        );
-    }
-    report.plots.push(classes);
-    let mut bound = Plot {
-        key: "bound".into(),
-        title: "Paths against the proven minimum".into(),
-        kind: PlotKind::Bars,
-        x: Axis::new("", ""),
-        y: Axis::new("Paths", ""),
-        group: Some("Layer".into()),
-        series: Vec::new(),
-    };
-    for (i, l) in r.layers.iter().enumerate() {
-        bound.series.push(Series::bars("paths", &["lower bound", "printed"], vec![l.lower_bound_paths as f64, l.paths as f64]).in_group(i));
-    }
-    report.plots.push(bound);
+    report.plots.push(per_layer_bars(r, "classes", "Path classes", "Class", &["long (≥ 15 nodes)", "medium (5–14)", "short (< 5)"], |l| {
+        vec![l.long_paths as f64, l.medium_paths as f64, l.short_paths as f64]
+    }));
+    report.plots.push(per_layer_bars(r, "bound", "Paths against the proven minimum", "", &["lower bound", "printed"], |l| {
+        vec![l.lower_bound_paths as f64, l.paths as f64]
+    }));
     report.tables.push(Table {
         key: "layers".into(),
         title: "Paths per layer".into(),
@@ -348,6 +326,19 @@ fn paths_report(r: &PathsReport) -> StageReport {
             .collect(),
     });
     report
+}
+
+/// A bar plot of path counts with one bar series per layer.
+fn per_layer_bars(r: &PathsReport, key: &str, title: &str, x: &str, labels: &[&str], values: impl Fn(&paths::LayerPaths) -> Vec<f64>) -> Plot {
+    Plot {
+        key: key.into(),
+        title: title.into(),
+        kind: PlotKind::Bars,
+        x: Axis::new(x, ""),
+        y: Axis::new("Paths", ""),
+        group: Some("Layer".into()),
+        series: r.layers.iter().enumerate().map(|(i, l)| Series::bars("paths", labels, values(l)).in_group(i)).collect(),
+    }
 }
 
 #[cfg(test)]

@@ -124,11 +124,12 @@ impl LatticeBench {
 }
 
 #[cfg(not(target_arch = "wasm32"))]
-pub use native::{run_all, run_lattice};
+pub use native::{run_all, run_cache, run_lattice};
 
 #[cfg(not(target_arch = "wasm32"))]
 mod native {
     use super::*;
+    pub use super::cache_native::run_cache;
     use crate::pipeline::{self, Files, RunOptions, RunOutput};
     use std::time::Instant;
 
@@ -298,6 +299,113 @@ mod native {
                 times[times.len() / 2],
                 b.target_ms()
             ));
+        }
+        Ok(out)
+    }
+}
+
+/// `design_json` with `material.bed_temp_c` raised by `delta` (the cache benchmark's edit: it
+/// changes only what the `gcode` stage reads).
+pub fn bump_bed_temp(design_json: &str, delta: f64) -> Result<String, String> {
+    let mut v: serde_json::Value = serde_json::from_str(design_json).map_err(|e| e.to_string())?;
+    let t = v.pointer_mut("/material/bed_temp_c").ok_or("the design has no material.bed_temp_c")?;
+    *t = serde_json::json!(t.as_f64().ok_or("material.bed_temp_c is not a number")? + delta);
+    serde_json::to_string_pretty(&v).map_err(|e| e.to_string())
+}
+
+/// Stages of `stages` before `gcode` that were recomputed (not `cached`); empty when every
+/// one was reused.
+pub fn uncached_before_gcode(stages: &[crate::report::StageReport]) -> Vec<String> {
+    stages.iter().take_while(|r| r.stage != "gcode").filter(|r| !r.cached).map(|r| r.stage.clone()).collect()
+}
+
+#[cfg(not(target_arch = "wasm32"))]
+mod cache_native {
+    use super::*;
+    use crate::jobs::Registry;
+    use crate::pipeline::{self, Cache, Files, RunOptions};
+    use std::time::Instant;
+
+    /// One cached workload: first run, then the re-run after `bump_bed_temp(+10)`.
+    struct CacheRow {
+        name: String,
+        add_file_s: Option<f64>,
+        first_s: f64,
+        second_s: f64,
+        stages: Vec<(String, bool)>,
+        uncached: Vec<String>,
+        same_layers: bool,
+    }
+
+    fn run_pair(name: &str, json: &str, files: &Files, mesh_slot: Option<&str>) -> Result<CacheRow, String> {
+        let registry = Registry::builtin();
+        let mut cache = Cache::new();
+        let options = RunOptions { collect_preview: true };
+        let design = Design::from_json(name, json).map_err(|e| e.to_string())?;
+        // As `Session.addFile` does: the mesh is imported into the cache before the first run.
+        let add_file_s = match mesh_slot {
+            Some(slot) => {
+                let t = Instant::now();
+                let plain = Design::default();
+                let mut quiet = |_: &str, _: f32| {};
+                let mut ctx = pipeline::Ctx::new(&plain, files, &mut cache, &mut quiet);
+                let input = crate::design::Input::File { name: "bench.stl".into(), embedded: None };
+                ctx.mesh(slot, &input).map_err(|e| e.to_string())?;
+                Some(t.elapsed().as_secs_f64())
+            }
+            None => None,
+        };
+        let t = Instant::now();
+        let a = pipeline::run_in(&registry, &mut cache, &design, files, &options, &mut |_, _| {}).map_err(|e| e.to_string())?;
+        let first_s = t.elapsed().as_secs_f64();
+        let layers = a.report.analysis.layers;
+        drop(a);
+        let edited = Design::from_json(name, &bump_bed_temp(json, 10.0)?).map_err(|e| e.to_string())?;
+        let t = Instant::now();
+        let b = pipeline::run_in(&registry, &mut cache, &edited, files, &options, &mut |_, _| {}).map_err(|e| e.to_string())?;
+        let second_s = t.elapsed().as_secs_f64();
+        Ok(CacheRow {
+            name: name.into(),
+            add_file_s,
+            first_s,
+            second_s,
+            stages: b.report.stages.iter().map(|r| (r.stage.clone(), r.cached)).collect(),
+            uncached: uncached_before_gcode(&b.report.stages),
+            same_layers: b.report.analysis.layers == layers,
+        })
+    }
+
+    /// The stage-cache benchmark (`weft bench --cache`): a full run, then a re-run after
+    /// `material.bed_temp_c` +10, on the disc-48mm example and on the `triangles` mesh.
+    pub fn run_cache(triangles: usize) -> Result<String, String> {
+        let stl = bench_mesh(triangles).to_stl_binary();
+        let stl_mb = stl.len() as f64 / 1e6;
+        let mut files = Files::new();
+        files.insert("bench.stl".into(), stl);
+        let rows = [
+            run_pair("disc-48mm", DISC_48MM_JSON, &Files::new(), None)?,
+            run_pair(&format!("mesh-{triangles}"), &bench_design().to_json_pretty(), &files, Some("mesh"))?,
+        ];
+        let mut out = String::new();
+        out.push_str(&format!(
+            "## stage cache: full run, then re-run after material.bed_temp_c +10 (native, preview on; mesh: {stl_mb:.1} MB STL)\n\n"
+        ));
+        out.push_str("| workload | addFile s | first run s | re-run s | re-run / first | stages before gcode cached |\n|---|---|---|---|---|---|\n");
+        for r in &rows {
+            out.push_str(&format!(
+                "| {} | {} | {:.4} | {:.4} | {:.4} | {} |\n",
+                r.name,
+                r.add_file_s.map_or("-".into(), |s| format!("{s:.3}")),
+                r.first_s,
+                r.second_s,
+                r.second_s / r.first_s,
+                if r.uncached.is_empty() { "all".to_string() } else { format!("NOT: {}", r.uncached.join(", ")) },
+            ));
+        }
+        out.push('\n');
+        for r in &rows {
+            let st: Vec<String> = r.stages.iter().map(|(s, c)| format!("{s}{}", if *c { " (cached)" } else { "" })).collect();
+            out.push_str(&format!("re-run stages of {}: {}{}\n", r.name, st.join(", "), if r.same_layers { "" } else { " (layer count DIFFERS)" }));
         }
         Ok(out)
     }

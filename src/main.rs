@@ -82,6 +82,9 @@ enum Command {
         /// Run only the lattice path-optimisation benchmarks (otherwise they follow the others).
         #[arg(long)]
         lattice: bool,
+        /// Run only the stage-cache benchmark (full run, then a re-run after a temperature edit).
+        #[arg(long)]
+        cache: bool,
     },
     /// Write a lattice design's printed struts as an STL (a box per strut) for other slicers.
     ExportStl {
@@ -257,7 +260,19 @@ fn main() -> ExitCode {
             cmd_jobs();
             Ok(())
         }
-        Command::Bench { triangles, gcode_mb, lattice } => {
+        Command::Bench { triangles, gcode_mb, lattice, cache } => {
+            if cache {
+                return match weft::bench::run_cache(triangles) {
+                    Ok(t) => {
+                        println!("{t}");
+                        ExitCode::SUCCESS
+                    }
+                    Err(e) => {
+                        eprintln!("weft: error: {}", e.replace('\n', "; "));
+                        ExitCode::FAILURE
+                    }
+                };
+            }
             let all = if lattice { Ok(String::new()) } else { weft::bench::run_all(triangles, gcode_mb) };
             all.and_then(|a| weft::bench::run_lattice().map(|l| println!("{a}\n{l}")))
         }

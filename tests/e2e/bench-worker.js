@@ -15,6 +15,15 @@
 //       score, targetMs, prepareMs, ms: [...] }] }: the lattice path-optimisation workloads
 //       (src/bench.rs): BenchLattice(which) prepares the layer's strokes (not timed), then
 //       run() (paths::optimise only) is timed `repeats` times with performance.now().
+//   { cmd: "cache", stl, discJson } → { type: "cache", rows: [{ name, addFileMs, firstMs,
+//       secondMs, stages: [{ stage, cached }], uncached: [...] }] }: the stage-cache workload
+//       of `weft bench --cache` (src/bench.rs): per workload one Session, a full run, then a
+//       re-run after material.bed_temp_c +10 (edited in the design JSON). `discJson` is the
+//       ball-burst-disc-48mm example; `stl` (ArrayBuffer) the benchmark mesh (addFile first).
+//   { cmd: "memory", stl }           → { type: "memory", stlBytes, addFileMs, runMs, layers,
+//       memory: { init, afterAddFile, afterRun }, uaMemory }: peak wasm memory of a big input
+//       (Session.addFile, then Session.run(benchDesign())); uaMemory is
+//       performance.measureUserAgentSpecificMemory() when the context allows it, else null.
 // Run the job in a fresh worker (the page does) so the STL generation does not count in the
 // job's linear memory.
 import init, { BenchLattice, Session, benchAnalyze, benchDesign, benchMeshStl } from "../../pkg/weft.js";
@@ -53,6 +62,79 @@ self.onmessage = async ({ data }) => {
         b.free();
       }
       self.postMessage({ type: "lattice", rows, memory: mem() });
+      return;
+    }
+    if (data.cmd === "cache") {
+      const bump = (json) => {
+        const d = JSON.parse(json);
+        d.material.bed_temp_c += 10;
+        return JSON.stringify(d);
+      };
+      const report = (ran) => (typeof ran === "string" ? JSON.parse(ran) : ran);
+      const rows = [];
+      const workloads = [{ name: "disc-48mm", json: data.discJson, stl: null }];
+      if (data.stl) workloads.push({ name: "mesh", json: benchDesign(), stl: new Uint8Array(data.stl) });
+      for (const w of workloads) {
+        const session = new Session();
+        let addFileMs = null;
+        if (w.stl) {
+          const t = performance.now();
+          session.addFile("mesh", "bench.stl", w.stl);
+          addFileMs = performance.now() - t;
+          w.stl = null;
+        }
+        let t = performance.now();
+        const a = report(session.run(w.json, () => {}));
+        const firstMs = performance.now() - t;
+        const edited = bump(w.json);
+        t = performance.now();
+        const b = report(session.run(edited, () => {}));
+        const secondMs = performance.now() - t;
+        session.free();
+        const stages = b.stages.map((r) => ({ stage: r.stage, cached: r.cached }));
+        const gi = stages.findIndex((r) => r.stage === "gcode");
+        const uncached = stages.slice(0, gi < 0 ? stages.length : gi).filter((r) => !r.cached).map((r) => r.stage);
+        rows.push({ name: w.name, addFileMs, firstMs, secondMs, stages, uncached, layers: [a.analysis.layers, b.analysis.layers] });
+      }
+      self.postMessage({ type: "cache", rows, memory: mem() });
+      return;
+    }
+    if (data.cmd === "memory") {
+      const uaMemory = async () => {
+        if (!self.crossOriginIsolated || typeof performance.measureUserAgentSpecificMemory !== "function") return null;
+        try {
+          return (await performance.measureUserAgentSpecificMemory()).bytes;
+        } catch (e) {
+          return `error: ${e.message}`;
+        }
+      };
+      const init = mem();
+      let stl = new Uint8Array(data.stl);
+      const stlBytes = stl.byteLength;
+      const session = new Session();
+      let t = performance.now();
+      let stage = "addFile";
+      try {
+        session.addFile("mesh", "bench.stl", stl);
+        stl = null;
+        const addFileMs = performance.now() - t;
+        const afterAddFile = mem();
+        const uaAfterAddFile = await uaMemory();
+        stage = "run";
+        t = performance.now();
+        const ran = session.run(benchDesign(), () => {});
+        const runMs = performance.now() - t;
+        const report = typeof ran === "string" ? JSON.parse(ran) : ran;
+        const afterRun = mem();
+        const uaAfterRun = await uaMemory();
+        session.free();
+        self.postMessage({
+          type: "memory", stlBytes, addFileMs, runMs, layers: report.analysis.layers,
+          memory: { init, afterAddFile, afterRun }, uaMemory: { afterAddFile: uaAfterAddFile, afterRun: uaAfterRun },
+        });
+      } catch (err) {
+        self.postMessage({ type: "error", message: `${stage}: ${String(err?.stack ?? err?.message ?? err)}`, memory: mem(), stlBytes });
+      }
       return;
     }
     if (data.cmd !== "run") throw new Error(`unknown command ${data.cmd}`);

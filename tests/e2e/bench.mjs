@@ -14,6 +14,10 @@
 //   BENCH_TIMEOUT_S timeout of the browser job, s (default 900)
 //   BENCH_LATTICE_ONLY=1  only the lattice path-optimisation benchmarks (`weft bench --lattice`)
 //   BENCH_REPEATS   timed passes per lattice workload in the worker (default 3)
+//   BENCH_CACHE_ONLY=1  only the stage-cache and big-input memory steps (`weft bench --cache`)
+//   BENCH_CACHE=0   skip those steps in the full run
+//   BENCH_BIG_TRIANGLES  triangles of the big-input memory step, tried in order until one
+//                   works (default 4000000,3000000,2000000,1000000; 4M ≈ 200 MB of STL)
 import { execFileSync } from "node:child_process";
 import { existsSync, readFileSync, writeFileSync } from "node:fs";
 import { join, resolve } from "node:path";
@@ -28,6 +32,9 @@ const GCODE_MB = Number(process.env.BENCH_GCODE_MB ?? 100);
 const TIMEOUT = Number(process.env.BENCH_TIMEOUT_S ?? 900) * 1000;
 const LATTICE_ONLY = process.env.BENCH_LATTICE_ONLY === "1";
 const REPEATS = Number(process.env.BENCH_REPEATS ?? 3);
+const CACHE_ONLY = process.env.BENCH_CACHE_ONLY === "1";
+const CACHE = CACHE_ONLY || process.env.BENCH_CACHE !== "0";
+const BIG_TRIANGLES = (process.env.BENCH_BIG_TRIANGLES ?? "4000000,3000000,2000000,1000000").split(",").map(Number);
 const MB = 1e6;
 const MiB = 1024 * 1024;
 
@@ -85,6 +92,19 @@ function runNative() {
   };
 }
 
+/** `weft bench --cache`: rows { [workload]: { addFile, first, second, ratio, cached } }, s. */
+function runNativeCache() {
+  if (!WEFT_BIN || !CACHE) return null;
+  const args = ["bench", "--cache", "--triangles", String(TRIANGLES)];
+  log(`native: ${WEFT_BIN} ${args.join(" ")}`);
+  const text = execFileSync(WEFT_BIN, args, { cwd: ROOT, encoding: "utf8", maxBuffer: 1 << 24, timeout: TIMEOUT });
+  const rows = {};
+  for (const m of text.matchAll(/^\| ([\w-]+) \| ([\d.]+|-) \| ([\d.]+) \| ([\d.]+) \| ([\d.]+) \| (.+) \|$/gm)) {
+    rows[m[1].startsWith("mesh-") ? "mesh" : m[1]] = { addFile: m[2] === "-" ? null : Number(m[2]), first: Number(m[3]), second: Number(m[4]), cached: m[6] };
+  }
+  return { text, rows };
+}
+
 // ---------------------------------------------------------------------------------------
 // Browser: the worker
 // ---------------------------------------------------------------------------------------
@@ -121,6 +141,8 @@ async function runBrowser() {
         return [];
       }
     };
+
+    if (CACHE_ONLY) return { version, ...(await cacheSteps(page, renderers)) };
 
     // 0. Lattice path optimisation, in its own fresh worker.
     log(`browser ${version}: lattice path-optimisation workloads in a worker (${REPEATS} passes each)`);
@@ -185,18 +207,131 @@ async function runBrowser() {
     const after = Object.fromEntries(pids.map((p) => [p, procMem(p)]));
     const rendererPeakMiB = Math.max(0, ...pids.map((p) => after[p]?.hwm ?? 0));
     const rendererBeforeMiB = Math.max(0, ...pids.map((p) => before[p]?.rss ?? 0));
+    const cache = CACHE ? await cacheSteps(page, renderers) : {};
     if (errors.length) log(`page errors: ${errors.join(" | ")}`);
-    return { version, lattice, gen, result, rendererPeakMiB, rendererBeforeMiB, peakReset };
+    return { version, lattice, gen, result, rendererPeakMiB, rendererBeforeMiB, peakReset, ...cache };
   } finally {
     await browser.close();
     await server.close();
   }
 }
 
+/** Generates the benchmark STL in a worker that is then terminated; keeps it as window.__stl. */
+async function genStl(page, triangles) {
+  return page.evaluate(async (triangles) => {
+    const w = new Worker("/tests/e2e/bench-worker.js", { type: "module" });
+    try {
+      const msg = await new Promise((ok, fail) => {
+        w.onmessage = ({ data }) => ok(data);
+        w.onerror = (e) => fail(new Error(e.message || "worker failed to start"));
+        w.postMessage({ cmd: "stl", triangles });
+      });
+      if (msg.type !== "stl") throw new Error(msg.message ?? "no STL");
+      window.__stl = msg.bytes;
+      return { bytes: msg.bytes.byteLength, ms: msg.ms };
+    } finally {
+      w.terminate();
+    }
+  }, triangles);
+}
+
+/** Posts `msg` (with window.__stl as `stl`, transferred) to a fresh worker; resolves with its
+ *  answer, `{ type: "error", message }` included (a worker crash becomes one too). */
+async function inWorker(page, msg, timeout = TIMEOUT) {
+  return page.evaluate(async ({ msg, timeout }) => {
+    const w = new Worker("/tests/e2e/bench-worker.js", { type: "module" });
+    const stl = window.__stl;
+    window.__stl = null;
+    if (stl) msg.stl = stl;
+    try {
+      return await new Promise((ok) => {
+        const timer = setTimeout(() => ok({ type: "error", message: `no answer within ${timeout / 1000} s` }), timeout);
+        w.onmessage = ({ data }) => { clearTimeout(timer); ok(data); };
+        w.onerror = (e) => { clearTimeout(timer); ok({ type: "error", message: `worker error: ${e.message || "(no message: crashed or out of memory?)"}` }); };
+        w.postMessage(msg, stl ? [stl] : []);
+      });
+    } finally {
+      w.terminate();
+    }
+  }, { msg, timeout });
+}
+
+/** The stage-cache step and the big-input memory step (each in fresh workers). */
+async function cacheSteps(page, renderers) {
+  const discJson = readFileSync(join(ROOT, "examples/ball-burst-disc-48mm.json"), "utf8");
+  log(`cache: generating the ${TRIANGLES}-triangle STL, then full run + bed_temp_c +10 re-run (disc-48mm, mesh)`);
+  const gen = await genStl(page, TRIANGLES);
+  const cache = await inWorker(page, { cmd: "cache", discJson });
+  if (cache.type !== "cache") throw new Error(`cache step: ${cache.message}`);
+  cache.stlBytes = gen.bytes;
+  const big = [];
+  for (const triangles of BIG_TRIANGLES) {
+    log(`memory: ${triangles} triangles: generating the STL`);
+    let g;
+    try {
+      g = await genStl(page, triangles);
+    } catch (e) {
+      big.push({ triangles, type: "error", message: `STL generation: ${e.message}` });
+      continue;
+    }
+    const pids = await renderers();
+    const peakReset = pids.length > 0 && pids.every(resetPeak);
+    log(`memory: ${triangles} triangles (${f(g.bytes / MB, 0)} MB): addFile + run in a fresh worker`);
+    const r = await inWorker(page, { cmd: "memory" });
+    const rendererPeakMiB = Math.max(0, ...pids.map((p) => procMem(p)?.hwm ?? 0));
+    big.push({ triangles, stlBytes: g.bytes, rendererPeakMiB, peakReset, ...r });
+    if (r.type === "memory") break;
+    log(`memory: ${triangles} triangles failed: ${r.message}`);
+  }
+  return { cache, big };
+}
+
+function cacheReport(browserRun, nativeCache) {
+  const out = [];
+  const c = browserRun.cache;
+  out.push(`## stage cache: full run, then a re-run after \`material.bed_temp_c\` +10 (edited in the design JSON)`);
+  out.push("");
+  out.push(`Browser: Chromium ${browserRun.version}, module Web Worker, one \`Session\` per workload (\`Session.run\`, preview on). Native: \`weft bench --cache\` (\`pipeline::run_in\` with one \`Cache\`, preview on). Mesh: ${TRIANGLES} triangles requested, ${f(c.stlBytes / MB, 1)} MB STL, \`addFile("mesh", "bench.stl", bytes)\` before the first run. Seconds.`);
+  out.push("");
+  out.push("| workload | | addFile | first run | re-run | re-run / first | stages before gcode cached on the re-run |");
+  out.push("|---|---|---|---|---|---|---|");
+  for (const r of c.rows) {
+    const n = nativeCache?.rows?.[r.name];
+    if (n) out.push(`| ${r.name} | native | ${f(n.addFile)} | ${f(n.first)} | ${f(n.second)} | ${f(n.second / n.first, 3)} | ${n.cached} |`);
+    const stages = r.stages.map((s) => `${s.stage}${s.cached ? " (cached)" : ""}`).join(", ");
+    out.push(`| ${r.name} | worker | ${r.addFileMs == null ? "-" : f(r.addFileMs / 1000)} | ${f(r.firstMs / 1000)} | ${f(r.secondMs / 1000)} | ${f(r.secondMs / r.firstMs, 3)} | ${r.uncached.length ? `NOT: ${r.uncached.join(", ")}` : "all"} (${stages}) |`);
+  }
+  out.push("");
+  out.push("## peak memory of a big input in the worker (`Session.addFile`, then `Session.run(benchDesign())`)");
+  out.push("");
+  out.push("wasm linear memory is `memory.buffer.byteLength` (it only grows: each value is the peak so far). × = multiple of the STL size.");
+  out.push("");
+  out.push("| triangles | STL MB | result | addFile s | run s | layers | wasm MiB after addFile | × | wasm MiB after run | × | measureUserAgentSpecificMemory | renderer peak RSS MiB |");
+  out.push("|---|---|---|---|---|---|---|---|---|---|---|---|");
+  for (const b of browserRun.big) {
+    if (b.type === "memory") {
+      const m = b.memory;
+      const ua = b.uaMemory?.afterRun == null ? "unavailable (not cross-origin isolated)" : `${JSON.stringify(b.uaMemory)}`;
+      out.push(`| ${b.triangles} | ${f(b.stlBytes / MB, 1)} | ok | ${f(b.addFileMs / 1000)} | ${f(b.runMs / 1000)} | ${b.layers} | ${f(m.afterAddFile / MiB, 0)} | ${f(m.afterAddFile / b.stlBytes, 2)}× | ${f(m.afterRun / MiB, 0)} | ${f(m.afterRun / b.stlBytes, 2)}× | ${ua} | ${f(b.rendererPeakMiB, 0)}${b.peakReset ? "" : " (lifetime)"} |`);
+    } else {
+      const msg = String(b.message).split("\n")[0].replaceAll("|", "\\|");
+      out.push(`| ${b.triangles} | ${f((b.stlBytes ?? 0) / MB, 1)} | **failed**: \`${msg}\` | | | | | | ${b.memory ? f(b.memory / MiB, 0) : "?"} (at failure) | | | ${f(b.rendererPeakMiB, 0)} |`);
+    }
+  }
+  out.push("");
+  return out.join("\n");
+}
+
 // ---------------------------------------------------------------------------------------
 // Report
 // ---------------------------------------------------------------------------------------
 const browserRun = await runBrowser();
+const nativeCache = runNativeCache();
+if (CACHE_ONLY) {
+  console.log(cacheReport(browserRun, nativeCache));
+  console.log("\n<details><summary>weft bench --cache output</summary>\n\n" + (nativeCache?.text.trim() ?? "") + "\n\n</details>");
+  process.exit(0);
+}
 const native = runNative();
 const { result: r, version } = browserRun;
 const latticeOut = [];
@@ -269,6 +404,7 @@ out.push(`| worker (\`benchAnalyze\`, one pass) | ${f(wMBs, 0)} |`);
 out.push("");
 console.log(out.join("\n"));
 console.log(latticeOut.join("\n"));
+if (CACHE) console.log(cacheReport(browserRun, nativeCache));
 if (native) {
   console.log("\n<details><summary>weft bench output</summary>\n\n" + native.text.trim() + "\n\n</details>");
 }

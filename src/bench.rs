@@ -124,12 +124,13 @@ impl LatticeBench {
 }
 
 #[cfg(not(target_arch = "wasm32"))]
-pub use native::{run_all, run_cache, run_lattice};
+pub use native::{run_all, run_lattice};
+#[cfg(not(target_arch = "wasm32"))]
+pub use cache_native::run_cache;
 
 #[cfg(not(target_arch = "wasm32"))]
 mod native {
     use super::*;
-    pub use super::cache_native::run_cache;
     use crate::pipeline::{self, Files, RunOptions, RunOutput};
     use std::time::Instant;
 

@@ -22,8 +22,9 @@
 //       ball-burst-disc-48mm example; `stl` (ArrayBuffer) the benchmark mesh (addFile first).
 //   { cmd: "memory", stl }           → { type: "memory", stlBytes, addFileMs, runMs, layers,
 //       memory: { init, afterAddFile, afterRun }, uaMemory }: peak wasm memory of a big input
-//       (Session.addFile, then Session.run(benchDesign())); uaMemory is
-//       performance.measureUserAgentSpecificMemory() when the context allows it, else null.
+//       (Session.addFile, then Session.run(benchDesign())); after each it posts
+//       { type: "phase", phase } and waits for { cmd: "continue", measured }: the page's
+//       performance.measureUserAgentSpecificMemory() (bytes, or why not), kept as uaMemory.
 // Run the job in a fresh worker (the page does) so the STL generation does not count in the
 // job's linear memory.
 import init, { BenchLattice, Session, benchAnalyze, benchDesign, benchMeshStl } from "../../pkg/weft.js";
@@ -31,8 +32,13 @@ import init, { BenchLattice, Session, benchAnalyze, benchDesign, benchMeshStl } 
 const ready = init();
 
 const MB = 1e6;
+let resume = null; // the memory step waits for the page's { cmd: "continue", measured }
 
 self.onmessage = async ({ data }) => {
+  if (data.cmd === "continue") {
+    resume?.(data.measured);
+    return;
+  }
   try {
     const { memory } = await ready;
     const mem = () => memory.buffer.byteLength;
@@ -100,14 +106,12 @@ self.onmessage = async ({ data }) => {
       return;
     }
     if (data.cmd === "memory") {
-      const uaMemory = async () => {
-        if (!self.crossOriginIsolated || typeof performance.measureUserAgentSpecificMemory !== "function") return null;
-        try {
-          return (await performance.measureUserAgentSpecificMemory()).bytes;
-        } catch (e) {
-          return `error: ${e.message}`;
-        }
-      };
+      // measureUserAgentSpecificMemory is not exposed to dedicated workers: the page measures
+      // (the whole agent cluster, this worker included) when told, and answers "continue".
+      const uaMemory = (phase) => new Promise((ok) => {
+        resume = (measured) => { resume = null; ok(measured ?? null); };
+        self.postMessage({ type: "phase", phase });
+      });
       const init = mem();
       let stl = new Uint8Array(data.stl);
       const stlBytes = stl.byteLength;
@@ -119,14 +123,14 @@ self.onmessage = async ({ data }) => {
         stl = null;
         const addFileMs = performance.now() - t;
         const afterAddFile = mem();
-        const uaAfterAddFile = await uaMemory();
+        const uaAfterAddFile = await uaMemory("afterAddFile");
         stage = "run";
         t = performance.now();
         const ran = session.run(benchDesign(), () => {});
         const runMs = performance.now() - t;
         const report = typeof ran === "string" ? JSON.parse(ran) : ran;
         const afterRun = mem();
-        const uaAfterRun = await uaMemory();
+        const uaAfterRun = await uaMemory("afterRun");
         session.free();
         self.postMessage({
           type: "memory", stlBytes, addFileMs, runMs, layers: report.analysis.layers,

@@ -126,9 +126,21 @@ async function runBrowser() {
     const errors = [];
     page.on("pageerror", (e) => errors.push(e.message));
     page.on("console", (m) => { if (m.type() === "error") errors.push(m.text()); });
-    // A blank page of the server's origin (module workers must be same-origin).
-    await page.route(`${server.url}/bench.html`, (route) =>
-      route.fulfill({ contentType: "text/html; charset=utf-8", body: "<!doctype html><title>weft bench</title>" }));
+    // A blank page of the server's origin (module workers must be same-origin), cross-origin
+    // isolated (COOP + COEP on every response) so the worker may call
+    // performance.measureUserAgentSpecificMemory (the big-input memory step).
+    const isolation = {
+      "cross-origin-opener-policy": "same-origin",
+      "cross-origin-embedder-policy": "require-corp",
+      "cross-origin-resource-policy": "same-origin",
+    };
+    await context.route(`${server.url}/**`, async (route) => {
+      if (route.request().url() === `${server.url}/bench.html`) {
+        return route.fulfill({ contentType: "text/html; charset=utf-8", headers: isolation, body: "<!doctype html><title>weft bench</title>" });
+      }
+      const response = await route.fetch();
+      return route.fulfill({ response, headers: { ...response.headers(), ...isolation } });
+    });
     await page.goto(`${server.url}/bench.html`);
 
     // Renderer processes (the worker runs in its page's renderer), for peak RSS.
@@ -246,7 +258,27 @@ async function inWorker(page, msg, timeout = TIMEOUT) {
     try {
       return await new Promise((ok) => {
         const timer = setTimeout(() => ok({ type: "error", message: `no answer within ${timeout / 1000} s` }), timeout);
-        w.onmessage = ({ data }) => { clearTimeout(timer); ok(data); };
+        w.onmessage = async ({ data }) => {
+          if (data.type === "phase") {
+            // The memory step's pauses: measure the agent cluster (page + worker) from here.
+            let measured;
+            if (!self.crossOriginIsolated) measured = "unavailable: not cross-origin isolated";
+            else if (typeof performance.measureUserAgentSpecificMemory !== "function") measured = "unavailable: no such function";
+            else {
+              try {
+                // Chromium answers at its next garbage collection (up to ~20 s); give up after 60 s.
+                const late = new Promise((_, fail) => setTimeout(() => fail(new Error("no answer in 60 s")), 60_000));
+                measured = (await Promise.race([performance.measureUserAgentSpecificMemory(), late])).bytes;
+              } catch (e) {
+                measured = `error: ${e.message}`;
+              }
+            }
+            w.postMessage({ cmd: "continue", measured });
+            return;
+          }
+          clearTimeout(timer);
+          ok(data);
+        };
         w.onerror = (e) => { clearTimeout(timer); ok({ type: "error", message: `worker error: ${e.message || "(no message: crashed or out of memory?)"}` }); };
         w.postMessage(msg, stl ? [stl] : []);
       });
@@ -297,7 +329,7 @@ function cacheReport(browserRun, nativeCache) {
   out.push("|---|---|---|---|---|---|---|");
   for (const r of c.rows) {
     const n = nativeCache?.rows?.[r.name];
-    if (n) out.push(`| ${r.name} | native | ${f(n.addFile)} | ${f(n.first)} | ${f(n.second)} | ${f(n.second / n.first, 3)} | ${n.cached} |`);
+    if (n) out.push(`| ${r.name} | native | ${n.addFile == null ? "-" : f(n.addFile)} | ${f(n.first)} | ${f(n.second)} | ${f(n.second / n.first, 3)} | ${n.cached} |`);
     const stages = r.stages.map((s) => `${s.stage}${s.cached ? " (cached)" : ""}`).join(", ");
     out.push(`| ${r.name} | worker | ${r.addFileMs == null ? "-" : f(r.addFileMs / 1000)} | ${f(r.firstMs / 1000)} | ${f(r.secondMs / 1000)} | ${f(r.secondMs / r.firstMs, 3)} | ${r.uncached.length ? `NOT: ${r.uncached.join(", ")}` : "all"} (${stages}) |`);
   }
@@ -311,7 +343,8 @@ function cacheReport(browserRun, nativeCache) {
   for (const b of browserRun.big) {
     if (b.type === "memory") {
       const m = b.memory;
-      const ua = b.uaMemory?.afterRun == null ? "unavailable (not cross-origin isolated)" : `${JSON.stringify(b.uaMemory)}`;
+      const uaf = (x) => (typeof x === "number" ? `${f(x / MiB, 0)} MiB (${f(x / b.stlBytes, 2)}×)` : String(x));
+      const ua = typeof b.uaMemory?.afterRun === "number" ? `after addFile ${uaf(b.uaMemory.afterAddFile)}, after run ${uaf(b.uaMemory.afterRun)}` : uaf(b.uaMemory?.afterRun);
       out.push(`| ${b.triangles} | ${f(b.stlBytes / MB, 1)} | ok | ${f(b.addFileMs / 1000)} | ${f(b.runMs / 1000)} | ${b.layers} | ${f(m.afterAddFile / MiB, 0)} | ${f(m.afterAddFile / b.stlBytes, 2)}× | ${f(m.afterRun / MiB, 0)} | ${f(m.afterRun / b.stlBytes, 2)}× | ${ua} | ${f(b.rendererPeakMiB, 0)}${b.peakReset ? "" : " (lifetime)"} |`);
     } else {
       const msg = String(b.message).split("\n")[0].replaceAll("|", "\\|");

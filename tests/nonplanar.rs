@@ -268,7 +268,7 @@ fn collisions_are_counted_when_segments_are_long() {
 fn bad_options_and_missing_mesh() {
     let tp = grid(1, 2, 1.0);
     let bad = |o: Options| match project(&tp, None, &o) {
-        Err(Error::BadOption { field, .. }) => field,
+        Err(Error::BadOptions { problems }) => problems[0].path.trim_start_matches("job.nonplanar.").to_string(),
         other => panic!("{other:?}"),
     };
     assert_eq!(bad(Options { max_segment_mm: 0.001, ..sphere(5.0, [0.0; 3]) }), "max_segment_mm");

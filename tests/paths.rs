@@ -481,7 +481,7 @@ fn options_are_validated_and_progress_reported() {
         Options { short_path_speed_factor: 1.2, ..Options::default() },
     ];
     for o in bad {
-        assert!(matches!(optimise(&l, &o, 0.4, 0, &mut |_| {}), Err(Error::BadOption { .. })), "{o:?}");
+        assert!(matches!(optimise(&l, &o, 0.4, 0, &mut |_| {}), Err(Error::BadOptions { .. })), "{o:?}");
     }
     let mut seen = Vec::new();
     let out = optimise(&l, &Options::default(), 0.4, 0, &mut |f| seen.push(f)).unwrap();

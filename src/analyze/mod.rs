@@ -7,10 +7,13 @@ use serde::Serialize;
 
 mod machine;
 mod overlap;
-pub mod parse;
-pub mod time;
+/// The G-code lexer (shared with the writer; lives in [`crate::motion::lex`]).
+pub use crate::motion::lex as parse;
+/// The time model (shared with the writer; lives in [`crate::motion::time`]).
+pub use crate::motion::time;
 
-pub use machine::{gippo_score, DEFAULT_ACCELERATION_MM_S2, DEFAULT_FEED_MM_MIN};
+pub use crate::motion::{DEFAULT_ACCELERATION_MM_S2, DEFAULT_FEED_MM_MIN};
+pub use machine::gippo_score;
 
 /// Default line width assumed when a file has no `;WIDTH:` comments, mm.
 pub const DEFAULT_LINE_WIDTH_MM: f64 = 0.4;

@@ -11,6 +11,7 @@ use serde::{Deserialize, Serialize};
 
 mod flavor;
 pub mod format;
+mod out;
 mod template;
 mod writer;
 

@@ -2,105 +2,12 @@
 //! [`super::flavor`].
 
 use super::flavor::{dialect, feed_mm_min, PathCtx};
+use super::out::Out;
 use super::format::{duration, fixed, push_fixed, push_u64};
 use super::template::expand;
 use super::{Error, Flavor, Gcode, GcodeStats, Options, Origin};
 use super::{DEFAULT_END_GCODE, DEFAULT_PNEUMATIC_END_GCODE, DEFAULT_PNEUMATIC_START_GCODE, DEFAULT_START_GCODE};
 use crate::geom::{DVec3, Feature, Toolpath};
-
-/// The text being written and the machine state the writer tracks.
-pub(crate) struct Out {
-    /// G-code body.
-    pub text: String,
-    /// Current nozzle position in printer coordinates (exact, before rounding); `None` before
-    /// the first move.
-    pub pos: Option<DVec3>,
-    /// Last Z written, in µm (rounded as printed).
-    pub z_written: Option<i64>,
-    /// Modal feed rate last written, mm/min.
-    pub feed: Option<u64>,
-    /// Exact running sum of extruded E (the absolute E position when not retracted).
-    pub e_total: f64,
-    /// M83 mode.
-    pub relative_e: bool,
-    /// Filament currently pulled back.
-    pub retracted: bool,
-    /// Retractions written.
-    pub retractions: usize,
-}
-
-impl Out {
-    /// Appends one line.
-    pub fn line(&mut self, s: &str) {
-        self.text.push_str(s);
-        self.text.push('\n');
-    }
-
-    /// Appends ` F<feed>` when it differs from the modal feed rate.
-    pub fn push_feed(&mut self, line: &mut String, feed: u64) {
-        if self.feed != Some(feed) {
-            line.push_str(" F");
-            push_u64(line, feed);
-            self.feed = Some(feed);
-        }
-    }
-
-    /// Appends ` Z<z>` when the printed Z would change.
-    pub fn push_z_if_changed(&mut self, line: &mut String, z: f64) {
-        let zi = (z * 1000.0).round() as i64;
-        if self.z_written != Some(zi) {
-            line.push_str(" Z");
-            push_fixed(line, z, 3);
-            self.z_written = Some(zi);
-        }
-    }
-
-    /// `G1 Z<z> F<feed>` when the printed Z changes.
-    pub fn move_z(&mut self, z: f64, feed: u64) {
-        self.move_z_with("G1", z, feed);
-    }
-
-    /// `<code> Z<z> F<feed>` when the printed Z changes.
-    pub fn move_z_with(&mut self, code: &str, z: f64, feed: u64) {
-        let zi = (z * 1000.0).round() as i64;
-        if self.z_written == Some(zi) {
-            return;
-        }
-        let mut line = String::from(code);
-        self.push_z_if_changed(&mut line, z);
-        self.push_feed(&mut line, feed);
-        self.line(&line);
-        if let Some(p) = &mut self.pos {
-            p.z = z;
-        }
-    }
-
-    /// `G0 X<x> Y<y> F<feed>`.
-    pub fn move_xy(&mut self, to: DVec3, feed: u64) {
-        let mut line = String::from("G0 X");
-        push_fixed(&mut line, to.x, 3);
-        line.push_str(" Y");
-        push_fixed(&mut line, to.y, 3);
-        self.push_feed(&mut line, feed);
-        self.line(&line);
-        self.pos = Some(to);
-    }
-}
-
-impl Out {
-    /// `G1 X<x> Y<y> [Z<z>] [F<feed>]` without E.
-    pub fn dry_move(&mut self, to: DVec3, feed: u64) {
-        let mut line = String::with_capacity(40);
-        line.push_str("G1 X");
-        push_fixed(&mut line, to.x, 3);
-        line.push_str(" Y");
-        push_fixed(&mut line, to.y, 3);
-        self.push_z_if_changed(&mut line, to.z);
-        self.push_feed(&mut line, feed);
-        self.line(&line);
-        self.pos = Some(to);
-    }
-}
 
 /// Speed of `feature` in mm/s, before the path's speed factor.
 fn feature_speed(options: &Options, feature: Feature, layer: usize) -> f64 {
@@ -192,20 +99,10 @@ pub(crate) fn write(toolpath: &Toolpath, options: &Options) -> Result<Gcode, Err
     let start = expand(start_template, "start_gcode", &vars)?;
     let end = expand(end_template, "end_gcode", &vars)?;
 
-    let mut out = Out {
-        text: String::with_capacity(1 << 16),
-        pos: None,
-        z_written: None,
-        feed: None,
-        e_total: 0.0,
-        relative_e: printer.relative_e,
-        retracted: false,
-        retractions: 0,
-    };
+    let mut out = Out::new(printer.relative_e, None);
     let mut d = dialect(printer.flavor);
-    out.text.push_str(&start);
-    if !start.is_empty() && !start.ends_with('\n') {
-        out.text.push('\n');
+    if !start.is_empty() {
+        out.code(start.strip_suffix('\n').unwrap_or(&start));
     }
     d.prologue(&mut out, options);
 
@@ -300,21 +197,14 @@ pub(crate) fn write(toolpath: &Toolpath, options: &Options) -> Result<Gcode, Err
         }
     }
     d.epilogue(&mut out, options);
-    out.text.push_str(&end);
-    if !end.is_empty() && !end.ends_with('\n') {
-        out.text.push('\n');
+    if !end.is_empty() {
+        out.code(end.strip_suffix('\n').unwrap_or(&end));
     }
 
-    // Time and travel as the analyzer measures them, so header, stats and `weft analyze` agree.
-    let analysis = crate::analyze::analyze(
-        "weft",
-        out.text.as_bytes(),
-        &crate::analyze::Options { filament_diameter_mm: printer.filament_diameter_mm, ..Default::default() },
-    );
-    let (time_s, travel_mm) = match &analysis {
-        Ok(a) => (a.report.estimated_time_s, a.report.travel_mm),
-        Err(_) => (0.0, 0.0),
-    };
+    // Time and travel of the moves as printed, with the analyzer's model (`crate::motion`), so
+    // header, stats and `weft analyze` agree; nothing when a user code makes the file unreadable.
+    out.motion.timer.stop();
+    let (time_s, travel_mm) = if out.motion_ok { (out.motion.timer.total(), out.motion.travel_mm) } else { (0.0, 0.0) };
     let stats = GcodeStats {
         layers: layers_written,
         extruded_mm,

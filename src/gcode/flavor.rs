@@ -59,7 +59,8 @@ fn dry_route(out: &mut Out, route: &[DVec3], to: DVec3, options: &Options) {
 /// The dialect object for `flavor`.
 pub(crate) fn dialect(flavor: Flavor) -> Box<dyn Dialect> {
     match flavor {
-        Flavor::Marlin => Box::new(Marlin),
+        // The poses CSV has its own writer (`poses.rs`) and never reaches the layer loop.
+        Flavor::Marlin | Flavor::PosesCsv => Box::new(Marlin),
         Flavor::Pneumatic => Box::new(PneumaticDialect { pressure_written: None }),
     }
 }

@@ -86,6 +86,7 @@ pub const fn other(path: &'static str, section: &'static str, label: &'static st
     Field { path, section, label, unit: "", kind, min: None, max: None, step: None, choices, doc, default: None, when: None }
 }
 /// Three numbers, each in `min..=max`.
+#[allow(clippy::too_many_arguments)] // a table row constructor: one argument per column
 pub const fn vec3(path: &'static str, section: &'static str, label: &'static str, unit: &'static str, min: f64, max: f64, step: f64, doc: &'static str) -> Field {
     Field { path, section, label, unit, kind: Kind::Vec3, min: Some(min), max: Some(max), step: Some(step), choices: &[], doc, default: None, when: None }
 }

@@ -53,6 +53,14 @@ pub(crate) struct Machine<'o> {
     /// …and their overlap comes back here, in layer order.
     overlap_in: Option<std::sync::mpsc::Receiver<(usize, f64)>>,
     preview: Option<Preview>,
+    /// The options' machine is 5-axis: positions are turned into tips (forward kinematics).
+    fk: bool,
+    /// Tip of the previous move's end (when `fk`).
+    last_view: [f64; 3],
+    /// G-code moves (`G0`–`G3`) read so far.
+    moves: u32,
+    /// Tool axis at the current position, once the file has stated one.
+    axis: Option<[f64; 3]>,
 }
 
 impl<'o> Machine<'o> {
@@ -85,6 +93,10 @@ impl<'o> Machine<'o> {
             overlap_out: None,
             overlap_in: None,
             preview: if opts.collect_preview { Some(Preview::default()) } else { None },
+            fk: opts.machine.is_five_axis(),
+            last_view: [0.0; 3],
+            moves: 0,
+            axis: None,
         }
     }
 
@@ -94,12 +106,58 @@ impl<'o> Machine<'o> {
             self.comment(c);
         }
         match self.m.line(l.cmd, &l.words, self.preview.is_some()) {
-            Step::Move(mv) => self.motion(&mv),
+            Step::Move(mv) => {
+                self.update_axis();
+                self.motion(&mv);
+                self.moves = self.moves.saturating_add(1);
+            }
             Step::Retract => self.retract(),
             Step::Unretract => self.retracted = false,
             Step::Home => self.in_run = false,
             Step::None => {}
         }
+        if self.fk {
+            self.last_view = self.view(self.m.pos);
+        }
+    }
+
+    /// The rotary angles of the options' machine (letter order).
+    fn angles(&self) -> [f64; 2] {
+        self.opts.machine.rotary_indices().map(|k| self.m.rotary[k])
+    }
+
+    /// Where a machine position `p` puts the tip (forward kinematics at the current angles);
+    /// `p` itself unless the options name a 5-axis machine and the file has rotary words.
+    fn view(&self, p: [f64; 3]) -> [f64; 3] {
+        if !self.fk || self.m.rotary_moves == 0 {
+            return p;
+        }
+        self.opts.machine.to_tip(crate::geom::DVec3::from_array(p), self.angles()).to_array()
+    }
+
+    /// The tool axis after a move: from `I J K` (normalised), or the forward kinematics of the
+    /// rotary words on a 5-axis machine; `None` until the file states one.
+    fn update_axis(&mut self) {
+        let axis = if self.m.ijk_moves > 0 {
+            let v = crate::geom::DVec3::from_array(self.m.ijk);
+            let n = v.length();
+            Some(if n > 0.0 && n.is_finite() { (v / n).to_array() } else { [0.0, 0.0, 1.0] })
+        } else if self.fk && self.m.rotary_moves > 0 {
+            Some(self.opts.machine.tool_axis(self.angles()).to_array())
+        } else {
+            None
+        };
+        if axis.is_none() {
+            return;
+        }
+        if let (None, Some(pv)) = (self.axis, &mut self.preview) {
+            // Segments before the first stated axis had the default, vertical one.
+            pv.axis.reserve(3 * pv.feature.len());
+            for _ in 0..pv.feature.len() {
+                pv.axis.extend_from_slice(&[0.0, 0.0, 1.0]);
+            }
+        }
+        self.axis = axis;
     }
 
     fn comment(&mut self, c: &[u8]) {
@@ -149,15 +207,33 @@ impl<'o> Machine<'o> {
                     self.retract();
                 }
                 self.in_run = false;
-                if let Some(pv) = &mut self.preview {
-                    let mut a = p0;
-                    if use_pts {
+                if self.preview.is_some() {
+                    let fk = self.fk;
+                    let mut a = if fk { self.last_view } else { p0 };
+                    let pts: Vec<[f64; 3]> = if !fk {
+                        Vec::new()
+                    } else if use_pts {
+                        self.m.arc_pts.iter().map(|b| self.view(*b)).collect()
+                    } else {
+                        vec![self.view(t)]
+                    };
+                    let moves = self.moves;
+                    let Some(pv) = &mut self.preview else { return };
+                    if fk {
+                        for &b in &pts {
+                            push6(&mut pv.travel_positions, a, b);
+                            pv.travel_move.push(moves);
+                            a = b;
+                        }
+                    } else if use_pts {
                         for &b in &self.m.arc_pts {
                             push6(&mut pv.travel_positions, a, b);
+                            pv.travel_move.push(moves);
                             a = b;
                         }
                     } else {
                         push6(&mut pv.travel_positions, a, t);
+                        pv.travel_move.push(moves);
                     }
                 }
             }
@@ -200,23 +276,31 @@ impl<'o> Machine<'o> {
         let w = self.width;
         let path_index = (self.paths_total - 1) as u32;
         let mut a = p0;
+        let mut va = if self.fk { self.last_view } else { p0 };
         let n_pts = if use_pts { self.m.arc_pts.len() } else { 1 };
         for k in 0..n_pts {
             let b = if use_pts { self.m.arc_pts[k] } else { t };
-            self.segs.push(Seg { a: [a[0], a[1]], b: [b[0], b[1]], w });
+            // Overlap and preview are in the part's frame (tips), flow at the machine's motion.
+            let vb = if self.fk { self.view(b) } else { b };
+            self.segs.push(Seg { a: [va[0], va[1]], b: [vb[0], vb[1]], w });
             if let Some(pv) = &mut self.preview {
                 let d = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
                 let seg_len = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
                 // Each chord gets its share of E; flow = volume / time at the feed rate.
                 let share = if use_pts { de / n_pts as f64 } else { de };
                 let flow = if seg_len > 0.0 && v > 0.0 { share * self.area / (seg_len / v) } else { 0.0 };
-                push6(&mut pv.positions, a, b);
+                push6(&mut pv.positions, va, vb);
                 pv.feature.push(self.feature);
                 pv.path.push(path_index);
                 pv.flow.push(flow as f32);
                 pv.width.push(w as f32);
+                pv.segment_move.push(self.moves);
+                if let Some(n) = self.axis {
+                    pv.axis.extend_from_slice(&[n[0] as f32, n[1] as f32, n[2] as f32]);
+                }
             }
             a = b;
+            va = vb;
         }
         self.travel_at_ext = self.m.travel_mm;
         self.retractions_at_ext = self.retractions;
@@ -303,6 +387,8 @@ impl<'o> Machine<'o> {
             overlap_mm: per_layer.iter().map(|l| l.overlap_mm).sum(),
             gippo_score: gippo,
             estimated_time_s: self.m.timer.total(),
+            rotary_moves: self.m.rotary_moves,
+            ijk_moves: self.m.ijk_moves,
             filament_mm: self.e_high,
             per_layer,
         };

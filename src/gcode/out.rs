@@ -85,7 +85,7 @@ impl Out {
     /// reads it as the analyzer would.
     pub fn code(&mut self, s: &str) {
         self.line(s);
-        if self.motion.text(s).is_err() {
+        if !self.motion.text(s) {
             self.motion_ok = false;
         }
     }

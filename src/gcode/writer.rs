@@ -101,7 +101,7 @@ fn plan_five_axis(toolpath: &Toolpath, options: &Options, offset: DVec3) -> Resu
                 if value >= lo && value <= hi {
                     return Ok(());
                 }
-                let above = !(value < lo);
+                let above = value.is_nan() || value > hi;
                 Err(Error::MachineLimit { pass: pi, path: qi, point, axis, value, limit: if above { hi } else { lo }, above, unit, setting, fix })
             };
             let check_xyz = |point: usize, p: DVec3| -> Result<(), Error> {

@@ -357,20 +357,20 @@ impl Motion {
         Move { from: p0, to: t, de, len, v, use_pts }
     }
 
-    /// Feeds G-code text (one or more lines, as the analyzer splits them); `Err` when a line
+    /// Feeds G-code text (one or more lines, as the analyzer splits them); false when a line
     /// is not text or cannot be read (the analyzer would reject the file).
-    pub fn text(&mut self, text: &str) -> Result<(), ()> {
+    pub fn text(&mut self, text: &str) -> bool {
         let bytes = text.as_bytes();
         if lex::first_binary_byte(bytes).is_some() {
-            return Err(());
+            return false;
         }
         for mut line in bytes.split(|&b| b == b'\n') {
             if let Some((&b'\r', rest)) = line.split_last() {
                 line = rest;
             }
-            let l = lex::lex_line(line).map_err(|_| ())?;
+            let Ok(l) = lex::lex_line(line) else { return false };
             self.line(l.cmd, &l.words, false);
         }
-        Ok(())
+        true
     }
 }

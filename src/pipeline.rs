@@ -221,6 +221,7 @@ pub fn run(
             collect_preview: options.collect_preview,
             default_line_width_mm: design.printer.nozzle_diameter_mm,
             filament_diameter_mm: design.printer.filament_diameter_mm,
+            machine: design.printer.machine.clone(),
         },
     )?;
     progress(Stage::Analyze, 1.0);

@@ -445,9 +445,23 @@ fn outside_bed_message(size: &[f64; 3], bed: &[f64; 3], below: f64) -> String {
 /// model (centred on 0, 0) is shifted to the bed centre.
 ///
 /// [`GcodeStats::extruded_mm`] and [`GcodeStats::filament_mm`] are the writer's exact sums;
-/// `travel_mm` and `estimated_time_s` come from running [`crate::analyze::analyze`] on the
-/// produced text (so they include moves of the start and end templates and agree with
-/// `weft analyze`).
+/// `travel_mm` and `estimated_time_s` are the writer's own moves (numbers as printed) and the
+/// start/end templates (read with the analyzer's lexer) timed with the model it shares with
+/// the analyzer ([`crate::motion`]), so they equal `weft analyze` to the bit (0 when a user
+/// code makes the file unreadable to the analyzer).
+///
+/// Passes: first-layer speed and temperature and the fan's `fan_start_layer` count only
+/// [`PassKind::Layer`](crate::geom::PassKind) passes; a free pass never gets first-layer
+/// rules (`M104 S<nozzle_temp>` and the fan come before the first free pass if not yet
+/// written). Per-point data ([`crate::geom::PointData`]): flow per segment as
+/// `k · EM · length · area / (π f_d² / 4)` (area) or `value · length` (filament per mm), a
+/// per-segment feed instead of the feature speed × speed factor, `G4 P<ms>` after a point with
+/// a dwell (after reaching the first point for entry 0); unusable data →
+/// [`Error::BadPointData`]. Tool axes: a cartesian machine accepts only +Z
+/// ([`Error::NeedsFiveAxis`]); a 5-axis machine ([`Printer::machine`]) writes rotary words
+/// (5 decimals, X Y Z in machine coordinates) or `I J K` (7 decimals, X Y Z of the tip) on
+/// every motion line where they change, after checking travel and rotary limits in machine
+/// coordinates ([`Error::MachineLimit`]). [`Flavor::PosesCsv`] writes a CSV instead.
 ///
 /// [`Flavor::Pneumatic`] writes the same layout without E: `G21`/`G90` instead of the E
 /// modes, `G0` travels (lifted by `z_hop_mm` when at least `min_travel_mm` long, no

@@ -24,6 +24,8 @@ pub mod gcode;
 pub mod geom;
 pub mod import;
 pub mod lattice;
+pub mod machine;
+pub mod motion;
 pub mod nonplanar;
 pub mod paths;
 pub mod slice;

@@ -481,8 +481,9 @@ fn analyze_stage(ctx: &mut Ctx, written: &Out<Written>, options: &RunOptions) ->
         collect_preview: options.collect_preview,
         default_line_width_mm: design.printer.nozzle_diameter_mm,
         filament_diameter_mm: design.printer.filament_diameter_mm,
+        machine: design.printer.machine.clone(),
     };
-    let parts = (options.collect_preview, a_options.default_line_width_mm, a_options.filament_diameter_mm, &design.name);
+    let parts = (options.collect_preview, a_options.default_line_width_mm, a_options.filament_diameter_mm, &a_options.machine, &design.name);
     ctx.stage("analyze", "analyze", &parts, &[written.key], |_| {
         let a = analyze::analyze(&format!("{}.gcode", design.name), written.text.as_bytes(), &a_options)?;
         let r = &a.report;

@@ -1,31 +1,13 @@
 //! The interpreter: machine state, classification of moves, layers, paths and the report.
 
 use super::overlap::{Overlap, Seg};
-use super::parse::{lex_line, parse_number, trim_start, Command, Line, Words};
-use super::time::MotionTimer;
 use super::{Analysis, Error, LayerReport, Options, Preview, Report};
 use crate::geom::Feature;
+use crate::motion::lex::{lex_line, parse_number, trim_start, Line};
+use crate::motion::{Motion, Move, Step};
 
-/// Moves shorter than this (mm) have no XYZ motion.
-const MOTION_EPS: f64 = 1e-9;
 /// Z-based layer detection: a Z change larger than this starts a layer, mm.
 const LAYER_Z_EPS: f64 = 1e-6;
-/// Longest preview chord of an arc, mm.
-const ARC_CHORD_MM: f64 = 0.5;
-/// Largest preview angle step of an arc, rad (10°).
-const ARC_STEP_RAD: f64 = std::f64::consts::PI / 18.0;
-/// Feed rate before any F word, mm/min.
-pub const DEFAULT_FEED_MM_MIN: f64 = 1500.0;
-/// Acceleration before any M204, mm/s².
-pub const DEFAULT_ACCELERATION_MM_S2: f64 = 1000.0;
-
-#[derive(Clone, Copy, PartialEq, Eq)]
-enum EMode {
-    /// Follows G90/G91 (Marlin: G90/G91 reset the E mode).
-    Follow,
-    Absolute,
-    Relative,
-}
 
 struct LayerAcc {
     z: f64,
@@ -40,15 +22,8 @@ struct LayerAcc {
 pub(crate) struct Machine<'o> {
     opts: &'o Options,
     comment_layers: bool,
-    pos: [f64; 3],
-    e: f64,
-    abs_xyz: bool,
-    e_mode: EMode,
-    unit: f64,
-    feed: f64,
-    accel_print: f64,
-    accel_travel: f64,
-    modal: Command,
+    /// Positions, modes, feed, time and travel (shared with the writer).
+    m: Motion,
     width: f64,
     feature: u8,
     area: f64,
@@ -62,7 +37,6 @@ pub(crate) struct Machine<'o> {
     merge_first: bool,
 
     extruded_mm: f64,
-    travel_mm: f64,
     retractions: usize,
     paths_total: usize,
 
@@ -78,9 +52,15 @@ pub(crate) struct Machine<'o> {
     overlap_out: Option<std::sync::mpsc::SyncSender<(usize, Vec<Seg>)>>,
     /// …and their overlap comes back here, in layer order.
     overlap_in: Option<std::sync::mpsc::Receiver<(usize, f64)>>,
-    timer: MotionTimer,
-    arc_pts: Vec<[f64; 3]>,
     preview: Option<Preview>,
+    /// The options' machine is 5-axis: positions are turned into tips (forward kinematics).
+    fk: bool,
+    /// Tip of the previous move's end (when `fk`).
+    last_view: [f64; 3],
+    /// G-code moves (`G0`–`G3`) read so far.
+    moves: u32,
+    /// Tool axis at the current position, once the file has stated one.
+    axis: Option<[f64; 3]>,
 }
 
 impl<'o> Machine<'o> {
@@ -89,15 +69,7 @@ impl<'o> Machine<'o> {
         Machine {
             opts,
             comment_layers,
-            pos: [0.0; 3],
-            e: 0.0,
-            abs_xyz: true,
-            e_mode: EMode::Follow,
-            unit: 1.0,
-            feed: DEFAULT_FEED_MM_MIN,
-            accel_print: DEFAULT_ACCELERATION_MM_S2,
-            accel_travel: DEFAULT_ACCELERATION_MM_S2,
-            modal: Command::G(1, 0),
+            m: Motion::default(),
             width: opts.default_line_width_mm,
             feature: 255,
             area: std::f64::consts::PI * fd * fd / 4.0,
@@ -109,7 +81,6 @@ impl<'o> Machine<'o> {
             seen_layer_comment: false,
             merge_first: false,
             extruded_mm: 0.0,
-            travel_mm: 0.0,
             retractions: 0,
             paths_total: 0,
             travel_at_ext: 0.0,
@@ -121,17 +92,11 @@ impl<'o> Machine<'o> {
             overlap: Overlap::default(),
             overlap_out: None,
             overlap_in: None,
-            timer: MotionTimer::default(),
-            arc_pts: Vec::new(),
             preview: if opts.collect_preview { Some(Preview::default()) } else { None },
-        }
-    }
-
-    fn e_relative(&self) -> bool {
-        match self.e_mode {
-            EMode::Follow => !self.abs_xyz,
-            EMode::Absolute => false,
-            EMode::Relative => true,
+            fk: opts.machine.is_five_axis(),
+            last_view: [0.0; 3],
+            moves: 0,
+            axis: None,
         }
     }
 
@@ -140,69 +105,59 @@ impl<'o> Machine<'o> {
         if let Some(c) = l.comment {
             self.comment(c);
         }
-        let w = &l.words;
-        let cmd = if l.cmd == Command::Modal { self.modal } else { l.cmd };
-        match cmd {
-            Command::G(0 | 1, 0) => {
-                self.modal = cmd;
-                self.linear(w);
+        match self.m.line(l.cmd, &l.words, self.preview.is_some()) {
+            Step::Move(mv) => {
+                self.update_axis();
+                self.motion(&mv);
+                self.moves = self.moves.saturating_add(1);
             }
-            Command::G(g @ (2 | 3), 0) => {
-                self.modal = cmd;
-                self.arc(w, g == 2);
-            }
-            Command::G(4, 0) => {
-                let s = w.get(b'S').unwrap_or(0.0) + w.get(b'P').unwrap_or(0.0) / 1000.0;
-                self.timer.dwell(s);
-            }
-            Command::G(10, 0) if !w.has(b'P') && !w.has(b'L') => self.retract(),
-            Command::G(11, 0) => self.retracted = false,
-            Command::G(20, 0) => self.unit = 25.4,
-            Command::G(21, 0) => self.unit = 1.0,
-            Command::G(28, 0) => {
-                let any = w.has(b'X') || w.has(b'Y') || w.has(b'Z');
-                for (k, letter) in [b'X', b'Y', b'Z'].into_iter().enumerate() {
-                    if !any || w.has(letter) {
-                        self.pos[k] = 0.0;
-                    }
-                }
-                self.timer.stop();
-                self.in_run = false;
-            }
-            Command::G(90, 0) => {
-                self.abs_xyz = true;
-                self.e_mode = EMode::Follow;
-            }
-            Command::G(91, 0) => {
-                self.abs_xyz = false;
-                self.e_mode = EMode::Follow;
-            }
-            Command::G(92, 0) => {
-                for (k, letter) in [b'X', b'Y', b'Z'].into_iter().enumerate() {
-                    if let Some(v) = w.get(letter) {
-                        self.pos[k] = v * self.unit;
-                    }
-                }
-                if let Some(v) = w.get(b'E') {
-                    self.e = v * self.unit;
-                }
-            }
-            Command::M(82) => self.e_mode = EMode::Absolute,
-            Command::M(83) => self.e_mode = EMode::Relative,
-            Command::M(204) => {
-                if let Some(s) = w.get(b'S').filter(|v| *v > 0.0) {
-                    self.accel_print = s;
-                    self.accel_travel = s;
-                }
-                if let Some(p) = w.get(b'P').filter(|v| *v > 0.0) {
-                    self.accel_print = p;
-                }
-                if let Some(t) = w.get(b'T').filter(|v| *v > 0.0) {
-                    self.accel_travel = t;
-                }
-            }
-            _ => {}
+            Step::Retract => self.retract(),
+            Step::Unretract => self.retracted = false,
+            Step::Home => self.in_run = false,
+            Step::None => {}
         }
+        if self.fk {
+            self.last_view = self.view(self.m.pos);
+        }
+    }
+
+    /// The rotary angles of the options' machine (letter order).
+    fn angles(&self) -> [f64; 2] {
+        self.opts.machine.rotary_indices().map(|k| self.m.rotary[k])
+    }
+
+    /// Where a machine position `p` puts the tip (forward kinematics at the current angles);
+    /// `p` itself unless the options name a 5-axis machine and the file has rotary words.
+    fn view(&self, p: [f64; 3]) -> [f64; 3] {
+        if !self.fk || self.m.rotary_moves == 0 {
+            return p;
+        }
+        self.opts.machine.to_tip(crate::geom::DVec3::from_array(p), self.angles()).to_array()
+    }
+
+    /// The tool axis after a move: from `I J K` (normalised), or the forward kinematics of the
+    /// rotary words on a 5-axis machine; `None` until the file states one.
+    fn update_axis(&mut self) {
+        let axis = if self.m.ijk_moves > 0 {
+            let v = crate::geom::DVec3::from_array(self.m.ijk);
+            let n = v.length();
+            Some(if n > 0.0 && n.is_finite() { (v / n).to_array() } else { [0.0, 0.0, 1.0] })
+        } else if self.fk && self.m.rotary_moves > 0 {
+            Some(self.opts.machine.tool_axis(self.angles()).to_array())
+        } else {
+            None
+        };
+        if axis.is_none() {
+            return;
+        }
+        if let (None, Some(pv)) = (self.axis, &mut self.preview) {
+            // Segments before the first stated axis had the default, vertical one.
+            pv.axis.reserve(3 * pv.feature.len());
+            for _ in 0..pv.feature.len() {
+                pv.axis.extend_from_slice(&[0.0, 0.0, 1.0]);
+            }
+        }
+        self.axis = axis;
     }
 
     fn comment(&mut self, c: &[u8]) {
@@ -229,118 +184,6 @@ impl<'o> Machine<'o> {
         }
     }
 
-    /// Target of a motion command and its E delta (updates E and F).
-    fn target(&mut self, w: &Words) -> ([f64; 3], f64) {
-        let mut t = self.pos;
-        for (k, letter) in [b'X', b'Y', b'Z'].into_iter().enumerate() {
-            if let Some(v) = w.get(letter) {
-                let v = v * self.unit;
-                t[k] = if self.abs_xyz { v } else { self.pos[k] + v };
-            }
-        }
-        let mut de = 0.0;
-        if let Some(v) = w.get(b'E') {
-            let v = v * self.unit;
-            if self.e_relative() {
-                de = v;
-                self.e += v;
-            } else {
-                de = v - self.e;
-                self.e = v;
-            }
-        }
-        if let Some(f) = w.get(b'F') {
-            if f > 0.0 {
-                self.feed = f * self.unit;
-            }
-        }
-        (t, de)
-    }
-
-    fn linear(&mut self, w: &Words) {
-        let (t, de) = self.target(w);
-        let p = self.pos;
-        let d = [t[0] - p[0], t[1] - p[1], t[2] - p[2]];
-        let len = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
-        let dir = if len > 0.0 { [d[0] / len, d[1] / len, d[2] / len] } else { [0.0; 3] };
-        self.motion(t, de, len, dir, dir, false);
-    }
-
-    fn arc(&mut self, w: &Words, cw: bool) {
-        let (t, de) = self.target(w);
-        let p = self.pos;
-        let center = if w.get(b'I').is_some() || w.get(b'J').is_some() {
-            Some([p[0] + w.get(b'I').unwrap_or(0.0) * self.unit, p[1] + w.get(b'J').unwrap_or(0.0) * self.unit])
-        } else if let Some(r) = w.get(b'R') {
-            let r = r * self.unit;
-            let (dx, dy) = (t[0] - p[0], t[1] - p[1]);
-            let d = (dx * dx + dy * dy).sqrt();
-            if r != 0.0 && d > 0.0 {
-                let e = if cw ^ (r < 0.0) { -1.0 } else { 1.0 };
-                let h2 = r * r - d * d / 4.0;
-                let h = if h2 > 0.0 { h2.sqrt() } else { 0.0 };
-                let (mx, my) = ((p[0] + t[0]) / 2.0, (p[1] + t[1]) / 2.0);
-                let (sx, sy) = (-dy / d, dx / d);
-                Some([mx + e * h * sx, my + e * h * sy])
-            } else {
-                None
-            }
-        } else {
-            None
-        };
-        let fallback = |m: &mut Self| {
-            let d = [t[0] - p[0], t[1] - p[1], t[2] - p[2]];
-            let len = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
-            let dir = if len > 0.0 { [d[0] / len, d[1] / len, d[2] / len] } else { [0.0; 3] };
-            m.motion(t, de, len, dir, dir, false);
-        };
-        let Some(c) = center else { return fallback(self) };
-        let (rpx, rpy) = (p[0] - c[0], p[1] - c[1]);
-        let (rtx, rty) = (t[0] - c[0], t[1] - c[1]);
-        let r = (rpx * rpx + rpy * rpy).sqrt();
-        if r.is_nan() || r <= MOTION_EPS || !r.is_finite() {
-            return fallback(self);
-        }
-        let two_pi = 2.0 * std::f64::consts::PI;
-        let mut ang = libm::atan2(rpx * rty - rpy * rtx, rpx * rtx + rpy * rty);
-        if ang < 0.0 {
-            ang += two_pi;
-        }
-        if cw {
-            ang -= two_pi;
-        }
-        if ang == 0.0 && p[0] == t[0] && p[1] == t[1] {
-            ang = two_pi;
-        }
-        let dz = t[2] - p[2];
-        let xy = ang.abs() * r;
-        let len = (xy * xy + dz * dz).sqrt();
-        // Tangents at both ends (unit, including the helical Z component).
-        let s = if cw { -1.0 } else { 1.0 };
-        let th0 = libm::atan2(rpy, rpx);
-        let th1 = th0 + ang;
-        let tz = if len > 0.0 { dz / len } else { 0.0 };
-        let txy = if len > 0.0 { xy / len } else { 0.0 };
-        let dir_in = [-s * libm::sin(th0) * txy, s * libm::cos(th0) * txy, tz];
-        let dir_out = [-s * libm::sin(th1) * txy, s * libm::cos(th1) * txy, tz];
-        let need_points = (de > 0.0 && xy > MOTION_EPS) || self.preview.is_some();
-        let mut pts = std::mem::take(&mut self.arc_pts);
-        pts.clear();
-        if need_points {
-            let n1 = (xy / ARC_CHORD_MM).ceil();
-            let n2 = (ang.abs() / ARC_STEP_RAD).ceil();
-            let n = if n1.is_finite() { n1.max(n2).clamp(1.0, 1024.0) as usize } else { 1 };
-            for k in 1..n {
-                let f = k as f64 / n as f64;
-                let th = th0 + ang * f;
-                pts.push([c[0] + r * libm::cos(th), c[1] + r * libm::sin(th), p[2] + dz * f]);
-            }
-            pts.push(t);
-        }
-        self.arc_pts = pts;
-        self.motion(t, de, len, dir_in, dir_out, need_points);
-    }
-
     fn retract(&mut self) {
         if !self.retracted {
             self.retractions += 1;
@@ -349,47 +192,58 @@ impl<'o> Machine<'o> {
         self.in_run = false;
     }
 
-    /// A move from the current position to `t` feeding `de`, of length `len` (arc length for
-    /// arcs, whose chord points are in `self.arc_pts` when `use_pts`).
-    fn motion(&mut self, t: [f64; 3], de: f64, len: f64, dir_in: [f64; 3], dir_out: [f64; 3], use_pts: bool) {
-        let p0 = self.pos;
+    /// Bookkeeping of a move [`Motion`] has timed: net E, extrusion or travel, retraction.
+    fn motion(&mut self, mv: &Move) {
+        let Move { from: p0, to: t, de, len, v, use_pts } = *mv;
         self.e_net += de;
         if self.e_net > self.e_high {
             self.e_high = self.e_net;
         }
-        let v = self.feed / 60.0;
-        if len > MOTION_EPS && len.is_finite() {
+        if mv.moves() {
             if de > 0.0 {
-                self.timer.push(len, dir_in, dir_out, v, self.accel_print);
                 self.extrude(p0, t, de, len, use_pts, v);
             } else {
-                self.timer.push(len, dir_in, dir_out, v, self.accel_travel);
                 if de < 0.0 {
                     self.retract();
                 }
-                self.travel_mm += len;
                 self.in_run = false;
-                if let Some(pv) = &mut self.preview {
-                    let mut a = p0;
-                    if use_pts {
-                        for &b in &self.arc_pts {
+                if self.preview.is_some() {
+                    let fk = self.fk;
+                    let mut a = if fk { self.last_view } else { p0 };
+                    let pts: Vec<[f64; 3]> = if !fk {
+                        Vec::new()
+                    } else if use_pts {
+                        self.m.arc_pts.iter().map(|b| self.view(*b)).collect()
+                    } else {
+                        vec![self.view(t)]
+                    };
+                    let moves = self.moves;
+                    let Some(pv) = &mut self.preview else { return };
+                    if fk {
+                        for &b in &pts {
                             push6(&mut pv.travel_positions, a, b);
+                            pv.travel_move.push(moves);
+                            a = b;
+                        }
+                    } else if use_pts {
+                        for &b in &self.m.arc_pts {
+                            push6(&mut pv.travel_positions, a, b);
+                            pv.travel_move.push(moves);
                             a = b;
                         }
                     } else {
                         push6(&mut pv.travel_positions, a, t);
+                        pv.travel_move.push(moves);
                     }
                 }
             }
         } else if de != 0.0 && de.is_finite() {
-            self.timer.push_isolated(de.abs(), v, self.accel_print);
             if de < 0.0 {
                 self.retract();
             } else {
                 self.retracted = false;
             }
         }
-        self.pos = t;
     }
 
     fn extrude(&mut self, p0: [f64; 3], t: [f64; 3], de: f64, len: f64, use_pts: bool, v: f64) {
@@ -422,25 +276,33 @@ impl<'o> Machine<'o> {
         let w = self.width;
         let path_index = (self.paths_total - 1) as u32;
         let mut a = p0;
-        let n_pts = if use_pts { self.arc_pts.len() } else { 1 };
+        let mut va = if self.fk { self.last_view } else { p0 };
+        let n_pts = if use_pts { self.m.arc_pts.len() } else { 1 };
         for k in 0..n_pts {
-            let b = if use_pts { self.arc_pts[k] } else { t };
-            self.segs.push(Seg { a: [a[0], a[1]], b: [b[0], b[1]], w });
+            let b = if use_pts { self.m.arc_pts[k] } else { t };
+            // Overlap and preview are in the part's frame (tips), flow at the machine's motion.
+            let vb = if self.fk { self.view(b) } else { b };
+            self.segs.push(Seg { a: [va[0], va[1]], b: [vb[0], vb[1]], w });
             if let Some(pv) = &mut self.preview {
                 let d = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
                 let seg_len = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
                 // Each chord gets its share of E; flow = volume / time at the feed rate.
                 let share = if use_pts { de / n_pts as f64 } else { de };
                 let flow = if seg_len > 0.0 && v > 0.0 { share * self.area / (seg_len / v) } else { 0.0 };
-                push6(&mut pv.positions, a, b);
+                push6(&mut pv.positions, va, vb);
                 pv.feature.push(self.feature);
                 pv.path.push(path_index);
                 pv.flow.push(flow as f32);
                 pv.width.push(w as f32);
+                pv.segment_move.push(self.moves);
+                if let Some(n) = self.axis {
+                    pv.axis.extend_from_slice(&[n[0] as f32, n[1] as f32, n[2] as f32]);
+                }
             }
             a = b;
+            va = vb;
         }
-        self.travel_at_ext = self.travel_mm;
+        self.travel_at_ext = self.m.travel_mm;
         self.retractions_at_ext = self.retractions;
         self.travel_segs_at_ext = self.preview.as_ref().map_or(0, |p| p.travel_positions.len() / 6);
     }
@@ -486,7 +348,7 @@ impl<'o> Machine<'o> {
 
     /// Ends the file and builds the analysis.
     pub fn finish(mut self) -> Analysis {
-        self.timer.stop();
+        self.m.timer.stop();
         self.finish_layer();
         // Closing the channel ends the overlap thread once it has measured every layer sent.
         drop(self.overlap_out.take());
@@ -503,7 +365,7 @@ impl<'o> Machine<'o> {
             let l = &self.layers[i];
             let (travel_end, retr_end) = match self.layers.get(i + 1) {
                 Some(next) => (next.travel_start, next.retractions_start),
-                None => (self.travel_mm, self.retractions),
+                None => (self.m.travel_mm, self.retractions),
             };
             per_layer.push(LayerReport {
                 z: l.z,
@@ -520,11 +382,13 @@ impl<'o> Machine<'o> {
             layers: n,
             extrusion_paths: self.paths_total,
             extruded_mm: self.extruded_mm,
-            travel_mm: self.travel_mm,
+            travel_mm: self.m.travel_mm,
             retractions: self.retractions,
             overlap_mm: per_layer.iter().map(|l| l.overlap_mm).sum(),
             gippo_score: gippo,
-            estimated_time_s: self.timer.total(),
+            estimated_time_s: self.m.timer.total(),
+            rotary_moves: self.m.rotary_moves,
+            ijk_moves: self.m.ijk_moves,
             filament_mm: self.e_high,
             per_layer,
         };
@@ -574,10 +438,10 @@ fn find_newline(s: &[u8]) -> Option<usize> {
 
 /// Runs the analyzer over `bytes`.
 pub(crate) fn run(file: &str, bytes: &[u8], options: &Options) -> Result<Analysis, Error> {
-    if let Some(offset) = super::parse::first_binary_byte(bytes) {
+    if let Some(offset) = crate::motion::lex::first_binary_byte(bytes) {
         return Err(Error::NotText { file: file.to_string(), offset });
     }
-    let layer_comments = super::parse::has_layer_comments(bytes);
+    let layer_comments = crate::motion::lex::has_layer_comments(bytes);
     #[cfg(not(target_arch = "wasm32"))]
     if bytes.len() >= PARALLEL_OVERLAP_MIN_BYTES {
         // Overlap is per layer and independent of parsing: measure it on a second core while

@@ -7,10 +7,14 @@ use serde::Serialize;
 
 mod machine;
 mod overlap;
-pub mod parse;
-pub mod time;
+mod poses;
+/// The G-code lexer (shared with the writer; lives in [`crate::motion::lex`]).
+pub use crate::motion::lex as parse;
+/// The time model (shared with the writer; lives in [`crate::motion::time`]).
+pub use crate::motion::time;
 
-pub use machine::{gippo_score, DEFAULT_ACCELERATION_MM_S2, DEFAULT_FEED_MM_MIN};
+pub use crate::motion::{DEFAULT_ACCELERATION_MM_S2, DEFAULT_FEED_MM_MIN};
+pub use machine::gippo_score;
 
 /// Default line width assumed when a file has no `;WIDTH:` comments, mm.
 pub const DEFAULT_LINE_WIDTH_MM: f64 = 0.4;
@@ -20,12 +24,19 @@ pub const DEFAULT_FILAMENT_DIAMETER_MM: f64 = 1.75;
 /// Analyzer options.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Options {
-    /// Build the preview buffers (costs memory: 36 bytes per segment). Default false.
+    /// Build the preview buffers (costs memory: 40 bytes per extrusion segment, 12 more with
+    /// tool axes; 28 per travel segment). Default false.
     pub collect_preview: bool,
     /// Line width when the file states none (`;WIDTH:`), mm. Default 0.4.
     pub default_line_width_mm: f64,
     /// Filament diameter when the file states none, mm. Default 1.75.
     pub filament_diameter_mm: f64,
+    /// The machine the file is for. Default cartesian: `A B C` words are read and counted
+    /// ([`Report::rotary_moves`]) but give no tool axis. A 5-axis machine turns them into the
+    /// tool axis ([`Preview::axis`]) and the preview's positions into nozzle tips in the
+    /// part's frame, through its forward kinematics ([`crate::machine`]). `I J K` vectors on
+    /// `G0`/`G1` give the tool axis on any machine.
+    pub machine: crate::machine::Machine,
 }
 
 impl Default for Options {
@@ -34,6 +45,7 @@ impl Default for Options {
             collect_preview: false,
             default_line_width_mm: DEFAULT_LINE_WIDTH_MM,
             filament_diameter_mm: DEFAULT_FILAMENT_DIAMETER_MM,
+            machine: crate::machine::Machine::default(),
         }
     }
 }
@@ -83,6 +95,10 @@ pub struct Report {
     pub filament_mm: f64,
     /// Per layer.
     pub per_layer: Vec<LayerReport>,
+    /// Moves with an `A`, `B` or `C` word.
+    pub rotary_moves: usize,
+    /// `G0`/`G1` moves with an `I`, `J` or `K` tool-vector word.
+    pub ijk_moves: usize,
 }
 
 /// Buffers for the 3D preview, in printer coordinates (mm). Segments are in file order,
@@ -107,6 +123,16 @@ pub struct Preview {
     pub layer_travel_start: Vec<u32>,
     /// Z of each layer, mm.
     pub layer_z: Vec<f32>,
+    /// Per extrusion segment: the tool axis at its end (unit x y z, 3 floats). Empty when the
+    /// file never states an axis (no `I J K`, and no rotary words for a 5-axis machine);
+    /// otherwise segments before the first stated axis get +Z.
+    pub axis: Vec<f32>,
+    /// Per extrusion segment: index of the G-code move (`G0`–`G3` command, 0-based, in file
+    /// order) it comes from; non-decreasing (an arc gives several segments). With
+    /// [`Preview::travel_move`] a print-order slider shows "everything up to move k".
+    pub segment_move: Vec<u32>,
+    /// Per travel segment: index of the G-code move it comes from.
+    pub travel_move: Vec<u32>,
 }
 
 /// Report plus (optionally) preview.
@@ -173,8 +199,14 @@ pub enum Error {
 ///   half a line width, unioned per segment; arcs are measured on their preview chords);
 /// - time: see [`time`].
 ///
+/// A poses CSV (header `x,y,z,nx,ny,nz`, the `poses_csv` flavour) is read as one layer of
+/// paths separated by blank lines, with the rows' axes in the preview (no time, no filament).
+///
 /// Errors: any NUL or other non-text control byte → [`Error::NotText`]; a parameter of an
 /// interpreted command whose number cannot be read → [`Error::Malformed`] with its line.
 pub fn analyze(file: &str, bytes: &[u8], options: &Options) -> Result<Analysis, Error> {
+    if poses::is_poses(bytes) {
+        return poses::run(file, bytes, options);
+    }
     machine::run(file, bytes, options)
 }

@@ -3,7 +3,7 @@
 //! E). A new flavour is one more impl of this trait plus one arm in [`dialect`].
 
 use super::format::{fixed, push_fixed};
-use super::writer::Out;
+use super::out::Out;
 use super::{Flavor, Options};
 use crate::geom::DVec3;
 
@@ -59,7 +59,8 @@ fn dry_route(out: &mut Out, route: &[DVec3], to: DVec3, options: &Options) {
 /// The dialect object for `flavor`.
 pub(crate) fn dialect(flavor: Flavor) -> Box<dyn Dialect> {
     match flavor {
-        Flavor::Marlin => Box::new(Marlin),
+        // The poses CSV has its own writer (`poses.rs`) and never reaches the layer loop.
+        Flavor::Marlin | Flavor::PosesCsv => Box::new(Marlin),
         Flavor::Pneumatic => Box::new(PneumaticDialect { pressure_written: None }),
     }
 }
@@ -80,28 +81,16 @@ pub(crate) fn feed_mm_min(mm_s: f64) -> u64 {
 impl Marlin {
     fn retract(out: &mut Out, options: &Options) {
         let r = &options.printer.retraction;
-        let mut line = String::from("G1 E");
-        if out.relative_e {
-            push_fixed(&mut line, -r.length_mm, 5);
-        } else {
-            push_fixed(&mut line, out.e_total - r.length_mm, 5);
-        }
-        out.push_feed(&mut line, feed_mm_min(r.speed_mm_s));
-        out.line(&line);
+        let e = if out.relative_e { -r.length_mm } else { out.e_total - r.length_mm };
+        out.e_only(e, feed_mm_min(r.speed_mm_s));
         out.retracted = true;
         out.retractions += 1;
     }
 
     fn unretract(out: &mut Out, options: &Options) {
         let r = &options.printer.retraction;
-        let mut line = String::from("G1 E");
-        if out.relative_e {
-            push_fixed(&mut line, r.length_mm, 5);
-        } else {
-            push_fixed(&mut line, out.e_total, 5);
-        }
-        out.push_feed(&mut line, feed_mm_min(r.speed_mm_s));
-        out.line(&line);
+        let e = if out.relative_e { r.length_mm } else { out.e_total };
+        out.e_only(e, feed_mm_min(r.speed_mm_s));
         out.retracted = false;
     }
 
@@ -112,27 +101,21 @@ impl Marlin {
             return;
         }
         out.e_total += e;
-        let mut line = String::from("G1 E");
-        if out.relative_e {
-            push_fixed(&mut line, e, 5);
-        } else {
-            push_fixed(&mut line, out.e_total, 5);
-        }
-        out.push_feed(&mut line, feed_mm_min(options.printer.retraction.speed_mm_s));
-        out.line(&line);
+        let word = if out.relative_e { e } else { out.e_total };
+        out.e_only(word, feed_mm_min(options.printer.retraction.speed_mm_s));
     }
 }
 
 impl Dialect for Marlin {
     fn prologue(&mut self, out: &mut Out, options: &Options) {
         // G90 first: in Marlin G90/G91 also reset the E mode, so M82/M83 must come after.
-        out.line("G90 ; absolute coordinates");
-        out.line(if out.relative_e { "M83 ; relative extrusion" } else { "M82 ; absolute extrusion" });
-        out.line("G92 E0");
+        out.code("G90 ; absolute coordinates");
+        out.code(if out.relative_e { "M83 ; relative extrusion" } else { "M82 ; absolute extrusion" });
+        out.code("G92 E0");
         let mut line = String::from("M204 S");
         push_fixed(&mut line, options.printer.acceleration_mm_s2, 0);
         line.push_str(" ; acceleration");
-        out.line(&line);
+        out.code(&line);
     }
 
     fn travel(&mut self, out: &mut Out, to: DVec3, options: &Options) {
@@ -171,22 +154,7 @@ impl Dialect for Marlin {
     }
 
     fn segment(&mut self, out: &mut Out, to: DVec3, e: f64, feed: u64) {
-        let mut line = String::with_capacity(48);
-        line.push_str("G1 X");
-        push_fixed(&mut line, to.x, 3);
-        line.push_str(" Y");
-        push_fixed(&mut line, to.y, 3);
-        out.push_z_if_changed(&mut line, to.z);
-        line.push_str(" E");
-        out.e_total += e;
-        if out.relative_e {
-            push_fixed(&mut line, e, 5);
-        } else {
-            push_fixed(&mut line, out.e_total, 5);
-        }
-        out.push_feed(&mut line, feed);
-        out.line(&line);
-        out.pos = Some(to);
+        out.extrude_move(to, e, feed);
     }
 
     fn epilogue(&mut self, out: &mut Out, options: &Options) {
@@ -210,7 +178,7 @@ struct PneumaticDialect {
 fn push_code(out: &mut Out, code: &str) {
     let code = code.trim_end_matches(['\n', '\r']);
     if !code.trim().is_empty() {
-        out.line(code);
+        out.code(code);
     }
 }
 
@@ -245,8 +213,8 @@ fn travel_leg(out: &mut Out, to: DVec3, options: &Options, z_code: &str) -> Opti
 
 impl Dialect for PneumaticDialect {
     fn prologue(&mut self, out: &mut Out, _options: &Options) {
-        out.line("G21 ; millimetres");
-        out.line("G90 ; absolute coordinates");
+        out.code("G21 ; millimetres");
+        out.code("G90 ; absolute coordinates");
     }
 
     fn travel(&mut self, out: &mut Out, to: DVec3, options: &Options) {
@@ -274,13 +242,7 @@ impl Dialect for PneumaticDialect {
             self.pressure_written = Some(pa);
         }
         push_code(out, &pn.valve_on);
-        let ms = (options.material.flow.pre_flow_s * 1000.0).round();
-        if ms.is_finite() && ms >= 1.0 {
-            let mut line = String::from("G4 P");
-            push_fixed(&mut line, ms, 0);
-            line.push_str(" ; pre-flow");
-            out.line(&line);
-        }
+        out.dwell(options.material.flow.pre_flow_s, "pre-flow");
     }
 
     fn end_lead_mm(&self, options: &Options, path: &PathCtx) -> f64 {

@@ -39,6 +39,18 @@ pub fn push_fixed(out: &mut String, v: f64, decimals: usize) {
     }
 }
 
+/// The value a reader gets back from `v` printed by [`push_fixed`] with `decimals` places
+/// (the same f64 the analyzer's number parser returns for that text: both are the correctly
+/// rounded quotient of the printed integer by a power of ten).
+pub fn as_printed(v: f64, decimals: usize) -> f64 {
+    let decimals = decimals.min(9);
+    let r = (v * POW10[decimals]).round();
+    if !r.is_finite() || r.abs() >= 9.0e18 || r == 0.0 {
+        return 0.0;
+    }
+    r / POW10[decimals]
+}
+
 /// `v` formatted by [`push_fixed`].
 pub fn fixed(v: f64, decimals: usize) -> String {
     let mut s = String::new();
@@ -97,6 +109,17 @@ mod tests {
         assert_eq!(fixed(123.0005, 3), "123.001");
         assert_eq!(fixed(f64::NAN, 3), "0");
         assert_eq!(fixed(9000.4, 0), "9000");
+    }
+
+    #[test]
+    fn printed_values_read_back_exactly() {
+        for v in [0.1, 12.345_67, -3.000_4, 123_456.789_49, 1e-7, -0.0004, 7.5e12, 0.3] {
+            for d in [0, 3, 5, 7] {
+                let text = fixed(v, d);
+                let (back, _) = crate::motion::lex::parse_number(text.as_bytes()).unwrap();
+                assert_eq!(back.to_bits(), as_printed(v, d).to_bits(), "{v} {d} {text}");
+            }
+        }
     }
 
     #[test]

@@ -6,14 +6,18 @@
 //! multiplier, k the cross-section correction and f_d the filament diameter.
 
 use crate::geom::Toolpath;
+use crate::machine::Machine;
 use crate::settings::{self, int, num, other, vec3, when, Field, Kind};
 use serde::{Deserialize, Serialize};
 
 mod flavor;
 pub mod format;
+mod out;
+mod poses;
 mod template;
 mod writer;
 
+pub use poses::POSES_CSV_HEADER;
 pub use template::PLACEHOLDERS;
 pub use writer::equation4_e;
 
@@ -28,14 +32,23 @@ pub enum Flavor {
     /// it ([`Pneumatic::valve_off`]); the pressure is set per path
     /// ([`Pneumatic::pressure_template`]). Set [`Printer::pneumatic`] to your machine's codes.
     Pneumatic,
+    /// Not G-code: a CSV of tool poses for a robot or another CAM (`.csv`). A header line
+    /// `x,y,z,nx,ny,nz`, then one row per point of every path in print order: the nozzle tip
+    /// in printer coordinates (mm, 3 decimals) and the unit tool axis (7 decimals); a blank
+    /// line separates paths (CSV readers skip it). It is a flavour rather than a machine
+    /// output because it replaces the whole file and needs no kinematics: poses are written
+    /// as planned, whatever [`Printer::machine`] says (no 3-axis check, no machine limits).
+    PosesCsv,
 }
 
 impl Flavor {
-    /// File name extension of the output, without the dot: `gcode` (Marlin) or `nc` (pneumatic).
+    /// File name extension of the output, without the dot: `gcode` (Marlin), `nc`
+    /// (pneumatic) or `csv` (poses).
     pub fn file_extension(self) -> &'static str {
         match self {
             Flavor::Marlin => "gcode",
             Flavor::Pneumatic => "nc",
+            Flavor::PosesCsv => "csv",
         }
     }
 
@@ -44,6 +57,7 @@ impl Flavor {
         match self {
             Flavor::Marlin => "Marlin",
             Flavor::Pneumatic => "Pneumatic",
+            Flavor::PosesCsv => "PosesCSV",
         }
     }
 }
@@ -111,6 +125,19 @@ pub struct Printer {
     pub end_gcode: String,
     /// Valve and pressure codes of the pneumatic flavour (ignored by Marlin).
     pub pneumatic: Pneumatic,
+    /// Kinematics and limits: cartesian (default; left out of the JSON when default, so
+    /// existing designs read and write as before) or five-axis. JSON:
+    /// `{"kind": "five_axis", "layout": "head_head" | "table_table", "rotary_axes": "ab" | "bc",
+    /// "axis_output": "rotary" | "ijk", "pivot_mm": 0, "table_center_mm": [110, 110, 0],
+    /// "rotary_min_deg": [-120, -120, -36000], "rotary_max_deg": [120, 120, 36000],
+    /// "travel_min_mm": [x, y, z], "travel_max_mm": [x, y, z]}` (every field optional; see
+    /// [`crate::machine`] for the conventions).
+    #[serde(skip_serializing_if = "is_default_machine")]
+    pub machine: Machine,
+}
+
+fn is_default_machine(m: &Machine) -> bool {
+    *m == Machine::default()
 }
 
 /// Machine codes of the pneumatic flavour ([`Flavor::Pneumatic`]). Controllers differ: these
@@ -196,6 +223,7 @@ impl Default for Printer {
             start_gcode: DEFAULT_START_GCODE.into(),
             end_gcode: DEFAULT_END_GCODE.into(),
             pneumatic: Pneumatic::default(),
+            machine: Machine::default(),
         }
     }
 }
@@ -336,6 +364,52 @@ pub enum Error {
     /// Nothing to print.
     #[error("the toolpath is empty: nothing to print; check that the part is not below the first layer height")]
     Empty,
+    /// A path's per-point data cannot be written.
+    #[error("pass {pass}, path {path}: per-point data is unusable: {}; the toolpath generator must give one finite, non-negative value per point (positive feeds, unit tool axes)", problems.join("; "))]
+    BadPointData {
+        /// Pass index (0-based, in the toolpath).
+        pass: usize,
+        /// Path index within the pass.
+        path: usize,
+        /// What is wrong ([`crate::geom::PointData::problems`]).
+        problems: Vec<String>,
+    },
+    /// A tilted tool axis on a 3-axis printer.
+    #[error("pass {pass}, path {path}, point {point}: the tool axis ({:.4}, {:.4}, {:.4}) is not vertical, but this printer is 3-axis (printer.machine.kind = cartesian); pick a 5-axis machine (printer.machine.kind = five_axis) or plan vertical tool axes", axis[0], axis[1], axis[2])]
+    NeedsFiveAxis {
+        /// Pass index.
+        pass: usize,
+        /// Path index within the pass.
+        path: usize,
+        /// Point index within the path.
+        point: usize,
+        /// The tool axis.
+        axis: [f64; 3],
+    },
+    /// A machine axis would leave its travel or rotary range.
+    #[error("pass {pass}, path {path}, point {point}: machine axis {axis} would reach {value:.3} {unit}, beyond its {} limit {limit} {unit} ({setting}); {fix}", if *above { "upper" } else { "lower" })]
+    MachineLimit {
+        /// Pass index.
+        pass: usize,
+        /// Path index within the pass.
+        path: usize,
+        /// Point index within the path (approach-route points count after the path's points).
+        point: usize,
+        /// The axis letter (`X` … `C`).
+        axis: char,
+        /// The value it would reach, machine coordinates (mm or degrees).
+        value: f64,
+        /// The limit.
+        limit: f64,
+        /// Whether the upper limit is exceeded (else the lower).
+        above: bool,
+        /// `mm` or `°`.
+        unit: &'static str,
+        /// The setting holding the limit.
+        setting: &'static str,
+        /// What to change.
+        fix: &'static str,
+    },
 }
 
 fn outside_bed_message(size: &[f64; 3], bed: &[f64; 3], below: f64) -> String {
@@ -371,9 +445,23 @@ fn outside_bed_message(size: &[f64; 3], bed: &[f64; 3], below: f64) -> String {
 /// model (centred on 0, 0) is shifted to the bed centre.
 ///
 /// [`GcodeStats::extruded_mm`] and [`GcodeStats::filament_mm`] are the writer's exact sums;
-/// `travel_mm` and `estimated_time_s` come from running [`crate::analyze::analyze`] on the
-/// produced text (so they include moves of the start and end templates and agree with
-/// `weft analyze`).
+/// `travel_mm` and `estimated_time_s` are the writer's own moves (numbers as printed) and the
+/// start/end templates (read with the analyzer's lexer) timed with the model it shares with
+/// the analyzer ([`crate::motion`]), so they equal `weft analyze` to the bit (0 when a user
+/// code makes the file unreadable to the analyzer).
+///
+/// Passes: first-layer speed and temperature and the fan's `fan_start_layer` count only
+/// [`PassKind::Layer`](crate::geom::PassKind) passes; a free pass never gets first-layer
+/// rules (`M104 S<nozzle_temp>` and the fan come before the first free pass if not yet
+/// written). Per-point data ([`crate::geom::PointData`]): flow per segment as
+/// `k · EM · length · area / (π f_d² / 4)` (area) or `value · length` (filament per mm), a
+/// per-segment feed instead of the feature speed × speed factor, `G4 P<ms>` after a point with
+/// a dwell (after reaching the first point for entry 0); unusable data →
+/// [`Error::BadPointData`]. Tool axes: a cartesian machine accepts only +Z
+/// ([`Error::NeedsFiveAxis`]); a 5-axis machine ([`Printer::machine`]) writes rotary words
+/// (5 decimals, X Y Z in machine coordinates) or `I J K` (7 decimals, X Y Z of the tip) on
+/// every motion line where they change, after checking travel and rotary limits in machine
+/// coordinates ([`Error::MachineLimit`]). [`Flavor::PosesCsv`] writes a CSV instead.
 ///
 /// [`Flavor::Pneumatic`] writes the same layout without E: `G21`/`G90` instead of the E
 /// modes, `G0` travels (lifted by `z_hop_mm` when at least `min_travel_mm` long, no
@@ -401,7 +489,7 @@ pub const PRINTER_FIELDS: &[Field] = &[
     other("origin", "Printer", "Origin", Kind::Choice, &["corner", "center"], "Where X = Y = 0 is: front-left corner (Cartesian) or bed centre (delta)."),
     num("nozzle_diameter_mm", "Printer", "Nozzle diameter", "mm", 0.05, 3.0, 0.01, "d_n in GIPPO equation 4."),
     num("filament_diameter_mm", "Printer", "Filament diameter", "mm", 0.5, 5.0, 0.01, "f_d in GIPPO equation 4."),
-    other("flavor", "Printer", "G-code flavour", Kind::Choice, &["marlin", "pneumatic"], "marlin: FDM G-code; pneumatic: .nc for pneumatic (bio)printers, valve on/off and pressure per path."),
+    other("flavor", "Printer", "G-code flavour", Kind::Choice, &["marlin", "pneumatic", "poses_csv"], "marlin: FDM G-code; pneumatic: .nc for pneumatic (bio)printers, valve on/off and pressure per path; poses_csv: a .csv of tip positions and tool axes (x,y,z,nx,ny,nz) for a robot or other CAM."),
     when(other("pneumatic.valve_on", "Printer", "Valve on (pneumatic)", Kind::Text, &[], "Line(s) that start the flow of each path."), "flavor", "pneumatic"),
     when(other("pneumatic.valve_off", "Printer", "Valve off (pneumatic)", Kind::Text, &[], "Line(s) that stop the flow after each path."), "flavor", "pneumatic"),
     when(other("pneumatic.pressure_template", "Printer", "Pressure code (pneumatic)", Kind::Text, &[], "{pressure_kpa} is replaced; empty: no pressure line."), "flavor", "pneumatic"),
@@ -415,6 +503,16 @@ pub const PRINTER_FIELDS: &[Field] = &[
     num("travel_speed_mm_s", "Printer", "Travel speed", "mm/s", 1.0, 1000.0, 1.0, ""),
     num("z_speed_mm_s", "Printer", "Z speed", "mm/s", 0.1, 100.0, 0.1, ""),
     num("acceleration_mm_s2", "Printer", "Acceleration", "mm/s²", 10.0, 50000.0, 10.0, "Used for time estimates."),
+    other("machine.kind", "Printer", "Machine", Kind::Choice, &["cartesian", "five_axis"], "cartesian: X Y Z, the tool always vertical; five_axis: two rotary axes tilt the tool (toolpaths with tool axes)."),
+    when(other("machine.layout", "Printer", "5-axis layout", Kind::Choice, &["head_head", "table_table"], "What the rotary axes turn: the head, or the table with the part."), "machine.kind", "five_axis"),
+    when(other("machine.rotary_axes", "Printer", "Rotary axes", Kind::Choice, &["ab", "bc"], "ab: A about X carrying B about Y; bc: C about Z with B about Y (head: C outer; table: B cradle, C turntable)."), "machine.kind", "five_axis"),
+    when(other("machine.axis_output", "Printer", "Tool axis as", Kind::Choice, &["rotary", "ijk"], "rotary: angle words through the inverse kinematics, X Y Z in machine coordinates; ijk: tip X Y Z with I J K tool vectors (the controller does the kinematics)."), "machine.kind", "five_axis"),
+    when(num("machine.pivot_mm", "Printer", "Pivot length (head-head)", "mm", 0.0, 1000.0, 0.1, "Nozzle tip to where the rotary axes cross, along the tool axis; 0: the controller compensates."), "machine.layout", "head_head"),
+    when(vec3("machine.table_center_mm", "Printer", "Rotary centre (table-table)", "mm", -10000.0, 10000.0, 0.1, "Where the table's rotary axes cross, printer coordinates."), "machine.layout", "table_table"),
+    when(vec3("machine.rotary_min_deg", "Printer", "Rotary lower limits A, B, C", "°", -1.0e6, 1.0e6, 1.0, "Checked in machine coordinates before writing."), "machine.kind", "five_axis"),
+    when(vec3("machine.rotary_max_deg", "Printer", "Rotary upper limits A, B, C", "°", -1.0e6, 1.0e6, 1.0, "Checked in machine coordinates before writing."), "machine.kind", "five_axis"),
+    when(vec3("machine.travel_min_mm", "Printer", "Travel lower limits X, Y, Z", "mm", -10000.0, 10000.0, 1.0, "Machine coordinates; absent: the bed's volume."), "machine.kind", "five_axis"),
+    when(vec3("machine.travel_max_mm", "Printer", "Travel upper limits X, Y, Z", "mm", -10000.0, 10000.0, 1.0, "Machine coordinates; absent: the bed's volume."), "machine.kind", "five_axis"),
     other("start_gcode", "Printer", "Start G-code", Kind::Text, &[], "Placeholders: {nozzle_temp_c} {first_layer_nozzle_temp_c} {bed_temp_c} {bed_x_mm} {bed_y_mm} {fan_pwm} {design_name}."),
     other("end_gcode", "Printer", "End G-code", Kind::Text, &[], "Same placeholders as the start G-code."),
 ];

@@ -3,109 +3,17 @@
 
 use super::flavor::{dialect, feed_mm_min, PathCtx};
 use super::format::{duration, fixed, push_fixed, push_u64};
+use super::out::{AxisWords, Out};
 use super::template::expand;
 use super::{Error, Flavor, Gcode, GcodeStats, Options, Origin};
 use super::{DEFAULT_END_GCODE, DEFAULT_PNEUMATIC_END_GCODE, DEFAULT_PNEUMATIC_START_GCODE, DEFAULT_START_GCODE};
-use crate::geom::{DVec3, Feature, Toolpath};
-
-/// The text being written and the machine state the writer tracks.
-pub(crate) struct Out {
-    /// G-code body.
-    pub text: String,
-    /// Current nozzle position in printer coordinates (exact, before rounding); `None` before
-    /// the first move.
-    pub pos: Option<DVec3>,
-    /// Last Z written, in µm (rounded as printed).
-    pub z_written: Option<i64>,
-    /// Modal feed rate last written, mm/min.
-    pub feed: Option<u64>,
-    /// Exact running sum of extruded E (the absolute E position when not retracted).
-    pub e_total: f64,
-    /// M83 mode.
-    pub relative_e: bool,
-    /// Filament currently pulled back.
-    pub retracted: bool,
-    /// Retractions written.
-    pub retractions: usize,
-}
-
-impl Out {
-    /// Appends one line.
-    pub fn line(&mut self, s: &str) {
-        self.text.push_str(s);
-        self.text.push('\n');
-    }
-
-    /// Appends ` F<feed>` when it differs from the modal feed rate.
-    pub fn push_feed(&mut self, line: &mut String, feed: u64) {
-        if self.feed != Some(feed) {
-            line.push_str(" F");
-            push_u64(line, feed);
-            self.feed = Some(feed);
-        }
-    }
-
-    /// Appends ` Z<z>` when the printed Z would change.
-    pub fn push_z_if_changed(&mut self, line: &mut String, z: f64) {
-        let zi = (z * 1000.0).round() as i64;
-        if self.z_written != Some(zi) {
-            line.push_str(" Z");
-            push_fixed(line, z, 3);
-            self.z_written = Some(zi);
-        }
-    }
-
-    /// `G1 Z<z> F<feed>` when the printed Z changes.
-    pub fn move_z(&mut self, z: f64, feed: u64) {
-        self.move_z_with("G1", z, feed);
-    }
-
-    /// `<code> Z<z> F<feed>` when the printed Z changes.
-    pub fn move_z_with(&mut self, code: &str, z: f64, feed: u64) {
-        let zi = (z * 1000.0).round() as i64;
-        if self.z_written == Some(zi) {
-            return;
-        }
-        let mut line = String::from(code);
-        self.push_z_if_changed(&mut line, z);
-        self.push_feed(&mut line, feed);
-        self.line(&line);
-        if let Some(p) = &mut self.pos {
-            p.z = z;
-        }
-    }
-
-    /// `G0 X<x> Y<y> F<feed>`.
-    pub fn move_xy(&mut self, to: DVec3, feed: u64) {
-        let mut line = String::from("G0 X");
-        push_fixed(&mut line, to.x, 3);
-        line.push_str(" Y");
-        push_fixed(&mut line, to.y, 3);
-        self.push_feed(&mut line, feed);
-        self.line(&line);
-        self.pos = Some(to);
-    }
-}
-
-impl Out {
-    /// `G1 X<x> Y<y> [Z<z>] [F<feed>]` without E.
-    pub fn dry_move(&mut self, to: DVec3, feed: u64) {
-        let mut line = String::with_capacity(40);
-        line.push_str("G1 X");
-        push_fixed(&mut line, to.x, 3);
-        line.push_str(" Y");
-        push_fixed(&mut line, to.y, 3);
-        self.push_z_if_changed(&mut line, to.z);
-        self.push_feed(&mut line, feed);
-        self.line(&line);
-        self.pos = Some(to);
-    }
-}
+use crate::geom::{DVec3, Feature, Path, PassKind, PointFlow, Toolpath};
+use crate::machine::{AxisOutput, Machine};
 
 /// Speed of `feature` in mm/s, before the path's speed factor.
-fn feature_speed(options: &Options, feature: Feature, layer: usize) -> f64 {
+fn feature_speed(options: &Options, feature: Feature, first_layer: bool) -> f64 {
     let s = &options.speeds;
-    if layer == 0 {
+    if first_layer {
         return s.first_layer_mm_s;
     }
     match feature {
@@ -120,6 +28,106 @@ fn feature_speed(options: &Options, feature: Feature, layer: usize) -> f64 {
 /// GIPPO equation 4: filament length for a segment, mm.
 pub fn equation4_e(length_mm: f64, layer_height_mm: f64, width_mm: f64, em: f64, k: f64, filament_diameter_mm: f64) -> f64 {
     k * 4.0 * length_mm * layer_height_mm * em * width_mm / (std::f64::consts::PI * filament_diameter_mm * filament_diameter_mm)
+}
+
+/// Filament for a segment of `len` mm: the path's per-point flow at its end point `j`, or
+/// equation 4 (exactly as before for paths without per-point flow).
+pub(crate) fn segment_e(options: &Options, path: &Path, height: f64, j: usize, len: f64) -> f64 {
+    let m = &options.material;
+    let fd = options.printer.filament_diameter_mm;
+    match path.data.as_deref().and_then(|d| d.flow.as_ref()) {
+        None => equation4_e(len, height, path.width, m.extrusion_multiplier, m.k, fd),
+        Some(PointFlow::AreaMm2(a)) => m.k * m.extrusion_multiplier * len * a[j] / (std::f64::consts::PI * fd * fd / 4.0),
+        Some(PointFlow::FilamentPerMm(f)) => f[j] * len,
+    }
+}
+
+/// Every path's per-point data is usable, and a 3-axis printer gets only vertical tool axes.
+pub(crate) fn check_point_data(toolpath: &Toolpath, three_axis: bool) -> Result<(), Error> {
+    for (pi, pass) in toolpath.passes.iter().enumerate() {
+        for (qi, path) in pass.paths.iter().enumerate() {
+            let Some(data) = path.data.as_deref() else { continue };
+            let problems = data.problems(path.points.len());
+            if !problems.is_empty() {
+                return Err(Error::BadPointData { pass: pi, path: qi, problems });
+            }
+            if three_axis {
+                if let Some(k) = data.tool_axis.as_ref().and_then(|v| v.iter().position(|a| (*a - DVec3::Z).length() > 1e-9)) {
+                    let a = data.tool_axis.as_ref().map_or(DVec3::Z, |v| v[k]);
+                    return Err(Error::NeedsFiveAxis { pass: pi, path: qi, point: k, axis: a.to_array() });
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Tool axis of point `k` of `path` (+Z without per-point axes).
+pub(crate) fn axis_at(path: &Path, k: usize) -> DVec3 {
+    path.data.as_deref().and_then(|d| d.tool_axis.as_ref()).and_then(|v| v.get(k).copied()).unwrap_or(DVec3::Z)
+}
+
+/// The rotary angles of every point of every path (paths in print order, those with fewer
+/// than two points empty), continuous along the whole print; checks the machine's travel and
+/// rotary limits in machine coordinates (path points, approach routes with the path's first
+/// pose, and the z-hop above path starts).
+fn plan_five_axis(toolpath: &Toolpath, options: &Options, offset: DVec3) -> Result<Vec<Vec<[f64; 2]>>, Error> {
+    let m = &options.printer.machine;
+    let bed = options.printer.bed_size_mm;
+    let (lo, hi) = match options.printer.origin {
+        Origin::Corner => ([0.0, 0.0, 0.0], bed),
+        Origin::Center => ([-bed[0] / 2.0, -bed[1] / 2.0, 0.0], [bed[0] / 2.0, bed[1] / 2.0, bed[2]]),
+    };
+    let (tlo, thi) = (m.travel_min_mm.unwrap_or(lo), m.travel_max_mm.unwrap_or(hi));
+    let travel_setting = if m.travel_min_mm.is_some() || m.travel_max_mm.is_some() { "printer.machine.travel_min_mm / travel_max_mm" } else { "the bed size, printer.bed_size_mm" };
+    let idx = m.rotary_indices();
+    let letters = m.rotary_letters();
+    let hop = options.printer.retraction.z_hop_mm.max(0.0);
+    let mut prev: Option<[f64; 2]> = None;
+    let mut out = Vec::new();
+    for (pi, pass) in toolpath.passes.iter().enumerate() {
+        for (qi, path) in pass.paths.iter().enumerate() {
+            if path.points.len() < 2 {
+                out.push(Vec::new());
+                continue;
+            }
+            let mut angles = Vec::with_capacity(path.points.len());
+            for k in 0..path.points.len() {
+                let a = m.inverse(axis_at(path, k), prev);
+                prev = Some(a);
+                angles.push(a);
+            }
+            let limit = |point: usize, axis: char, value: f64, lo: f64, hi: f64, unit: &'static str, setting: &'static str, fix: &'static str| {
+                if value >= lo && value <= hi {
+                    return Ok(());
+                }
+                let above = value.is_nan() || value > hi;
+                Err(Error::MachineLimit { pass: pi, path: qi, point, axis, value, limit: if above { hi } else { lo }, above, unit, setting, fix })
+            };
+            let check_xyz = |point: usize, p: DVec3| -> Result<(), Error> {
+                for (k, axis) in ['X', 'Y', 'Z'].into_iter().enumerate() {
+                    limit(point, axis, p[k], tlo[k] - 1e-6, thi[k] + 1e-6, "mm", travel_setting, "move the part, change the rotary centre or pivot, or widen the travel limits if the machine allows it")?;
+                }
+                Ok(())
+            };
+            for (k, (p, a)) in path.points.iter().zip(&angles).enumerate() {
+                for j in 0..2 {
+                    let (rlo, rhi) = (m.rotary_min_deg[idx[j]], m.rotary_max_deg[idx[j]]);
+                    limit(k, letters[j] as char, a[j], rlo, rhi, "°", "printer.machine.rotary_min_deg / rotary_max_deg", "tilt the part or its tool axes less, pick the other layout or rotary pair, or widen the limit if the machine allows it")?;
+                }
+                let q = m.to_machine(*p + offset, *a);
+                check_xyz(k, q)?;
+                if k == 0 && hop > 0.0 {
+                    check_xyz(k, q + DVec3::new(0.0, 0.0, hop))?;
+                }
+            }
+            for (j, r) in path.approach.iter().flatten().enumerate() {
+                check_xyz(path.points.len() + j, m.to_machine(*r + offset, angles[0]))?;
+            }
+            out.push(angles);
+        }
+    }
+    Ok(out)
 }
 
 /// Text safe inside a `;` comment line.
@@ -176,6 +184,13 @@ pub(crate) fn write(toolpath: &Toolpath, options: &Options) -> Result<Gcode, Err
     check_bed(toolpath, options, offset)?;
     let printer = &options.printer;
     let material = &options.material;
+    if printer.flavor == Flavor::PosesCsv {
+        check_point_data(toolpath, false)?;
+        return Ok(super::poses::write(toolpath, options, offset));
+    }
+    let machine: &Machine = &printer.machine;
+    check_point_data(toolpath, !machine.is_five_axis())?;
+    let plan = if machine.is_five_axis() { Some(plan_five_axis(toolpath, options, offset)?) } else { None };
     let pwm = fan_pwm(material.fan_percent);
     let vars: Vec<(&str, String)> = vec![
         ("nozzle_temp_c", fixed(material.nozzle_temp_c, 1)),
@@ -192,33 +207,40 @@ pub(crate) fn write(toolpath: &Toolpath, options: &Options) -> Result<Gcode, Err
     let start = expand(start_template, "start_gcode", &vars)?;
     let end = expand(end_template, "end_gcode", &vars)?;
 
-    let mut out = Out {
-        text: String::with_capacity(1 << 16),
-        pos: None,
-        z_written: None,
-        feed: None,
-        e_total: 0.0,
-        relative_e: printer.relative_e,
-        retracted: false,
-        retractions: 0,
-    };
+    // Rotary angles: 5 decimals (≤ 5e-6° rounding, under 1e-7 rad on the axis); I J K: 7.
+    let axes = plan.as_ref().map(|_| match machine.axis_output {
+        AxisOutput::Rotary => {
+            let l = machine.rotary_letters();
+            AxisWords { letters: [l[0], l[1], 0], decimals: 5, all_or_none: false }
+        }
+        AxisOutput::Ijk => AxisWords { letters: [b'I', b'J', b'K'], decimals: 7, all_or_none: true },
+    });
+    let rotary_xyz = plan.is_some() && machine.axis_output == AxisOutput::Rotary;
+    let mut out = Out::new(printer.relative_e, axes);
     let mut d = dialect(printer.flavor);
-    out.text.push_str(&start);
-    if !start.is_empty() && !start.ends_with('\n') {
-        out.text.push('\n');
+    if !start.is_empty() {
+        out.code(start.strip_suffix('\n').unwrap_or(&start));
     }
     d.prologue(&mut out, options);
 
     let mut extruded_mm = 0.0;
     let mut layers_written = 0usize;
+    // Planar layers written (first-layer rules and the fan count only these).
+    let mut planar = 0usize;
+    let mut fan_on = false;
+    let mut temp_switched = false;
+    let mut path_no = 0usize;
     let mut line = String::new();
     let mut route_buf: Vec<DVec3> = Vec::new();
     for layer in &toolpath.passes {
         if layer.paths.iter().all(|p| p.points.len() < 2) {
+            path_no += layer.paths.len();
             continue;
         }
         let n = layers_written;
         layers_written += 1;
+        let free = layer.kind == PassKind::Free;
+        let first_layer = !free && planar == 0;
         line.clear();
         line.push_str(";LAYER_CHANGE\n;Z:");
         push_fixed(&mut line, layer.z, 3);
@@ -227,27 +249,51 @@ pub(crate) fn write(toolpath: &Toolpath, options: &Options) -> Result<Gcode, Err
         line.push_str("\n;LAYER:");
         push_u64(&mut line, n as u64);
         out.line(&line);
-        if n as u64 == material.fan_start_layer as u64 && pwm > 0 {
+        // A free pass is never a first layer: full fan and the normal temperature.
+        if pwm > 0 && !fan_on && (free || planar as u64 == material.fan_start_layer as u64) {
             out.line(&format!("M106 S{pwm}"));
+            fan_on = true;
         }
-        if n == 1 {
+        if !temp_switched && (free || planar == 1) {
             out.line(&format!("M104 S{}", fixed(material.nozzle_temp_c, 1)));
+            temp_switched = true;
+        }
+        if !free {
+            planar += 1;
         }
         let mut feature: Option<Feature> = None;
         let mut width: Option<i64> = None;
         for path in &layer.paths {
+            let angles: &[[f64; 2]] = plan.as_ref().map_or(&[], |p| &p[path_no]);
+            path_no += 1;
             if path.points.len() < 2 {
                 continue;
             }
-            let first = path.points[0] + offset;
+            let data = path.data.as_deref();
+            let feeds = data.and_then(|d| d.feed_mm_s.as_deref());
+            let dwells = data.and_then(|d| d.dwell_s.as_deref());
+            // Where point `k` (or a point on its segment) is written: machine X Y Z for rotary
+            // output, the tip otherwise; and the axis words it carries.
+            let place = |q: DVec3, k: usize| if rotary_xyz { machine.to_machine(q + offset, angles[k]) } else { q + offset };
+            let aim = |out: &mut Out, k: usize| {
+                if out.axes.is_some() {
+                    out.axis_target = match machine.axis_output {
+                        AxisOutput::Rotary => [angles[k][0], angles[k][1], 0.0],
+                        AxisOutput::Ijk => axis_at(path, k).to_array(),
+                    };
+                }
+            };
+            aim(&mut out, 0);
+            let first = place(path.points[0], 0);
             match &path.approach {
                 Some(route) if out.pos.is_some() => {
                     route_buf.clear();
-                    route_buf.extend(route.iter().map(|q| *q + offset));
+                    route_buf.extend(route.iter().map(|q| place(*q, 0)));
                     d.approach(&mut out, &route_buf, first, options);
                 }
                 _ => d.travel(&mut out, first, options),
             }
+            out.flush_axes();
             if feature != Some(path.feature) {
                 out.line(&format!(";TYPE:{}", path.feature.gcode_name()));
                 feature = Some(path.feature);
@@ -257,10 +303,13 @@ pub(crate) fn write(toolpath: &Toolpath, options: &Options) -> Result<Gcode, Err
                 out.line(&format!(";WIDTH:{}", fixed(path.width, 3)));
                 width = Some(wi);
             }
-            let speed = feature_speed(options, path.feature, n) * path.speed_factor;
+            let speed = feature_speed(options, path.feature, first_layer) * path.speed_factor;
             let feed = feed_mm_min(speed);
             let ctx = PathCtx { speed_factor: path.speed_factor, speed_mm_s: speed };
             d.path_begin(&mut out, options, &ctx);
+            if let Some(dw) = dwells {
+                out.dwell(dw[0], "");
+            }
             // The dialect may end the path early (pneumatic post-flow): from `cut` mm on, the
             // remaining moves are coasts.
             let lead = d.end_lead_mm(options, &ctx);
@@ -271,20 +320,26 @@ pub(crate) fn write(toolpath: &Toolpath, options: &Options) -> Result<Gcode, Err
                 d.path_end(&mut out, options);
                 open = false;
             }
-            for w in path.points.windows(2) {
+            for (i, w) in path.points.windows(2).enumerate() {
+                let j = i + 1;
                 let len = w[0].distance(w[1]);
                 if len <= 0.0 {
+                    if let Some(dw) = dwells {
+                        out.dwell(dw[j], "");
+                    }
                     continue;
                 }
-                let e = equation4_e(len, layer.height, path.width, material.extrusion_multiplier, material.k, printer.filament_diameter_mm);
+                let e = segment_e(options, path, layer.height, j, len);
+                let feed = feeds.map_or(feed, |f| feed_mm_min(f[j]));
                 extruded_mm += len;
-                let to = w[1] + offset;
+                aim(&mut out, j);
+                let to = place(w[1], j);
                 if !open {
                     d.coast(&mut out, to, feed);
                 } else if done + len > cut + 1e-9 {
                     let t = (cut - done) / len;
                     if t * len > 1e-9 {
-                        d.segment(&mut out, w[0].lerp(w[1], t) + offset, e * t, feed);
+                        d.segment(&mut out, place(w[0].lerp(w[1], t), j), e * t, feed);
                     }
                     d.path_end(&mut out, options);
                     open = false;
@@ -293,6 +348,9 @@ pub(crate) fn write(toolpath: &Toolpath, options: &Options) -> Result<Gcode, Err
                     d.segment(&mut out, to, e, feed);
                 }
                 done += len;
+                if let Some(dw) = dwells {
+                    out.dwell(dw[j], "");
+                }
             }
             if open {
                 d.path_end(&mut out, options);
@@ -300,21 +358,14 @@ pub(crate) fn write(toolpath: &Toolpath, options: &Options) -> Result<Gcode, Err
         }
     }
     d.epilogue(&mut out, options);
-    out.text.push_str(&end);
-    if !end.is_empty() && !end.ends_with('\n') {
-        out.text.push('\n');
+    if !end.is_empty() {
+        out.code(end.strip_suffix('\n').unwrap_or(&end));
     }
 
-    // Time and travel as the analyzer measures them, so header, stats and `weft analyze` agree.
-    let analysis = crate::analyze::analyze(
-        "weft",
-        out.text.as_bytes(),
-        &crate::analyze::Options { filament_diameter_mm: printer.filament_diameter_mm, ..Default::default() },
-    );
-    let (time_s, travel_mm) = match &analysis {
-        Ok(a) => (a.report.estimated_time_s, a.report.travel_mm),
-        Err(_) => (0.0, 0.0),
-    };
+    // Time and travel of the moves as printed, with the analyzer's model (`crate::motion`), so
+    // header, stats and `weft analyze` agree; nothing when a user code makes the file unreadable.
+    out.motion.timer.stop();
+    let (time_s, travel_mm) = if out.motion_ok { (out.motion.timer.total(), out.motion.travel_mm) } else { (0.0, 0.0) };
     let stats = GcodeStats {
         layers: layers_written,
         extruded_mm,

@@ -1,4 +1,4 @@
-//! Print-time model.
+//! Print-time model, shared by the analyzer and the writer (which times its own moves).
 //!
 //! Each move is a trapezoidal velocity profile: accelerate at `a` from the entry speed to the
 //! commanded feed rate, cruise, decelerate to the exit speed (a triangle when the move is too

@@ -1,4 +1,5 @@
-//! Byte-level G-code lexing: words, numbers, comments. No allocation per line.
+//! Byte-level G-code lexing: words, numbers, comments. No allocation per line. Shared by the
+//! analyzer and the writer (which reads its start/end templates and user codes with it).
 
 /// Powers of ten exactly representable as f64.
 const POW10: [f64; 23] = [
@@ -93,6 +94,15 @@ impl Words {
     pub fn get(&self, letter: u8) -> Option<f64> {
         let k = (letter - b'A') as usize;
         if self.mask & (1 << k) != 0 { Some(self.vals[k]) } else { None }
+    }
+
+    /// Sets `letter` (uppercase) to `v`, as if the line had it (the writer describes the moves
+    /// it prints this way, with the values exactly as printed).
+    #[inline]
+    pub fn set(&mut self, letter: u8, v: f64) {
+        let k = (letter - b'A') as usize;
+        self.vals[k] = v;
+        self.mask |= 1 << k;
     }
 
     /// Whether `letter` appeared at all.

@@ -292,34 +292,23 @@ impl Session {
     /// Tool axis at the end of each extrusion segment (3 floats), empty without tool axes.
     #[wasm_bindgen(js_name = previewAxis)]
     pub fn preview_axis(&self) -> js_sys::Float32Array {
-        f32_array(preview_axis(&self.preview))
+        f32_array(&self.preview.axis)
     }
     /// Per extrusion segment, the index of the G-code move it came from.
     #[wasm_bindgen(js_name = previewSegmentMove)]
     pub fn preview_segment_move(&self) -> js_sys::Uint32Array {
-        u32_array(preview_segment_move(&self.preview))
+        u32_array(&self.preview.segment_move)
     }
     /// Per travel segment, the index of the G-code move it came from.
     #[wasm_bindgen(js_name = previewTravelMove)]
     pub fn preview_travel_move(&self) -> js_sys::Uint32Array {
-        u32_array(preview_travel_move(&self.preview))
+        u32_array(&self.preview.travel_move)
     }
     /// Bed size of the last run's printer, mm.
     #[wasm_bindgen(js_name = bedSize)]
     pub fn bed_size(&self) -> Vec<f64> {
         self.bed.to_vec()
     }
-}
-
-// The analyzer's print-order and tool-axis buffers (filled once the analyzer provides them).
-fn preview_axis(_p: &Preview) -> &[f32] {
-    &[]
-}
-fn preview_segment_move(_p: &Preview) -> &[u32] {
-    &[]
-}
-fn preview_travel_move(_p: &Preview) -> &[u32] {
-    &[]
 }
 
 /// `1234567` → `1,234,567`.

@@ -227,9 +227,10 @@ function setFields(assignments) {
   return null;
 }
 
-/** Extension of the output: `.nc` for pneumatic (CNC-style) controllers, else `.gcode`. */
+/** Extension of the output for the design's flavour (from the schema: `.gcode`, `.nc`, `.csv`). */
 function gcodeExtension() {
-  return state.design?.printer?.flavor === "pneumatic" ? "nc" : "gcode";
+  const flavor = state.design?.printer?.flavor;
+  return schema.flavors?.find((f) => f.name === flavor)?.extension ?? "gcode";
 }
 
 function designName() {
@@ -333,7 +334,7 @@ function renderForm() {
   for (const [path, view] of fieldViews) writeField(view, getPath(state.design, path));
   renderSlots();
   renderPatternPickers();
-  $("download").textContent = `Download ${gcodeExtension() === "nc" ? ".nc" : "G-code"}`;
+  $("download").textContent = `Download ${gcodeExtension() === "gcode" ? "G-code" : `.${gcodeExtension()}`}`;
   if (viewsKey !== jobKind().name) buildViews();
 }
 

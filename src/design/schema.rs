@@ -111,6 +111,17 @@ pub struct Schema {
     pub builtin_shapes: Vec<Choice>,
     /// Lattice patterns with their default sizes.
     pub patterns: Vec<Choice>,
+    /// Output flavours: `printer.flavor` value → file extension (the download's name).
+    pub flavors: Vec<FlavorInfo>,
+}
+
+/// An output flavour as the page names its downloads.
+#[derive(Serialize)]
+pub struct FlavorInfo {
+    /// `printer.flavor` value.
+    pub name: String,
+    /// File extension without the dot.
+    pub extension: &'static str,
 }
 
 /// The schema of `registry`'s job kinds.
@@ -146,7 +157,11 @@ pub fn schema(registry: &Registry) -> Schema {
                 .unwrap_or_default(),
         })
         .collect();
-    Schema { version: super::DESIGN_VERSION, fields: rows(registry), features, job_kinds, builtin_shapes, patterns }
+    let flavors = [crate::gcode::Flavor::Marlin, crate::gcode::Flavor::Pneumatic, crate::gcode::Flavor::PosesCsv]
+        .into_iter()
+        .map(|f| FlavorInfo { name: serde_json::to_value(f).ok().and_then(|v| v.as_str().map(String::from)).unwrap_or_default(), extension: f.file_extension() })
+        .collect();
+    Schema { version: super::DESIGN_VERSION, fields: rows(registry), features, job_kinds, builtin_shapes, patterns, flavors }
 }
 
 /// The schema as JSON (the CLI's `weft schema`, tests).

@@ -416,6 +416,32 @@ await check(10, "print-order slider hides later moves (fewer segments drawn); th
 
 await latticeChecks({ browser, baseUrl: base, weftBin: WEFT_BIN, check, newPage, outDir: OUT, first: 11 });
 
+await check(16, "every example run in Chromium gives the G-code recorded in tests/golden/gcode.sha256 (the native golden test's bytes)", async () => {
+  const golden = new Map(readFileSync(join(ROOT, "tests/golden/gcode.sha256"), "utf8").trim().split("\n")
+    .map((l) => l.split(/\s+/)).map(([h, n]) => [n.replace(/\.gcode$/, ""), h]));
+  const { page: p, context } = await newPage();
+  await p.goto(`${base}/www/`);
+  await p.evaluate(() => window.weft.ready);
+  await p.waitForFunction(() => document.querySelectorAll("#examples option[value]:not([value=''])").length > 0);
+  const files = await p.$$eval("#examples option", (os) => os.map((o) => o.value).filter(Boolean));
+  const wrong = [];
+  for (const file of files) {
+    const name = file.replace(/\.json$/, "");
+    if (!golden.has(name)) throw new Error(`${file} has no recorded G-code hash`);
+    const before = await p.evaluate(() => window.weft.resultCount);
+    await p.selectOption("#examples", file);
+    await p.waitForFunction((n) => window.weft.resultCount > n && !window.weft.busy, before, { timeout: 120000 });
+    const hash = await p.evaluate(async () => {
+      const d = await crypto.subtle.digest("SHA-256", window.weft.result.gcode);
+      return [...new Uint8Array(d)].map((b) => b.toString(16).padStart(2, "0")).join("");
+    });
+    if (hash !== golden.get(name)) wrong.push(`${name}: ${hash.slice(0, 12)}… ≠ ${golden.get(name).slice(0, 12)}…`);
+  }
+  await context.close();
+  if (wrong.length) throw new Error(wrong.join("; "));
+  return `${files.length} examples byte-identical to the native golden hashes`;
+});
+
 if (main.errors.length) console.log(`note: console errors in the main page:\n  ${main.errors.join("\n  ")}`);
 if (offOrigin.length) console.log(`note: blocked requests leaving the origin:\n  ${[...new Set(offOrigin)].join("\n  ")}`);
 await browser.close();

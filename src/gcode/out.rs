@@ -194,21 +194,17 @@ impl Out {
 
     /// `G1 X<x> Y<y> [Z<z>] [axes] [F<feed>]` without E.
     pub fn dry_move(&mut self, to: DVec3, feed: u64) {
-        let mut line = String::with_capacity(40);
-        line.push_str("G1");
-        let mut words = Words::default();
-        Self::word(&mut line, &mut words, b'X', to.x, 3);
-        Self::word(&mut line, &mut words, b'Y', to.y, 3);
-        self.push_z_if_changed(&mut line, &mut words, to.z);
-        self.push_axes(&mut line, &mut words);
-        self.push_feed(&mut line, &mut words, feed);
-        self.moved(&line, Command::G(1, 0), &words);
-        self.pos = Some(to);
+        self.g1(to, None, feed);
     }
 
     /// `G1 X<x> Y<y> [Z<z>] [axes] E<e> [F<feed>]`, feeding `e` mm (E printed absolute or
     /// relative as the mode says).
     pub fn extrude_move(&mut self, to: DVec3, e: f64, feed: u64) {
+        self.g1(to, Some(e), feed);
+    }
+
+    /// A `G1` to `to`, feeding `e` mm when given.
+    fn g1(&mut self, to: DVec3, e: Option<f64>, feed: u64) {
         let mut line = String::with_capacity(48);
         line.push_str("G1");
         let mut words = Words::default();
@@ -216,9 +212,11 @@ impl Out {
         Self::word(&mut line, &mut words, b'Y', to.y, 3);
         self.push_z_if_changed(&mut line, &mut words, to.z);
         self.push_axes(&mut line, &mut words);
-        self.e_total += e;
-        let e_word = if self.relative_e { e } else { self.e_total };
-        Self::word(&mut line, &mut words, b'E', e_word, 5);
+        if let Some(e) = e {
+            self.e_total += e;
+            let e_word = if self.relative_e { e } else { self.e_total };
+            Self::word(&mut line, &mut words, b'E', e_word, 5);
+        }
         self.push_feed(&mut line, &mut words, feed);
         self.moved(&line, Command::G(1, 0), &words);
         self.pos = Some(to);

@@ -3,7 +3,7 @@
 use super::overlap::{Overlap, Seg};
 use super::{Analysis, Error, LayerReport, Options, Preview, Report};
 use crate::geom::Feature;
-use crate::motion::lex::{lex_line, parse_number, trim_start, Line};
+use crate::motion::lex::{lex_line, parse_number, trim_start, Command, Line};
 use crate::motion::{Motion, Move, Step};
 
 /// Z-based layer detection: a Z change larger than this starts a layer, mm.
@@ -105,18 +105,29 @@ impl<'o> Machine<'o> {
         if let Some(c) = l.comment {
             self.comment(c);
         }
-        match self.m.line(l.cmd, &l.words, self.preview.is_some()) {
+        // Whether the position or the angles may have changed, and the tip is not yet known.
+        let stale = match self.m.line(l.cmd, &l.words, self.preview.is_some()) {
             Step::Move(mv) => {
                 self.update_axis();
-                self.motion(&mv);
+                let viewed = self.motion(&mv);
                 self.moves = self.moves.saturating_add(1);
+                !viewed
             }
-            Step::Retract => self.retract(),
-            Step::Unretract => self.retracted = false,
-            Step::Home => self.in_run = false,
-            Step::None => {}
-        }
-        if self.fk {
+            Step::Retract => {
+                self.retract();
+                false
+            }
+            Step::Unretract => {
+                self.retracted = false;
+                false
+            }
+            Step::Home => {
+                self.in_run = false;
+                true
+            }
+            Step::None => l.cmd == Command::G(92, 0),
+        };
+        if self.fk && stale {
             self.last_view = self.view(self.m.pos);
         }
     }
@@ -193,7 +204,8 @@ impl<'o> Machine<'o> {
     }
 
     /// Bookkeeping of a move [`Motion`] has timed: net E, extrusion or travel, retraction.
-    fn motion(&mut self, mv: &Move) {
+    /// True when it set [`Machine::last_view`] (5-axis, the tip of the move's end computed).
+    fn motion(&mut self, mv: &Move) -> bool {
         let Move { from: p0, to: t, de, len, v, use_pts } = *mv;
         self.e_net += de;
         if self.e_net > self.e_high {
@@ -202,39 +214,27 @@ impl<'o> Machine<'o> {
         if mv.moves() {
             if de > 0.0 {
                 self.extrude(p0, t, de, len, use_pts, v);
-            } else {
-                if de < 0.0 {
-                    self.retract();
-                }
-                self.in_run = false;
-                if self.preview.is_some() {
-                    let fk = self.fk;
-                    let mut a = if fk { self.last_view } else { p0 };
-                    let pts: Vec<[f64; 3]> = if !fk {
-                        Vec::new()
-                    } else if use_pts {
-                        self.m.arc_pts.iter().map(|b| self.view(*b)).collect()
-                    } else {
-                        vec![self.view(t)]
-                    };
-                    let moves = self.moves;
-                    let Some(pv) = &mut self.preview else { return };
-                    if fk {
-                        for &b in &pts {
-                            push6(&mut pv.travel_positions, a, b);
-                            pv.travel_move.push(moves);
-                            a = b;
-                        }
-                    } else if use_pts {
-                        for &b in &self.m.arc_pts {
-                            push6(&mut pv.travel_positions, a, b);
-                            pv.travel_move.push(moves);
-                            a = b;
-                        }
-                    } else {
-                        push6(&mut pv.travel_positions, a, t);
-                        pv.travel_move.push(moves);
+                return self.fk;
+            }
+            if de < 0.0 {
+                self.retract();
+            }
+            self.in_run = false;
+            if self.preview.is_some() {
+                let mut va = if self.fk { self.last_view } else { p0 };
+                let n_pts = if use_pts { self.m.arc_pts.len() } else { 1 };
+                for k in 0..n_pts {
+                    let b = if use_pts { self.m.arc_pts[k] } else { t };
+                    let vb = if self.fk { self.view(b) } else { b };
+                    if let Some(pv) = &mut self.preview {
+                        push6(&mut pv.travel_positions, va, vb);
+                        pv.travel_move.push(self.moves);
                     }
+                    va = vb;
+                }
+                if self.fk {
+                    self.last_view = va;
+                    return true;
                 }
             }
         } else if de != 0.0 && de.is_finite() {
@@ -244,6 +244,7 @@ impl<'o> Machine<'o> {
                 self.retracted = false;
             }
         }
+        false
     }
 
     fn extrude(&mut self, p0: [f64; 3], t: [f64; 3], de: f64, len: f64, use_pts: bool, v: f64) {
@@ -301,6 +302,9 @@ impl<'o> Machine<'o> {
             }
             a = b;
             va = vb;
+        }
+        if self.fk {
+            self.last_view = va;
         }
         self.travel_at_ext = self.m.travel_mm;
         self.retractions_at_ext = self.retractions;
@@ -402,7 +406,7 @@ impl<'o> Machine<'o> {
 }
 
 #[inline]
-fn push6(v: &mut Vec<f32>, a: [f64; 3], b: [f64; 3]) {
+pub(super) fn push6(v: &mut Vec<f32>, a: [f64; 3], b: [f64; 3]) {
     v.extend_from_slice(&[a[0] as f32, a[1] as f32, a[2] as f32, b[0] as f32, b[1] as f32, b[2] as f32]);
 }
 

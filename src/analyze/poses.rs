@@ -2,6 +2,7 @@
 //! a point, a blank line ends a path; consecutive points of a path are extrusion segments,
 //! the jumps between paths travels. There are no feeds, so no time and no filament.
 
+use super::machine::push6;
 use super::{Analysis, Error, LayerReport, Options, Preview, Report};
 
 /// Whether `bytes` is a poses CSV (its first line is the header).
@@ -26,19 +27,23 @@ pub(crate) fn run(file: &str, bytes: &[u8], options: &Options) -> Result<Analysi
             in_path = false;
             continue;
         }
-        let vals: Vec<f64> = line.split(',').map(|v| v.trim().parse::<f64>()).collect::<Result<_, _>>().map_err(|_| Error::Malformed {
-            file: file.into(),
-            line: i + 1,
-            problem: "a poses row needs six numbers x,y,z,nx,ny,nz".into(),
-        })?;
-        if vals.len() != 6 || vals.iter().any(|v| !v.is_finite()) {
-            return Err(Error::Malformed { file: file.into(), line: i + 1, problem: "a poses row needs six finite numbers x,y,z,nx,ny,nz".into() });
+        let malformed = |problem: &str| Error::Malformed { file: file.into(), line: i + 1, problem: problem.into() };
+        let mut vals = [0.0f64; 6];
+        let mut n = 0;
+        for v in line.split(',') {
+            let v = v.trim().parse::<f64>().map_err(|_| malformed("a poses row needs six numbers x,y,z,nx,ny,nz"))?;
+            if let Some(slot) = vals.get_mut(n) {
+                *slot = v;
+            }
+            n += 1;
+        }
+        if n != 6 || vals.iter().any(|v| !v.is_finite()) {
+            return Err(malformed("a poses row needs six finite numbers x,y,z,nx,ny,nz"));
         }
         let p = [vals[0], vals[1], vals[2]];
         z.get_or_insert(p[2]);
         if let Some(a) = prev {
             let len = ((p[0] - a[0]).powi(2) + (p[1] - a[1]).powi(2) + (p[2] - a[2]).powi(2)).sqrt();
-            let seg = [a[0] as f32, a[1] as f32, a[2] as f32, p[0] as f32, p[1] as f32, p[2] as f32];
             if in_path {
                 report.extruded_mm += len;
                 if let Some(last) = paths.last_mut() {
@@ -46,7 +51,7 @@ pub(crate) fn run(file: &str, bytes: &[u8], options: &Options) -> Result<Analysi
                     last.1 += 1;
                 }
                 if options.collect_preview {
-                    pv.positions.extend_from_slice(&seg);
+                    push6(&mut pv.positions, a, p);
                     pv.feature.push(255);
                     pv.path.push(paths.len().saturating_sub(1) as u32);
                     pv.flow.push(0.0);
@@ -57,7 +62,7 @@ pub(crate) fn run(file: &str, bytes: &[u8], options: &Options) -> Result<Analysi
             } else {
                 report.travel_mm += len;
                 if options.collect_preview {
-                    pv.travel_positions.extend_from_slice(&seg);
+                    push6(&mut pv.travel_positions, a, p);
                     pv.travel_move.push(row);
                 }
             }

@@ -120,7 +120,7 @@ impl Dialect for Marlin {
 
     fn travel(&mut self, out: &mut Out, to: DVec3, options: &Options) {
         let p = &options.printer;
-        let Some(Leg { from, dxy, xy_moves, z_feed, xy_feed }) = travel_leg(out, to, options, "G1") else { return };
+        let Some(Leg { from, dxy, xy_moves, z_feed, xy_feed }) = travel_leg(out, to, options, 1) else { return };
         let r = &p.retraction;
         let retract = r.length_mm > 0.0 && xy_moves && dxy >= r.min_travel_mm && !out.retracted;
         if retract {
@@ -192,14 +192,14 @@ struct Leg {
 }
 
 /// Common start of a travel to `to`: the file's first move goes straight there (where the start
-/// G-code left the head is unknown: Z first with `z_code`, then XY) and a move to where the head
+/// G-code left the head is unknown: Z first with `G<z_g>`, then XY) and a move to where the head
 /// already is does nothing; both return `None`. Otherwise the leg to plan.
-fn travel_leg(out: &mut Out, to: DVec3, options: &Options, z_code: &str) -> Option<Leg> {
+fn travel_leg(out: &mut Out, to: DVec3, options: &Options, z_g: u32) -> Option<Leg> {
     let p = &options.printer;
     let z_feed = feed_mm_min(p.z_speed_mm_s);
     let xy_feed = feed_mm_min(p.travel_speed_mm_s);
     let Some(from) = out.pos else {
-        out.move_z_with(z_code, to.z, z_feed);
+        out.move_z_with(z_g, to.z, z_feed);
         out.move_xy(to, xy_feed);
         return None;
     };
@@ -219,14 +219,14 @@ impl Dialect for PneumaticDialect {
 
     fn travel(&mut self, out: &mut Out, to: DVec3, options: &Options) {
         let p = &options.printer;
-        let Some(Leg { from, dxy, xy_moves, z_feed, xy_feed }) = travel_leg(out, to, options, "G0") else { return };
+        let Some(Leg { from, dxy, xy_moves, z_feed, xy_feed }) = travel_leg(out, to, options, 0) else { return };
         let r = &p.retraction;
         let hop = if xy_moves && dxy >= r.min_travel_mm && r.z_hop_mm > 0.0 { r.z_hop_mm } else { 0.0 };
-        out.move_z_with("G0", (from.z + hop).max(to.z), z_feed);
+        out.move_z_with(0, (from.z + hop).max(to.z), z_feed);
         if xy_moves {
             out.move_xy(to, xy_feed);
         }
-        out.move_z_with("G0", to.z, z_feed);
+        out.move_z_with(0, to.z, z_feed);
     }
 
     fn path_begin(&mut self, out: &mut Out, options: &Options, path: &PathCtx) {

@@ -2,16 +2,27 @@
 
 const POW10: [f64; 10] = [1.0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9];
 
+/// `v` scaled by `10^decimals` and rounded half away from zero, as [`push_fixed`] prints it;
+/// `None` when it prints as `0` (zero, non-finite, or ≥ 9·10^18 after scaling).
+fn scaled(v: f64, decimals: usize) -> Option<f64> {
+    let r = (v * POW10[decimals]).round();
+    if !r.is_finite() || r.abs() >= 9.0e18 || r == 0.0 { None } else { Some(r) }
+}
+
 /// Appends `v` rounded half away from zero to `decimals` (≤ 9) decimal places, trailing
 /// zeros trimmed (`1.5`, `10`, `0.25`). Never prints `-0`; non-finite or absurdly large
 /// values (≥ 9·10^18 after scaling) print as `0` (the writer validates its inputs first).
 pub fn push_fixed(out: &mut String, v: f64, decimals: usize) {
+    push_fixed_read(out, v, decimals);
+}
+
+/// [`push_fixed`], returning the value printed ([`as_printed`]) from the same rounding.
+pub(crate) fn push_fixed_read(out: &mut String, v: f64, decimals: usize) -> f64 {
     let decimals = decimals.min(9);
-    let r = (v * POW10[decimals]).round();
-    if !r.is_finite() || r.abs() >= 9.0e18 || r == 0.0 {
+    let Some(r) = scaled(v, decimals) else {
         out.push('0');
-        return;
-    }
+        return 0.0;
+    };
     let mut n = r as i64;
     if n < 0 {
         out.push('-');
@@ -37,6 +48,7 @@ pub fn push_fixed(out: &mut String, v: f64, decimals: usize) {
             out.push(b as char);
         }
     }
+    r / POW10[decimals]
 }
 
 /// The value a reader gets back from `v` printed by [`push_fixed`] with `decimals` places
@@ -44,11 +56,13 @@ pub fn push_fixed(out: &mut String, v: f64, decimals: usize) {
 /// rounded quotient of the printed integer by a power of ten).
 pub fn as_printed(v: f64, decimals: usize) -> f64 {
     let decimals = decimals.min(9);
-    let r = (v * POW10[decimals]).round();
-    if !r.is_finite() || r.abs() >= 9.0e18 || r == 0.0 {
-        return 0.0;
-    }
-    r / POW10[decimals]
+    scaled(v, decimals).map_or(0.0, |r| r / POW10[decimals])
+}
+
+/// `v` at `decimals` (≤ 9) places as an integer (`round(v · 10^decimals)`), to compare what
+/// would be printed without printing it.
+pub(crate) fn printed_units(v: f64, decimals: usize) -> i64 {
+    (v * POW10[decimals.min(9)]).round() as i64
 }
 
 /// `v` formatted by [`push_fixed`].

@@ -3,9 +3,10 @@
 //! neither.
 //!
 //! Every motion line is also described to a [`Motion`] with its numbers exactly as printed
-//! ([`as_printed`]), so the writer times its own output with the analyzer's model.
+//! ([`super::format::as_printed`]), so the writer times its own output with the analyzer's
+//! model. Lines are built straight into [`Out::text`], with no buffer per line.
 
-use super::format::{as_printed, push_fixed, push_u64};
+use super::format::{printed_units, push_fixed_read, push_u64};
 use crate::geom::DVec3;
 use crate::motion::lex::{Command, Words};
 use crate::motion::Motion;
@@ -90,91 +91,89 @@ impl Out {
         }
     }
 
-    /// Appends a motion line the writer built and feeds its words to the time model.
-    fn moved(&mut self, line: &str, cmd: Command, words: &Words) {
-        self.line(line);
+    /// Starts a motion line `G<g>` (0 or 1; written straight into [`Out::text`]).
+    fn begin(&mut self, g: u32) -> (Command, Words) {
+        self.text.push_str(if g == 0 { "G0" } else { "G1" });
+        (Command::G(g, 0), Words::default())
+    }
+
+    /// Ends the motion line begun with [`Out::begin`] and feeds its words to the time model.
+    fn end(&mut self, cmd: Command, words: &Words) {
+        self.text.push('\n');
         self.motion.line(cmd, words, false);
     }
 
     /// Appends ` <letter><v>` and records the value as printed.
-    pub fn word(line: &mut String, words: &mut Words, letter: u8, v: f64, decimals: usize) {
-        line.push(' ');
-        line.push(letter as char);
-        push_fixed(line, v, decimals);
-        words.set(letter, as_printed(v, decimals));
+    fn word(&mut self, words: &mut Words, letter: u8, v: f64, decimals: usize) {
+        self.text.push(' ');
+        self.text.push(letter as char);
+        words.set(letter, push_fixed_read(&mut self.text, v, decimals));
     }
 
     /// Appends ` F<feed>` when it differs from the modal feed rate.
-    pub fn push_feed(&mut self, line: &mut String, words: &mut Words, feed: u64) {
+    fn push_feed(&mut self, words: &mut Words, feed: u64) {
         if self.feed != Some(feed) {
-            line.push_str(" F");
-            push_u64(line, feed);
+            self.text.push_str(" F");
+            push_u64(&mut self.text, feed);
             words.set(b'F', feed as f64);
             self.feed = Some(feed);
         }
     }
 
     /// Appends ` Z<z>` when the printed Z would change.
-    pub fn push_z_if_changed(&mut self, line: &mut String, words: &mut Words, z: f64) {
-        let zi = (z * 1000.0).round() as i64;
+    fn push_z_if_changed(&mut self, words: &mut Words, z: f64) {
+        let zi = printed_units(z, 3);
         if self.z_written != Some(zi) {
-            Self::word(line, words, b'Z', z, 3);
+            self.word(words, b'Z', z, 3);
             self.z_written = Some(zi);
         }
     }
 
+    /// The axis target as it would be printed (integers), `None` for unused letters.
+    fn axis_scaled(&self, ax: AxisWords) -> [Option<i64>; 3] {
+        std::array::from_fn(|k| (ax.letters[k] != 0).then(|| printed_units(self.axis_target[k], ax.decimals)))
+    }
+
     /// Appends the 5-axis words that differ from those last written.
-    fn push_axes(&mut self, line: &mut String, words: &mut Words) {
+    fn push_axes(&mut self, words: &mut Words) {
         let Some(ax) = self.axes else { return };
-        let scale = [1.0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9][ax.decimals.min(9)];
-        let scaled: [Option<i64>; 3] =
-            std::array::from_fn(|k| if ax.letters[k] == 0 { None } else { Some((self.axis_target[k] * scale).round() as i64) });
+        let scaled = self.axis_scaled(ax);
         let changed: [bool; 3] = std::array::from_fn(|k| scaled[k].is_some() && scaled[k] != self.axis_written[k]);
         let any = changed.iter().any(|c| *c);
         for k in 0..3 {
             if ax.letters[k] != 0 && (changed[k] || (ax.all_or_none && any)) {
-                Self::word(line, words, ax.letters[k], self.axis_target[k], ax.decimals);
+                self.word(words, ax.letters[k], self.axis_target[k], ax.decimals);
                 self.axis_written[k] = scaled[k];
             }
         }
     }
 
-    /// Whether the axis target differs from what was last written.
-    fn axes_pending(&self) -> bool {
-        let Some(ax) = self.axes else { return false };
-        let scale = [1.0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9][ax.decimals.min(9)];
-        (0..3).any(|k| ax.letters[k] != 0 && Some((self.axis_target[k] * scale).round() as i64) != self.axis_written[k])
-    }
-
     /// `G0 <axes>` when the axis target has not been written yet (a reorientation without
     /// XYZ motion).
     pub fn flush_axes(&mut self) {
-        if !self.axes_pending() {
+        let Some(ax) = self.axes else { return };
+        if self.axis_scaled(ax).iter().zip(&self.axis_written).all(|(s, w)| s.is_none() || s == w) {
             return;
         }
-        let mut line = String::from("G0");
-        let mut words = Words::default();
-        self.push_axes(&mut line, &mut words);
-        self.moved(&line, Command::G(0, 0), &words);
+        let (cmd, mut words) = self.begin(0);
+        self.push_axes(&mut words);
+        self.end(cmd, &words);
     }
 
     /// `G1 Z<z> F<feed>` when the printed Z changes.
     pub fn move_z(&mut self, z: f64, feed: u64) {
-        self.move_z_with("G1", z, feed);
+        self.move_z_with(1, z, feed);
     }
 
-    /// `<code> Z<z> F<feed>` (`code` is `G0` or `G1`) when the printed Z changes.
-    pub fn move_z_with(&mut self, code: &str, z: f64, feed: u64) {
-        let zi = (z * 1000.0).round() as i64;
-        if self.z_written == Some(zi) {
+    /// `G<g> Z<z> F<feed>` (`g` is 0 or 1) when the printed Z changes.
+    pub fn move_z_with(&mut self, g: u32, z: f64, feed: u64) {
+        if self.z_written == Some(printed_units(z, 3)) {
             return;
         }
-        let mut line = String::from(code);
-        let mut words = Words::default();
-        self.push_z_if_changed(&mut line, &mut words, z);
-        self.push_feed(&mut line, &mut words, feed);
-        let cmd = if code == "G0" { Command::G(0, 0) } else { Command::G(1, 0) };
-        self.moved(&line, cmd, &words);
+        let (cmd, mut words) = self.begin(g);
+        self.push_z_if_changed(&mut words, z);
+        self.push_feed(&mut words, feed);
+        self.end(cmd, &words);
         if let Some(p) = &mut self.pos {
             p.z = z;
         }
@@ -182,13 +181,12 @@ impl Out {
 
     /// `G0 X<x> Y<y> [axes] F<feed>`.
     pub fn move_xy(&mut self, to: DVec3, feed: u64) {
-        let mut line = String::from("G0");
-        let mut words = Words::default();
-        Self::word(&mut line, &mut words, b'X', to.x, 3);
-        Self::word(&mut line, &mut words, b'Y', to.y, 3);
-        self.push_axes(&mut line, &mut words);
-        self.push_feed(&mut line, &mut words, feed);
-        self.moved(&line, Command::G(0, 0), &words);
+        let (cmd, mut words) = self.begin(0);
+        self.word(&mut words, b'X', to.x, 3);
+        self.word(&mut words, b'Y', to.y, 3);
+        self.push_axes(&mut words);
+        self.push_feed(&mut words, feed);
+        self.end(cmd, &words);
         self.pos = Some(to);
     }
 
@@ -205,30 +203,27 @@ impl Out {
 
     /// A `G1` to `to`, feeding `e` mm when given.
     fn g1(&mut self, to: DVec3, e: Option<f64>, feed: u64) {
-        let mut line = String::with_capacity(48);
-        line.push_str("G1");
-        let mut words = Words::default();
-        Self::word(&mut line, &mut words, b'X', to.x, 3);
-        Self::word(&mut line, &mut words, b'Y', to.y, 3);
-        self.push_z_if_changed(&mut line, &mut words, to.z);
-        self.push_axes(&mut line, &mut words);
+        let (cmd, mut words) = self.begin(1);
+        self.word(&mut words, b'X', to.x, 3);
+        self.word(&mut words, b'Y', to.y, 3);
+        self.push_z_if_changed(&mut words, to.z);
+        self.push_axes(&mut words);
         if let Some(e) = e {
             self.e_total += e;
             let e_word = if self.relative_e { e } else { self.e_total };
-            Self::word(&mut line, &mut words, b'E', e_word, 5);
+            self.word(&mut words, b'E', e_word, 5);
         }
-        self.push_feed(&mut line, &mut words, feed);
-        self.moved(&line, Command::G(1, 0), &words);
+        self.push_feed(&mut words, feed);
+        self.end(cmd, &words);
         self.pos = Some(to);
     }
 
     /// `G1 E<e> [F<feed>]` without motion; `e` is the word's value.
     pub fn e_only(&mut self, e: f64, feed: u64) {
-        let mut line = String::from("G1");
-        let mut words = Words::default();
-        Self::word(&mut line, &mut words, b'E', e, 5);
-        self.push_feed(&mut line, &mut words, feed);
-        self.moved(&line, Command::G(1, 0), &words);
+        let (cmd, mut words) = self.begin(1);
+        self.word(&mut words, b'E', e, 5);
+        self.push_feed(&mut words, feed);
+        self.end(cmd, &words);
     }
 
     /// `G4 P<ms>[ ; comment]` when `seconds` rounds to at least 1 ms.
@@ -237,13 +232,13 @@ impl Out {
         if !(ms.is_finite() && ms >= 1.0) {
             return;
         }
-        let mut line = String::from("G4");
+        self.text.push_str("G4");
         let mut words = Words::default();
-        Self::word(&mut line, &mut words, b'P', ms, 0);
+        self.word(&mut words, b'P', ms, 0);
         if !comment.is_empty() {
-            line.push_str(" ; ");
-            line.push_str(comment);
+            self.text.push_str(" ; ");
+            self.text.push_str(comment);
         }
-        self.moved(&line, Command::G(4, 0), &words);
+        self.end(Command::G(4, 0), &words);
     }
 }

@@ -52,8 +52,7 @@ pub(crate) fn check_point_data(toolpath: &Toolpath, three_axis: bool) -> Result<
                 return Err(Error::BadPointData { pass: pi, path: qi, problems });
             }
             if three_axis {
-                if let Some(k) = data.tool_axis.as_ref().and_then(|v| v.iter().position(|a| (*a - DVec3::Z).length() > 1e-9)) {
-                    let a = data.tool_axis.as_ref().map_or(DVec3::Z, |v| v[k]);
+                if let Some((k, a)) = data.tool_axis.iter().flatten().enumerate().find(|(_, a)| (**a - DVec3::Z).length() > 1e-9) {
                     return Err(Error::NeedsFiveAxis { pass: pi, path: qi, point: k, axis: a.to_array() });
                 }
             }
@@ -67,11 +66,19 @@ pub(crate) fn axis_at(path: &Path, k: usize) -> DVec3 {
     path.data.as_deref().and_then(|d| d.tool_axis.as_ref()).and_then(|v| v.get(k).copied()).unwrap_or(DVec3::Z)
 }
 
-/// The rotary angles of every point of every path (paths in print order, those with fewer
-/// than two points empty), continuous along the whole print; checks the machine's travel and
+/// A planned 5-axis pose of a path point.
+struct Pose {
+    /// Rotary angles, letter order, degrees.
+    angles: [f64; 2],
+    /// Machine X Y Z of the point at those angles (printer coordinates).
+    machine: DVec3,
+}
+
+/// The pose of every point of every path (paths in print order, those with fewer than two
+/// points empty), angles continuous along the whole print; checks the machine's travel and
 /// rotary limits in machine coordinates (path points, approach routes with the path's first
 /// pose, and the z-hop above path starts).
-fn plan_five_axis(toolpath: &Toolpath, options: &Options, offset: DVec3) -> Result<Vec<Vec<[f64; 2]>>, Error> {
+fn plan_five_axis(toolpath: &Toolpath, options: &Options, offset: DVec3) -> Result<Vec<Vec<Pose>>, Error> {
     let m = &options.printer.machine;
     let bed = options.printer.bed_size_mm;
     let (lo, hi) = match options.printer.origin {
@@ -91,12 +98,6 @@ fn plan_five_axis(toolpath: &Toolpath, options: &Options, offset: DVec3) -> Resu
                 out.push(Vec::new());
                 continue;
             }
-            let mut angles = Vec::with_capacity(path.points.len());
-            for k in 0..path.points.len() {
-                let a = m.inverse(axis_at(path, k), prev);
-                prev = Some(a);
-                angles.push(a);
-            }
             let limit = |point: usize, axis: char, value: f64, lo: f64, hi: f64, unit: &'static str, setting: &'static str, fix: &'static str| {
                 if value >= lo && value <= hi {
                     return Ok(());
@@ -110,21 +111,25 @@ fn plan_five_axis(toolpath: &Toolpath, options: &Options, offset: DVec3) -> Resu
                 }
                 Ok(())
             };
-            for (k, (p, a)) in path.points.iter().zip(&angles).enumerate() {
+            let mut poses = Vec::with_capacity(path.points.len());
+            for (k, p) in path.points.iter().enumerate() {
+                let a = m.inverse(axis_at(path, k), prev);
+                prev = Some(a);
                 for j in 0..2 {
                     let (rlo, rhi) = (m.rotary_min_deg[idx[j]], m.rotary_max_deg[idx[j]]);
                     limit(k, letters[j] as char, a[j], rlo, rhi, "°", "printer.machine.rotary_min_deg / rotary_max_deg", "tilt the part or its tool axes less, pick the other layout or rotary pair, or widen the limit if the machine allows it")?;
                 }
-                let q = m.to_machine(*p + offset, *a);
+                let q = m.to_machine(*p + offset, a);
                 check_xyz(k, q)?;
                 if k == 0 && hop > 0.0 {
                     check_xyz(k, q + DVec3::new(0.0, 0.0, hop))?;
                 }
+                poses.push(Pose { angles: a, machine: q });
             }
             for (j, r) in path.approach.iter().flatten().enumerate() {
-                check_xyz(path.points.len() + j, m.to_machine(*r + offset, angles[0]))?;
+                check_xyz(path.points.len() + j, m.to_machine(*r + offset, poses[0].angles))?;
             }
-            out.push(angles);
+            out.push(poses);
         }
     }
     Ok(out)
@@ -264,7 +269,7 @@ pub(crate) fn write(toolpath: &Toolpath, options: &Options) -> Result<Gcode, Err
         let mut feature: Option<Feature> = None;
         let mut width: Option<i64> = None;
         for path in &layer.paths {
-            let angles: &[[f64; 2]] = plan.as_ref().map_or(&[], |p| &p[path_no]);
+            let poses: &[Pose] = plan.as_ref().map_or(&[], |p| &p[path_no]);
             path_no += 1;
             if path.points.len() < 2 {
                 continue;
@@ -272,19 +277,21 @@ pub(crate) fn write(toolpath: &Toolpath, options: &Options) -> Result<Gcode, Err
             let data = path.data.as_deref();
             let feeds = data.and_then(|d| d.feed_mm_s.as_deref());
             let dwells = data.and_then(|d| d.dwell_s.as_deref());
-            // Where point `k` (or a point on its segment) is written: machine X Y Z for rotary
-            // output, the tip otherwise; and the axis words it carries.
-            let place = |q: DVec3, k: usize| if rotary_xyz { machine.to_machine(q + offset, angles[k]) } else { q + offset };
+            // Where a point on the segment to point `k` is written: machine X Y Z for rotary
+            // output, the tip otherwise (path points themselves: `at`, planned already); and
+            // the axis words it carries.
+            let place = |q: DVec3, k: usize| if rotary_xyz { machine.to_machine(q + offset, poses[k].angles) } else { q + offset };
+            let at = |k: usize| if rotary_xyz { poses[k].machine } else { path.points[k] + offset };
             let aim = |out: &mut Out, k: usize| {
                 if out.axes.is_some() {
                     out.axis_target = match machine.axis_output {
-                        AxisOutput::Rotary => [angles[k][0], angles[k][1], 0.0],
+                        AxisOutput::Rotary => [poses[k].angles[0], poses[k].angles[1], 0.0],
                         AxisOutput::Ijk => axis_at(path, k).to_array(),
                     };
                 }
             };
             aim(&mut out, 0);
-            let first = place(path.points[0], 0);
+            let first = at(0);
             match &path.approach {
                 Some(route) if out.pos.is_some() => {
                     route_buf.clear();
@@ -333,7 +340,7 @@ pub(crate) fn write(toolpath: &Toolpath, options: &Options) -> Result<Gcode, Err
                 let feed = feeds.map_or(feed, |f| feed_mm_min(f[j]));
                 extruded_mm += len;
                 aim(&mut out, j);
-                let to = place(w[1], j);
+                let to = at(j);
                 if !open {
                     d.coast(&mut out, to, feed);
                 } else if done + len > cut + 1e-9 {

@@ -278,14 +278,11 @@ impl Machine {
         };
         let singular = (u * u + w * w).sqrt() < 1e-9;
         let alpha0 = libm::atan2(u, w).to_degrees();
-        let candidates: Vec<f64> = if singular {
-            vec![prev.map_or(0.0, |p| p.0)]
-        } else {
-            let near = prev.map_or(0.0, |p| p.0);
-            vec![unwrap_near(alpha0, near), unwrap_near(alpha0 + 180.0, near)]
-        };
+        let near = prev.map_or(0.0, |p| p.0);
+        let both = [unwrap_near(alpha0, near), unwrap_near(alpha0 + 180.0, near)];
+        let candidates: &[f64] = if singular { std::slice::from_ref(&near) } else { &both };
         let mut best: Option<((f64, f64), f64)> = None;
-        for alpha in candidates {
+        for &alpha in candidates {
             let v = rot(a1, -alpha, n);
             // v = R_a2(β) ẑ.
             let beta = match a2 {

@@ -7,7 +7,7 @@
 // designSchema(); stage cards, metrics, plots and tables come from the run report.
 import { MSG, plain } from "./protocol.js";
 import { drawSegments2d, drawView, featureStyles } from "./views.js";
-import { renderReport } from "./report.js";
+import { metricList, renderReport } from "./report.js";
 import { formatNumber } from "./plot.js";
 
 const $ = (id) => document.getElementById(id);
@@ -197,18 +197,6 @@ function redo() {
   forgetFieldEdits();
   state.undo.push(state.json);
   setDesign(state.redo.pop(), { record: false });
-}
-
-/** Applies a change to a copy of the design; returns the problem text or null. */
-function changeDesign(mutate) {
-  const next = structuredClone(state.design);
-  mutate(next);
-  try {
-    setDesign(weft.validateDesign(JSON.stringify(next)));
-    return null;
-  } catch (err) {
-    return messageOf(err);
-  }
 }
 
 /**
@@ -614,13 +602,14 @@ function buildSlots(slots) {
     host.append(card);
     slotCards.set(slot.name, { slot, card, fields, source, extra, list, note, input });
   }
+  // The toolbar's Open… takes designs, G-code and whatever a slot takes.
+  const accept = new Set([".json", ...GCODE_EXT.map((e) => `.${e}`), ...slots.flatMap((s) => s.accept ?? [])]);
+  $("file").accept = [...accept].join(",");
 }
 
 /** Updates every slot card from the design and the loaded files. */
 function renderSlots() {
-  const accept = new Set([".json", ...GCODE_EXT.map((e) => `.${e}`)]);
   for (const { slot, card, source, extra, list, note } of slotCards.values()) {
-    for (const a of slot.accept ?? []) accept.add(a);
     const value = getPath(state.design, slot.path);
     const named = namedFiles(value);
     const held = filesOf(slot);
@@ -694,7 +683,6 @@ function renderSlots() {
       note.textContent = value === undefined || value === null ? "Not used by the design as it is set now." : "";
     }
   }
-  $("file").accept = [...accept].join(",");
 }
 
 function shapeParam(slot, key, value, note) {
@@ -742,21 +730,17 @@ function onSourceChange(slot, select) {
 /**
  * Points the slot's design field at these files (added to a `multiple` slot's list), through
  * fillSlot, which also applies the job kind's rule for a filled slot (e.g. a lattice's domain
- * becomes the loaded solid); setField when the module has no fillSlot.
+ * becomes the loaded solid); returns the problem or null.
  */
 function useFiles(slot, names) {
   const had = namedFiles(getPath(state.design, slot.path)).map((f) => f.name);
   const all = slot.multiple ? [...new Set([...had, ...names])] : [names[names.length - 1]];
-  if (typeof weft.fillSlot === "function") {
-    try {
-      setDesign(weft.fillSlot(state.json, slot.name, all));
-      return null;
-    } catch (err) {
-      return messageOf(err);
-    }
+  try {
+    setDesign(weft.fillSlot(state.json, slot.name, all));
+    return null;
+  } catch (err) {
+    return messageOf(err);
   }
-  const value = slot.multiple ? { files: all } : { file: { name: all[0] } };
-  return setFields([[slot.path, JSON.stringify(value)]]);
 }
 
 /** Reads files into a slot (worker first, so a bad file is refused at once), then uses them. */
@@ -953,15 +937,16 @@ function redrawView(v) {
 // ---------------------------------------------------------------------------------------
 // Pattern picker: any field with widget "pattern_picker", thumbnails of schema.patterns
 // ---------------------------------------------------------------------------------------
-/** Pattern thumbnails: kind → {segments}, drawn once per pattern and seed. */
+/** Pattern thumbnails: kind → {segments}, computed once per pattern and seed. */
 const thumbs = { cache: new Map(), seed: null };
 
 function thumbnailSeed() {
   return Number(state.design?.seed ?? 1);
 }
 
-function loadThumbnail(p) {
-  if (thumbs.cache.has(p.kind)) return;
+function thumbnail(p) {
+  let t = thumbs.cache.get(p.kind);
+  if (t) return t;
   const seed = thumbnailSeed();
   let segments = new Float32Array(0);
   for (const s of [seed, BigInt(seed)]) { // u64 seeds cross as BigInt
@@ -970,15 +955,17 @@ function loadThumbnail(p) {
       break;
     } catch { /* try the other seed type; drawn blank otherwise */ }
   }
-  thumbs.cache.set(p.kind, { segments });
+  thumbs.cache.set(p.kind, (t = { segments }));
+  return t;
 }
 
-function drawThumbnail(kind) {
-  const canvas = document.querySelector(`.pattern-picker canvas[data-pattern="${kind}"]`);
-  const t = thumbs.cache.get(kind);
-  if (!canvas || !t) return;
+/** Draws every thumbnail of one picker (when it is made, and when the seed changes). */
+function drawThumbnails(picker) {
   const half = THUMB_MM / 2;
-  drawSegments2d(canvas, t.segments, { stride: 4, frame: [-half, -half, half, half], lineWidth: 1, color: THUMB_COLOR });
+  for (const c of picker.querySelectorAll("canvas[data-pattern]")) {
+    const p = schema.patterns.find((q) => q.kind === c.dataset.pattern);
+    drawSegments2d(c, thumbnail(p).segments, { stride: 4, frame: [-half, -half, half, half], lineWidth: 1, color: THUMB_COLOR });
+  }
 }
 
 function patternOf(view) {
@@ -986,20 +973,23 @@ function patternOf(view) {
   return view.f.kind === "choice" ? v : v?.kind;
 }
 
+/**
+ * Thumbnail buttons after each field with widget "pattern_picker". A picker lives as long as
+ * its field's row (buildForm replaces both); a form render only updates which one is pressed.
+ */
 function renderPatternPickers() {
   const patterns = schema.patterns ?? [];
   const views = [...fieldViews.values()].filter((v) => v.f.widget === "pattern_picker");
-  document.querySelectorAll(".pattern-picker").forEach((el) => {
-    if (!views.some((v) => v.picker === el && el.previousElementSibling === v.wrap)) el.remove();
-  });
   if (!views.length || !patterns.length) return;
-  if (thumbs.seed !== thumbnailSeed()) {
+  const reseeded = thumbs.seed !== thumbnailSeed();
+  if (reseeded) {
     // Voronoi depends on the seed: redraw all with the design's.
     thumbs.cache.clear();
     thumbs.seed = thumbnailSeed();
   }
   views.forEach((view, n) => {
-    if (!view.picker || !view.picker.isConnected) {
+    const made = !view.picker;
+    if (made) {
       const picker = document.createElement("div");
       picker.id = n === 0 ? "pattern-picker" : `pattern-picker-${n}`;
       picker.className = "pattern-picker";
@@ -1015,7 +1005,6 @@ function renderPatternPickers() {
         c.dataset.pattern = p.kind;
         c.width = 64;
         c.height = 64;
-        drawSegments2d(c, null); // background until the thumbnail is drawn
         const label = document.createElement("span");
         label.textContent = p.label ?? p.kind.replace(/_/g, " ");
         b.append(c, label);
@@ -1029,13 +1018,10 @@ function renderPatternPickers() {
       view.wrap.after(picker);
       view.picker = picker;
     }
+    if (made || reseeded) drawThumbnails(view.picker);
     const current = patternOf(view);
     for (const b of view.picker.querySelectorAll("button")) b.setAttribute("aria-pressed", String(b.dataset.pattern === current));
   });
-  for (const p of patterns) {
-    loadThumbnail(p);
-    drawThumbnail(p.kind);
-  }
 }
 
 // ---------------------------------------------------------------------------------------
@@ -1314,23 +1300,7 @@ function renderStats(report, gcode, ms) {
   if (typeof ms === "number") rows.push(["Worker time", num(ms / 1000, 2), "s"]);
   const reused = (report?.stages ?? []).filter((s) => s.cached).length;
   if (reused) rows.push(["Stages reused", `${reused} of ${report.stages.length}`, ""]);
-  const dl = document.createElement("dl");
-  for (const [k, v, unit] of rows) {
-    const div = document.createElement("div");
-    const dt = document.createElement("dt");
-    dt.textContent = k;
-    const dd = document.createElement("dd");
-    dd.textContent = v;
-    if (unit) {
-      const u = document.createElement("span");
-      u.className = "unit";
-      u.textContent = ` ${unit}`;
-      dd.append(u);
-    }
-    div.append(dt, dd);
-    dl.append(div);
-  }
-  $("stats").replaceChildren(dl);
+  $("stats").replaceChildren(metricList(rows.map(([label, value, unit]) => ({ label, value, unit })), ""));
 }
 
 function download(data, name, type) {

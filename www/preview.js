@@ -198,16 +198,16 @@ export class Preview {
     }
     layerMin.value = "0";
     layerMax.value = String(Math.max(0, this.layers - 1));
+    const bounds = segments > 0 ? boundsOf(data.positions) : null;
     this.buildStarts();
-    this.buildAxis(segments);
+    this.buildAxis(segments, bounds);
     this.setupMoves(segments);
 
     const bed = data?.bedSize && data.bedSize.length >= 2 && data.bedSize[0] > 0 ? data.bedSize : DEFAULT_BED;
     this.setBed(bed, options.origin ?? "corner");
     this.applyColors(false);
     this.setLayerRange(0, this.layers - 1);
-    if (segments > 0) this.fit(boundsOf(data.positions));
-    else this.fit();
+    this.fit(bounds);
     this.requestRender();
   }
 
@@ -310,8 +310,11 @@ export class Preview {
       : `${what} ${(move + 1).toLocaleString("en-US")} of ${total.toLocaleString("en-US")}`;
   }
 
-  /** Tool-axis lines (2 vertices per segment) when the result has an axis per segment. */
-  buildAxis(segments) {
+  /**
+   * Tool-axis lines (2 vertices per segment) when the result has an axis per segment.
+   * @param {THREE.Box3|null} bounds  of the extrusion segments (setResult computes it once)
+   */
+  buildAxis(segments, bounds) {
     const d = this.data;
     const axis = d?.axis;
     this.axis.geometry = new THREE.BufferGeometry();
@@ -323,8 +326,7 @@ export class Preview {
       this.axis.geometry.setAttribute("position", new THREE.BufferAttribute(new Float32Array(0), 3));
       return;
     }
-    const b = boundsOf(d.positions);
-    const len = Math.max(0.3, Math.min(5, b.getSize(new THREE.Vector3()).length() * 0.02));
+    const len = Math.max(0.3, Math.min(5, bounds.getSize(new THREE.Vector3()).length() * 0.02));
     const p = d.positions;
     const out = new Float32Array(segments * 6);
     for (let i = 0; i < segments; i++) {

@@ -42,7 +42,7 @@ export const MSG = Object.freeze({
 /**
  * Preview buffers of a result: message key → [Session method, typed array constructor].
  * The worker copies nothing: each typed array returned by wasm-bindgen owns its buffer,
- * which is transferred. A getter the module lacks gives an empty array.
+ * which is transferred.
  */
 export const PREVIEW_BUFFERS = Object.freeze({
   positions: ["previewPositions", Float32Array],

@@ -112,12 +112,16 @@ function fillCard(card, stage, state) {
   for (const table of stage.tables ?? []) card.append(tableOf(table, group));
 }
 
-function metricList(metrics) {
+/**
+ * A <dl> of label / value (unit) pairs; numbers are formatted, text is shown as it is.
+ * @param {Array<{key?: string, label?: string, value: number|string, unit?: string, hint?: string}>} metrics
+ */
+export function metricList(metrics, className = "metrics") {
   const dl = document.createElement("dl");
-  dl.className = "metrics";
+  if (className) dl.className = className;
   for (const m of metrics) {
     const div = document.createElement("div");
-    div.dataset.key = m.key ?? "";
+    if (m.key) div.dataset.key = m.key;
     if (m.hint) div.title = m.hint;
     const dt = document.createElement("dt");
     dt.textContent = m.label ?? m.key;

@@ -69,12 +69,11 @@ function handle(msg) {
           });
           break;
         }
-        const raw = session.inspect(msg.design, msg.view, Math.max(0, msg.index | 0));
-        const r = raw instanceof Map ? Object.fromEntries(raw) : raw;
-        const data = owned(r.data, Float32Array);
+        const answer = plain(session.inspect(msg.design, msg.view, Math.max(0, msg.index | 0)));
+        const { view, index, shape, stride, count, meta } = answer;
+        const data = owned(answer.data, Float32Array);
         self.postMessage({
-          type: MSG.INSPECTED, id: msg.id, view: r.view ?? msg.view, index: r.index ?? msg.index, shape: r.shape,
-          stride: r.stride ?? 1, count: r.count ?? 0, data, meta: plain(r.meta ?? {}), ms: performance.now() - t0,
+          type: MSG.INSPECTED, id: msg.id, view, index, shape, stride, count, data, meta, ms: performance.now() - t0,
         }, transferList([data]));
         break;
       }
@@ -111,7 +110,7 @@ function progressReporter(id) {
 function postResult(id, request, report, t0) {
   const preview = {};
   for (const [key, [method, Type]] of Object.entries(PREVIEW_BUFFERS)) {
-    preview[key] = typeof session[method] === "function" ? owned(session[method](), Type) : new Type(0);
+    preview[key] = owned(session[method](), Type);
   }
   const gcode = owned(session.gcode(), Uint8Array);
   self.postMessage(

@@ -28,6 +28,7 @@
 // Run the job in a fresh worker (the page does) so the STL generation does not count in the
 // job's linear memory.
 import init, { BenchLattice, Session, benchAnalyze, benchDesign, benchMeshStl } from "../../pkg/weft.js";
+import { plain } from "../../www/protocol.js"; // reports as objects (JSON text before wasm API v2)
 
 const ready = init();
 
@@ -76,7 +77,6 @@ self.onmessage = async ({ data }) => {
         d.material.bed_temp_c += 10;
         return JSON.stringify(d);
       };
-      const report = (ran) => (typeof ran === "string" ? JSON.parse(ran) : ran);
       const rows = [];
       const workloads = [{ name: "disc-48mm", json: data.discJson, stl: null }];
       if (data.stl) workloads.push({ name: "mesh", json: benchDesign(), stl: new Uint8Array(data.stl) });
@@ -90,11 +90,11 @@ self.onmessage = async ({ data }) => {
           w.stl = null;
         }
         let t = performance.now();
-        const a = report(session.run(w.json, () => {}));
+        const a = plain(session.run(w.json, () => {}));
         const firstMs = performance.now() - t;
         const edited = bump(w.json);
         t = performance.now();
-        const b = report(session.run(edited, () => {}));
+        const b = plain(session.run(edited, () => {}));
         const secondMs = performance.now() - t;
         session.free();
         const stages = b.stages.map((r) => ({ stage: r.stage, cached: r.cached }));
@@ -128,7 +128,7 @@ self.onmessage = async ({ data }) => {
         t = performance.now();
         const ran = session.run(benchDesign(), () => {});
         const runMs = performance.now() - t;
-        const report = typeof ran === "string" ? JSON.parse(ran) : ran;
+        const report = plain(ran);
         const afterRun = mem();
         const uaAfterRun = await uaMemory("afterRun");
         session.free();
@@ -175,8 +175,7 @@ self.onmessage = async ({ data }) => {
     const design = benchDesign();
     t = performance.now();
     stageStart = t;
-    const ran = session.run(design, progress); // an object (wasm API v2); JSON text before
-    const report = typeof ran === "string" ? JSON.parse(ran) : ran;
+    const report = plain(session.run(design, progress));
     const end = performance.now();
     if (current !== null) stages.push({ stage: current, ms: end - stageStart });
     const runMs = end - t;
@@ -191,8 +190,7 @@ self.onmessage = async ({ data }) => {
     const big = new Uint8Array(gcodeBytes * reps);
     for (let i = 0; i < reps; i++) big.set(gcode, i * gcodeBytes);
     t = performance.now();
-    const analyzed = benchAnalyze(big);
-    const analysis = typeof analyzed === "string" ? JSON.parse(analyzed) : analyzed;
+    const analysis = plain(benchAnalyze(big));
     const analyzeMs = performance.now() - t;
 
     self.postMessage({

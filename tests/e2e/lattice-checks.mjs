@@ -14,7 +14,7 @@ import { createHash } from "node:crypto";
 import { execFileSync } from "node:child_process";
 import { join } from "node:path";
 import { tmpdir } from "node:os";
-import { colouredPixels, downloadGcode, waitReady, waitResult } from "./page-helpers.mjs";
+import { collectErrors, colouredPixels, downloadGcode, waitReady, waitResult } from "./page-helpers.mjs";
 
 const EXAMPLE = "honeycomb-10mm.json";
 const BACKGROUND = [0x1f, 0x23, 0x2a]; // the 2D views' background (views.js)
@@ -33,10 +33,7 @@ export async function latticeChecks({ browser, baseUrl, weftBin = process.env.WE
   const open = newPage ?? (async () => {
     const context = await browser.newContext({ viewport: { width: 1400, height: 900 }, acceptDownloads: true });
     const page = await context.newPage();
-    const errors = [];
-    page.on("console", (m) => { if (m.type() === "error") errors.push(m.text()); });
-    page.on("pageerror", (e) => errors.push(`uncaught: ${e.message}`));
-    return { context, page, errors };
+    return { context, page, errors: collectErrors(page) };
   });
   let n = first;
   const main = await open();

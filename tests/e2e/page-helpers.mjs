@@ -1,5 +1,30 @@
-// Page helpers shared by the end-to-end checks (run.mjs, lattice-checks.mjs).
+// Page helpers shared by the end-to-end checks (run.mjs, lattice-checks.mjs, ui-mock.mjs).
 import { readFileSync } from "node:fs";
+import { chromium } from "playwright-core";
+
+/**
+ * The system Chromium (CHROMIUM, default /usr/bin/chromium), headless unless E2E_HEADED=1,
+ * with a software WebGL.
+ */
+export function launchChromium() {
+  const headed = Boolean(process.env.E2E_HEADED);
+  return chromium.launch({
+    executablePath: process.env.CHROMIUM ?? "/usr/bin/chromium",
+    headless: !headed,
+    args: [
+      "--headless", "--no-sandbox", "--disable-background-networking", "--disable-component-update",
+      "--disable-sync", "--disable-gpu-sandbox", "--use-angle=swiftshader", "--enable-unsafe-swiftshader",
+    ].filter((a) => !(headed && a === "--headless")),
+  });
+}
+
+/** Console errors and uncaught exceptions of `page`, collected from now on. */
+export function collectErrors(page) {
+  const errors = [];
+  page.on("console", (m) => { if (m.type() === "error") errors.push(m.text()); });
+  page.on("pageerror", (e) => errors.push(`uncaught: ${e.message}`));
+  return errors;
+}
 
 /** Waits until the page has initialised and holds a design. */
 export async function waitReady(page) {

@@ -13,17 +13,15 @@
 import { existsSync, mkdirSync, readFileSync, writeFileSync } from "node:fs";
 import { createHash } from "node:crypto";
 import { execFileSync } from "node:child_process";
-import { dirname, join, resolve } from "node:path";
-import { fileURLToPath } from "node:url";
-import { chromium } from "playwright-core";
-import { serve } from "./server.mjs";
+import { join, resolve } from "node:path";
+import { ROOT, serve } from "./server.mjs";
 import { latticeChecks } from "./lattice-checks.mjs";
-import { colouredPixels, downloadGcode, waitReady, waitResult as waitResultWithin } from "./page-helpers.mjs";
+import {
+  collectErrors, colouredPixels, downloadGcode, launchChromium, waitReady, waitResult as waitResultWithin,
+} from "./page-helpers.mjs";
 
-const ROOT = resolve(dirname(fileURLToPath(import.meta.url)), "../..");
 const OUT = join(ROOT, "tests/e2e/out");
 const WEFT_BIN = resolve(ROOT, process.env.WEFT_BIN ?? "target/release/weft");
-const CHROMIUM = process.env.CHROMIUM ?? "/usr/bin/chromium";
 const PKG_DIR = process.env.WEFT_PKG_DIR ? resolve(process.env.WEFT_PKG_DIR) : join(ROOT, "pkg");
 const JOB_TIMEOUT = Number(process.env.E2E_TIMEOUT_S ?? 120) * 1000;
 const VIEWPORT = { width: 1400, height: 900 };
@@ -101,14 +99,7 @@ async function check(n, title, fn) {
 // Static server of the repository root, localhost only (tests/e2e/server.mjs).
 const server = await serve({ root: ROOT, pkgDir: PKG_DIR });
 const base = server.url;
-const browser = await chromium.launch({
-  executablePath: CHROMIUM,
-  headless: !process.env.E2E_HEADED,
-  args: [
-    "--headless", "--no-sandbox", "--disable-background-networking", "--disable-component-update",
-    "--disable-sync", "--disable-gpu-sandbox", "--use-angle=swiftshader", "--enable-unsafe-swiftshader",
-  ].filter((a) => !(process.env.E2E_HEADED && a === "--headless")),
-});
+const browser = await launchChromium();
 const newPage = async () => {
   const context = await browser.newContext({ viewport: VIEWPORT, acceptDownloads: true });
   // Nothing may leave the origin.
@@ -117,12 +108,21 @@ const newPage = async () => {
     return route.abort();
   });
   const page = await context.newPage();
-  const errors = [];
-  page.on("console", (m) => { if (m.type() === "error") errors.push(m.text()); });
-  page.on("pageerror", (e) => errors.push(`uncaught: ${e.message}`));
-  return { context, page, errors };
+  return { context, page, errors: collectErrors(page) };
 };
 const offOrigin = [];
+
+/** Runs `fn(page, errors)` in a fresh browser context opened at `path` of the server, then closes it. */
+async function inFreshPage(path, fn) {
+  const { context, page: p, errors } = await newPage();
+  try {
+    await p.goto(`${base}${path}`);
+    await waitReady(p);
+    return await fn(p, errors);
+  } finally {
+    await context.close();
+  }
+}
 
 const cube = fixtureCube();
 const main = await newPage();
@@ -243,106 +243,82 @@ await check(5, "corrupt STL → #error names the file and line; design and previ
   return `"${message.split("\n")[0].slice(0, 90)}"`;
 });
 
-await check(6, "damaged share fragment #d=!!!! → clear error, page still works", async () => {
-  const fresh = await newPage();
-  try {
-    const p = fresh.page;
-    await p.goto(`${base}/www/#d=!!!!`);
-    await waitReady(p);
-    await p.waitForSelector("#error:not([hidden])", { timeout: 10000 });
-    const message = (await p.textContent("#error-text")).trim();
-    if (!/share|link|fragment/i.test(message)) throw new Error(`unclear message: ${message}`);
-    if (!(await p.evaluate(() => JSON.parse(window.weft.design).version))) throw new Error("no design shown");
-    if ((await p.$$("#schema-fields input")).length === 0) throw new Error("the form is empty");
-    await p.click("#slice");
-    await waitResult(p, 0, "slicing the default design after the damaged link");
-    return `"${message.split("\n")[0].slice(0, 90)}"`;
-  } finally {
-    await fresh.context.close();
-  }
-});
+await check(6, "damaged share fragment #d=!!!! → clear error, page still works", () => inFreshPage("/www/#d=!!!!", async (p) => {
+  await p.waitForSelector("#error:not([hidden])", { timeout: 10000 });
+  const message = (await p.textContent("#error-text")).trim();
+  if (!/share|link|fragment/i.test(message)) throw new Error(`unclear message: ${message}`);
+  if (!(await p.evaluate(() => JSON.parse(window.weft.design).version))) throw new Error("no design shown");
+  if ((await p.$$("#schema-fields input")).length === 0) throw new Error("the form is empty");
+  await p.click("#slice");
+  await waitResult(p, 0, "slicing the default design after the damaged link");
+  return `"${message.split("\n")[0].slice(0, 90)}"`;
+}));
 
-await check(7, "Cancel stops a long job, restarts the worker, and a short run works after", async () => {
-  const fresh = await newPage();
-  try {
-    const p = fresh.page;
-    await p.goto(`${base}/www/`);
-    await waitReady(p);
-    const short = await p.evaluate(() => window.weft.design);
-    const long = JSON.parse(short);
-    long.name = "long-sphere";
-    long.job.input = { builtin: { shape: "sphere", radius: 60, segments: 128 } };
-    long.job.slice.layer_height_mm = 0.05;
-    await dropFile(p, "long.json", Buffer.from(JSON.stringify(long)), "application/json");
-    await p.waitForFunction(() => JSON.parse(window.weft.design).name === "long-sphere", null, { timeout: 10000 })
-      .catch(async () => { throw new Error(`the long design was not accepted: ${await p.textContent("#error-text")}`); });
-    const gen = await p.evaluate(() => window.weft.workerGeneration);
-    const t0 = Date.now();
-    await p.click("#slice");
-    const shown = await p.waitForSelector("#progress:not([hidden])", { timeout: 15000 }).catch(() => null);
-    if (!shown) {
-      const count = await p.evaluate(() => window.weft.resultCount);
-      const error = await p.evaluate(() => (document.getElementById("error").hidden ? "" : document.getElementById("error-text").textContent));
-      throw new Error(`no progress bar: the long job ${count ? `finished in ${Date.now() - t0} ms` : error ? `failed: ${error}` : "did not start"}; nothing to cancel`);
-    }
-    await p.waitForTimeout(300);
-    await p.click("#cancel");
-    await p.waitForSelector("#progress", { state: "hidden", timeout: 5000 });
-    const after = await p.evaluate(() => ({ gen: window.weft.workerGeneration, busy: window.weft.busy, count: window.weft.resultCount }));
-    if (after.gen !== gen + 1) throw new Error(`worker generation ${gen} → ${after.gen}; expected a restart`);
-    if (after.busy) throw new Error("still busy after Cancel");
-    await dropFile(p, "short.json", Buffer.from(short), "application/json");
-    await p.waitForFunction((s) => window.weft.design === s, short, { timeout: 10000 });
-    const t1 = Date.now();
-    await p.click("#slice");
-    await waitResult(p, after.count, "short run after Cancel");
+await check(7, "Cancel stops a long job, restarts the worker, and a short run works after", () => inFreshPage("/www/", async (p, errors) => {
+  const short = await p.evaluate(() => window.weft.design);
+  const long = JSON.parse(short);
+  long.name = "long-sphere";
+  long.job.input = { builtin: { shape: "sphere", radius: 60, segments: 128 } };
+  long.job.slice.layer_height_mm = 0.05;
+  await dropFile(p, "long.json", Buffer.from(JSON.stringify(long)), "application/json");
+  await p.waitForFunction(() => JSON.parse(window.weft.design).name === "long-sphere", null, { timeout: 10000 })
+    .catch(async () => { throw new Error(`the long design was not accepted: ${await p.textContent("#error-text")}`); });
+  const gen = await p.evaluate(() => window.weft.workerGeneration);
+  const t0 = Date.now();
+  await p.click("#slice");
+  const shown = await p.waitForSelector("#progress:not([hidden])", { timeout: 15000 }).catch(() => null);
+  if (!shown) {
     const count = await p.evaluate(() => window.weft.resultCount);
-    if (count !== after.count + 1) throw new Error("the cancelled job delivered a result");
-    if (fresh.errors.length) throw new Error(`console errors:\n${fresh.errors.join("\n")}`);
-    return `cancelled after ${((t1 - t0) / 1000).toFixed(1)} s; short run took ${((Date.now() - t1) / 1000).toFixed(1)} s`;
-  } finally {
-    await fresh.context.close();
+    const error = await p.evaluate(() => (document.getElementById("error").hidden ? "" : document.getElementById("error-text").textContent));
+    throw new Error(`no progress bar: the long job ${count ? `finished in ${Date.now() - t0} ms` : error ? `failed: ${error}` : "did not start"}; nothing to cancel`);
   }
-});
+  await p.waitForTimeout(300);
+  await p.click("#cancel");
+  await p.waitForSelector("#progress", { state: "hidden", timeout: 5000 });
+  const after = await p.evaluate(() => ({ gen: window.weft.workerGeneration, busy: window.weft.busy, count: window.weft.resultCount }));
+  if (after.gen !== gen + 1) throw new Error(`worker generation ${gen} → ${after.gen}; expected a restart`);
+  if (after.busy) throw new Error("still busy after Cancel");
+  await dropFile(p, "short.json", Buffer.from(short), "application/json");
+  await p.waitForFunction((s) => window.weft.design === s, short, { timeout: 10000 });
+  const t1 = Date.now();
+  await p.click("#slice");
+  await waitResult(p, after.count, "short run after Cancel");
+  const count = await p.evaluate(() => window.weft.resultCount);
+  if (count !== after.count + 1) throw new Error("the cancelled job delivered a result");
+  if (errors.length) throw new Error(`console errors:\n${errors.join("\n")}`);
+  return `cancelled after ${((t1 - t0) / 1000).toFixed(1)} s; short run took ${((Date.now() - t1) / 1000).toFixed(1)} s`;
+}));
 
-await check(8, "input slots: one drop zone per schema slot for every job kind (labels, extensions)", async () => {
-  const fresh = await newPage();
-  try {
-    const p = fresh.page;
-    await p.goto(`${base}/www/`);
-    await waitReady(p);
-    const kinds = await p.evaluate(() => window.weft.schema.job_kinds.map((k) => ({
-      name: k.name, slots: k.slots.map((s) => ({ name: s.name, label: s.label, accept: s.accept, multiple: Boolean(s.multiple) })),
-    })));
-    if (!kinds.some((k) => k.name === "slice") || !kinds.some((k) => k.name === "lattice")) {
-      throw new Error(`schema job kinds: ${kinds.map((k) => k.name).join(", ")}`);
-    }
-    const seen = [];
-    for (const kind of kinds) {
-      const problem = await p.evaluate((k) => {
-        const sel = document.getElementById("f-job-kind");
-        if (!sel) return "no job selector (#f-job-kind)";
-        sel.value = JSON.stringify(k);
-        sel.dispatchEvent(new Event("change"));
-        return JSON.parse(window.weft.design).job.kind === k ? null : `the job kind did not change to ${k}`;
-      }, kind.name);
-      if (problem) throw new Error(problem);
-      const zones = await p.$$eval("#slots .slot", (els) => els.map((el) => ({
-        name: el.dataset.slot, label: el.querySelector(".slot-label")?.textContent ?? "",
-        accept: el.querySelector("input[type=file]")?.accept ?? "", multiple: el.querySelector("input[type=file]")?.multiple ?? false,
-      })));
-      const want = kind.slots.map((s) => ({ name: s.name, label: s.label, accept: s.accept.join(","), multiple: s.multiple }));
-      if (JSON.stringify(zones) !== JSON.stringify(want)) {
-        throw new Error(`${kind.name}: drop zones ${JSON.stringify(zones)}, schema slots ${JSON.stringify(want)}`);
-      }
-      seen.push(`${kind.name}: ${zones.map((z) => z.name).join("+") || "none"}`);
-    }
-    if (fresh.errors.length) throw new Error(`console errors:\n${fresh.errors.join("\n")}`);
-    return seen.join("; ");
-  } finally {
-    await fresh.context.close();
+await check(8, "input slots: one drop zone per schema slot for every job kind (labels, extensions)", () => inFreshPage("/www/", async (p, errors) => {
+  const kinds = await p.evaluate(() => window.weft.schema.job_kinds.map((k) => ({
+    name: k.name, slots: k.slots.map((s) => ({ name: s.name, label: s.label, accept: s.accept, multiple: Boolean(s.multiple) })),
+  })));
+  if (!kinds.some((k) => k.name === "slice") || !kinds.some((k) => k.name === "lattice")) {
+    throw new Error(`schema job kinds: ${kinds.map((k) => k.name).join(", ")}`);
   }
-});
+  const seen = [];
+  for (const kind of kinds) {
+    const problem = await p.evaluate((k) => {
+      const sel = document.getElementById("f-job-kind");
+      if (!sel) return "no job selector (#f-job-kind)";
+      sel.value = JSON.stringify(k);
+      sel.dispatchEvent(new Event("change"));
+      return JSON.parse(window.weft.design).job.kind === k ? null : `the job kind did not change to ${k}`;
+    }, kind.name);
+    if (problem) throw new Error(problem);
+    const zones = await p.$$eval("#slots .slot", (els) => els.map((el) => ({
+      name: el.dataset.slot, label: el.querySelector(".slot-label")?.textContent ?? "",
+      accept: el.querySelector("input[type=file]")?.accept ?? "", multiple: el.querySelector("input[type=file]")?.multiple ?? false,
+    })));
+    const want = kind.slots.map((s) => ({ name: s.name, label: s.label, accept: s.accept.join(","), multiple: s.multiple }));
+    if (JSON.stringify(zones) !== JSON.stringify(want)) {
+      throw new Error(`${kind.name}: drop zones ${JSON.stringify(zones)}, schema slots ${JSON.stringify(want)}`);
+    }
+    seen.push(`${kind.name}: ${zones.map((z) => z.name).join("+") || "none"}`);
+  }
+  if (errors.length) throw new Error(`console errors:\n${errors.join("\n")}`);
+  return seen.join("; ");
+}));
 
 await check(9, "temperature change → re-run reuses every stage before gcode; G-code differs only in temperature lines", async () => {
   // A baseline run of the design as it is now.
@@ -372,13 +348,12 @@ await check(9, "temperature change → re-run reuses every stage before gcode; G
   });
   const writer = order.indexOf("gcode");
   const stages = all.filter((s) => order.indexOf(s.stage) >= 0 && (writer < 0 || order.indexOf(s.stage) < writer));
-  const g = stages.length;
-  if (g < 1) throw new Error(`no stages before gcode in the report: ${JSON.stringify(all)} (job stages ${order.join(", ")})`);
-  const recomputed = stages.slice(0, g).filter((s) => !s.cached).map((s) => s.stage);
+  if (!stages.length) throw new Error(`no stages before gcode in the report: ${JSON.stringify(all)} (job stages ${order.join(", ")})`);
+  const recomputed = stages.filter((s) => !s.cached).map((s) => s.stage);
   if (recomputed.length) throw new Error(`recomputed although only the temperature changed: ${recomputed.join(", ")} (${JSON.stringify(stages)})`);
   const cards = await page.evaluate(() => window.weft.reportCards);
   const badges = cards.filter((c) => c.cached).map((c) => c.stage);
-  const shouldShow = stages.slice(0, g).map((s) => s.stage).filter((st) => cards.some((c) => c.stage === st));
+  const shouldShow = stages.map((s) => s.stage).filter((st) => cards.some((c) => c.stage === st));
   if (shouldShow.some((st) => !badges.includes(st))) throw new Error(`cards without the reused badge: ${JSON.stringify(cards)}`);
   const b = await download(page, "temp-b.gcode");
   const la = a.bytes.toString("utf8").split("\n");

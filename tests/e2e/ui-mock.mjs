@@ -5,19 +5,12 @@
 //
 //   node tests/e2e/ui-mock.mjs          (SHOTS=dir: also save screenshots there)
 import { mkdirSync } from "node:fs";
-import { dirname, join, resolve } from "node:path";
-import { fileURLToPath } from "node:url";
-import { chromium } from "playwright-core";
-import { serve } from "./server.mjs";
-import { waitReady, waitResult } from "./page-helpers.mjs";
+import { join } from "node:path";
+import { ROOT, serve } from "./server.mjs";
+import { collectErrors, launchChromium, waitReady, waitResult } from "./page-helpers.mjs";
 
-const ROOT = resolve(dirname(fileURLToPath(import.meta.url)), "../..");
-const server = await serve({ root: ROOT, pkgDir: join(ROOT, "tests/e2e/mock-pkg") });
-const browser = await chromium.launch({
-  executablePath: process.env.CHROMIUM ?? "/usr/bin/chromium",
-  args: ["--headless", "--no-sandbox", "--disable-background-networking", "--disable-component-update", "--disable-sync",
-    "--use-angle=swiftshader", "--enable-unsafe-swiftshader"],
-});
+const server = await serve({ pkgDir: join(ROOT, "tests/e2e/mock-pkg") });
+const browser = await launchChromium();
 const shots = process.env.SHOTS;
 if (shots) mkdirSync(shots, { recursive: true });
 let failed = 0;
@@ -32,9 +25,7 @@ async function check(title, fn) {
 }
 const context = await browser.newContext({ viewport: { width: 1280, height: 800 }, acceptDownloads: true });
 const page = await context.newPage();
-const errors = [];
-page.on("console", (m) => { if (m.type() === "error") errors.push(m.text()); });
-page.on("pageerror", (e) => errors.push(`uncaught: ${e.message}`));
+const errors = collectErrors(page);
 const T = 20000;
 
 await check("page starts; slots of the slice kind match the schema", async () => {

@@ -5,6 +5,8 @@
 //   WEFT_PKG_DIR=tests/e2e/mock-pkg node tests/e2e/ui-mock.mjs
 //
 // The numbers are invented; only the shapes of the values follow the contract.
+// Served as /pkg/weft.js by tests/e2e/server.mjs, so ../www/ is the page's directory.
+import { PREVIEW_BUFFERS } from "../www/protocol.js";
 
 export default async function init() {
   return {};
@@ -96,6 +98,14 @@ export function setField(json, path, valueJson) {
   if (v === null) delete o[keys.at(-1)];
   else o[keys.at(-1)] = v;
   return JSON.stringify(d, null, 2);
+}
+
+/** Points a slot's design field at the files (the real one also applies the kind's rule). */
+export function fillSlot(json, slot, names) {
+  const d = JSON.parse(json);
+  const s = SLOTS[d.job.kind]?.find((x) => x.name === slot);
+  if (!s) throw new Error(`job ${d.job.kind} has no input slot ${slot}`);
+  return setField(json, s.path, JSON.stringify(s.multiple ? { files: names } : { file: { name: names.at(-1) } }));
 }
 
 export function encodeShare(json, files) {
@@ -209,19 +219,12 @@ export class Session {
   }
 
   gcode() { return new TextEncoder().encode(this.gcodeText ?? ""); }
-  previewPositions() { return this.out?.positions ?? new Float32Array(0); }
-  previewFeature() { return this.out?.feature ?? new Uint8Array(0); }
-  previewPath() { return this.out?.path ?? new Uint32Array(0); }
-  previewFlow() { return this.out?.flow ?? new Float32Array(0); }
-  previewWidth() { return this.out?.width ?? new Float32Array(0); }
-  previewLayerStart() { return this.out?.layerStart ?? new Uint32Array(0); }
-  previewTravel() { return this.out?.travel ?? new Float32Array(0); }
-  previewTravelLayerStart() { return this.out?.travelLayerStart ?? new Uint32Array(0); }
-  previewLayerZ() { return this.out?.layerZ ?? new Float32Array(0); }
-  previewAxis() { return this.out?.axis ?? new Float32Array(0); }
-  previewSegmentMove() { return this.out?.segmentMove ?? new Uint32Array(0); }
-  previewTravelMove() { return this.out?.travelMove ?? new Uint32Array(0); }
-  bedSize() { return new Float64Array([220, 220, 250]); }
+}
+
+// The preview getters (previewPositions, …, bedSize) of protocol.js's table: the buffer of
+// the last result under the same key, empty before one.
+for (const [key, [method, Type]] of Object.entries(PREVIEW_BUFFERS)) {
+  Session.prototype[method] = function () { return this.out?.[key] ?? new Type(0); };
 }
 
 /** A stack of squares (4 segments per layer, one path each) and a travel between layers. */
@@ -249,6 +252,7 @@ function preview(layers, withAxis) {
   layerStart.push(pos.length / 6);
   travelLayerStart.push(travel.length / 6);
   return {
+    bedSize: new Float64Array([220, 220, 250]),
     positions: new Float32Array(pos), feature: new Uint8Array(feature), path: new Uint32Array(path), flow: new Float32Array(flow),
     width: new Float32Array(width), layerStart: new Uint32Array(layerStart), travel: new Float32Array(travel),
     travelLayerStart: new Uint32Array(travelLayerStart), layerZ: new Float32Array(layerZ),

@@ -137,11 +137,6 @@ impl Cache {
         Cache::default()
     }
 
-    /// Drops every output.
-    pub fn clear(&mut self) {
-        self.entries.clear();
-    }
-
     /// Cache ids held (for tests and diagnostics).
     pub fn ids(&self) -> Vec<String> {
         self.entries.keys().cloned().collect()
@@ -180,14 +175,12 @@ pub struct Ctx<'a> {
     progress: &'a mut dyn FnMut(&str, f32),
     /// Stage reports, in run order.
     pub reports: Vec<StageReport>,
-    /// Cancellation: a stage boundary checks it ([`Error::Cancelled`]).
-    pub cancel: Option<&'a dyn Fn() -> bool>,
 }
 
 impl<'a> Ctx<'a> {
     /// A context over `design` and `files` with `cache`.
     pub fn new(design: &'a Design, files: &'a Files, cache: &'a mut Cache, progress: &'a mut dyn FnMut(&str, f32)) -> Ctx<'a> {
-        Ctx { design, files, cache, progress, reports: Vec::new(), cancel: None }
+        Ctx { design, files, cache, progress, reports: Vec::new() }
     }
 
     /// Runs stage `name` (cache id `id`, usually the name) unless the cache holds its output
@@ -200,9 +193,6 @@ impl<'a> Ctx<'a> {
         P: Serialize + ?Sized,
         F: FnOnce(&mut dyn FnMut(f32)) -> Result<(T, Option<StageReport>), Error>,
     {
-        if self.cancel.is_some_and(|c| c()) {
-            return Err(Error::Cancelled);
-        }
         let key = Key::of(id, &parts, upstream);
         if let Some(e) = self.cache.entries.get(id) {
             if e.key == key {
@@ -236,20 +226,20 @@ impl<'a> Ctx<'a> {
     /// the plate: XY centred on 0, lowest point at Z = 0. `slot` names the slot for messages
     /// and for the cache id.
     pub fn mesh(&mut self, slot: &str, input: &Input) -> Result<Out<Mesh>, Error> {
-        let (parts, file_key) = match input {
-            Input::Builtin(_) => (serde_json::to_value(input).unwrap_or_default(), None),
-            Input::File { name, embedded } => match self.files.hash(name) {
-                Some(h) => (serde_json::json!({ "file": name }), Some(h)),
-                None if embedded.is_some() => (serde_json::to_value(input).unwrap_or_default(), None),
-                None => return Err(Error::MissingInput { name: name.clone(), slot: slot.to_string() }),
-            },
-            Input::Files(_) => return Err(Error::NoInput(format!("the {slot} input takes one mesh file, not several"))),
+        // A loaded file is keyed by its content; a built-in shape or an embedded file by the
+        // input itself. Missing files and several-file inputs are refused by `load_input`.
+        let file = match input {
+            Input::File { name, .. } => self.files.hash(name).map(|h| (name, h)),
+            _ => None,
+        };
+        let (parts, upstream) = match file {
+            Some((name, h)) => (serde_json::json!({ "file": name }), vec![h]),
+            None => (serde_json::to_value(input).unwrap_or_default(), Vec::new()),
         };
         let files = self.files;
         let id = format!("import:{slot}");
-        let upstream: Vec<Key> = file_key.into_iter().collect();
         self.stage("import", &id, &parts, &upstream, |_| {
-            let (mesh, report) = load_input(input, files)?;
+            let (mesh, report) = load_input(slot, input, files)?;
             let stage = report.as_ref().map(|r| {
                 StageReport::new("import", "Reading the mesh", r)
                     .metric("triangles", "Triangles", r.triangles as f64, "", "Facets in the mesh after repairs.")
@@ -257,11 +247,6 @@ impl<'a> Ctx<'a> {
             });
             Ok((mesh, stage))
         })
-    }
-
-    /// Reports progress of a stage that does not go through [`Ctx::stage`].
-    pub fn progress(&mut self, stage: &str, fraction: f32) {
-        (self.progress)(stage, fraction);
     }
 }
 
@@ -364,9 +349,6 @@ pub enum Error {
     /// Reading back failed (a bug: weft's own G-code must always analyse).
     #[error("analysing the written G-code: {0}")]
     Analyze(#[from] analyze::Error),
-    /// Cancelled at a stage boundary.
-    #[error("cancelled")]
-    Cancelled,
 }
 
 impl Error {
@@ -376,9 +358,9 @@ impl Error {
     }
 }
 
-/// Resolves a mesh input: the built-in shape, or the file (loaded, or embedded in a share
-/// link) imported; placed on the plate: XY centred on 0, lowest point at Z = 0.
-pub fn load_input(input: &Input, files: &Files) -> Result<(Mesh, Option<ImportReport>), Error> {
+/// Resolves the mesh input of `slot`: the built-in shape, or the file (loaded, or embedded in
+/// a share link) imported; placed on the plate: XY centred on 0, lowest point at Z = 0.
+fn load_input(slot: &str, input: &Input, files: &Files) -> Result<(Mesh, Option<ImportReport>), Error> {
     let (mut mesh, report) = match input {
         Input::Builtin(shape) => (shape.mesh(), None),
         Input::File { name, embedded } => {
@@ -389,12 +371,12 @@ pub fn load_input(input: &Input, files: &Files) -> Result<(Mesh, Option<ImportRe
                     unpacked = share::unpack(e).map_err(Error::Embedded)?;
                     &unpacked
                 }
-                (None, None) => return Err(Error::MissingInput { name: name.clone(), slot: "mesh".into() }),
+                (None, None) => return Err(Error::MissingInput { name: name.clone(), slot: slot.into() }),
             };
             let imported = import::read_mesh(name, bytes, &import::Options::default())?;
             (imported.mesh, Some(imported.report))
         }
-        Input::Files(_) => return Err(Error::NoInput("a mesh input takes one file, not several".into())),
+        Input::Files(_) => return Err(Error::NoInput(format!("the {slot} input takes one mesh file, not several"))),
     };
     if let Some(b) = mesh.bounds() {
         let c = (b.min + b.max) * 0.5;
@@ -437,7 +419,6 @@ pub fn run_in(
     let mut ctx = Ctx::new(design, files, cache, progress);
     let Product::Toolpath(toolpath) = kind.run(&mut ctx)?;
     let written = write_stage(&mut ctx, &toolpath)?;
-    drop(toolpath);
     let analysed = analyze_stage(&mut ctx, &written, options)?;
     let reports = std::mem::take(&mut ctx.reports);
     let report = RunReport {
@@ -465,12 +446,9 @@ fn write_stage(ctx: &mut Ctx, toolpath: &Out<Toolpath>) -> Result<Out<Written>, 
     let parts = (&design.printer, &design.material, &design.speeds, &design.name);
     ctx.stage("gcode", "gcode", &parts, &[toolpath.key], |_| {
         let g = gcode::write_gcode(toolpath, &writer_options(design))?;
-        let st = &g.stats;
-        let report = StageReport::new("gcode", "Writing G-code", st)
-            .metric("layers", "Layers", st.layers as f64, "", "Layers (or passes) written.")
-            .metric("filament", "Filament", st.filament_mm, "mm", "Filament the print uses.")
-            .metric("time", "Estimated time", st.estimated_time_s, "s", "Print time with acceleration, as a firmware plans it.")
-            .metric("size", "File size", g.text.len() as f64, "bytes", "Size of the G-code file.");
+        // Its numbers are the run report's `gcode` totals, which the page shows once, in its
+        // overall statistics; the stage report says whether the writer ran.
+        let report = StageReport::new("gcode", "Writing G-code", &g.stats);
         Ok((Written { text: Arc::new(g.text), stats: g.stats }, Some(report)))
     })
 }
@@ -486,16 +464,8 @@ fn analyze_stage(ctx: &mut Ctx, written: &Out<Written>, options: &RunOptions) ->
     let parts = (options.collect_preview, a_options.default_line_width_mm, a_options.filament_diameter_mm, &a_options.machine, &design.name);
     ctx.stage("analyze", "analyze", &parts, &[written.key], |_| {
         let a = analyze::analyze(&format!("{}.gcode", design.name), written.text.as_bytes(), &a_options)?;
-        let r = &a.report;
-        let mut report = StageReport::new("analyze", "Measuring the G-code", &serde_json::json!({}))
-            .metric("extrusion_paths", "Extrusion paths", r.extrusion_paths as f64, "", "Runs of extrusion between travels, read back from the G-code.")
-            .metric("extruded", "Extruded", r.extruded_mm, "mm", "Length printed, read back from the G-code.")
-            .metric("travel", "Travel", r.travel_mm, "mm", "Moves without extruding.")
-            .metric("retractions", "Retractions", r.retractions as f64, "", "Times the filament is pulled back before a travel.")
-            .metric("overlap", "Overlap", r.overlap_mm, "mm", "Length printed on top of earlier lines of the same layer (0 means no strut is printed twice).")
-            .metric("gippo_score", "GIPPO score", r.gippo_score, "", "Equation 1 of the GIPPO paper over the extrusion paths: higher means longer paths, fewer stops.");
-        // The full analysis is the run report's `analysis`; the stage keeps only its summary.
-        report.data = serde_json::Value::Null;
+        // The full reading is the run report's `analysis` (the page's overall statistics).
+        let report = StageReport::new("analyze", "Measuring the G-code", &serde_json::Value::Null);
         Ok((Analysed { report: a.report, preview: a.preview.map(Arc::new) }, Some(report)))
     })
 }

@@ -179,19 +179,23 @@ impl Axis {
 }
 
 impl Series {
+    fn new(name: &str, kind: Option<PlotKind>, x: XValues, y: Vec<f64>) -> Series {
+        Series { name: name.into(), kind, group_index: None, x, y }
+    }
+
     /// A numeric series.
     pub fn xy(name: &str, x: Vec<f64>, y: Vec<f64>) -> Series {
-        Series { name: name.into(), kind: None, group_index: None, x: XValues::Numbers(x), y }
+        Series::new(name, None, XValues::Numbers(x), y)
     }
 
     /// A bar series over `labels`.
     pub fn bars(name: &str, labels: &[&str], y: Vec<f64>) -> Series {
-        Series { name: name.into(), kind: None, group_index: None, x: XValues::Labels(labels.iter().map(|s| s.to_string()).collect()), y }
+        Series::new(name, None, XValues::Labels(labels.iter().map(|s| s.to_string()).collect()), y)
     }
 
     /// A horizontal reference line.
     pub fn hline(name: &str, y: f64) -> Series {
-        Series { name: name.into(), kind: Some(PlotKind::Hline), group_index: None, x: XValues::Numbers(Vec::new()), y: vec![y] }
+        Series::new(name, Some(PlotKind::Hline), XValues::Numbers(Vec::new()), vec![y])
     }
 
     /// This series for group member `i`.

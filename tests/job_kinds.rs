@@ -89,6 +89,11 @@ impl Kind for Spiral {
 
 static SPIRAL: Spiral = Spiral;
 
+/// (stage, reused) of every stage report of a run, in order.
+fn reuse(out: &pipeline::RunOutput) -> Vec<(&str, bool)> {
+    out.report.stages.iter().map(|s| (s.stage.as_str(), s.cached)).collect()
+}
+
 fn registry() -> Registry {
     Registry::builtin().with(&SPIRAL)
 }
@@ -151,8 +156,7 @@ fn a_temperature_edit_reruns_only_the_writer_and_the_analyzer() {
     assert!(first.report.stages.iter().all(|s| !s.cached));
     let hotter = design.with_overrides(&["material.bed_temp_c=70".into()]).unwrap();
     let second = run(&hotter, &mut cache);
-    let reused: Vec<(&str, bool)> = second.report.stages.iter().map(|s| (s.stage.as_str(), s.cached)).collect();
-    assert_eq!(reused, [("lattice", true), ("paths", true), ("gcode", false), ("analyze", false)]);
+    assert_eq!(reuse(&second), [("lattice", true), ("paths", true), ("gcode", false), ("analyze", false)]);
     // Same bytes as a run without a cache, and only the temperature lines differ.
     let fresh = pipeline::run(&hotter, &Files::new(), &RunOptions::default(), &mut |_, _| {}).unwrap();
     assert_eq!(second.gcode, fresh.gcode);
@@ -164,8 +168,7 @@ fn a_temperature_edit_reruns_only_the_writer_and_the_analyzer() {
     // A path setting re-runs paths onward, not the lattice.
     let euler = hotter.with_overrides(&["job.paths.method=euler".into()]).unwrap();
     let fourth = run(&euler, &mut cache);
-    let reused: Vec<(&str, bool)> = fourth.report.stages.iter().map(|s| (s.stage.as_str(), s.cached)).collect();
-    assert_eq!(reused, [("lattice", true), ("paths", false), ("gcode", false), ("analyze", false)]);
+    assert_eq!(reuse(&fourth), [("lattice", true), ("paths", false), ("gcode", false), ("analyze", false)]);
 }
 
 #[test]
@@ -180,7 +183,6 @@ fn the_layer_view_reuses_the_lattice_of_the_run() {
     assert!(ids.contains(&"domains".to_string()) && ids.contains(&"lattice".to_string()), "{ids:?}");
     // A run afterwards reuses the sliced solid and the lattice.
     let out = pipeline::run_in(&reg, &mut cache, &design, &Files::new(), &RunOptions::default(), &mut |_, _| {}).unwrap();
-    let cached: Vec<(&str, bool)> = out.report.stages.iter().map(|s| (s.stage.as_str(), s.cached)).collect();
-    assert_eq!(&cached[..2], [("slice", true), ("lattice", true)]);
+    assert_eq!(&reuse(&out)[..2], [("slice", true), ("lattice", true)]);
     assert!(matches!(pipeline::inspect(&reg, &mut cache, &design, &Files::new(), "nope", 0), Err(Error::UnknownView { .. })));
 }

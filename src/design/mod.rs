@@ -64,14 +64,7 @@ impl Job {
 
     /// A job of kind `kind` with `settings`.
     pub fn new(kind: &str, settings: &impl Serialize) -> Job {
-        let mut v = serde_json::to_value(settings).unwrap_or(Value::Null);
-        if let Value::Object(m) = &mut v {
-            let mut out = serde_json::Map::new();
-            out.insert("kind".into(), Value::String(kind.into()));
-            out.append(m);
-            v = Value::Object(out);
-        }
-        Job { value: v }
+        Job { value: crate::jobs::with_kind(kind, settings).unwrap_or(Value::Null) }
     }
 
     /// The input at the design path `path` (a slot's path, e.g. `job.input`).

@@ -120,14 +120,7 @@ impl Kind for LatticeKind {
     }
 
     fn validate(design: &Design, j: &LatticeJob, out: &mut Vec<Problem>) {
-        let nozzle = design.printer.nozzle_diameter_mm;
-        let t = j.lattice.layer_thickness_mm;
-        if t > nozzle {
-            out.push(Problem {
-                path: "job.lattice.layer_thickness_mm".into(),
-                message: format!("{} mm is thicker than the {} mm nozzle: use at most the nozzle diameter", crate::settings::fmt(t), crate::settings::fmt(nozzle)),
-            });
-        }
+        out.extend(super::thicker_than_nozzle("job.lattice.layer_thickness_mm", j.lattice.layer_thickness_mm, design.printer.nozzle_diameter_mm));
         if j.domain == Domain::Solid && j.input.is_none() {
             out.push(Problem { path: "job.input".into(), message: "a solid domain needs a solid: load a mesh or set job.input".into() });
         }
@@ -215,17 +208,19 @@ pub fn lattice_strokes(design: &Design, files: &crate::pipeline::Files) -> Resul
 /// layer thickness) and the lattice strokes on them.
 fn strokes(j: &LatticeJob, ctx: &mut Ctx) -> Result<Out<Vec<StrokeLayer>>, Error> {
     let design = ctx.design;
-    let domains: Out<Vec<LayerDomain>> = match lattice::planar_domains(&j.domain, &j.lattice) {
-        Some(d) => ctx.stage("domains", "domains", &(&j.domain, &j.lattice), &[], |_| Ok((d, None)))?,
-        None => {
+    let domains: Out<Vec<LayerDomain>> = match j.domain {
+        // Built inside the stage, so a cached run does not build them again.
+        Domain::Rectangle { .. } | Domain::Disc { .. } | Domain::TensileSpecimen { .. } => {
+            ctx.stage("domains", "domains", &(&j.domain, &j.lattice), &[], |_| Ok((lattice::planar_domains(&j.domain, &j.lattice).unwrap_or_default(), None)))?
+        }
+        Domain::Solid => {
             let input = j.input.as_ref().ok_or_else(|| Error::NoInput("a solid lattice domain needs a mesh: load one, or pass --input mesh=FILE".into()))?;
             let mesh = ctx.mesh("mesh", input)?;
             let t = j.lattice.layer_thickness_mm;
             let options = slice::Options { first_layer_height_mm: t, layer_height_mm: t, perimeters: 0, infill_density: 0.0, solid_layers: 0, ..slice::Options::default() };
             ctx.stage("slice", "domains", &options, &[mesh.key], |progress| {
                 let sliced = slice::slice(&mesh, &options, progress).map_err(|e| Error::stage("slicing", e))?;
-                let r = &sliced.report;
-                let report = StageReport::new("slice", "Slicing the solid", r).metric("layers", "Layers", r.layers as f64, "", "Layers of the solid, one lattice layer each.");
+                let report = super::slice_report(&sliced.report, "Slicing the solid");
                 let domains = sliced.layers.into_iter().map(|l| LayerDomain { z: l.z, height: l.height, regions: l.regions, handles: Vec::new() }).collect();
                 Ok((domains, Some(report)))
             })?
@@ -252,8 +247,8 @@ fn paths_report(r: &PathsReport) -> StageReport {
     let total: usize = r.layers.iter().map(|l| l.paths).sum();
     let bound: usize = r.layers.iter().map(|l| l.lower_bound_paths).sum();
     let mut report = StageReport::new("paths", "Optimising print paths", r)
-        .metric("paths", "Paths", total as f64, "", "Extrusion paths over all layers: fewer means fewer starts and stops.")
-        .metric("lower_bound", "Lower bound", bound as f64, "", "The proven minimum number of paths (half the odd-degree nodes of each connected part, at least one).");
+        .metric("paths", "Paths (all layers)", total as f64, "", "Extrusion paths over all layers: fewer means fewer starts and stops.")
+        .metric("lower_bound", "Lower bound (all layers)", bound as f64, "", "The proven minimum number of paths (half the odd-degree nodes of each connected part, at least one).");
     for (i, l) in r.layers.iter().enumerate() {
         for (key, label, value, unit, hint) in [
             ("score", "Score", l.score, "", "GIPPO equation 1: higher means longer paths and fewer of them."),
@@ -313,7 +308,7 @@ fn paths_report(r: &PathsReport) -> StageReport {
             .map(|(i, l)| TableRow {
                 group_index: None,
                 cells: vec![
-                    i.into(),
+                    (i + 1).into(),
                     l.edges.into(),
                     l.odd_nodes.into(),
                     l.lower_bound_paths.into(),

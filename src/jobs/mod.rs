@@ -150,6 +150,36 @@ pub enum Product {
     Toolpath(Out<Toolpath>),
 }
 
+/// The slice stage's report as the page shows it: the repairs made while cutting layers, each
+/// only when it happened (the layer count is in the run's overall statistics).
+pub fn slice_report(r: &crate::slice::SliceReport, label: &str) -> crate::report::StageReport {
+    let mut report = crate::report::StageReport::new("slice", label, r);
+    for (key, label, value, unit, hint) in [
+        ("gaps_closed", "Gaps closed", r.gaps_closed as f64, "", "Open outlines whose ends were joined (the mesh has small holes)."),
+        ("largest_gap", "Largest gap closed", r.largest_gap_closed_mm, "mm", "The widest hole bridged in a layer outline."),
+        ("open_contours_dropped", "Open outlines dropped", r.open_contours_dropped as f64, "", "Outlines too open to close: those parts are not printed; repair the mesh."),
+        ("layers_with_overlaps", "Layers with overlaps", r.layers_with_overlaps as f64, "", "Layers where shells overlap; they were merged into one region."),
+    ] {
+        if value > 0.0 {
+            report = report.metric(key, label, value, unit, hint);
+        }
+    }
+    report
+}
+
+/// The problem of a layer `height` thicker than the nozzle (`path` names the field): a
+/// strand cannot be squashed thicker than the hole it comes out of.
+pub fn thicker_than_nozzle(path: &str, height: f64, nozzle: f64) -> Option<Problem> {
+    (height > nozzle).then(|| Problem {
+        path: path.into(),
+        message: format!(
+            "{} mm is thicker than the {} mm nozzle: use at most the nozzle diameter",
+            crate::settings::fmt(height),
+            crate::settings::fmt(nozzle)
+        ),
+    })
+}
+
 /// A job kind, as the pipeline, the design and the page see it. Implement [`Kind`] (typed)
 /// rather than this.
 pub trait JobKind: Sync {
@@ -216,19 +246,24 @@ pub trait Kind: Sync {
     }
 }
 
-/// The typed settings of `job` (a normalised `job` object).
-pub fn settings<T: DeserializeOwned>(job: &Value) -> Result<T, Error> {
+/// The settings part of a `job` object: everything but `kind`.
+fn without_kind(job: &Value) -> Value {
     let mut v = job.clone();
     if let Value::Object(m) = &mut v {
         m.remove("kind");
     }
-    serde_json::from_value(v).map_err(|e| Error::BadJob(e.to_string()))
+    v
 }
 
-fn with_kind(name: &str, settings: &impl Serialize) -> Result<Value, serde_json::Error> {
+/// The typed settings of `job` (a normalised `job` object).
+pub fn settings<T: DeserializeOwned>(job: &Value) -> Result<T, Error> {
+    serde_json::from_value(without_kind(job)).map_err(|e| Error::BadJob(e.to_string()))
+}
+
+/// The `job` object of kind `name` with `settings`, `kind` first (as people write it).
+pub fn with_kind(name: &str, settings: &impl Serialize) -> Result<Value, serde_json::Error> {
     let mut v = serde_json::to_value(settings)?;
     if let Value::Object(m) = &mut v {
-        // `kind` first, as people write it.
         let mut out = serde_json::Map::new();
         out.insert("kind".into(), Value::String(name.into()));
         out.append(m);
@@ -267,11 +302,7 @@ impl<K: Kind> JobKind for K {
         with_kind(K::NAME, &K::Settings::default()).unwrap_or(Value::Null)
     }
     fn normalize(&self, job: &Value) -> Result<Value, serde_json::Error> {
-        let mut v = job.clone();
-        if let Value::Object(m) = &mut v {
-            m.remove("kind");
-        }
-        let s: K::Settings = serde_json::from_value(v)?;
+        let s: K::Settings = serde_json::from_value(without_kind(job))?;
         with_kind(K::NAME, &s)
     }
     fn validate(&self, design: &Design, job: &Value, out: &mut Vec<Problem>) {

@@ -4,7 +4,6 @@ use super::{Kind, Product, Slot, SlotKind, StageInfo};
 use crate::design::Input;
 use crate::geom::shapes::{self, Shape};
 use crate::pipeline::{Ctx, Error};
-use crate::report::StageReport;
 use crate::settings::{mount, Row};
 use crate::slice;
 use serde::{Deserialize, Serialize};
@@ -65,16 +64,7 @@ impl Kind for SliceKind {
     fn validate(design: &crate::design::Design, s: &SliceJob, out: &mut Vec<crate::settings::Problem>) {
         let nozzle = design.printer.nozzle_diameter_mm;
         for (path, h) in [("job.slice.layer_height_mm", s.slice.layer_height_mm), ("job.slice.first_layer_height_mm", s.slice.first_layer_height_mm)] {
-            if h > nozzle {
-                out.push(crate::settings::Problem {
-                    path: path.into(),
-                    message: format!(
-                        "{} mm is thicker than the {} mm nozzle: use at most the nozzle diameter",
-                        crate::settings::fmt(h),
-                        crate::settings::fmt(nozzle)
-                    ),
-                });
-            }
+            out.extend(super::thicker_than_nozzle(path, h, nozzle));
         }
     }
 
@@ -82,8 +72,7 @@ impl Kind for SliceKind {
         let mesh = ctx.mesh("mesh", &s.input)?;
         let sliced = ctx.stage("slice", "slice", &s.slice, &[mesh.key], |progress| {
             let sliced = slice::slice(&mesh, &s.slice, progress).map_err(|e| Error::stage("slicing", e))?;
-            let r = &sliced.report;
-            let report = StageReport::new("slice", "Slicing layers", r).metric("layers", "Layers", r.layers as f64, "", "Planar layers cut from the part.");
+            let report = super::slice_report(&sliced.report, "Slicing layers");
             Ok((sliced.toolpath, Some(report)))
         })?;
         Ok(Product::Toolpath(sliced))

@@ -267,10 +267,10 @@ pub struct Lattice {
 pub enum Error {
     /// Options outside the ranges of [`FIELDS`] (the design validator normally reports these
     /// first, with their design paths).
-    #[error("{problems}")]
+    #[error("{}", crate::settings::describe(problems))]
     BadOptions {
         /// Each value out of range, with the allowed range.
-        problems: String,
+        problems: Vec<crate::settings::Problem>,
     },
     /// A pattern parameter is unusable.
     #[error("{field} = {value} is not usable: {fix}")]
@@ -334,7 +334,7 @@ pub fn generate(
     }
     let problems = crate::settings::check(options, FIELDS, "");
     if !problems.is_empty() {
-        return Err(Error::BadOptions { problems: crate::settings::describe(&problems) });
+        return Err(Error::BadOptions { problems });
     }
     validate(&options.pattern)?;
     for o in &options.overrides {

@@ -680,7 +680,8 @@ function renderSlots() {
     list.replaceChildren(...rows);
     list.hidden = rows.length === 0;
     if (!note.classList.contains("field-error")) {
-      note.textContent = value === undefined || value === null ? "Not used by the design as it is set now." : "";
+      // An empty slot says what it is for (the slot's one line from the schema).
+      note.textContent = value === undefined || value === null ? slot.doc ?? "" : "";
     }
   }
 }

@@ -34,6 +34,7 @@ pub mod pipeline;
 pub mod settings;
 pub mod jobs;
 pub mod report;
+pub mod testgen;
 
 pub use design::Design;
 pub use pipeline::{run, RunOptions, RunOutput};

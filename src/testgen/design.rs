@@ -1,0 +1,1 @@
+//! Generators of design inputs (see the module above).

@@ -1,0 +1,1 @@
+//! Generators of gcode inputs (see the module above).

@@ -1,0 +1,1 @@
+//! Generators of mesh inputs (see the module above).

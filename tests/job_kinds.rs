@@ -2,6 +2,7 @@
 //! the schema with no edit anywhere else; the stage cache re-runs only what an edit affects.
 
 use serde::{Deserialize, Serialize};
+use weft::budget::Estimate;
 use weft::design::{schema, Design, Input};
 use weft::geom::{DVec3, Feature, Pass, PassKind, Path, PointData, PointFlow, Toolpath};
 use weft::jobs::{Inspection, Kind, Product, Registry, Shape, Slot, SlotKind, StageInfo, ViewInfo};
@@ -45,6 +46,11 @@ impl Kind for Spiral {
         if s.turns.fract() != 0.0 {
             out.push(Problem { path: "job.turns".into(), message: "whole turns only".into() });
         }
+    }
+
+    fn estimate(s: &SpiralJob, _ctx: &mut Ctx) -> Result<Vec<Estimate>, Error> {
+        let segments = s.turns * 36.0;
+        Ok(vec![Estimate::new("spiral").quantity("segments", "Segments", segments, "").cost(segments * 100.0, segments * 1e-6)])
     }
 
     fn run(s: &SpiralJob, ctx: &mut Ctx) -> Result<Product, Error> {

@@ -14,6 +14,7 @@
 pub mod lattice;
 pub mod slice;
 
+use crate::budget::Estimate;
 use crate::design::Design;
 use crate::geom::Toolpath;
 use crate::pipeline::{Ctx, Error, Out};
@@ -208,6 +209,10 @@ pub trait JobKind: Sync {
     fn slot_filled(&self, _slot: &str, job: Value) -> Value {
         job
     }
+    /// The work of the job's own stages, stated before running them (each stage's
+    /// `estimate`), in run order; the last one states `segments`, the toolpath segments the
+    /// writer will get. May import meshes (bounded by their own estimate) but runs no stage.
+    fn estimate(&self, ctx: &mut Ctx) -> Result<Vec<Estimate>, Error>;
     /// Runs the job's own stages.
     fn run(&self, ctx: &mut Ctx) -> Result<Product, Error>;
     /// Data of view `view` at `index`.
@@ -238,6 +243,8 @@ pub trait Kind: Sync {
     fn slot_filled(_slot: &str, settings: Self::Settings) -> Self::Settings {
         settings
     }
+    /// The work of its stages, stated before running (see [`JobKind::estimate`]).
+    fn estimate(settings: &Self::Settings, ctx: &mut Ctx) -> Result<Vec<Estimate>, Error>;
     /// Runs the job's stages.
     fn run(settings: &Self::Settings, ctx: &mut Ctx) -> Result<Product, Error>;
     /// Data of a view.
@@ -315,6 +322,10 @@ impl<K: Kind> JobKind for K {
             Ok(s) => with_kind(K::NAME, &K::slot_filled(slot, s)).unwrap_or(job),
             Err(_) => job,
         }
+    }
+    fn estimate(&self, ctx: &mut Ctx) -> Result<Vec<Estimate>, Error> {
+        let s: K::Settings = settings(&ctx.design.job.value)?;
+        K::estimate(&s, ctx)
     }
     fn run(&self, ctx: &mut Ctx) -> Result<Product, Error> {
         let s: K::Settings = settings(&ctx.design.job.value)?;

@@ -68,6 +68,10 @@ impl Kind for SliceKind {
         }
     }
 
+    fn estimate(_s: &SliceJob, _ctx: &mut Ctx) -> Result<Vec<crate::budget::Estimate>, Error> {
+        Ok(Vec::new())
+    }
+
     fn run(s: &SliceJob, ctx: &mut Ctx) -> Result<Product, Error> {
         let mesh = ctx.mesh("mesh", &s.input)?;
         let sliced = ctx.stage("slice", "slice", &s.slice, &[mesh.key], |progress| {

@@ -188,6 +188,9 @@ pub struct Plan {
     /// The first refusal, with its stage.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub refused: Option<(String, OverBudget)>,
+    /// The refusal as the user reads it (`stage: what would be about …, limit …: fix`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub refusal: Option<String>,
     /// Why the page should ask before running (over a soft threshold), in plain words.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub ask: Option<String>,
@@ -195,7 +198,9 @@ pub struct Plan {
 
 impl Plan {
     /// The plan of `stages` (in run order).
-    pub fn new(stages: Vec<Estimate>) -> Plan {
+    pub fn new(mut stages: Vec<Estimate>) -> Plan {
+        // A stage with nothing to state (a built-in shape's import) is left out.
+        stages.retain(|e| !e.quantities.is_empty() || e.bytes > 0.0 || e.seconds > 0.0 || e.refused.is_some());
         let seconds = stages.iter().map(|e| e.seconds).sum::<f64>();
         let peak_bytes = stages.iter().map(|e| e.bytes).fold(0.0, f64::max);
         let segments = stages.iter().map(|e| e.get("segments")).fold(0.0, f64::max);
@@ -212,7 +217,8 @@ impl Plan {
             reasons.push(format!("{} of G-code", human(gcode_bytes, "bytes")));
         }
         let ask = (!reasons.is_empty()).then(|| format!("a big job: {}", reasons.join(", ")));
-        Plan { stages, seconds, peak_bytes, segments, gcode_bytes, refused, ask }
+        let refusal = refused.as_ref().map(|(stage, r)| format!("{stage}: {r}"));
+        Plan { stages, seconds, peak_bytes, segments, gcode_bytes, refused, refusal, ask }
     }
 }
 

@@ -19,6 +19,7 @@ use weft::pipeline::{self, Files, RunOptions};
   weft run cube.json --input part.stl --out part.gcode --report part.json
   weft run dome.json --input surface=dome.stl        fill a named input slot (weft jobs lists them)
   weft run cube.json --out dense.gcode --set job.slice.infill_density=0.5 --set name=dense
+  weft run big.json --input part.stl --dry-run        state the work and check the budgets first
   weft analyze part.gcode --json                     measure any slicer's G-code
   weft share cube.json                               print a share-link fragment
   weft bench                                         run the benchmarks of BENCHMARKS.md"
@@ -50,6 +51,10 @@ enum Command {
         /// No progress on stderr.
         #[arg(long, short)]
         quiet: bool,
+        /// Only state the run's work (each stage's estimate: counts, memory, time) and whether
+        /// it is within the budgets; write nothing but the --report (the plan as JSON).
+        #[arg(long)]
+        dry_run: bool,
     },
     /// Analyse a G-code file (weft's or any other slicer's).
     Analyze {
@@ -154,6 +159,7 @@ fn cmd_run(
     inputs: &[String],
     set: &[String],
     quiet: bool,
+    dry_run: bool,
 ) -> Result<(), String> {
     let mut design = load_design(design)?;
     if !set.is_empty() {
@@ -161,6 +167,17 @@ fn cmd_run(
     }
     let mut files = Files::new();
     apply_inputs(&mut design, inputs, &mut files)?;
+    if dry_run {
+        let plan = pipeline::estimate(&Registry::builtin(), &mut pipeline::Cache::disabled(), &design, &files).map_err(|e| e.to_string())?;
+        print!("{}", plan_table(&plan));
+        if let Some(path) = report {
+            write(&path, serde_json::to_string_pretty(&plan).unwrap_or_default().as_bytes())?;
+        }
+        return match plan.refused {
+            Some((stage, r)) => Err(format!("{stage}: {r}")),
+            None => Ok(()),
+        };
+    }
     let show = !quiet && std::io::stderr().is_terminal();
     let mut last = (String::new(), -1i32);
     let mut progress = |stage: &str, f: f32| {
@@ -195,6 +212,30 @@ fn cmd_run(
         );
     }
     Ok(())
+}
+
+/// The plan as a table: one line per stage (its counts, peak memory, time), then the totals.
+fn plan_table(plan: &weft::budget::Plan) -> String {
+    use weft::budget::human;
+    let mut out = format!("{:<10} {:>10} {:>9}  {}\n", "stage", "memory", "time", "work");
+    for e in &plan.stages {
+        let work: Vec<String> = e.quantities.iter().map(|q| format!("{} {}", q.label.to_lowercase(), human(q.value, q.unit))).collect();
+        out += &format!("{:<10} {:>10} {:>9}  {}\n", e.stage, human(e.bytes, "bytes"), human(e.seconds, "s"), work.join(", "));
+    }
+    out += &format!(
+        "total: about {}, peak {}, {} segments, {} of G-code\n",
+        human(plan.seconds, "s"),
+        human(plan.peak_bytes, "bytes"),
+        human(plan.segments, ""),
+        human(plan.gcode_bytes, "bytes")
+    );
+    if let Some(ask) = &plan.ask {
+        out += &format!("{ask} (the page asks before running it)\n");
+    }
+    if plan.refused.is_none() {
+        out += "within the budgets\n";
+    }
+    out
 }
 
 fn hms(s: f64) -> String {
@@ -249,7 +290,7 @@ fn cmd_jobs() {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
-        Command::Run { design, out, report, input, set, quiet } => cmd_run(&design, out, report, &input, &set, quiet),
+        Command::Run { design, out, report, input, set, quiet, dry_run } => cmd_run(&design, out, report, &input, &set, quiet, dry_run),
         Command::Analyze { file, json } => cmd_analyze(&file, json),
         Command::New => {
             print!("{}", Design::default().to_json_pretty());

@@ -7,6 +7,7 @@
 //! whose inputs changed — a temperature edit re-runs only G-code and analysis.
 
 use crate::analyze::{self, Preview};
+use crate::budget::{Estimate, Plan};
 use crate::design::{share, Design, Input};
 use crate::gcode::{self, GcodeStats};
 use crate::geom::{DVec3, Mesh, Toolpath};
@@ -132,7 +133,8 @@ impl Cache {
         Cache { entries: BTreeMap::new(), enabled: true }
     }
 
-    /// No caching: every stage runs and nothing is kept after the run (the CLI, one run).
+    /// No caching: every stage runs once and nothing is kept after the run (the CLI, one run);
+    /// only imported meshes are kept, between the run's estimate and its stages.
     pub fn disabled() -> Cache {
         Cache::default()
     }
@@ -175,12 +177,15 @@ pub struct Ctx<'a> {
     progress: &'a mut dyn FnMut(&str, f32),
     /// Stage reports, in run order.
     pub reports: Vec<StageReport>,
+    /// Cache ids whose report is in `reports` (a stage reached twice in one run, e.g. an
+    /// import by the estimate and then by the run, reports once).
+    reported: Vec<String>,
 }
 
 impl<'a> Ctx<'a> {
     /// A context over `design` and `files` with `cache`.
     pub fn new(design: &'a Design, files: &'a Files, cache: &'a mut Cache, progress: &'a mut dyn FnMut(&str, f32)) -> Ctx<'a> {
-        Ctx { design, files, cache, progress, reports: Vec::new() }
+        Ctx { design, files, cache, progress, reports: Vec::new(), reported: Vec::new() }
     }
 
     /// Runs stage `name` (cache id `id`, usually the name) unless the cache holds its output
@@ -198,8 +203,11 @@ impl<'a> Ctx<'a> {
             if e.key == key {
                 if let Ok(value) = e.value.clone().downcast::<T>() {
                     if let Some(mut r) = e.report.clone() {
-                        r.cached = true;
-                        self.reports.push(r);
+                        if !self.reported.iter().any(|i| i == id) {
+                            r.cached = true;
+                            self.reports.push(r);
+                            self.reported.push(id.to_string());
+                        }
                     }
                     (self.progress)(name, 1.0);
                     return Ok(Out { value, key });
@@ -215,11 +223,30 @@ impl<'a> Ctx<'a> {
         let value = Arc::new(value);
         if let Some(r) = &report {
             self.reports.push(r.clone());
+            self.reported.push(id.to_string());
         }
-        if self.cache.enabled {
+        // A disabled cache still keeps imported meshes for the run: the estimate made before
+        // the run imports them, and the run must not parse them again.
+        if self.cache.enabled || id.starts_with("import:") {
             self.cache.entries.insert(id.to_string(), Entry { key, value: value.clone(), report });
         }
         Ok(Out { value, key })
+    }
+
+    /// The importer's statement of its work on `input` (a slot's [`Input`]), before parsing it:
+    /// refused over the importer's limits. A built-in shape costs nothing worth stating.
+    pub fn import_estimate(&self, slot: &str, input: &Input) -> Result<Estimate, Error> {
+        let Input::File { name, embedded } = input else { return Ok(Estimate::new("import")) };
+        let unpacked;
+        let bytes: &[u8] = match (self.files.get(name), embedded) {
+            (Some(b), _) => b,
+            (None, Some(e)) => {
+                unpacked = share::unpack(e).map_err(Error::Embedded)?;
+                &unpacked
+            }
+            (None, None) => return Err(Error::MissingInput { name: name.clone(), slot: slot.into() }),
+        };
+        Ok(import::estimate(name, bytes)?)
     }
 
     /// The mesh of `input` (a slot's [`Input`]), imported once per file content and placed on
@@ -349,6 +376,14 @@ pub enum Error {
     /// Reading back failed (a bug: weft's own G-code must always analyse).
     #[error("analysing the written G-code: {0}")]
     Analyze(#[from] analyze::Error),
+    /// The run's estimate is over a budget or a limit (stated before running anything).
+    #[error("{stage}: {source}")]
+    TooBig {
+        /// The stage whose estimate is over.
+        stage: String,
+        /// What, the limit and the fix.
+        source: crate::budget::OverBudget,
+    },
 }
 
 impl Error {
@@ -417,6 +452,10 @@ pub fn run_in(
         .get(design.job.kind())
         .ok_or_else(|| Error::UnknownKind { kind: design.job.kind().into(), known: registry.names().join(", ") })?;
     let mut ctx = Ctx::new(design, files, cache, progress);
+    let plan = plan(kind, &mut ctx)?;
+    if let Some((stage, source)) = plan.refused {
+        return Err(Error::TooBig { stage, source });
+    }
     let Product::Toolpath(toolpath) = kind.run(&mut ctx)?;
     let written = write_stage(&mut ctx, &toolpath)?;
     let analysed = analyze_stage(&mut ctx, &written, options)?;
@@ -429,6 +468,32 @@ pub fn run_in(
         analysis: analysed.report.clone(),
     };
     Ok(RunOutput { gcode: written.text.clone(), report, preview: analysed.preview.clone() })
+}
+
+/// The run's plan (`weft run --dry-run`, the page's question before a big run): every
+/// stage's estimate in run order, made before running any stage but the imports (which are
+/// bounded by their own estimates and kept for the run).
+pub fn estimate(registry: &Registry, cache: &mut Cache, design: &Design, files: &Files) -> Result<Plan, Error> {
+    let kind = registry
+        .get(design.job.kind())
+        .ok_or_else(|| Error::UnknownKind { kind: design.job.kind().into(), known: registry.names().join(", ") })?;
+    let mut quiet = |_: &str, _: f32| {};
+    let mut ctx = Ctx::new(design, files, cache, &mut quiet);
+    plan(kind, &mut ctx)
+}
+
+/// The job's stage estimates, then the writer's and the analyzer's (unless a job stage is
+/// already refused).
+fn plan(kind: &dyn crate::jobs::JobKind, ctx: &mut Ctx) -> Result<Plan, Error> {
+    let mut stages = kind.estimate(ctx)?;
+    if stages.iter().all(|e| e.refused.is_none()) {
+        let segments = stages.last().map_or(0.0, |e| e.get("segments"));
+        let writer = gcode::estimate(segments, &writer_options(ctx.design));
+        let analyzer = analyze::estimate(writer.get("gcode_bytes"), &analyzer_options(ctx.design, &RunOptions { collect_preview: true }));
+        stages.push(writer);
+        stages.push(analyzer);
+    }
+    Ok(Plan::new(stages))
 }
 
 /// The printer, material, speeds and name: what the writer reads of the design.
@@ -453,14 +518,19 @@ fn write_stage(ctx: &mut Ctx, toolpath: &Out<Toolpath>) -> Result<Out<Written>, 
     })
 }
 
-fn analyze_stage(ctx: &mut Ctx, written: &Out<Written>, options: &RunOptions) -> Result<Out<Analysed>, Error> {
-    let design = ctx.design;
-    let a_options = analyze::Options {
+/// What the analyzer reads of the design.
+fn analyzer_options(design: &Design, options: &RunOptions) -> analyze::Options {
+    analyze::Options {
         collect_preview: options.collect_preview,
         default_line_width_mm: design.printer.nozzle_diameter_mm,
         filament_diameter_mm: design.printer.filament_diameter_mm,
         machine: design.printer.machine.clone(),
-    };
+    }
+}
+
+fn analyze_stage(ctx: &mut Ctx, written: &Out<Written>, options: &RunOptions) -> Result<Out<Analysed>, Error> {
+    let design = ctx.design;
+    let a_options = analyzer_options(design, options);
     let parts = (options.collect_preview, a_options.default_line_width_mm, a_options.filament_diameter_mm, &a_options.machine, &design.name);
     ctx.stage("analyze", "analyze", &parts, &[written.key], |_| {
         let a = analyze::analyze(&format!("{}.gcode", design.name), written.text.as_bytes(), &a_options)?;

@@ -216,6 +216,14 @@ impl Session {
         to_js(&out.report)
     }
 
+    /// The run's plan before running it (every stage's estimate; `ask` when the page should
+    /// ask first, `refused` when a budget is exceeded): see [`crate::budget::Plan`].
+    pub fn estimate(&mut self, design_json: &str) -> Result<JsValue, JsError> {
+        let design = Design::from_json("design", design_json).map_err(js_err)?;
+        let plan = pipeline::estimate(&self.registry, &mut self.cache, &design, &self.files).map_err(js_err)?;
+        to_js(&plan)
+    }
+
     /// Data of view `view` at `index` of the design's job: `{view, shape, index, count,
     /// stride, data: Float32Array, meta}`.
     pub fn inspect(&mut self, design_json: &str, view: &str, index: usize) -> Result<JsValue, JsError> {

@@ -41,6 +41,8 @@ const state = {
   files: new Map(),
   /** last result shown: {report, gcode: Uint8Array, fileName, ms} */
   result: null,
+  /** the plan (every stage's estimate) of the last run asked for */
+  plan: null,
   /** chosen group (e.g. layer) per stage card */
   groups: new Map(),
 };
@@ -147,7 +149,8 @@ function openShare(fragment) {
   }
   setDesign(json);
   if (askForMissing("This design")) return;
-  runDesign();
+  // A link is untrusted and tiny: what it asks for is estimated before anything runs.
+  runDesign({ fromLink: true });
 }
 
 /** Says which named files are missing (and where they go); true when some are. */
@@ -1186,7 +1189,13 @@ function cancel() {
 // ---------------------------------------------------------------------------------------
 let latestRun = 0;
 
-async function runDesign() {
+/**
+ * Runs the design after stating its work: a run over a budget is refused with the estimate's
+ * message, a big one (over the soft thresholds of the plan) is asked about first.
+ * @param {{confirmed?: boolean, fromLink?: boolean}} opts  confirmed: the user said "run
+ *   anyway"; fromLink: opened from a share link (which never runs a big job by itself)
+ */
+async function runDesign({ confirmed = false, fromLink = false } = {}) {
   const missing = missingFiles();
   if (missing.length) {
     const { slot, name } = missing[0];
@@ -1200,6 +1209,18 @@ async function runDesign() {
   const ext = gcodeExtension();
   jobs.stages = jobKind().stages ?? [];
   try {
+    const { plan } = await workers.request({ type: MSG.ESTIMATE, design: state.json });
+    state.plan = plan;
+    if (plan.refusal) {
+      showError(`${plan.refusal}\nNothing was run; your design is kept.`);
+      return;
+    }
+    if (plan.ask && !confirmed) {
+      const opened = fromLink ? "This shared design was opened without running it: it is " : "This is ";
+      showNotice(`${opened}${plan.ask}, peak memory ${humanBytes(plan.peak_bytes)}. Run it anyway?`, null,
+        { label: "Run anyway", run: () => runDesign({ confirmed: true }) });
+      return;
+    }
     const res = await workers.request({ type: MSG.RUN, design: state.json }, (s, f) => jobs.progress(s, f));
     if (mine === latestRun) showResult(res, `${name}.${ext}`);
   } catch (err) {
@@ -1472,9 +1493,24 @@ function hideError() {
 function hideErrorUnlessCrash() {
   if (Date.now() - crashShownAt > 8000) hideError();
 }
-function showNotice(message, link) {
+/**
+ * Shows a notice (as text); with `link`, a read-only field holding it; with `action`, a
+ * button that runs `action.run` and closes the notice.
+ */
+function showNotice(message, link, action) {
   const text = $("notice-text");
   text.textContent = message;
+  if (action) {
+    const button = document.createElement("button");
+    button.type = "button";
+    button.className = "notice-action";
+    button.textContent = action.label;
+    button.addEventListener("click", () => {
+      $("notice").hidden = true;
+      action.run();
+    });
+    text.append(" ", button);
+  }
   if (link) {
     const input = document.createElement("input");
     input.id = "share-url";
@@ -1490,6 +1526,17 @@ function showNotice(message, link) {
 // ---------------------------------------------------------------------------------------
 // Helpers
 // ---------------------------------------------------------------------------------------
+/** Bytes as a person reads them. */
+function humanBytes(n) {
+  const units = ["bytes", "KiB", "MiB", "GiB"];
+  let i = 0;
+  while (n >= 1024 && i < units.length - 1) {
+    n /= 1024;
+    i++;
+  }
+  return `${n >= 100 || i === 0 ? Math.round(n) : n.toFixed(1)} ${units[i]}`;
+}
+
 function messageOf(err) {
   if (err instanceof Error) return err.message || String(err);
   return typeof err === "string" ? err : JSON.stringify(err);

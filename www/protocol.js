@@ -1,7 +1,7 @@
 // Messages between the page (main.js) and the wasm worker (worker.js).
 //
 // Every request from the page carries an `id`; the worker answers each request with exactly
-// one `loaded` / `result` / `inspected` / `error` message bearing the same id (plus any number
+// one `loaded` / `estimated` / `result` / `inspected` / `error` message bearing the same id (plus any number
 // of `progress` messages for `run` and `analyze`); `unload` and `cancel` are not answered
 // unless they fail. Bytes travel in ArrayBuffers listed in the transfer list of postMessage,
 // so they move between threads instead of being copied.
@@ -18,6 +18,8 @@ export const MSG = Object.freeze({
   UNLOAD: "unload",
   /** Run a design. @see RunRequest */
   RUN: "run",
+  /** State a design's work before running it (answered by `estimated`). @see EstimateRequest */
+  ESTIMATE: "estimate",
   /** Analyse a G-code file. @see AnalyzeRequest */
   ANALYZE: "analyze",
   /** One index of one of the job kind's views (answered by `inspected`). @see InspectRequest */
@@ -33,6 +35,8 @@ export const MSG = Object.freeze({
   PROGRESS: "progress",
   /** Answer to `run` / `analyze`. @see ResultMessage */
   RESULT: "result",
+  /** Answer to `estimate`. @see EstimatedMessage */
+  ESTIMATED: "estimated",
   /** Answer to `inspect`. @see InspectedMessage */
   INSPECTED: "inspected",
   /** A request failed (or the module could not start). @see ErrorMessage */
@@ -79,6 +83,20 @@ export const PREVIEW_BUFFERS = Object.freeze({
  * @property {"run"} type
  * @property {number} id
  * @property {string} design   design JSON
+ */
+/**
+ * @typedef {Object} EstimateRequest
+ * @property {"estimate"} type
+ * @property {number} id
+ * @property {string} design   design JSON
+ */
+/**
+ * @typedef {Object} EstimatedMessage
+ * @property {"estimated"} type
+ * @property {number} id
+ * @property {{stages: Object[], seconds: number, peak_bytes: number, segments: number,
+ *   gcode_bytes: number, ask?: string, refused?: [string, {what: string, value: number,
+ *   limit: number, unit: string, fix: string}]}} plan  every stage's estimate (budget::Plan)
  */
 /**
  * @typedef {Object} AnalyzeRequest

@@ -53,6 +53,9 @@ function handle(msg) {
         postResult(msg.id, "run", report, t0);
         break;
       }
+      case MSG.ESTIMATE:
+        self.postMessage({ type: MSG.ESTIMATED, id: msg.id, plan: plain(session.estimate(msg.design)) });
+        break;
       case MSG.ANALYZE: {
         const t0 = performance.now();
         self.postMessage({ type: MSG.PROGRESS, id: msg.id, stage: "analyze", fraction: 0 });

@@ -210,3 +210,9 @@ pub fn analyze(file: &str, bytes: &[u8], options: &Options) -> Result<Analysis, 
     }
     machine::run(file, bytes, options)
 }
+
+/// PROVISIONAL (replaced by the analyzer's own estimate when issue 7's analyzer work merges):
+/// the analyzer's work on `gcode_bytes` of G-code.
+pub fn estimate(gcode_bytes: f64, _options: &Options) -> crate::budget::Estimate {
+    crate::budget::Estimate::new("analyze").cost(3.0 * gcode_bytes, gcode_bytes * 1e-8).budgets("a smaller G-code file")
+}

@@ -351,6 +351,9 @@ pub enum Error {
         /// How far the lowest point is below the plate (Z < 0), mm; 0 when it is not.
         below_plate_mm: f64,
     },
+    /// The G-code would be too big (stated before writing).
+    #[error(transparent)]
+    TooBig(#[from] crate::budget::OverBudget),
     /// A template names a placeholder the writer does not know.
     #[error("{template}: unknown placeholder {{{name}}}; use one of {known}")]
     UnknownPlaceholder {
@@ -424,6 +427,47 @@ fn outside_bed_message(size: &[f64; 3], bed: &[f64; 3], below: f64) -> String {
     )
 }
 
+/// Largest G-code file the writer makes, bytes (256 MiB). The text is held in memory twice
+/// on the page (wasm and the download's copy) and read back by the analyzer, whose own
+/// memory grows with it; PrusaSlicer's largest everyday files are around 100 MB.
+pub const MAX_GCODE_BYTES: f64 = 256.0 * crate::budget::MIB;
+/// G-code bytes per toolpath segment: a `G1 X… Y… E…` line (about 27 bytes) plus each
+/// segment's share of travels, retractions and layer comments (measured on the examples:
+/// 24–33).
+const GCODE_BYTES_PER_SEGMENT: f64 = 30.0;
+/// Writer time per segment on the reference machine, s (`cargo run --release --example
+/// slice_bench`: 0.25–0.7 µs).
+const SECONDS_PER_SEGMENT: f64 = 0.5e-6;
+
+/// The writer's work for a toolpath of `segments` segments (extrusions, travels and approach
+/// points): G-code bytes, peak memory (the text, grown by doubling) and time; refused over
+/// [`MAX_GCODE_BYTES`].
+pub fn estimate(segments: f64, options: &Options) -> crate::budget::Estimate {
+    let templates = (options.printer.start_gcode.len() + options.printer.end_gcode.len()) as f64;
+    let gcode = segments * GCODE_BYTES_PER_SEGMENT + templates + 2048.0;
+    crate::budget::Estimate::new("gcode")
+        .quantity("segments", "Toolpath segments", segments, "")
+        .quantity("gcode_bytes", "G-code", gcode, "bytes")
+        .cost(2.0 * gcode, segments * SECONDS_PER_SEGMENT)
+        .limit("the G-code", gcode, MAX_GCODE_BYTES, "bytes", "print fewer or thicker layers, less infill, or a smaller part")
+        .budgets("print fewer or thicker layers, less infill, or a smaller part")
+}
+
+/// Segments the writer gets from `toolpath`: path segments plus approach points (travels).
+pub fn segments(toolpath: &Toolpath) -> usize {
+    toolpath.passes.iter().flat_map(|l| &l.paths).map(|p| p.points.len().saturating_sub(1) + p.approach.as_ref().map_or(0, Vec::len) + 1).sum()
+}
+
+/// Checks that a part of `size_mm` (X, Y, Z), centred on the plate and standing on it, fits
+/// `printer`'s bed: jobs call it before slicing, so a part too big is refused with its real
+/// size before any work (the writer checks the toolpath itself again).
+pub fn check_fits(size_mm: [f64; 3], printer: &Printer) -> Result<(), Error> {
+    let bed = printer.bed_size_mm;
+    let eps = 1e-6;
+    let fits = size_mm.iter().all(|v| v.is_finite()) && (0..3).all(|k| size_mm[k] <= bed[k] + eps);
+    if fits { Ok(()) } else { Err(Error::OutsideBed { size_mm, bed_mm: bed, below_plate_mm: 0.0 }) }
+}
+
 /// Writes `toolpath` as G-code.
 ///
 /// Layout: a comment header with totals (PrusaSlicer and Cura styles), the start template,
@@ -478,6 +522,7 @@ fn outside_bed_message(size: &[f64; 3], bed: &[f64; 3], below: f64) -> String {
 /// Options are expected to be physically sensible (positive diameters, speeds and heights);
 /// a non-finite number would be written as `0`.
 pub fn write_gcode(toolpath: &Toolpath, options: &Options) -> Result<Gcode, Error> {
+    estimate(segments(toolpath) as f64, options).check()?;
     writer::write(toolpath, options)
 }
 

@@ -168,6 +168,14 @@ pub fn slice_report(r: &crate::slice::SliceReport, label: &str) -> crate::report
     report
 }
 
+/// Refuses a placed `mesh` that does not fit the design's printer, before any slicing: the
+/// message gives the part's real size and the bed's.
+pub fn part_fits(design: &Design, mesh: &crate::geom::Mesh) -> Result<(), Error> {
+    let Some(b) = mesh.bounds() else { return Ok(()) };
+    let size = b.max - b.min;
+    crate::gcode::check_fits([size.x, size.y, size.z], &design.printer).map_err(|e| Error::stage("the part", e))
+}
+
 /// The problem of a layer `height` thicker than the nozzle (`path` names the field): a
 /// strand cannot be squashed thicker than the hole it comes out of.
 pub fn thicker_than_nozzle(path: &str, height: f64, nozzle: f64) -> Option<Problem> {

@@ -1,5 +1,6 @@
 //! The `slice` job: a solid sliced into planar layers of perimeters and rectilinear infill.
 
+use crate::budget::Estimate;
 use super::{Kind, Product, Slot, SlotKind, StageInfo};
 use crate::design::Input;
 use crate::geom::shapes::{self, Shape};
@@ -68,12 +69,19 @@ impl Kind for SliceKind {
         }
     }
 
-    fn estimate(_s: &SliceJob, _ctx: &mut Ctx) -> Result<Vec<crate::budget::Estimate>, Error> {
-        Ok(Vec::new())
+    fn estimate(s: &SliceJob, ctx: &mut Ctx) -> Result<Vec<Estimate>, Error> {
+        let import = ctx.import_estimate("mesh", &s.input)?;
+        if import.refused.is_some() {
+            return Ok(vec![import]);
+        }
+        let mesh = ctx.mesh("mesh", &s.input)?;
+        super::part_fits(ctx.design, &mesh)?;
+        Ok(vec![import, slice::estimate(&mesh, &s.slice)])
     }
 
     fn run(s: &SliceJob, ctx: &mut Ctx) -> Result<Product, Error> {
         let mesh = ctx.mesh("mesh", &s.input)?;
+        super::part_fits(ctx.design, &mesh)?;
         let sliced = ctx.stage("slice", "slice", &s.slice, &[mesh.key], |progress| {
             let sliced = slice::slice(&mesh, &s.slice, progress).map_err(|e| Error::stage("slicing", e))?;
             let report = super::slice_report(&sliced.report, "Slicing layers");

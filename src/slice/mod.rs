@@ -18,6 +18,7 @@
 //! each layer is cut at its middle, and layers are made while that middle is below the top
 //! of the mesh.
 
+mod estimate;
 mod infill;
 mod order;
 mod perimeters;
@@ -31,8 +32,14 @@ use crate::geom::{DVec2, Feature, Mesh, Polygon, Toolpath, Pass};
 use i_overlay::i_shape::int::shape::{IntShape, IntShapes};
 use serde::{Deserialize, Serialize};
 
+pub use estimate::estimate;
+
 /// Most layers a slice may have ([`Error::TooManyLayers`] beyond).
 pub const MAX_LAYERS: usize = 100_000;
+/// Farthest a mesh point may lie from the plate centre, mm (100 m). Regions are computed in
+/// integer micrometres (i32: ±2,147 m) and their offsets and areas multiply coordinates; a
+/// mesh beyond this is almost always in the wrong units, and no printer is this big.
+pub const MAX_COORD_MM: f64 = 100_000.0;
 
 /// Default first layer height, mm.
 pub const DEFAULT_FIRST_LAYER_HEIGHT_MM: f64 = 0.2;
@@ -140,6 +147,9 @@ pub enum Error {
         /// Each value out of range, with the allowed range.
         problems: Vec<crate::settings::Problem>,
     },
+    /// Over a budget or a limit (stated by [`estimate`], checked before slicing).
+    #[error(transparent)]
+    TooBig(#[from] crate::budget::OverBudget),
     /// The mesh lies below the plate or is too tall for the layer count limit.
     #[error("the mesh would need {layers} layers (limit {limit}); raise layer_height_mm or scale the mesh down")]
     TooManyLayers {
@@ -171,6 +181,17 @@ pub const FIELDS: &[Field] = &[
 
 /// Layer tops, heights and cutting heights for a mesh whose top is at `top` mm: layers are
 /// made while their middle is below `top`.
+/// How many layers [`layer_stack`] makes below `top`, without making them.
+fn layer_stack_len(o: &Options, top: f64) -> usize {
+    let (f, h) = (o.first_layer_height_mm, o.layer_height_mm);
+    if !(f / 2.0 < top) {
+        return 0;
+    }
+    // Layer i ≥ 1 is cut at f + i·h − h/2, which must stay below `top`.
+    let more = ((top - f + h / 2.0) / h).ceil() - 1.0;
+    1 + more.clamp(0.0, 1e15) as usize
+}
+
 fn layer_stack(o: &Options, top: f64) -> Result<Vec<(f64, f64, f64)>, Error> {
     let estimate = ((top - o.first_layer_height_mm) / o.layer_height_mm).max(0.0) + 2.0;
     if estimate > MAX_LAYERS as f64 + 1.0 {
@@ -243,6 +264,7 @@ pub fn slice(mesh: &Mesh, options: &Options, progress: &mut dyn FnMut(f32)) -> R
     if mesh.triangles.is_empty() {
         return Err(Error::EmptyMesh);
     }
+    estimate(mesh, options).check()?;
     let o = options;
     let mut sweep = plane::Sweep::new(mesh);
     let top = match sweep.top {
@@ -404,6 +426,12 @@ mod tests {
         assert_eq!(layer_stack(&o, 0.15).unwrap().len(), 1);
         assert_eq!(layer_stack(&o, 0.05).unwrap().len(), 0, "a plate-thin mesh is never cut");
         assert!(matches!(layer_stack(&o, 1e6), Err(Error::TooManyLayers { .. })));
+        for top in [0.05, 0.1, 0.15, 0.2, 0.3, 0.31, 20.0, 20.05, 20.1, 33.333] {
+            for (f, h) in [(0.2, 0.2), (0.3, 0.1), (0.1, 0.25)] {
+                let o = Options { first_layer_height_mm: f, layer_height_mm: h, ..Options::default() };
+                assert_eq!(layer_stack_len(&o, top), layer_stack(&o, top).unwrap().len(), "top {top}, first {f}, height {h}");
+            }
+        }
     }
 
     #[test]

@@ -76,6 +76,12 @@ function cli(args) {
 const waitResult = (page, before, what) => waitResultWithin(page, before, what, JOB_TIMEOUT);
 const download = (page, what) => downloadGcode(page, join(OUT, what));
 
+/** A big job is asked about before it runs: says yes when the page asks. */
+async function runAnywayIfAsked(page) {
+  const button = await page.waitForSelector("#notice .notice-action", { timeout: 3000 }).catch(() => null);
+  if (button) await button.click();
+}
+
 async function dropFile(page, name, buffer, mimeType = "application/octet-stream") {
   await page.setInputFiles("#file", { name, mimeType, buffer });
 }
@@ -266,6 +272,7 @@ await check(7, "Cancel stops a long job, restarts the worker, and a short run wo
   const gen = await p.evaluate(() => window.weft.workerGeneration);
   const t0 = Date.now();
   await p.click("#slice");
+  await runAnywayIfAsked(p);
   const shown = await p.waitForSelector("#progress:not([hidden])", { timeout: 15000 }).catch(() => null);
   if (!shown) {
     const count = await p.evaluate(() => window.weft.resultCount);
@@ -415,6 +422,51 @@ await check(16, "every example run in Chromium gives the G-code recorded in test
   await context.close();
   if (wrong.length) throw new Error(wrong.join("; "));
   return `${files.length} examples byte-identical to the native golden hashes`;
+});
+
+await check(17, "hostile share links: a name of HTML stays text and runs nothing; a big job opens without running (Run anyway asks); one over a budget is refused before running", async () => {
+  const design = JSON.parse(cli(["new"]));
+  design.name = "<img src=x onerror=alert(1)>";
+  design.job.input = { builtin: { shape: "cube", size: [200, 200, 200] } };
+  design.job.slice.layer_height_mm = 0.05;
+  design.job.slice.first_layer_height_mm = 0.05;
+  const bigPath = join(OUT, "hostile-big.json");
+  writeFileSync(bigPath, JSON.stringify(design));
+  const big = cli(["share", bigPath]).trim();
+  design.job.slice.layer_height_mm = 0.01;
+  design.job.slice.first_layer_height_mm = 0.01;
+  design.job.slice.infill_density = 1;
+  writeFileSync(bigPath, JSON.stringify(design));
+  const huge = cli(["share", bigPath]).trim();
+  const seen = [];
+  const { page: p, context, errors } = await newPage();
+  try {
+    p.on("dialog", (d) => { seen.push(d.message()); d.dismiss().catch(() => {}); });
+    await p.goto(`${base}/www/${big.slice(big.indexOf("#"))}`);
+    await waitReady(p);
+    await p.waitForSelector("#notice:not([hidden]) .notice-action", { timeout: 20000 });
+    const notice = await p.textContent("#notice-text");
+    if (!/without running/.test(notice)) throw new Error(`unclear notice: ${notice}`);
+    const state = await p.evaluate(() => ({
+      name: JSON.parse(window.weft.design).name, count: window.weft.resultCount, busy: window.weft.busy,
+      imgs: document.querySelectorAll("img").length, shown: document.querySelector("#name, [data-path='name']")?.value ?? null,
+    }));
+    if (state.name !== design.name) throw new Error(`the name was changed to ${state.name}`);
+    if (state.count !== 0 || state.busy) throw new Error("the big shared design ran by itself");
+    if (state.imgs) throw new Error(`${state.imgs} <img> elements appeared: a name became HTML`);
+    await p.goto(`${base}/www/${huge.slice(huge.indexOf("#"))}`);
+    await waitReady(p);
+    await p.waitForSelector("#error:not([hidden])", { timeout: 20000 });
+    const error = await p.textContent("#error-text");
+    if (!/limit/.test(error) || !/Nothing was run/.test(error)) throw new Error(`unclear refusal: ${error}`);
+    if (await p.evaluate(() => window.weft.resultCount)) throw new Error("the design over the budget ran");
+    if (await p.evaluate(() => document.querySelectorAll("img").length)) throw new Error("a name became HTML");
+    if (seen.length) throw new Error(`a script ran: dialog "${seen[0]}"`);
+    if (errors.length) throw new Error(`console errors:\n${errors.join("\n")}`);
+    return `asked: "${notice.slice(0, 80)}…"; refused: "${error.split("\n")[0].slice(0, 100)}"`;
+  } finally {
+    await context.close();
+  }
 });
 
 if (main.errors.length) console.log(`note: console errors in the main page:\n  ${main.errors.join("\n  ")}`);

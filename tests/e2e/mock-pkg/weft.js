@@ -156,6 +156,19 @@ export class Session {
     this.files.delete(name);
   }
 
+  /** A plan like budget::Plan: designs named `big-*` ask first, `huge-*` are refused. */
+  estimate(designJson) {
+    const d = JSON.parse(designJson);
+    const big = /^big/.test(d.name), huge = /^huge/.test(d.name);
+    const plan = { stages: [], seconds: big ? 40 : 0.1, peak_bytes: 1e6, segments: 1e4, gcode_bytes: 3e5 };
+    if (big) plan.ask = "a big job: about 40 s";
+    if (huge) {
+      plan.refused = ["lattice", { what: "struts on one layer", value: 1.85e7, limit: 2e6, unit: "", fix: "use cells ≥ 0.6 mm" }];
+      plan.refusal = "lattice: struts on one layer would be about 18.5M, limit 2M: use cells ≥ 0.6 mm";
+    }
+    return plan;
+  }
+
   run(designJson, onProgress) {
     const d = JSON.parse(designJson);
     const kind = d.job.kind;

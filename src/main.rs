@@ -90,6 +90,16 @@ enum Command {
         /// Run only the stage-cache benchmark (full run, then a re-run after a temperature edit).
         #[arg(long)]
         cache: bool,
+        /// Run only the scaling benchmark: every parser and stage at 1×, 4× and 16× its input,
+        /// time and peak memory, with the growth exponent of each.
+        #[arg(long)]
+        scaling: bool,
+        /// One scaling case in this process (used by --scaling, one child per measurement).
+        #[arg(long, hide = true)]
+        scaling_case: Option<String>,
+        /// The scale of --scaling-case.
+        #[arg(long, hide = true, default_value_t = 1)]
+        scale: usize,
     },
     /// Write a lattice design's printed struts as an STL (a box per strut) for other slicers.
     ExportStl {
@@ -287,6 +297,60 @@ fn cmd_jobs() {
     }
 }
 
+/// This process's peak resident memory, KiB (Linux).
+fn peak_kib() -> Option<u64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    line.split_whitespace().nth(1)?.parse().ok()
+}
+
+/// `weft bench --scaling`: each case at each scale in a child process (so each peak memory is
+/// its own), then the growth exponents of time and of memory above an idle child's.
+fn scaling_bench() -> Result<(), String> {
+    use weft::bench::scaling::{cases, exponent, MAX_EXPONENT, SCALES};
+    let exe = std::env::current_exe().map_err(|e| e.to_string())?;
+    let child = |name: &str, scale: usize| -> Result<(f64, f64, f64), String> {
+        let out = std::process::Command::new(&exe)
+            .args(["bench", "--scaling-case", name, "--scale", &scale.to_string()])
+            .output()
+            .map_err(|e| e.to_string())?;
+        if !out.status.success() {
+            return Err(format!("{name} ×{scale}: {}", String::from_utf8_lossy(&out.stderr).trim()));
+        }
+        let text = String::from_utf8_lossy(&out.stdout);
+        let v: Vec<f64> = text.split_whitespace().filter_map(|w| w.parse().ok()).collect();
+        match v[..] {
+            [size, seconds, kib] => Ok((size, seconds, kib * 1024.0)),
+            _ => Err(format!("{name} ×{scale}: unreadable answer '{text}'")),
+        }
+    };
+    let idle = std::process::Command::new(&exe).args(["bench", "--scaling-case", "none"]).output().ok();
+    let idle_bytes = idle.and_then(|o| String::from_utf8_lossy(&o.stdout).split_whitespace().nth(2).and_then(|w| w.parse::<f64>().ok())).unwrap_or(0.0) * 1024.0;
+    println!("scaling: best of 3 per size; memory = peak resident above an idle process ({:.1} MiB)", idle_bytes / 1048576.0);
+    println!("{:<20} {:>10} {:>22} {:>22} {:>22} {:>6} {:>6}", "case", "unit", "1×: size, s, MiB", "4×", "16×", "t exp", "m exp");
+    let mut over = Vec::new();
+    for case in cases() {
+        let mut rows = Vec::new();
+        for &k in &SCALES {
+            rows.push(child(case.name, k)?);
+        }
+        let t = exponent(&rows.iter().map(|r| (r.0, r.1)).collect::<Vec<_>>());
+        let m = exponent(&rows.iter().map(|r| (r.0, (r.2 - idle_bytes).max(1.0))).collect::<Vec<_>>());
+        let cells: Vec<String> = rows.iter().map(|r| format!("{:.0}, {:.3}, {:.1}", r.0, r.1, (r.2 - idle_bytes).max(0.0) / 1048576.0)).collect();
+        let flag = if t > MAX_EXPONENT || m > MAX_EXPONENT { " ✗" } else { "" };
+        println!("{:<20} {:>10} {:>22} {:>22} {:>22} {:>6.2} {:>6.2}{flag}", case.name, case.unit, cells[0], cells[1], cells[2], t, m);
+        if !flag.is_empty() {
+            over.push(case.name);
+        }
+    }
+    if over.is_empty() {
+        println!("every exponent ≤ {MAX_EXPONENT}");
+        Ok(())
+    } else {
+        Err(format!("growth exponent over {MAX_EXPONENT}: {}", over.join(", ")))
+    }
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
@@ -301,7 +365,11 @@ fn main() -> ExitCode {
             cmd_jobs();
             Ok(())
         }
-        Command::Bench { triangles, gcode_mb, lattice, cache } => {
+        Command::Bench { scaling_case: Some(name), scale, .. } => weft::bench::scaling::run_case(&name, scale).map(|(size, seconds)| {
+            println!("{size} {seconds} {}", peak_kib().unwrap_or(0));
+        }),
+        Command::Bench { scaling: true, .. } => scaling_bench(),
+        Command::Bench { triangles, gcode_mb, lattice, cache, .. } => {
             if cache {
                 return match weft::bench::run_cache(triangles) {
                     Ok(t) => {

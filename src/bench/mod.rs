@@ -33,9 +33,9 @@ pub fn repeat_to(seed: &str, bytes: usize) -> String {
 }
 
 /// The honeycomb-10mm example (embedded so the wasm build has it).
-pub const HONEYCOMB_10MM_JSON: &str = include_str!("../examples/honeycomb-10mm.json");
+pub const HONEYCOMB_10MM_JSON: &str = include_str!("../../examples/honeycomb-10mm.json");
 /// The ball-burst-disc-48mm example.
-pub const DISC_48MM_JSON: &str = include_str!("../examples/ball-burst-disc-48mm.json");
+pub const DISC_48MM_JSON: &str = include_str!("../../examples/ball-burst-disc-48mm.json");
 
 /// Side of the square honeycomb (r = 0.92 mm) of the euler workload, mm: about 100 000 edges.
 pub const EULER_SQUARE_MM: f64 = 270.0;

@@ -187,7 +187,8 @@ pub fn validate(design: &Design, registry: &Registry) -> Vec<Problem> {
     settings::check_rows(&root, &kind_rows, &mut out);
     check_strings(&root, &[common_rows(), kind_rows].concat(), &mut out);
     for path in ["name", "printer.name", "material.name"] {
-        if let Some(Value::String(s)) = path.split('.').try_fold(&root, |v, k| v.get(k)) {
+        // A name over its length limit is refused for that already.
+        if let Some(Value::String(s)) = path.split('.').try_fold(&root, |v, k| v.get(k)).filter(|v| v.as_str().is_some_and(|s| s.len() <= MAX_NAME_BYTES)) {
             out.extend(one_line(path, s, "a name"));
         }
     }
@@ -222,8 +223,10 @@ fn check_strings(root: &Value, rows: &[Row], out: &mut Vec<Problem>) {
                 out.extend(settings::text_too_long(&path, s, MAX_EMBEDDED_CHARS, "the embedded file"));
             }
             Value::String(s) if (parent == "file" && key == "name") || parent == "files" => {
-                out.extend(settings::text_too_long(&path, s, MAX_FILE_NAME_BYTES, "the file name"));
-                out.extend(one_line(&path, s, "a file name"));
+                match settings::text_too_long(&path, s, MAX_FILE_NAME_BYTES, "the file name") {
+                    Some(p) => out.push(p),
+                    None => out.extend(one_line(&path, s, "a file name")),
+                }
             }
             Value::String(s) => out.extend(settings::text_too_long(&path, s, MAX_TEXT_BYTES, "the text")),
             Value::Array(items) => {

@@ -21,8 +21,7 @@ fn one_square() -> Toolpath {
 
 #[test]
 fn names_cannot_start_a_gcode_line() {
-    let mut o = Options::default();
-    o.design_name = "x\nG28 X9 ; home\r\nM84 S77\u{85}M104 S300\u{2028}M140 S120\u{0}G1 Z-5".into();
+    let mut o = Options { design_name: "x\nG28 X9 ; home\r\nM84 S77\u{85}M104 S300\u{2028}M140 S120\u{0}G1 Z-5".into(), ..Options::default() };
     o.printer.name = "p\nM502".into();
     o.material.name = "m\rM500".into();
     o.printer.start_gcode = "M117 {design_name}\n; {design_name}\n".into();
@@ -42,8 +41,7 @@ fn names_cannot_start_a_gcode_line() {
 
 #[test]
 fn templates_are_bounded() {
-    let mut o = Options::default();
-    o.design_name = "n".repeat(256);
+    let mut o = Options { design_name: "n".repeat(256), ..Options::default() };
     o.printer.start_gcode = gen::template_bomb(5000);
     let e = write_gcode(&one_square(), &o).unwrap_err();
     assert!(matches!(e, Error::TemplateTooLarge { template: "start_gcode", limit: MAX_EXPANDED_BYTES, .. }), "{e}");

@@ -35,10 +35,12 @@ enum Command {
     Run {
         /// The design (JSON), or a share link / fragment (`#d=…`).
         design: String,
-        /// Output file (default: <design name>.gcode, or .nc for the pneumatic flavour).
+        /// Output file, or a folder to write <design name>.gcode in (.nc for the pneumatic
+        /// flavour, .csv for poses); default: that file in the current folder. The name is made
+        /// safe (no folders, no hidden or device names), since a design may come from anyone.
         #[arg(long, short)]
         out: Option<PathBuf>,
-        /// Also write the run report (JSON) here.
+        /// Also write the run report (JSON) here (a folder: <design name>.report.json in it).
         #[arg(long)]
         report: Option<PathBuf>,
         /// An input file for a slot of the job: SLOT=FILE (e.g. surface=dome.stl), or FILE for
@@ -105,7 +107,7 @@ enum Command {
     ExportStl {
         /// The design (JSON, a lattice job).
         design: String,
-        /// Output STL.
+        /// Output STL, or a folder to write <design name>.stl in.
         #[arg(long)]
         out: PathBuf,
     },
@@ -117,6 +119,18 @@ fn read(path: &Path) -> Result<Vec<u8>, String> {
 
 fn write(path: &Path, bytes: &[u8]) -> Result<(), String> {
     std::fs::write(path, bytes).map_err(|e| format!("{}: {e}", path.display()))
+}
+
+/// Where to write an output named after the design: `out` as given, inside `out` when it is a
+/// folder, else in the current folder. The file's name comes from `design::file_stem`: a
+/// design or share link is untrusted and its name must not choose the folder.
+fn output_path(out: Option<&Path>, design_name: &str, extension: &str) -> PathBuf {
+    let file = format!("{}.{extension}", weft::design::file_stem(design_name));
+    match out {
+        Some(dir) if dir.is_dir() => dir.join(file),
+        Some(path) => path.to_path_buf(),
+        None => PathBuf::from(file),
+    }
 }
 
 fn file_name(path: &Path) -> String {
@@ -202,11 +216,11 @@ fn cmd_run(
         eprint!("\r                \r");
     }
     let output = result.map_err(|e| e.to_string())?;
-    let out = out.unwrap_or_else(|| PathBuf::from(format!("{}.{}", design.name, design.printer.flavor.file_extension())));
+    let out = output_path(out.as_deref(), &design.name, design.printer.flavor.file_extension());
     write(&out, output.gcode.as_bytes())?;
     if let Some(path) = report {
         let json = serde_json::to_string_pretty(&output.report).unwrap_or_default();
-        write(&path, json.as_bytes())?;
+        write(&output_path(Some(&path), &design.name, "report.json"), json.as_bytes())?;
     }
     if !quiet {
         let a = &output.report.analysis;
@@ -387,6 +401,7 @@ fn main() -> ExitCode {
         }
         Command::ExportStl { design, out } => load_design(&design).and_then(|d| {
             let e = weft::export::lattice_stl(&d).map_err(|e| e.to_string())?;
+            let out = output_path(Some(&out), &d.name, "stl");
             write(&out, &e.stl)?;
             eprintln!("{}: {} struts, {} triangles, {:.3} mm of struts", out.display(), e.struts, e.triangles, e.strut_mm);
             Ok(())

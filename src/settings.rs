@@ -75,29 +75,42 @@ pub struct Field {
     /// A special editor the page offers for this field (`pattern_picker`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub widget: Option<&'static str>,
+    /// Longest text of a [`Kind::Text`] field, bytes (UTF-8); absent: [`MAX_TEXT_BYTES`].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub max_len: Option<usize>,
 }
+
+/// Longest string a design may hold where no other limit is stated (a text field without
+/// its own `max_len`, a job kind, a choice), bytes. Every string of a design travels in share
+/// links and is copied into messages and forms; 256 bytes is a long sentence.
+pub const MAX_TEXT_BYTES: usize = 256;
 
 /// A real number in `min..=max` with a form `step`.
 #[allow(clippy::too_many_arguments)] // a table row constructor: one argument per column
 pub const fn num(path: &'static str, section: &'static str, label: &'static str, unit: &'static str, min: f64, max: f64, step: f64, doc: &'static str) -> Field {
-    Field { path, section, label, unit, kind: Kind::Number, min: Some(min), max: Some(max), step: Some(step), choices: &[], doc, default: None, when: None, widget: None }
+    Field { path, section, label, unit, kind: Kind::Number, min: Some(min), max: Some(max), step: Some(step), choices: &[], doc, default: None, when: None, widget: None, max_len: None }
 }
 /// A whole number in `min..=max`.
 pub const fn int(path: &'static str, section: &'static str, label: &'static str, min: f64, max: f64, doc: &'static str) -> Field {
-    Field { path, section, label, unit: "", kind: Kind::Integer, min: Some(min), max: Some(max), step: Some(1.0), choices: &[], doc, default: None, when: None, widget: None }
+    Field { path, section, label, unit: "", kind: Kind::Integer, min: Some(min), max: Some(max), step: Some(1.0), choices: &[], doc, default: None, when: None, widget: None, max_len: None }
 }
 /// A field without a numeric range (bool, text, choice, section).
 pub const fn other(path: &'static str, section: &'static str, label: &'static str, kind: Kind, choices: &'static [&'static str], doc: &'static str) -> Field {
-    Field { path, section, label, unit: "", kind, min: None, max: None, step: None, choices, doc, default: None, when: None, widget: None }
+    Field { path, section, label, unit: "", kind, min: None, max: None, step: None, choices, doc, default: None, when: None, widget: None, max_len: None }
 }
 /// Three numbers, each in `min..=max`.
 #[allow(clippy::too_many_arguments)] // a table row constructor: one argument per column
 pub const fn vec3(path: &'static str, section: &'static str, label: &'static str, unit: &'static str, min: f64, max: f64, step: f64, doc: &'static str) -> Field {
-    Field { path, section, label, unit, kind: Kind::Vec3, min: Some(min), max: Some(max), step: Some(step), choices: &[], doc, default: None, when: None, widget: None }
+    Field { path, section, label, unit, kind: Kind::Vec3, min: Some(min), max: Some(max), step: Some(step), choices: &[], doc, default: None, when: None, widget: None, max_len: None }
 }
 /// `f`, edited with the page's `widget`.
 pub const fn widget(mut f: Field, widget: &'static str) -> Field {
     f.widget = Some(widget);
+    f
+}
+/// `f` (a text field), at most `bytes` long.
+pub const fn max_len(mut f: Field, bytes: usize) -> Field {
+    f.max_len = Some(bytes);
     f
 }
 /// `f`, shown only while `path` equals `equals`.
@@ -227,11 +240,34 @@ fn check_one(root: &Value, path: &str, f: &Field, out: &mut Vec<Problem>) {
         Kind::Choice => {
             if let Some(s) = v.as_str() {
                 if !f.choices.is_empty() && !f.choices.contains(&s) {
-                    out.push(Problem { path: path.to_string(), message: format!("'{s}' is not one of {}", f.choices.join(", ")) });
+                    out.push(Problem { path: path.to_string(), message: format!("'{}' is not one of {}", clip(s, 40), f.choices.join(", ")) });
+                }
+            }
+        }
+        Kind::Text => {
+            if let Some(s) = v.as_str() {
+                if let Some(p) = text_too_long(path, s, f.max_len.unwrap_or(MAX_TEXT_BYTES), f.label) {
+                    out.push(p);
                 }
             }
         }
         _ => {}
+    }
+}
+
+/// The problem of a string `s` at `path` longer than `limit` bytes (`what` names it).
+pub fn text_too_long(path: &str, s: &str, limit: usize, what: &str) -> Option<Problem> {
+    (s.len() > limit).then(|| Problem {
+        path: path.to_string(),
+        message: format!("{what} is {} bytes long, over the limit of {limit} bytes: shorten it", s.len()),
+    })
+}
+
+/// `s` cut to at most `chars` characters (with `…` when cut), to quote a value in a message.
+pub fn clip(s: &str, chars: usize) -> std::borrow::Cow<'_, str> {
+    match s.char_indices().nth(chars) {
+        Some((i, _)) => format!("{}…", &s[..i]).into(),
+        None => s.into(),
     }
 }
 
@@ -252,5 +288,18 @@ mod tests {
         assert!(out[1].message.contains("whole number"), "{}", out[1].message);
         let local = check(&serde_json::json!({"a": -1.0}), F, "job.x");
         assert_eq!(local[0].path, "job.x.a");
+    }
+
+    #[test]
+    fn text_length_is_checked() {
+        const F: &[Field] = &[other("t", "S", "T", Kind::Text, &[], ""), max_len(other("u", "S", "U", Kind::Text, &[], ""), 4)];
+        let root = serde_json::json!({"t": "x".repeat(MAX_TEXT_BYTES + 1), "u": "héllo"});
+        let out = check(&root, F, "p");
+        assert_eq!(out.len(), 2, "{out:?}");
+        assert_eq!(out[0].path, "p.t");
+        assert!(out[0].message.contains(&format!("{} bytes long, over the limit of {MAX_TEXT_BYTES}", MAX_TEXT_BYTES + 1)), "{}", out[0].message);
+        assert!(out[1].message.contains("6 bytes long, over the limit of 4"), "{}", out[1].message);
+        assert_eq!(clip("abcdef", 3), "abc…");
+        assert_eq!(clip("ab", 3), "ab");
     }
 }

@@ -118,3 +118,130 @@ fn share_fragment_runs_like_the_file() {
     run_ok(&["run", &fragment, "--out", b.to_str().unwrap(), "-q"]);
     assert_eq!(std::fs::read(&a).unwrap(), std::fs::read(&b).unwrap());
 }
+
+/// A small valid design (a 5 mm cube, fast to slice) named `name`, as JSON.
+fn named_design(name: &str) -> String {
+    let mut v: serde_json::Value = serde_json::from_str(&weft::Design::default().to_json_pretty()).unwrap();
+    v["name"] = name.into();
+    v["job"]["input"] = serde_json::json!({"builtin": {"shape": "cube", "size": [5, 5, 2]}});
+    v.to_string()
+}
+
+/// Every file under `dir`, recursively.
+fn files_under(dir: &Path) -> Vec<PathBuf> {
+    let mut out = Vec::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        for e in std::fs::read_dir(&d).unwrap() {
+            let p = e.unwrap().path();
+            if p.is_dir() {
+                stack.push(p);
+            } else {
+                out.push(p);
+            }
+        }
+    }
+    out
+}
+
+#[test]
+fn hostile_design_names_write_inside_the_folder() {
+    // The sandbox: runs happen in sandbox/a/b/work; an escape would land elsewhere in the sandbox
+    // (never outside it: the absolute name points into it too).
+    let sandbox = tmp("hostile-names");
+    let _ = std::fs::remove_dir_all(&sandbox);
+    let work = sandbox.join("a/b/work");
+    let outside = sandbox.join("outside");
+    std::fs::create_dir_all(&work).unwrap();
+    std::fs::create_dir_all(&outside).unwrap();
+    let designs = sandbox.join("designs");
+    std::fs::create_dir_all(&designs).unwrap();
+    let absolute = format!("{}/x", outside.display());
+    let long = "L".repeat(250);
+    let cases: Vec<(&str, &str)> = vec![
+        (&absolute, ""),
+        ("../../x", "x.gcode"),
+        ("..", "design.gcode"),
+        (".bashrc", "bashrc.gcode"),
+        ("a\\b", "a_b.gcode"),
+        ("C:\\x", "C_x.gcode"),
+        ("CON", "_CON.gcode"),
+        ("nul.txt", "_nul.txt.gcode"),
+        ("Würfel 立方体", "Würfel 立方体.gcode"),
+        (&long, ""),
+    ];
+    for (i, (name, want)) in cases.iter().enumerate() {
+        let design = designs.join(format!("{i}.json"));
+        std::fs::write(&design, named_design(name)).unwrap();
+        let out = weft().current_dir(&work).args(["run", design.to_str().unwrap(), "-q"]).output().unwrap();
+        assert!(out.status.success(), "{name:?}: {}", String::from_utf8_lossy(&out.stderr));
+        let made: Vec<PathBuf> = files_under(&sandbox).into_iter().filter(|p| !p.starts_with(&designs)).collect();
+        assert_eq!(made.len(), 1, "{name:?}: {made:?}");
+        assert_eq!(made[0].parent(), Some(work.as_path()), "{name:?} wrote {}", made[0].display());
+        let file = made[0].file_name().unwrap().to_str().unwrap().to_string();
+        if want.is_empty() {
+            assert!(file.len() <= weft::design::MAX_FILE_STEM_BYTES + 6 && file.ends_with("_outside_x.gcode") || file.starts_with("LLL"), "{file}");
+        } else {
+            assert_eq!(file, *want, "{name:?}");
+        }
+        std::fs::remove_file(&made[0]).unwrap();
+    }
+    // Names with control characters (NUL, line breaks) or over the length limit are refused.
+    for name in ["a\0b", "x\nG28", &"n".repeat(10_000)] {
+        let design = designs.join("refused.json");
+        std::fs::write(&design, named_design(name)).unwrap();
+        let out = weft().current_dir(&work).args(["run", design.to_str().unwrap(), "-q"]).output().unwrap();
+        assert!(!out.status.success(), "{name:?}");
+        let err = String::from_utf8(out.stderr).unwrap();
+        assert!(err.len() < 500 && err.contains("name: "), "{err}");
+        assert!(files_under(&sandbox).iter().all(|p| p.starts_with(&designs)), "{name:?}");
+    }
+    // --out naming a folder: the file goes in it, named after the design; so does the report.
+    let folder = sandbox.join("out");
+    std::fs::create_dir_all(&folder).unwrap();
+    let design = designs.join("to-folder.json");
+    std::fs::write(&design, named_design("../../escape")).unwrap();
+    run_ok(&["run", design.to_str().unwrap(), "--out", folder.to_str().unwrap(), "--report", folder.to_str().unwrap(), "-q"]);
+    let mut made: Vec<String> = files_under(&folder).iter().map(|p| p.strip_prefix(&folder).unwrap().display().to_string()).collect();
+    made.sort();
+    assert_eq!(made, ["escape.gcode", "escape.report.json"]);
+}
+
+#[test]
+fn hostile_designs_fail_with_one_short_line() {
+    let dir = tmp("hostile-designs");
+    std::fs::create_dir_all(&dir).unwrap();
+    let design = repo("examples/cube-20mm.json");
+    let short = |e: &str| assert!(e.len() < 1000, "{} bytes: {}", e.len(), &e[..300]);
+    // A 1 MB name: refused by length, the name not repeated.
+    let long = dir.join("long-name.json");
+    std::fs::write(&long, weft::testgen::design::long_name_design(1 << 20)).unwrap();
+    let e = run_err(&["run", long.to_str().unwrap(), "--out", dir.join("x.gcode").to_str().unwrap()]);
+    short(&e);
+    assert!(e.contains("name: ") && e.contains("1048576 bytes") && e.contains("limit of 256"), "{e}");
+    // A template bomb: 5 000 × {design_name} with a 256-byte name.
+    let bomb = dir.join("bomb.json");
+    let mut v: serde_json::Value = serde_json::from_str(&named_design(&"n".repeat(256))).unwrap();
+    v["printer"]["start_gcode"] = weft::testgen::design::template_bomb(5000).into();
+    std::fs::write(&bomb, v.to_string()).unwrap();
+    let e = run_err(&["run", bomb.to_str().unwrap(), "--out", dir.join("bomb.gcode").to_str().unwrap()]);
+    short(&e);
+    assert!(e.contains("start_gcode") && e.contains("1280250 bytes") && e.contains("1048576"), "{e}");
+    // 50 000 nested --set keys (about 100 kB: under the OS limit of one argument).
+    let e = run_err(&["run", &design, "--set", &weft::testgen::design::deep_set_path(50_000)]);
+    short(&e);
+    assert!(e.contains("50000 keys") && e.contains("limit of 32"), "{e}");
+    // A design nested 100 000 deep.
+    let deep = dir.join("deep.json");
+    std::fs::write(&deep, weft::testgen::design::nested_design_json(100_000)).unwrap();
+    let e = run_err(&["run", deep.to_str().unwrap()]);
+    short(&e);
+    assert!(e.contains("recursion limit"), "{e}");
+    // A 3 kB share link whose design inflates to a 350 kB name; a link that inflates past the limit.
+    let e = run_err(&["run", &weft::testgen::design::share_bomb_fragment(3000)]);
+    short(&e);
+    assert!(e.contains("name: ") && e.contains("limit of 256"), "{e}");
+    let e = run_err(&["run", &weft::testgen::design::share_bomb_fragment(100_000)]);
+    short(&e);
+    assert!(e.contains(&format!("more than {} bytes", weft::design::MAX_DESIGN_BYTES)), "{e}");
+}

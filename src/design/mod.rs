@@ -14,9 +14,47 @@ use serde_json::Value;
 use crate::jobs::Registry;
 
 pub use crate::settings::Problem;
+use crate::settings::clip;
 
 /// The only version this build reads and writes.
 pub const DESIGN_VERSION: u32 = 1;
+
+/// Longest design name, bytes (UTF-8). The name is one line written into the G-code header and
+/// each `{design_name}` of the templates, and it names the output file (cut to
+/// [`MAX_FILE_STEM_BYTES`] there); 256 bytes is a long title.
+pub const MAX_NAME_BYTES: usize = 256;
+
+/// Largest design JSON read, bytes (4 MiB). A design is settings and names; the largest parts
+/// are the templates (2 × [`crate::gcode::MAX_TEMPLATE_BYTES`]), the files embedded by a share
+/// link ([`share::MAX_EMBEDDED_CHARS`]) and a slot's file names ([`MAX_INPUT_FILES`] ×
+/// typically 20–40 bytes), together under 1.5 MiB; 4 MiB leaves room and bounds what a share
+/// link or a pasted file makes the parser and validator read (a few copies of it).
+pub const MAX_DESIGN_BYTES: usize = 4 * 1024 * 1024;
+
+/// Most keys in a `--set` path (32). The deepest real design path has 6
+/// (`job.lattice.overrides.0.rotation_deg`); a limit keeps `--set a.a.a…` from building an
+/// object tree deep enough to overflow the stack when it is read, written or dropped.
+pub const MAX_PATH_DEPTH: usize = 32;
+
+/// Deepest JSON nesting a design value may have (128, serde_json's own parsing limit, so a
+/// value built in memory obeys the same rule as a parsed one).
+pub const MAX_JSON_DEPTH: usize = 128;
+
+/// Longest input file name, bytes (255: the longest file name of common file systems).
+pub const MAX_FILE_NAME_BYTES: usize = 255;
+
+/// Most files in one input slot (10 000): a DICOM series has one file per slice, rarely over
+/// 2 000; the names travel in share links and are listed in notes.
+pub const MAX_INPUT_FILES: usize = 10_000;
+
+/// Longest file stem [`file_stem`] makes, bytes (100): with the extension the file name stays
+/// well under the 255-byte name limit of common file systems.
+pub const MAX_FILE_STEM_BYTES: usize = 100;
+
+/// Longest quote of a value in an error message, characters.
+const MAX_QUOTE_CHARS: usize = 60;
+/// Longest serde message kept in an error, characters (field lists included).
+const MAX_MESSAGE_CHARS: usize = 2000;
 
 /// A whole job.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -141,6 +179,14 @@ pub enum Error {
         /// Every problem.
         problems: Vec<Problem>,
     },
+    /// Over [`MAX_DESIGN_BYTES`].
+    #[error("{source_name}: the design is {bytes} bytes, over the limit of {MAX_DESIGN_BYTES} bytes; a design holds settings and names (meshes travel as separate files): remove what was pasted into it")]
+    TooLarge {
+        /// Where it came from.
+        source_name: String,
+        /// Its size.
+        bytes: usize,
+    },
     /// A `--set` override could not be applied.
     #[error("--set {assignment}: {message}")]
     Override {
@@ -174,6 +220,9 @@ impl Design {
 
     /// Parses and validates a design whose job kind is one of `registry`'s.
     pub fn from_json_in(registry: &Registry, source_name: &str, text: &str) -> Result<Design, Error> {
+        if text.len() > MAX_DESIGN_BYTES {
+            return Err(Error::TooLarge { source_name: source_name.into(), bytes: text.len() });
+        }
         let syntax = |e: serde_json::Error| Error::Syntax {
             source_name: source_name.into(),
             line: e.line(),
@@ -193,6 +242,12 @@ impl Design {
 
     /// [`Design::from_value`] with the job kinds of `registry`.
     pub fn from_value_in(registry: &Registry, source_name: &str, value: Value) -> Result<Design, Error> {
+        if let Some(top) = too_deep(&value, MAX_JSON_DEPTH) {
+            drop_flat(value);
+            let place = if top.is_empty() { "the design".to_string() } else { clip(&top, MAX_QUOTE_CHARS).into_owned() };
+            let message = format!("{place}: nested more than {MAX_JSON_DEPTH} levels deep, the limit; a design is only a few levels deep");
+            return Err(Error::Syntax { source_name: source_name.into(), line: 0, column: 0, message });
+        }
         check_version(source_name, &value)?;
         let design: Design = serde_json::from_value(value).map_err(|e| Error::Syntax {
             source_name: source_name.into(),
@@ -207,7 +262,7 @@ impl Design {
     fn normalized(mut self, registry: &Registry, source_name: &str) -> Result<Design, Error> {
         let syntax = |message: String| Error::Syntax { source_name: source_name.into(), line: 0, column: 0, message };
         let kind = registry.get(self.job.kind()).ok_or_else(|| {
-            syntax(format!("job.kind: unknown job kind '{}'; use one of {}", self.job.kind(), registry.names().join(", ")))
+            syntax(format!("job.kind: unknown job kind '{}'; use one of {}", clip(self.job.kind(), MAX_QUOTE_CHARS), registry.names().join(", ")))
         })?;
         self.job.value = kind.normalize(&self.job.value).map_err(|e| syntax(format!("job: {}", strip_position(&e.to_string()))))?;
         Ok(self)
@@ -245,13 +300,13 @@ impl Design {
             message: e.to_string(),
         })?;
         for a in assignments {
+            let assignment = || clip(a, 200).into_owned();
             let (path, raw) = a.split_once('=').ok_or_else(|| Error::Override {
-                assignment: a.clone(),
+                assignment: assignment(),
                 message: "expected PATH=VALUE, e.g. job.slice.layer_height_mm=0.1".into(),
             })?;
             let new: Value = serde_json::from_str(raw).unwrap_or_else(|_| Value::String(raw.to_string()));
-            set_path(&mut value, path.trim(), new)
-                .map_err(|message| Error::Override { assignment: a.clone(), message })?;
+            set_path(&mut value, path.trim(), new).map_err(|message| Error::Override { assignment: assignment(), message })?;
         }
         Design::from_value_in(registry, "--set", value)
     }
@@ -280,24 +335,129 @@ impl Design {
 fn check_version(source_name: &str, value: &Value) -> Result<(), Error> {
     match value.get("version") {
         Some(v) if v.as_u64() == Some(DESIGN_VERSION as u64) => Ok(()),
-        Some(v) => Err(Error::Version { source_name: source_name.into(), found: v.to_string() }),
+        Some(v) => Err(Error::Version { source_name: source_name.into(), found: clip(&v.to_string(), MAX_QUOTE_CHARS).into_owned() }),
         None => Err(Error::Version { source_name: source_name.into(), found: "(missing)".into() }),
     }
 }
 
+/// A file stem made from a design name (or any untrusted string), safe to join to a folder:
+/// the file it names is inside that folder on every system. Letters and digits of any script
+/// are kept, as are `- _ . + , ( ) [ ] @ = ~`; whitespace becomes one space; anything else
+/// (path separators `/` `\\` `:`, control and invisible characters, `* ? " < > | $ %` …)
+/// becomes `_`, runs of `.` one `.`; leading dots, dashes, spaces and `_` are removed (no
+/// hidden files, `..`, or names read as options), then trailing dots and spaces (Windows drops
+/// them); the result is cut to [`MAX_FILE_STEM_BYTES`]. A Windows device name (`CON`, `NUL`,
+/// `COM1`, `LPT¹`, … with or without an extension) gets a leading `_`. Nothing left: `design`.
+pub fn file_stem(name: &str) -> String {
+    let mut s = String::with_capacity(name.len().min(4 * MAX_FILE_STEM_BYTES));
+    for c in name.chars() {
+        let c = if c.is_alphanumeric() || matches!(c, '-' | '_' | '.' | '+' | ',' | '(' | ')' | '[' | ']' | '@' | '=' | '~') {
+            c
+        } else if c.is_whitespace() {
+            ' '
+        } else {
+            '_'
+        };
+        // Collapse runs of the characters we made (and of dots), and skip leading junk.
+        let prev = s.chars().next_back();
+        if (s.is_empty() && matches!(c, '.' | '-' | ' ' | '_')) || (matches!(c, ' ' | '_' | '.') && prev == Some(c)) {
+            continue;
+        }
+        if s.len() + c.len_utf8() > MAX_FILE_STEM_BYTES {
+            break;
+        }
+        s.push(c);
+    }
+    let s = s.trim_end_matches(['.', ' ']);
+    if s.is_empty() {
+        return "design".into();
+    }
+    let base = s.split('.').next().unwrap_or("").trim_end().to_ascii_uppercase();
+    let reserved = matches!(base.as_str(), "CON" | "PRN" | "AUX" | "NUL")
+        || ((base.starts_with("COM") || base.starts_with("LPT"))
+            && base[3..].chars().count() == 1
+            && base[3..].chars().all(|c| c.is_ascii_digit() || matches!(c, '¹' | '²' | '³')));
+    if reserved {
+        let mut cut = s.len().min(MAX_FILE_STEM_BYTES - 1);
+        while !s.is_char_boundary(cut) {
+            cut -= 1;
+        }
+        format!("_{}", s[..cut].trim_end_matches(['.', ' ']))
+    } else {
+        s.to_string()
+    }
+}
+
 /// serde_json appends " at line L column C"; the error variant carries those separately.
+/// Values serde quotes (`` `field` ``, `"text"`) are cut to [`MAX_QUOTE_CHARS`]: a design is
+/// untrusted and its strings may be megabytes long.
 fn strip_position(msg: &str) -> String {
-    match msg.rfind(" at line ") {
-        Some(i) => msg[..i].to_string(),
-        None => msg.to_string(),
+    let msg = match msg.rfind(" at line ") {
+        Some(i) => &msg[..i],
+        None => msg,
+    };
+    let mut out = String::with_capacity(msg.len().min(MAX_MESSAGE_CHARS * 4));
+    let mut quote: Option<(char, usize)> = None;
+    for c in msg.chars() {
+        match quote {
+            Some((q, _)) if c == q => quote = None,
+            Some((q, n)) => {
+                quote = Some((q, n + 1));
+                if n == MAX_QUOTE_CHARS {
+                    out.push('…');
+                }
+                if n >= MAX_QUOTE_CHARS {
+                    continue;
+                }
+            }
+            None if c == '`' || c == '"' => quote = Some((c, 0)),
+            None => {}
+        }
+        out.push(c);
+    }
+    clip(&out, MAX_MESSAGE_CHARS).into_owned()
+}
+
+/// The top-level key of a place in `value` nested deeper than `limit` ("" for the root
+/// itself), found without recursion: the value may be far deeper than the stack allows.
+fn too_deep(value: &Value, limit: usize) -> Option<String> {
+    let mut stack: Vec<(&Value, usize, &str)> = vec![(value, 0, "")];
+    while let Some((v, depth, top)) = stack.pop() {
+        match v {
+            Value::Array(_) | Value::Object(_) if depth >= limit => return Some(top.to_string()),
+            Value::Array(items) => stack.extend(items.iter().map(|c| (c, depth + 1, top))),
+            Value::Object(map) => stack.extend(map.iter().map(|(k, c)| (c, depth + 1, if depth == 0 { k.as_str() } else { top }))),
+            _ => {}
+        }
+    }
+    None
+}
+
+/// Drops `value` one level at a time: the default drop recurses once per level and a value
+/// refused for its depth may be deeper than the stack.
+fn drop_flat(value: Value) {
+    let mut stack = vec![value];
+    while let Some(mut v) = stack.pop() {
+        match &mut v {
+            Value::Array(items) => stack.append(items),
+            Value::Object(map) => stack.extend(std::mem::take(map).into_iter().map(|(_, c)| c)),
+            _ => {}
+        }
     }
 }
 
 /// Sets a dotted path in a JSON tree, creating objects on the way (unknown names are then
-/// rejected by deserialisation, which names them).
+/// rejected by deserialisation, which names them). Paths of more than [`MAX_PATH_DEPTH`] keys
+/// are refused before anything is built.
 pub(crate) fn set_path(root: &mut Value, path: &str, new: Value) -> Result<(), String> {
     if path.is_empty() {
         return Err("empty field path".into());
+    }
+    let keys = path.bytes().filter(|&b| b == b'.').count() + 1;
+    if keys > MAX_PATH_DEPTH {
+        return Err(format!(
+            "the path has {keys} keys, over the limit of {MAX_PATH_DEPTH}; design paths are a few keys long, e.g. job.slice.layer_height_mm"
+        ));
     }
     let mut cur = root;
     let parts: Vec<&str> = path.split('.').collect();
@@ -319,7 +479,10 @@ pub(crate) fn set_path(root: &mut Value, path: &str, new: Value) -> Result<(), S
             Value::Array(items) => {
                 let idx: usize = part
                     .parse()
-                    .map_err(|_| format!("'{}' is a list; use an index like {}.0", parts[..i].join("."), parts[..i].join(".")))?;
+                    .map_err(|_| {
+                        let list = clip(&parts[..i].join("."), 200).into_owned();
+                        format!("'{list}' is a list; use an index like {list}.0")
+                    })?;
                 let len = items.len();
                 let slot = items
                     .get_mut(idx)
@@ -330,7 +493,7 @@ pub(crate) fn set_path(root: &mut Value, path: &str, new: Value) -> Result<(), S
                 }
                 cur = slot;
             }
-            _ => return Err(format!("'{}' is not an object", parts[..i].join("."))),
+            _ => return Err(format!("'{}' is not an object", clip(&parts[..i].join("."), 200))),
         }
     }
     Ok(())
@@ -394,5 +557,162 @@ mod tests {
         assert!(Design::default().with_overrides(&["no_equals".into()]).is_err());
         let d = Design::default().with_overrides(&["printer.bed_size_mm.0=300".into()]).unwrap();
         assert_eq!(d.printer.bed_size_mm[0], 300.0);
+    }
+
+    #[test]
+    fn file_stem_keeps_files_in_their_folder() {
+        let long = "x".repeat(10_000);
+        let cases: Vec<(&str, &str)> = vec![
+            ("cube-20mm", "cube-20mm"),
+            ("part 2", "part 2"),
+            ("/etc/x", "etc_x"),
+            ("../../x", "x"),
+            ("..", "design"),
+            (".", "design"),
+            ("", "design"),
+            ("   ", "design"),
+            (".bashrc", "bashrc"),
+            ("a\\b", "a_b"),
+            ("C:\\x", "C_x"),
+            ("CON", "_CON"),
+            ("nul", "_nul"),
+            ("Com1.txt", "_Com1.txt"),
+            ("LPT¹", "_LPT¹"),
+            ("CONSOLE", "CONSOLE"),
+            ("a\0b", "a_b"),
+            ("a\nG28\r\nb", "a G28 b"),
+            ("-rf", "rf"),
+            ("x.", "x"),
+            ("a..b", "a.b"),
+            ("Würfel 立方体", "Würfel 立方体"),
+            ("evil\u{202e}txt", "evil_txt"),
+            ("a／b", "a_b"),
+            ("~/x", "~_x"),
+        ];
+        for (name, want) in cases {
+            assert_eq!(file_stem(name), want, "{name:?}");
+        }
+        for name in [long.as_str(), &"é".repeat(5000), &format!("CON.{long}"), &"../".repeat(3000), "\0\0\0", "\u{202e}\u{200b}"] {
+            let stem = file_stem(name);
+            assert!(!stem.is_empty() && stem.len() <= MAX_FILE_STEM_BYTES, "{} bytes", stem.len());
+            assert!(!stem.contains(['/', '\\', ':', '\0']) && !stem.starts_with('.') && stem != "..", "{stem}");
+            let joined = std::path::Path::new("folder").join(format!("{stem}.gcode"));
+            assert_eq!(joined.parent(), Some(std::path::Path::new("folder")), "{stem}");
+            assert!(joined.components().all(|c| matches!(c, std::path::Component::Normal(_))), "{stem}");
+        }
+    }
+
+    #[test]
+    fn every_string_has_a_limit() {
+        let base = serde_json::to_value(Design::default()).unwrap();
+        let long = |n: usize| "a".repeat(n);
+        for (path, limit) in [
+            ("name", MAX_NAME_BYTES),
+            ("printer.name", crate::settings::MAX_TEXT_BYTES),
+            ("material.name", crate::settings::MAX_TEXT_BYTES),
+            ("printer.start_gcode", crate::gcode::MAX_TEMPLATE_BYTES),
+            ("printer.end_gcode", crate::gcode::MAX_TEMPLATE_BYTES),
+            ("printer.pneumatic.valve_on", crate::settings::MAX_TEXT_BYTES),
+            ("printer.pneumatic.valve_off", crate::settings::MAX_TEXT_BYTES),
+            ("printer.pneumatic.pressure_template", crate::settings::MAX_TEXT_BYTES),
+            ("job.input.file.name", MAX_FILE_NAME_BYTES),
+            ("job.input.files.0", MAX_FILE_NAME_BYTES),
+        ] {
+            let mut v = base.clone();
+            if path.starts_with("job.input.file.") {
+                v["job"]["input"] = serde_json::json!({"file": {"name": "x.stl"}});
+            } else if path.starts_with("job.input.files") {
+                v["job"]["input"] = serde_json::json!({"files": ["x.stl"]});
+            }
+            set_path(&mut v, path, long(limit).into()).unwrap();
+            Design::from_json("d", &v.to_string()).unwrap_or_else(|e| panic!("{path} at the limit: {e}"));
+            set_path(&mut v, path, long(limit + 1).into()).unwrap();
+            let e = Design::from_json("d", &v.to_string()).unwrap_err();
+            let Error::Invalid { problems, .. } = &e else { panic!("{path}: {e}") };
+            assert_eq!(problems.len(), 1, "{path}: {problems:?}");
+            assert_eq!(problems[0].path, path);
+            let m = &problems[0].message;
+            assert!(m.contains(&format!("{} bytes", limit + 1)) && m.contains(&format!("limit of {limit}")), "{path}: {m}");
+        }
+        // Embedded files: each and in total.
+        let mut v = base.clone();
+        let big = long(share::MAX_EMBEDDED_CHARS / 2 + 1);
+        v["job"]["input"] = serde_json::json!({"file": {"name": "x.stl", "embedded": big}});
+        assert!(Design::from_json("d", &v.to_string()).is_ok());
+        let mut l = serde_json::to_value(Design::from_json("t", include_str!("../../examples/honeycomb-10mm.json")).unwrap()).unwrap();
+        l["job"]["input"] = serde_json::json!({"file": {"name": "a.stl", "embedded": big}});
+        l["job"]["surface_input"] = serde_json::json!({"file": {"name": "b.stl", "embedded": big}});
+        let e = Design::from_json("d", &l.to_string()).unwrap_err().to_string();
+        assert!(e.contains("embedded files total") && e.contains(&share::MAX_EMBEDDED_CHARS.to_string()), "{e}");
+        // Too many files.
+        v["job"]["input"] = serde_json::json!({"files": vec!["a.dcm"; MAX_INPUT_FILES + 1]});
+        let e = Design::from_json("d", &v.to_string()).unwrap_err().to_string();
+        assert!(e.contains("job.input.files") && e.contains("10001 files"), "{e}");
+        // The whole text.
+        let e = Design::from_json("d", &" ".repeat(MAX_DESIGN_BYTES + 1)).unwrap_err();
+        assert!(matches!(e, Error::TooLarge { .. }) && e.to_string().contains(&MAX_DESIGN_BYTES.to_string()), "{e}");
+    }
+
+    #[test]
+    fn names_are_one_line() {
+        for (path, bad) in [("name", "x\nG28"), ("name", "x\rG28"), ("printer.name", "p\u{2028}M84"), ("material.name", "m\u{85}"), ("name", "tab\there")] {
+            let mut v = serde_json::to_value(Design::default()).unwrap();
+            set_path(&mut v, path, bad.into()).unwrap();
+            let e = Design::from_json("d", &v.to_string()).unwrap_err();
+            let Error::Invalid { problems, .. } = &e else { panic!("{e}") };
+            assert_eq!(problems[0].path, path, "{problems:?}");
+            assert!(problems[0].message.contains("control character") && problems[0].message.contains("one line"), "{problems:?}");
+        }
+        let mut v = serde_json::to_value(Design::default()).unwrap();
+        v["job"]["input"] = serde_json::json!({"file": {"name": "a\nb.stl"}});
+        assert!(Design::from_json("d", &v.to_string()).unwrap_err().to_string().contains("job.input.file.name"));
+    }
+
+    #[test]
+    fn messages_quote_hostile_values_short() {
+        let huge = "z".repeat(1_000_000);
+        let mut v = serde_json::to_value(Design::default()).unwrap();
+        v["printer"][huge.as_str()] = 1.into();
+        let e = Design::from_json("d", &v.to_string()).unwrap_err().to_string();
+        assert!(e.len() < 3000 && e.contains("unknown field"), "{}", e.len());
+        let mut v = serde_json::to_value(Design::default()).unwrap();
+        v["printer"]["flavor"] = huge.as_str().into();
+        let e = Design::from_json("d", &v.to_string()).unwrap_err().to_string();
+        assert!(e.len() < 3000, "{}", e.len());
+        v = serde_json::to_value(Design::default()).unwrap();
+        v["version"] = huge.as_str().into();
+        assert!(Design::from_json("d", &v.to_string()).unwrap_err().to_string().len() < 300);
+        v = serde_json::to_value(Design::default()).unwrap();
+        v["job"]["kind"] = huge.as_str().into();
+        assert!(Design::from_json("d", &v.to_string()).unwrap_err().to_string().len() < 300);
+        v = serde_json::to_value(Design::default()).unwrap();
+        v["name"] = huge.as_str().into();
+        let e = Design::from_json("d", &v.to_string()).unwrap_err().to_string();
+        assert!(e.len() < 300 && e.contains("1000000 bytes") && e.contains("limit of 256"), "{e}");
+        let e = Design::default().with_overrides(&[format!("{huge}=1")]).unwrap_err().to_string();
+        assert!(e.len() < 1000, "{}", e.len());
+    }
+
+    #[test]
+    fn deep_paths_and_values_are_refused() {
+        let e = Design::default().with_overrides(&[crate::testgen::design::deep_set_path(60_000)]).unwrap_err();
+        assert!(e.to_string().contains("60000 keys") && e.to_string().contains(&MAX_PATH_DEPTH.to_string()), "{e}");
+        // At the limit the path is built, then refused by name.
+        let at = crate::testgen::design::deep_set_path(MAX_PATH_DEPTH);
+        assert!(Design::default().with_overrides(&[at]).unwrap_err().to_string().contains("unknown field"));
+        // A deep value set by --set is refused cleanly.
+        let deep = format!("job.x={}{}", "[".repeat(127), "]".repeat(127));
+        assert!(Design::default().with_overrides(&[deep]).is_err());
+        let e = Design::from_json("d", &crate::testgen::design::nested_design_json(100_000)).unwrap_err();
+        assert!(matches!(e, Error::Syntax { .. }) && e.to_string().contains("recursion limit"), "{e}");
+        // A value built in memory, far deeper than the stack would survive dropping.
+        let mut v = Value::Null;
+        for _ in 0..1_000_000 {
+            v = Value::Array(vec![v]);
+        }
+        let mut root = serde_json::to_value(Design::default()).unwrap();
+        root["job"]["x"] = v;
+        let e = Design::from_value("d", root).unwrap_err().to_string();
+        assert!(e.contains("job: nested more than 128 levels"), "{e}");
     }
 }

@@ -3,16 +3,18 @@
 //! slots and views, and the menus' default values. [`validate`] checks a design with the same
 //! rows plus each job kind's own rules.
 
-use super::{Design, Input, Problem};
+use super::{Design, Input, Problem, MAX_FILE_NAME_BYTES, MAX_INPUT_FILES, MAX_NAME_BYTES};
+use super::share::MAX_EMBEDDED_CHARS;
 use crate::geom::shapes::Shape;
 use crate::geom::Feature;
 use crate::jobs::{Registry, Slot, StageInfo, ViewInfo};
-use crate::settings::{self, int, mount, other, Field, Kind, Row};
+use crate::settings::{self, int, max_len, mount, other, Field, Kind, Row, MAX_TEXT_BYTES};
+use serde_json::Value;
 use serde::Serialize;
 
 /// Rows of the design's own fields.
 pub const DESIGN_FIELDS: &[Field] = &[
-    other("name", "Design", "Name", Kind::Text, &[], "Names the downloaded file and the G-code header."),
+    max_len(other("name", "Design", "Name", Kind::Text, &[], "Names the downloaded file and the G-code header."), MAX_NAME_BYTES),
     int("seed", "Design", "Random seed", 0.0, 9.007199254740991e15, "Seeds every random choice: the same seed gives the same G-code."),
 ];
 
@@ -181,7 +183,15 @@ pub fn validate(design: &Design, registry: &Registry) -> Vec<Problem> {
         out.push(Problem { path: "job.kind".into(), message: format!("unknown job kind; use one of {}", registry.names().join(", ")) });
         return out;
     };
-    settings::check_rows(&root, &kind.fields(), &mut out);
+    let kind_rows = kind.fields();
+    settings::check_rows(&root, &kind_rows, &mut out);
+    check_strings(&root, &[common_rows(), kind_rows].concat(), &mut out);
+    for path in ["name", "printer.name", "material.name"] {
+        // A name over its length limit is refused for that already.
+        if let Some(Value::String(s)) = path.split('.').try_fold(&root, |v, k| v.get(k)).filter(|v| v.as_str().is_some_and(|s| s.len() <= MAX_NAME_BYTES)) {
+            out.extend(one_line(path, s, "a name"));
+        }
+    }
     for slot in kind.slots() {
         if let Some(Input::File { name, .. }) = design.job.input_at(slot.path) {
             if name.trim().is_empty() {
@@ -191,4 +201,69 @@ pub fn validate(design: &Design, registry: &Registry) -> Vec<Problem> {
     }
     kind.validate(design, &design.job.value, &mut out);
     out
+}
+
+/// Every string of the design within its length limit: a text row's own (checked with the rows),
+/// file names [`MAX_FILE_NAME_BYTES`] and one line, embedded files [`MAX_EMBEDDED_CHARS`] in
+/// total, a slot's file list [`MAX_INPUT_FILES`] long; any other string (kinds, choices, and
+/// whatever a job kind adds) [`MAX_TEXT_BYTES`]. Walks the tree with its own stack.
+fn check_strings(root: &Value, rows: &[Row], out: &mut Vec<Problem>) {
+    let mut stack: Vec<(String, &Value)> = vec![(String::new(), root)];
+    let mut embedded = 0usize;
+    while let Some((path, v)) = stack.pop() {
+        let (parent, key) = match path.rsplit_once('.') {
+            Some((p, k)) => (p.rsplit('.').next().unwrap_or(p), k),
+            None => ("", path.as_str()),
+        };
+        match v {
+            // Checked with its row.
+            Value::String(_) if rows.iter().any(|r| r.path == path) => {}
+            Value::String(s) if parent == "file" && key == "embedded" => {
+                embedded += s.len();
+                out.extend(settings::text_too_long(&path, s, MAX_EMBEDDED_CHARS, "the embedded file"));
+            }
+            Value::String(s) if (parent == "file" && key == "name") || parent == "files" => {
+                match settings::text_too_long(&path, s, MAX_FILE_NAME_BYTES, "the file name") {
+                    Some(p) => out.push(p),
+                    None => out.extend(one_line(&path, s, "a file name")),
+                }
+            }
+            Value::String(s) => out.extend(settings::text_too_long(&path, s, MAX_TEXT_BYTES, "the text")),
+            Value::Array(items) => {
+                if key == "files" && items.len() > MAX_INPUT_FILES {
+                    out.push(Problem {
+                        path: path.clone(),
+                        message: format!("{} files, over the limit of {MAX_INPUT_FILES} in one input: load fewer (e.g. every other slice of a series)", items.len()),
+                    });
+                }
+                let join = |i: usize| if path.is_empty() { i.to_string() } else { format!("{path}.{i}") };
+                stack.extend(items.iter().enumerate().rev().map(|(i, c)| (join(i), c)));
+            }
+            Value::Object(map) => {
+                let join = |k: &str| if path.is_empty() { k.to_string() } else { format!("{path}.{k}") };
+                let children: Vec<_> = map.iter().map(|(k, c)| (join(k), c)).collect();
+                stack.extend(children.into_iter().rev());
+            }
+            _ => {}
+        }
+    }
+    if embedded > MAX_EMBEDDED_CHARS {
+        out.push(Problem {
+            path: "job".into(),
+            message: format!(
+                "the embedded files total {embedded} characters, over the limit of {MAX_EMBEDDED_CHARS}: a share link carries at most {} KiB of files; load the files instead",
+                super::share::MAX_EMBED_BYTES / 1024
+            ),
+        });
+    }
+}
+
+/// The problem of a line break or another control character in `s`, a one-line name (it
+/// would start a new line in the G-code header or a `{design_name}` placeholder).
+fn one_line(path: &str, s: &str, what: &str) -> Option<Problem> {
+    let (i, c) = s.chars().enumerate().find(|(_, c)| c.is_control() || matches!(c, '\u{2028}' | '\u{2029}'))?;
+    Some(Problem {
+        path: path.to_string(),
+        message: format!("has a control character (U+{:04X}) at character {}: {what} is one line of text; remove it", c as u32, i + 1),
+    })
 }

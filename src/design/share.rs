@@ -11,8 +11,13 @@ use base64::engine::general_purpose::URL_SAFE_NO_PAD;
 pub const MAX_EMBED_BYTES: usize = 256 * 1024;
 /// Longest fragment accepted when opening a link, characters (2 MiB, Chromium's URL limit).
 pub const MAX_FRAGMENT_CHARS: usize = 2 * 1024 * 1024;
-/// Largest inflated size accepted (design JSON or embedded mesh), bytes.
+/// Largest inflated size of an embedded file accepted ([`unpack`]), bytes. The design JSON
+/// itself inflates to at most [`super::MAX_DESIGN_BYTES`].
 pub const MAX_INFLATED_BYTES: usize = 16 * 1024 * 1024;
+/// Longest `embedded` text (in total) a design may hold, characters: [`MAX_EMBED_BYTES`] of
+/// incompressible data deflated (stored blocks add 5 bytes per 64 KiB) then in base64url
+/// (4 characters per 3 bytes), with room to spare.
+pub const MAX_EMBEDDED_CHARS: usize = (MAX_EMBED_BYTES + MAX_EMBED_BYTES / 1024 + 64).div_ceil(3) * 4;
 /// Fragment key.
 pub const FRAGMENT_KEY: &str = "d=";
 
@@ -65,15 +70,21 @@ pub fn pack(bytes: &[u8]) -> String {
 
 /// Inverse of [`pack`], bounded by [`MAX_INFLATED_BYTES`].
 pub fn unpack(text: &str) -> Result<Vec<u8>, Error> {
+    unpack_limited(text, MAX_INFLATED_BYTES)
+}
+
+/// Inverse of [`pack`], refusing data that inflates to more than `limit` bytes (the inflater
+/// stops there: a bomb costs at most `limit` bytes and the time to write them).
+pub fn unpack_limited(text: &str, limit: usize) -> Result<Vec<u8>, Error> {
     if let Some(i) = text.bytes().position(|b| !(b.is_ascii_alphanumeric() || b == b'-' || b == b'_')) {
         return Err(Error::NotBase64 { position: i + 1 });
     }
     let raw = URL_SAFE_NO_PAD
         .decode(text.as_bytes())
         .map_err(|e| Error::Corrupt { detail: format!("base64: {e}") })?;
-    miniz_oxide::inflate::decompress_to_vec_with_limit(&raw, MAX_INFLATED_BYTES).map_err(|e| Error::Corrupt {
+    miniz_oxide::inflate::decompress_to_vec_with_limit(&raw, limit).map_err(|e| Error::Corrupt {
         detail: match e.status {
-            miniz_oxide::inflate::TINFLStatus::HasMoreOutput => format!("it unpacks to more than {MAX_INFLATED_BYTES} bytes"),
+            miniz_oxide::inflate::TINFLStatus::HasMoreOutput => format!("it unpacks to more than {limit} bytes, the limit"),
             _ => "the compressed data is cut short or altered".into(),
         },
     })
@@ -144,7 +155,7 @@ pub fn decode(fragment: &str) -> Result<Design, Error> {
         .split('&')
         .find_map(|kv| kv.strip_prefix(FRAGMENT_KEY))
         .ok_or(Error::Missing)?;
-    let bytes = unpack(data)?;
+    let bytes = unpack_limited(data, super::MAX_DESIGN_BYTES)?;
     let text = std::str::from_utf8(&bytes).map_err(|_| Error::Corrupt { detail: "the design is not UTF-8 text".into() })?;
     Ok(Design::from_json("share link", text)?)
 }

@@ -7,7 +7,7 @@
 
 use crate::geom::Toolpath;
 use crate::machine::Machine;
-use crate::settings::{self, int, num, other, vec3, when, Field, Kind};
+use crate::settings::{self, int, max_len, num, other, vec3, when, Field, Kind};
 use serde::{Deserialize, Serialize};
 
 mod flavor;
@@ -18,7 +18,7 @@ mod template;
 mod writer;
 
 pub use poses::POSES_CSV_HEADER;
-pub use template::PLACEHOLDERS;
+pub use template::{expand as expand_template, MAX_EXPANDED_BYTES, MAX_TEMPLATE_BYTES, PLACEHOLDERS};
 pub use writer::equation4_e;
 
 /// G-code dialects.
@@ -364,6 +364,26 @@ pub enum Error {
         /// The known ones.
         known: String,
     },
+    /// A start or end template over [`MAX_TEMPLATE_BYTES`].
+    #[error("printer.{template}: the template is {bytes} bytes, over the limit of {limit} bytes; shorten it (start and end codes are normally a few dozen lines)")]
+    TemplateTooLong {
+        /// start_gcode or end_gcode.
+        template: &'static str,
+        /// Its length.
+        bytes: usize,
+        /// [`MAX_TEMPLATE_BYTES`].
+        limit: usize,
+    },
+    /// A template whose placeholders expand beyond [`MAX_EXPANDED_BYTES`].
+    #[error("printer.{template}: the template expands to {bytes} bytes, over the limit of {limit} bytes; use fewer placeholders (each {{design_name}} writes the whole design name) or a shorter design name")]
+    TemplateTooLarge {
+        /// start_gcode or end_gcode.
+        template: &'static str,
+        /// Size of the expansion.
+        bytes: usize,
+        /// [`MAX_EXPANDED_BYTES`].
+        limit: usize,
+    },
     /// Nothing to print.
     #[error("the toolpath is empty: nothing to print; check that the part is not below the first layer height")]
     Empty,
@@ -558,8 +578,8 @@ pub const PRINTER_FIELDS: &[Field] = &[
     when(vec3("machine.rotary_max_deg", "Printer", "Rotary upper limits A, B, C", "°", -1.0e6, 1.0e6, 1.0, "Checked in machine coordinates before writing."), "machine.kind", "five_axis"),
     when(vec3("machine.travel_min_mm", "Printer", "Travel lower limits X, Y, Z", "mm", -10000.0, 10000.0, 1.0, "Machine coordinates; absent: the bed's volume."), "machine.kind", "five_axis"),
     when(vec3("machine.travel_max_mm", "Printer", "Travel upper limits X, Y, Z", "mm", -10000.0, 10000.0, 1.0, "Machine coordinates; absent: the bed's volume."), "machine.kind", "five_axis"),
-    other("start_gcode", "Printer", "Start G-code", Kind::Text, &[], "Placeholders: {nozzle_temp_c} {first_layer_nozzle_temp_c} {bed_temp_c} {bed_x_mm} {bed_y_mm} {fan_pwm} {design_name}."),
-    other("end_gcode", "Printer", "End G-code", Kind::Text, &[], "Same placeholders as the start G-code."),
+    max_len(other("start_gcode", "Printer", "Start G-code", Kind::Text, &[], "Placeholders: {nozzle_temp_c} {first_layer_nozzle_temp_c} {bed_temp_c} {bed_x_mm} {bed_y_mm} {fan_pwm} {design_name}."), MAX_TEMPLATE_BYTES),
+    max_len(other("end_gcode", "Printer", "End G-code", Kind::Text, &[], "Same placeholders as the start G-code."), MAX_TEMPLATE_BYTES),
 ];
 
 /// Rows of [`Material`] (paths relative to `material`).

@@ -135,9 +135,11 @@ fn plan_five_axis(toolpath: &Toolpath, options: &Options, offset: DVec3) -> Resu
     Ok(out)
 }
 
-/// Text safe inside a `;` comment line.
+/// `s` on one line: a name written into a comment or a placeholder cannot start a G-code
+/// line of its own (control characters, including CR, LF and NEL, and the Unicode line and
+/// paragraph separators become spaces).
 fn one_line(s: &str) -> String {
-    s.chars().map(|c| if c.is_control() { ' ' } else { c }).collect()
+    s.chars().map(|c| if c.is_control() || matches!(c, '\u{2028}' | '\u{2029}') { ' ' } else { c }).collect()
 }
 
 fn fan_pwm(percent: f64) -> u64 {

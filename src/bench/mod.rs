@@ -32,6 +32,8 @@ pub fn repeat_to(seed: &str, bytes: usize) -> String {
     s
 }
 
+pub mod scaling;
+
 /// The honeycomb-10mm example (embedded so the wasm build has it).
 pub const HONEYCOMB_10MM_JSON: &str = include_str!("../../examples/honeycomb-10mm.json");
 /// The ball-burst-disc-48mm example.

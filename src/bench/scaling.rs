@@ -57,15 +57,15 @@ fn honeycomb_strokes(side: f64) -> Result<Vec<StrokeLayer>, String> {
 }
 
 fn paths_case(scale: usize, method: paths::Method) -> Result<Prepared, String> {
-    let side = 40.0 * (scale as f64).sqrt();
+    let side = 80.0 * (scale as f64).sqrt();
     let strokes = honeycomb_strokes(side)?;
     let o = paths::Options { method, iterations: 20, ..Default::default() };
     Ok(Prepared { size: side * side, run: Box::new(move || paths::optimise(&strokes, &o, 0.4, 1, &mut |_| {}).map(drop).map_err(err)) })
 }
 
-/// A slice of a 20 mm-tall box whose footprint grows with the scale: its toolpath.
+/// A slice of a 20 mm-tall box (100 mm square at 1×) whose footprint grows with the scale: its toolpath.
 fn box_toolpath(scale: usize) -> Result<(Toolpath, f64), String> {
-    let side = 40.0 * (scale as f64).sqrt();
+    let side = 100.0 * (scale as f64).sqrt();
     let mesh = Shape::Cube { size: [side, side, 20.0] }.mesh();
     Ok((slice::slice(&mesh, &Default::default(), &mut |_| {}).map_err(err)?.toolpath, side * side))
 }
@@ -73,19 +73,16 @@ fn box_toolpath(scale: usize) -> Result<(Toolpath, f64), String> {
 /// Every case, in the order printed.
 pub fn cases() -> Vec<Case> {
     vec![
-        Case { name: "import/stl-binary", unit: "triangles", prepare: |k| Ok(mesh_case(testgen::mesh::binary_stl(50_000 * k), "a.stl", (50_000 * k) as f64)) },
-        Case { name: "import/stl-ascii", unit: "triangles", prepare: |k| Ok(mesh_case(testgen::mesh::ascii_stl(20_000 * k), "a.stl", (20_000 * k) as f64)) },
-        Case { name: "import/obj", unit: "triangles", prepare: |k| Ok(mesh_case(testgen::mesh::obj(20_000 * k), "a.obj", (20_000 * k) as f64)) },
-        Case { name: "import/3mf", unit: "triangles", prepare: |k| Ok(mesh_case(testgen::mesh::threemf(10_000 * k), "a.3mf", (10_000 * k) as f64)) },
-        Case { name: "import/3mf-objects", unit: "objects", prepare: |k| Ok(mesh_case(testgen::mesh::threemf_objects(2_000 * k), "a.3mf", (2_000 * k) as f64)) },
         Case {
             name: "gcode/template",
-            unit: "placeholders",
+            unit: "bytes",
+            // Templates are at most 64 KiB: 1× is 4 KiB of unclosed braces, expanded 5,000 times.
             prepare: |k| {
-                let n = 20_000 * k;
-                let o = gcode::Options { printer: gcode::Printer { start_gcode: testgen::design::template_bomb(n), ..Default::default() }, ..Default::default() };
-                let (tp, _) = box_toolpath(1)?;
-                Ok(Prepared { size: n as f64, run: Box::new(move || gcode::write_gcode(&tp, &o).map(drop).map_err(err)) })
+                let t = testgen::design::unclosed_braces_template(4096 * k);
+                Ok(Prepared {
+                    size: (4096 * k) as f64,
+                    run: Box::new(move || (0..5000).try_for_each(|_| gcode::expand_template(&t, "start_gcode", &[]).map(drop).map_err(err))),
+                })
             },
         },
         Case {
@@ -102,7 +99,7 @@ pub fn cases() -> Vec<Case> {
             name: "slice/area",
             unit: "mm²",
             prepare: |k| {
-                let side = 40.0 * (k as f64).sqrt();
+                let side = 100.0 * (k as f64).sqrt();
                 let mesh = Shape::Cube { size: [side, side, 20.0] }.mesh();
                 Ok(Prepared { size: side * side, run: Box::new(move || slice::slice(&mesh, &Default::default(), &mut |_| {}).map(drop).map_err(err)) })
             },
@@ -116,15 +113,11 @@ pub fn cases() -> Vec<Case> {
                 Ok(Prepared { size, run: Box::new(move || gcode::write_gcode(&tp, &o).map(drop).map_err(err)) })
             },
         },
-        Case { name: "analyze/print", unit: "moves", prepare: |k| Ok(analyze_case(testgen::gcode::print(20_000 * k).into(), (20_000 * k) as f64)) },
-        Case { name: "analyze/repeated", unit: "moves", prepare: |k| Ok(analyze_case(testgen::gcode::repeated_moves(5_000 * k).into(), (5_000 * k) as f64)) },
-        Case { name: "analyze/long-moves", unit: "moves", prepare: |k| Ok(analyze_case(testgen::gcode::long_moves(1_000 * k).into(), (1_000 * k) as f64)) },
-        Case { name: "analyze/arcs", unit: "arcs", prepare: |k| Ok(analyze_case(testgen::gcode::large_arcs(200 * k).into(), (200 * k) as f64)) },
         Case {
             name: "lattice/honeycomb",
             unit: "mm²",
             prepare: |k| {
-                let side = 40.0 * (k as f64).sqrt();
+                let side = 100.0 * (k as f64).sqrt();
                 Ok(Prepared { size: side * side, run: Box::new(move || honeycomb_strokes(side).map(drop)) })
             },
         },
@@ -135,10 +128,10 @@ pub fn cases() -> Vec<Case> {
             name: "nonplanar/sphere",
             unit: "mm²",
             prepare: |k| {
-                let side = 20.0 * (k as f64).sqrt();
+                let side = 60.0 * (k as f64).sqrt();
                 let strokes = honeycomb_strokes(side)?;
                 let tp = paths::optimise(&strokes, &paths::Options { method: paths::Method::Euler, ..Default::default() }, 0.4, 1, &mut |_| {}).map_err(err)?.toolpath;
-                let o = nonplanar::Options { surface: nonplanar::Surface::Sphere { radius_mm: 200.0, center_mm: [0.0, 0.0, -190.0] }, ..Default::default() };
+                let o = nonplanar::Options { surface: nonplanar::Surface::Sphere { radius_mm: 200.0, center_mm: [0.0, 0.0, -190.0] }, max_segment_mm: nonplanar::DEFAULT_MAX_SEGMENT_MM };
                 Ok(Prepared { size: side * side, run: Box::new(move || nonplanar::project(&tp, None, &o).map(drop).map_err(err)) })
             },
         },

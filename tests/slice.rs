@@ -431,7 +431,8 @@ fn errors() {
     assert!(matches!(e, Error::BadOptions { problems } if problems[0].path == "line_width_mm"));
     let o = Options { layer_height_mm: 0.01, first_layer_height_mm: 0.01, ..Default::default() };
     let e = slice::slice(&cube([1.0, 1.0, 2000.0]), &o, &mut |_| {}).unwrap_err();
-    assert!(matches!(e, Error::TooManyLayers { limit: 100_000, .. }), "{e:?}");
+    assert!(matches!(&e, Error::TooBig(r) if r.what == "layers" && r.limit == 100_000.0), "{e:?}");
+    assert_eq!(e.to_string(), "layers would be about 200k, limit 100k: use thicker layers (job.slice.layer_height_mm) or scale the part down");
 }
 
 #[test]

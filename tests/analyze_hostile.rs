@@ -52,14 +52,14 @@ fn normal_print_scales_linearly() {
 #[test]
 fn repeated_moves_scale_linearly() {
     // Was quadratic: 10,000 moves 3.3 s, 40,000 52 s.
-    assert_linear("repeated_moves", gen::repeated_moves, 20_000, &Options::default());
-    assert_linear("repeated_moves (preview)", gen::repeated_moves, 20_000, &preview());
+    assert_linear("repeated_moves", gen::repeated_moves, 40_000, &Options::default());
+    assert_linear("repeated_moves (preview)", gen::repeated_moves, 40_000, &preview());
 }
 
 #[test]
 fn long_moves_scale_linearly() {
     // Was worse than quadratic: 250 moves 0.2 s, 1,000 10 s.
-    assert_linear("long_moves", gen::long_moves, 20_000, &Options::default());
+    assert_linear("long_moves", gen::long_moves, 40_000, &Options::default());
 }
 
 #[test]

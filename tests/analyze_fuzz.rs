@@ -1,6 +1,7 @@
-//! The analyzer never panics: mutated fixtures and random G-code-ish bytes.
+//! The analyzer never panics: mutated fixtures and random G-code-ish bytes, with exponents,
+//! huge numbers and arcs among the mutations. Whatever it accepts has finite totals.
 
-use weft::analyze::{analyze, Options};
+use weft::analyze::{analyze, Options, MAX_ARC_CHORDS};
 
 struct XorShift(u64);
 impl XorShift {
@@ -16,6 +17,25 @@ impl XorShift {
 }
 
 const ALPHABET: &[u8] = b"GMXYZEFIJRPSTN0123456789.-+ ;()*\n\r\tgxyze%";
+
+/// Multi-byte insertions: exponents (refused), numbers at and past the magnitude limit, tiny
+/// feeds, arcs (huge, degenerate, helical).
+const SNIPPETS: &[&str] = &[
+    "e5",
+    "e-3",
+    "e+300",
+    "E1e300",
+    "X1e10",
+    "9999999",
+    "10000001",
+    "F0.0001",
+    "\nG2 X10 Y10 I10000000 J0 E1\n",
+    "\nG3 X0 Y0 I-9999999 J0 E5\n",
+    "\nG2 X5 Y5 R-9999999 E1\n",
+    "\nG2 X1 Y0 R0.0000001 E1\n",
+    "\nG3 X0 Y0 Z9999999 I1 J1 E1\n",
+    "\nG91\nG2 X0 Y0 I0.001 E1\n",
+];
 
 fn check(bytes: &[u8]) {
     let opts = Options { collect_preview: true, ..Default::default() };
@@ -36,7 +56,13 @@ fn check(bytes: &[u8]) {
         assert_eq!(*p.layer_segment_start.last().unwrap() as usize, n);
         assert!(p.layer_segment_start.windows(2).all(|w| w[0] <= w[1]));
         assert!(p.layer_travel_start.windows(2).all(|w| w[0] <= w[1]));
-        assert!(r.overlap_mm <= r.extruded_mm * (1.0 + 1e-9) + 1e-9 || !r.extruded_mm.is_finite());
+        assert!(r.overlap_mm <= r.extruded_mm * (1.0 + 1e-9) + 1e-9);
+        for v in [r.extruded_mm, r.travel_mm, r.filament_mm, r.estimated_time_s, r.overlap_mm, r.gippo_score] {
+            assert!(v.is_finite(), "{r:?}");
+        }
+        // Every move gives at most MAX_ARC_CHORDS segments.
+        let moves = bytes.iter().filter(|&&b| b == b'\n').count() + 1;
+        assert!(n + p.travel_positions.len() / 6 <= moves * MAX_ARC_CHORDS);
     }
 }
 
@@ -51,9 +77,13 @@ fn mutated_fixtures_never_panic() {
         let mut b = base[round % 2].clone();
         for _ in 0..1 + rng.below(20) {
             let i = rng.below(b.len());
-            match rng.below(3) {
+            match rng.below(4) {
                 0 => b[i] = ALPHABET[rng.below(ALPHABET.len())],
                 1 => b.insert(i, ALPHABET[rng.below(ALPHABET.len())]),
+                2 if rng.below(4) == 0 => {
+                    let snippet = SNIPPETS[rng.below(SNIPPETS.len())].as_bytes();
+                    b.splice(i..i, snippet.iter().copied());
+                }
                 _ => {
                     b.remove(i);
                 }
@@ -77,12 +107,16 @@ fn random_gcode_words_never_panic() {
             s.push_str(cmd);
             for _ in 0..rng.below(5) {
                 let letter = b"XYZEFIJRPS"[rng.below(10)] as char;
-                let v = match rng.below(6) {
+                let v = match rng.below(10) {
                     0 => "0".to_string(),
                     1 => format!("{}", rng.below(200) as f64 / 7.0),
                     2 => format!("-{}", rng.below(50)),
                     3 => "1e400".to_string(),
                     4 => "99999999999999999999999".to_string(),
+                    5 => format!("{}e{}", rng.below(10), rng.below(400) as i64 - 200),
+                    6 => "9999999.999".to_string(),
+                    7 => "-10000000".to_string(),
+                    8 => format!("0.{:0>12}", rng.below(1000)),
                     _ => format!(".{}", rng.below(1000)),
                 };
                 s.push(' ');

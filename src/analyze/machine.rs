@@ -1,7 +1,7 @@
 //! The interpreter: machine state, classification of moves, layers, paths and the report.
 
 use super::overlap::{Overlap, Seg};
-use super::{Analysis, Error, LayerReport, Options, Preview, Report};
+use super::{Analysis, Error, Estimate, LayerReport, Options, Preview, Report, MAX_LAYER_SEGMENTS, MAX_PEAK_BYTES};
 use crate::geom::Feature;
 use crate::motion::lex::{lex_line, parse_number, trim_start, Command, Line};
 use crate::motion::{Motion, Move, Step};
@@ -61,10 +61,14 @@ pub(crate) struct Machine<'o> {
     moves: u32,
     /// Tool axis at the current position, once the file has stated one.
     axis: Option<[f64; 3]>,
+    /// The estimate made before reading (moves and layers, upper bounds).
+    est: Estimate,
+    /// Chords of the arcs read so far beyond the one per arc the estimate counted.
+    arc_extra: usize,
 }
 
 impl<'o> Machine<'o> {
-    pub fn new(opts: &'o Options, comment_layers: bool) -> Self {
+    pub fn new(opts: &'o Options, comment_layers: bool, est: &Estimate) -> Self {
         let fd = if opts.filament_diameter_mm > 0.0 { opts.filament_diameter_mm } else { super::DEFAULT_FILAMENT_DIAMETER_MM };
         Machine {
             opts,
@@ -97,11 +101,14 @@ impl<'o> Machine<'o> {
             last_view: [0.0; 3],
             moves: 0,
             axis: None,
+            est: *est,
+            arc_extra: 0,
         }
     }
 
-    /// Interprets one line.
-    pub fn line(&mut self, l: &Line<'_>) {
+    /// Interprets one line; `Err` (a problem for [`Error::TooLarge`]) when it would take the
+    /// analysis over a limit.
+    pub fn line(&mut self, l: &Line<'_>) -> Result<(), String> {
         if let Some(c) = l.comment {
             self.comment(c);
         }
@@ -109,7 +116,7 @@ impl<'o> Machine<'o> {
         let stale = match self.m.line(l.cmd, &l.words, self.preview.is_some()) {
             Step::Move(mv) => {
                 self.update_axis();
-                let viewed = self.motion(&mv);
+                let viewed = self.motion(&mv)?;
                 self.moves = self.moves.saturating_add(1);
                 !viewed
             }
@@ -130,6 +137,34 @@ impl<'o> Machine<'o> {
         if self.fk && stale {
             self.last_view = self.view(self.m.pos);
         }
+        Ok(())
+    }
+
+    /// Admits the `n` segments a move is about to add (to the current layer when
+    /// `extruding`): refuses a layer over [`MAX_LAYER_SEGMENTS`] and, when an arc adds chords
+    /// the estimate did not count, an analysis over [`MAX_PEAK_BYTES`].
+    fn admit(&mut self, n: usize, extruding: bool) -> Result<(), String> {
+        if extruding && self.segs.len() + n > MAX_LAYER_SEGMENTS {
+            let layer = self.layers.len();
+            return Err(format!(
+                "layer {layer} has more than {MAX_LAYER_SEGMENTS} extrusion segments (arcs count by their chords), limit {MAX_LAYER_SEGMENTS}: no print has that many in one layer; check the file, or split that layer"
+            ));
+        }
+        // Check again when arcs add chords the estimate did not count, and whenever the layer
+        // outgrows the estimate's largest by another 64k segments.
+        let layer = if extruding { self.segs.len() + n } else { 0 };
+        let grew = layer > self.est.largest_layer && (layer - n) >> 16 != layer >> 16;
+        if n > 1 || grew {
+            self.arc_extra += n - 1;
+            let segments = self.est.moves.saturating_add(self.arc_extra);
+            let largest = self.est.largest_layer.max(layer);
+            let need = super::peak_bytes(segments, self.est.layers, largest, self.preview.is_some());
+            if need > MAX_PEAK_BYTES {
+                let arcs = if self.arc_extra > 0 { format!("the arcs up to here add {} chords; ", super::human_count(self.arc_extra)) } else { String::new() };
+                return Err(format!("{arcs}{}", super::too_large(need, segments, self.est.layers, self.preview.is_some())));
+            }
+        }
+        Ok(())
     }
 
     /// The rotary angles of the options' machine (letter order).
@@ -205,7 +240,7 @@ impl<'o> Machine<'o> {
 
     /// Bookkeeping of a move [`Motion`] has timed: net E, extrusion or travel, retraction.
     /// True when it set [`Machine::last_view`] (5-axis, the tip of the move's end computed).
-    fn motion(&mut self, mv: &Move) -> bool {
+    fn motion(&mut self, mv: &Move) -> Result<bool, String> {
         let Move { from: p0, to: t, de, len, v, use_pts } = *mv;
         self.e_net += de;
         if self.e_net > self.e_high {
@@ -213,8 +248,8 @@ impl<'o> Machine<'o> {
         }
         if mv.moves() {
             if de > 0.0 {
-                self.extrude(p0, t, de, len, use_pts, v);
-                return self.fk;
+                self.extrude(p0, t, de, len, use_pts, v)?;
+                return Ok(self.fk);
             }
             if de < 0.0 {
                 self.retract();
@@ -223,6 +258,7 @@ impl<'o> Machine<'o> {
             if self.preview.is_some() {
                 let mut va = if self.fk { self.last_view } else { p0 };
                 let n_pts = if use_pts { self.m.arc_pts.len() } else { 1 };
+                self.admit(n_pts, false)?;
                 for k in 0..n_pts {
                     let b = if use_pts { self.m.arc_pts[k] } else { t };
                     let vb = if self.fk { self.view(b) } else { b };
@@ -234,7 +270,7 @@ impl<'o> Machine<'o> {
                 }
                 if self.fk {
                     self.last_view = va;
-                    return true;
+                    return Ok(true);
                 }
             }
         } else if de != 0.0 && de.is_finite() {
@@ -244,10 +280,10 @@ impl<'o> Machine<'o> {
                 self.retracted = false;
             }
         }
-        false
+        Ok(false)
     }
 
-    fn extrude(&mut self, p0: [f64; 3], t: [f64; 3], de: f64, len: f64, use_pts: bool, v: f64) {
+    fn extrude(&mut self, p0: [f64; 3], t: [f64; 3], de: f64, len: f64, use_pts: bool, v: f64) -> Result<(), String> {
         self.retracted = false;
         let new_layer = match self.layers.last() {
             None => true,
@@ -264,6 +300,8 @@ impl<'o> Machine<'o> {
         if new_layer {
             self.start_layer(t[2]);
         }
+        let n_pts = if use_pts { self.m.arc_pts.len() } else { 1 };
+        self.admit(n_pts, true)?;
         if !self.in_run {
             self.paths_total += 1;
             self.layer_paths.push((0.0, 0));
@@ -278,7 +316,6 @@ impl<'o> Machine<'o> {
         let path_index = (self.paths_total - 1) as u32;
         let mut a = p0;
         let mut va = if self.fk { self.last_view } else { p0 };
-        let n_pts = if use_pts { self.m.arc_pts.len() } else { 1 };
         for k in 0..n_pts {
             let b = if use_pts { self.m.arc_pts[k] } else { t };
             // Overlap and preview are in the part's frame (tips), flow at the machine's motion.
@@ -309,6 +346,7 @@ impl<'o> Machine<'o> {
         self.travel_at_ext = self.m.travel_mm;
         self.retractions_at_ext = self.retractions;
         self.travel_segs_at_ext = self.preview.as_ref().map_or(0, |p| p.travel_positions.len() / 6);
+        Ok(())
     }
 
     fn start_layer(&mut self, z: f64) {
@@ -340,7 +378,11 @@ impl<'o> Machine<'o> {
         }
         match &self.overlap_out {
             // The overlap thread owns the buffer from here; the result is filled in at finish().
-            Some(tx) if tx.send((index, std::mem::take(&mut self.segs))).is_ok() => {}
+            // Large layers are measured here, so that the layers in flight stay small; so are
+            // tiny ones, which cost less than handing them over.
+            Some(tx)
+                if (PARALLEL_LAYER_MIN_SEGMENTS..=PARALLEL_LAYER_SEGMENTS).contains(&self.segs.len())
+                    && tx.send((index, std::mem::take(&mut self.segs))).is_ok() => {}
             _ => layer.overlap = self.overlap.layer(&self.segs, self.opts.default_line_width_mm),
         }
         layer.gippo = gippo_score(&self.layer_paths);
@@ -422,7 +464,7 @@ pub fn gippo_score(paths: &[(f64, u32)]) -> f64 {
 
 /// Position of the first `\n` in `s`, eight bytes at a time.
 #[inline]
-fn find_newline(s: &[u8]) -> Option<usize> {
+pub(super) fn find_newline(s: &[u8]) -> Option<usize> {
     const ONES: u64 = 0x0101_0101_0101_0101;
     const HIGHS: u64 = 0x8080_8080_8080_8080;
     const NL: u64 = 0x0a0a_0a0a_0a0a_0a0a;
@@ -441,7 +483,7 @@ fn find_newline(s: &[u8]) -> Option<usize> {
 }
 
 /// Runs the analyzer over `bytes`.
-pub(crate) fn run(file: &str, bytes: &[u8], options: &Options) -> Result<Analysis, Error> {
+pub(crate) fn run(file: &str, bytes: &[u8], options: &Options, est: &Estimate) -> Result<Analysis, Error> {
     if let Some(offset) = crate::motion::lex::first_binary_byte(bytes) {
         return Err(Error::NotText { file: file.to_string(), offset });
     }
@@ -462,14 +504,22 @@ pub(crate) fn run(file: &str, bytes: &[u8], options: &Options) -> Result<Analysi
                     }
                 }
             });
-            let mut m = Machine::new(options, layer_comments);
+            let mut m = Machine::new(options, layer_comments, est);
             m.overlap_out = Some(seg_tx);
             m.overlap_in = Some(res_rx);
             parse_all(file, bytes, m)
         });
     }
-    parse_all(file, bytes, Machine::new(options, layer_comments))
+    parse_all(file, bytes, Machine::new(options, layer_comments, est))
 }
+
+/// Layers of at most this many segments go to the overlap thread (native builds); larger
+/// ones are measured on the reading thread, so that the layers in flight (at most 10) stay
+/// within a few tens of MB.
+pub(super) const PARALLEL_LAYER_SEGMENTS: usize = 1 << 16;
+/// Layers of fewer segments are measured on the reading thread (a file of a million one-move
+/// layers would otherwise spend its time passing them between threads).
+const PARALLEL_LAYER_MIN_SEGMENTS: usize = 64;
 
 /// Files at least this large (bytes) measure overlap on a second thread (native builds).
 #[cfg(not(target_arch = "wasm32"))]
@@ -486,7 +536,7 @@ fn parse_all(file: &str, bytes: &[u8], mut m: Machine) -> Result<Analysis, Error
             line = rest;
         }
         let l = lex_line(line).map_err(|problem| Error::Malformed { file: file.to_string(), line: line_no, problem })?;
-        m.line(&l);
+        m.line(&l).map_err(|problem| Error::TooLarge { file: file.to_string(), line: line_no, problem })?;
         start = end + 1;
     }
     Ok(m.finish())

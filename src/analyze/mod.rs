@@ -5,6 +5,7 @@
 
 use serde::Serialize;
 
+mod estimate;
 mod machine;
 mod overlap;
 mod poses;
@@ -13,8 +14,29 @@ pub use crate::motion::lex as parse;
 /// The time model (shared with the writer; lives in [`crate::motion::time`]).
 pub use crate::motion::time;
 
-pub use crate::motion::{DEFAULT_ACCELERATION_MM_S2, DEFAULT_FEED_MM_MIN};
+pub use crate::motion::lex::{MAX_WORD_MAGNITUDE, MIN_RATE};
+pub use crate::motion::{ARC_TOLERANCE_MM, DEFAULT_ACCELERATION_MM_S2, DEFAULT_FEED_MM_MIN, MAX_ARC_CHORDS};
+pub use estimate::{peak_bytes, Estimate};
 pub use machine::gippo_score;
+pub use overlap::{MAX_SPAN_MM, MAX_WALK};
+
+/// Most memory one analysis may need, bytes ([`Estimate::peak_bytes`]: preview buffers, the
+/// largest layer's working set, per-layer records; the G-code text itself is the caller's).
+/// The browser worker has about 2 GB of wasm memory for a whole run, and the G-code text, the
+/// toolpath it was written from and the preview's copies handed to the page need the other
+/// half. Measured peaks (native, `VmHWM`): a slicer-style print of 1M moves (39 MB) takes
+/// 1.1 bytes per G-code byte with the preview and 0.04 without; the densest input (one layer
+/// of 1M five-byte moves `X1E1`) 35 bytes per byte with the preview. The estimate bounds these
+/// from above (2.8 bytes per byte for the print, with the preview), so this admits about
+/// 9 million moves of a print with the preview (a 350 MB file) and any file with sane layers
+/// without it.
+pub const MAX_PEAK_BYTES: usize = 1_000_000_000;
+
+/// Most extrusion segments (moves, arcs by their chords) in one layer: the overlap measure
+/// holds a layer at once, at up to about 360 bytes a segment (so at most about 380 MB). A
+/// solid 300 × 300 mm layer of 0.45 mm lines is 200 m of extrusion: a million segments of
+/// 0.2 mm, the densest layer a real print has.
+pub const MAX_LAYER_SEGMENTS: usize = 1 << 20;
 
 /// Default line width assumed when a file has no `;WIDTH:` comments, mm.
 pub const DEFAULT_LINE_WIDTH_MM: f64 = 0.4;
@@ -165,6 +187,52 @@ pub enum Error {
         /// What is wrong.
         problem: String,
     },
+    /// The analysis would need more memory than [`MAX_PEAK_BYTES`], or a layer has more than
+    /// [`MAX_LAYER_SEGMENTS`] segments.
+    #[error("{file}: {}{problem}", at_line(*.line))]
+    TooLarge {
+        /// File name.
+        file: String,
+        /// 1-based line where the limit was reached; 0 when refused before reading.
+        line: usize,
+        /// The number, the limit and the fix.
+        problem: String,
+    },
+}
+
+fn at_line(line: usize) -> String {
+    if line == 0 { String::new() } else { format!("line {line}: ") }
+}
+
+/// Bytes as "1.3 GB" / "12.0 MB".
+pub(crate) fn human_bytes(n: usize) -> String {
+    let n = n as f64;
+    if n >= 1e9 { format!("{:.1} GB", n / 1e9) } else { format!("{:.1} MB", n / 1e6) }
+}
+
+/// Counts as "12.8M" / "3,200".
+pub(crate) fn human_count(n: usize) -> String {
+    if n >= 1_000_000 { format!("{:.1}M", n as f64 / 1e6) } else { n.to_string() }
+}
+
+/// Scans `bytes` for what [`analyze`] would need, without reading any number: lines, moves,
+/// arcs and layers (upper bounds) and the peak memory ([`Estimate::peak_bytes`], compared
+/// with [`MAX_PEAK_BYTES`]). Linear in the size of the file, allocates nothing.
+pub fn estimate(bytes: &[u8], options: &Options) -> Estimate {
+    estimate::scan(bytes, options)
+}
+
+/// The refusal of an analysis needing `need` bytes for `segments` segments in `layers` layers.
+pub(crate) fn too_large(need: usize, segments: usize, layers: usize, preview: bool) -> String {
+    format!(
+        "the analysis needs about {} ({} segments, {} layers{}), limit {}: analyse a smaller file{}",
+        human_bytes(need),
+        human_count(segments),
+        human_count(layers),
+        if preview { ", with the preview" } else { "" },
+        human_bytes(MAX_PEAK_BYTES),
+        if preview { ", or without the preview (`weft analyze` builds none)" } else { " or split it" }
+    )
 }
 
 /// Analyses G-code `bytes`; `file` names it in messages.
@@ -176,6 +244,11 @@ pub enum Error {
 /// (`S` both, `P` print, `T` travel acceleration); comments after `;` and in parentheses,
 /// `N` line numbers, `*` checksums, lowercase, CRLF; lines of parameters with no command
 /// repeat the last motion command. Other commands are ignored (with their arguments).
+/// Numbers are plain decimals: G-code has no exponents, and since a printer reads `X1e10` as
+/// `X1` and an E word `e10`, such a word is refused rather than read either way (an uppercase
+/// `E` right after a number is the compact form: `G1X40E4` is `X40 E4`). A letter given twice
+/// on a line, a number larger than [`MAX_WORD_MAGNITUDE`] (10 km) and a feed rate or
+/// acceleration below [`MIN_RATE`] are refused too, so every total stays finite.
 ///
 /// Definitions:
 /// - an *extruding move* is a `G0`–`G3` with XYZ motion and a positive E delta; other moves
@@ -196,19 +269,34 @@ pub enum Error {
 ///   `G92` resets): filament retracted and fed again is not counted twice, and a final
 ///   retraction does not reduce it;
 /// - `overlap_mm`: see the overlap rule in [`Report::overlap_mm`] (nearly parallel, within
-///   half a line width, unioned per segment; arcs are measured on their preview chords);
+///   half a line width, unioned per segment; arcs are measured on their preview chords:
+///   within [`ARC_TOLERANCE_MM`] of the arc, at most [`MAX_ARC_CHORDS`] per arc);
 /// - time: see [`time`].
 ///
 /// A poses CSV (header `x,y,z,nx,ny,nz`, the `poses_csv` flavour) is read as one layer of
 /// paths separated by blank lines, with the rows' axes in the preview (no time, no filament).
 ///
+/// Cost: linear in the size of the file (the overlap search included, see [`MAX_WALK`]).
+/// Memory: [`estimate`] is checked against [`MAX_PEAK_BYTES`] before reading, and again as
+/// arcs expand and layers grow.
+///
 /// Errors: any NUL or other non-text control byte → [`Error::NotText`]; a parameter of an
-/// interpreted command whose number cannot be read → [`Error::Malformed`] with its line.
+/// interpreted command whose number cannot be read or is refused (above) →
+/// [`Error::Malformed`] with its line; a file needing more than [`MAX_PEAK_BYTES`], or a layer
+/// of more than [`MAX_LAYER_SEGMENTS`] segments → [`Error::TooLarge`].
 pub fn analyze(file: &str, bytes: &[u8], options: &Options) -> Result<Analysis, Error> {
+    let est = estimate(bytes, options);
+    if est.peak_bytes > MAX_PEAK_BYTES {
+        return Err(Error::TooLarge {
+            file: file.to_string(),
+            line: 0,
+            problem: too_large(est.peak_bytes, est.moves, est.layers, options.collect_preview),
+        });
+    }
     if poses::is_poses(bytes) {
         return poses::run(file, bytes, options);
     }
-    machine::run(file, bytes, options)
+    machine::run(file, bytes, options, &est)
 }
 
 /// PROVISIONAL (replaced by the analyzer's own estimate when issue 7's analyzer work merges):

@@ -8,8 +8,25 @@
 //!
 //! Candidates come from a uniform grid hashed into a table of linked lists: every segment is
 //! cut into pieces no longer than a cell; each segment first queries the cells of its pieces'
-//! boxes grown by the tolerance, then registers itself in the cells its pieces' boxes touch. Average cost is
-//! linear in the number of segments.
+//! boxes grown by the tolerance, then registers itself in the cells its pieces' boxes touch.
+//!
+//! Cost stays linear in the number of segments whatever they are:
+//! - the cell is 3 line widths, grown when the layer's segments are long so that they make at
+//!   most [`PIECES_PER_SEGMENT`] pieces each on average (long moves crossing the bed do not
+//!   visit thousands of cells each);
+//! - a query walks at most [`MAX_WALK`] entries of a cell, newest first, and stops as soon as
+//!   the segment is covered end to end but for 10⁻⁹ of its length (a move repeated or stacked
+//!   many times is covered by a recent copy, so it does not compare with every earlier copy).
+//!
+//! A segment therefore visits at most about 9 cells per piece and [`MAX_WALK`] entries per cell
+//! (the worst case, a blob of segments through one spot in every direction, costs about
+//! 10 µs a segment; a print about 0.1 µs).
+//!
+//! These bounds do not change the figure on real prints beyond rounding: the result does not
+//! depend on the cell size, and a cell of a print holds far fewer than [`MAX_WALK`] segments
+//! (lines at least a width apart cross a cell a few at a time, even a grown one: see
+//! [`PIECES_PER_SEGMENT`]); only hostile input (hundreds of segments through one spot that do
+//! not cover each other) has candidates left unexamined.
 
 /// One extrusion segment in the layer plane.
 #[derive(Clone, Copy, Debug)]
@@ -28,6 +45,13 @@ const SIN_MAX_ANGLE: f64 = 0.173_648_177_666_930_35;
 pub const MAX_SPAN_MM: f64 = 2000.0;
 /// Pieces per segment at most.
 const MAX_PIECES: usize = 8192;
+/// Mean pieces per segment the cell size allows before it grows: a layer whose segments span
+/// less than about 5 mm on average keeps the 3-width cell; one of long infill lines gets cells
+/// a quarter of their length (so a cell of a solid 300 mm layer holds about 160 of them, under
+/// [`MAX_WALK`]). Low, because the registrations (memory) grow with it.
+pub const PIECES_PER_SEGMENT: f64 = 4.0;
+/// Entries of one cell a query walks at most (newest first).
+pub const MAX_WALK: usize = 256;
 /// Cells per piece axis at most (only reached after the piece cap).
 const MAX_CELLS_AXIS: i64 = 16;
 
@@ -61,19 +85,32 @@ fn bucket(cx: i64, cy: i64, mask: u64) -> u32 {
     ((h ^ (h >> 29)) & mask) as u32
 }
 
-/// Calls `f(cx, cy)` for every cell touched by the box of each piece of `s`, grown by `grow`.
+/// The extent of `s` along X or Y, when it takes part in overlap (finite, not longer than any
+/// printer, at a sane position).
 #[inline]
-fn for_piece_cells(s: &Seg, cs: f64, grow: f64, mut f: impl FnMut(i64, i64)) {
+fn span(s: &Seg) -> Option<f64> {
+    let span = (s.b[0] - s.a[0]).abs().max((s.b[1] - s.a[1]).abs());
+    let sane = span <= MAX_SPAN_MM && s.a[0].abs() <= 1e9 && s.a[1].abs() <= 1e9;
+    sane.then_some(span)
+}
+
+/// Pieces a segment of extent `span` is cut into (each no longer than a cell `cs`).
+#[inline]
+fn pieces(span: f64, cs: f64) -> usize {
+    ((span / cs).ceil() as usize).clamp(1, MAX_PIECES)
+}
+
+/// Calls `f(cx, cy)` for every cell touched by the box of each piece of `s`, grown by `grow`,
+/// until `f` returns false.
+#[inline]
+fn for_piece_cells(s: &Seg, cs: f64, grow: f64, mut f: impl FnMut(i64, i64) -> bool) {
     let inv = 1.0 / cs;
     let dx = s.b[0] - s.a[0];
     let dy = s.b[1] - s.a[1];
     // Pieces no longer than a cell along either axis. Segments longer than any printer
     // (or at non-finite positions) take no part in overlap.
-    let span = dx.abs().max(dy.abs());
-    if span.is_nan() || span > MAX_SPAN_MM || !s.a[0].is_finite() || !s.a[1].is_finite() || s.a[0].abs() > 1e9 || s.a[1].abs() > 1e9 {
-        return;
-    }
-    let n = ((span * inv).ceil() as usize).clamp(1, MAX_PIECES);
+    let Some(span) = span(s) else { return };
+    let n = pieces(span, cs);
     let step = 1.0 / n as f64;
     for k in 0..n {
         let t0 = k as f64 * step;
@@ -88,7 +125,9 @@ fn for_piece_cells(s: &Seg, cs: f64, grow: f64, mut f: impl FnMut(i64, i64)) {
         while cy <= cy1 {
             let mut cx = cx0;
             while cx <= cx1 {
-                f(cx, cy);
+                if !f(cx, cy) {
+                    return;
+                }
                 cx += 1;
             }
             cy += 1;
@@ -182,10 +221,48 @@ fn clip(lo: &mut f64, hi: &mut f64, v0: f64, dv: f64, min: f64, max: f64) -> Opt
     if *hi > *lo { Some(()) } else { None }
 }
 
+/// Whether a parameter interval covers a whole segment but for rounding: the search stops
+/// there, since what other candidates could still add is below 2·10⁻⁹ of its length.
+#[inline]
+fn covers(iv: (f64, f64)) -> bool {
+    iv.0 <= 1e-9 && iv.1 >= 1.0 - 1e-9
+}
+
+/// Merges `iv` (parameter intervals within [0, 1]) into disjoint sorted intervals, in place.
+/// Comparisons only, so the covered length is the same whenever and however often it is done.
+fn merge(iv: &mut Vec<(f64, f64)>) {
+    iv.sort_by(|x, y| x.0.total_cmp(&y.0));
+    let mut w = 0;
+    for r in 1..iv.len() {
+        let (l, h) = iv[r];
+        if l > iv[w].1 {
+            w += 1;
+            iv[w] = (l, h);
+        } else if h > iv[w].1 {
+            iv[w].1 = h;
+        }
+    }
+    iv.truncate(w + 1);
+}
+
+/// Bytes [`Overlap::layer`] holds for a layer of `segments` segments at most (its buffers and
+/// the caller's segment list), for the analyzer's memory estimate.
+pub fn layer_bytes(segments: usize) -> usize {
+    use std::mem::size_of;
+    // Per segment: the caller's list (grown by doubling: up to twice its length) and its path
+    // records (16 bytes, doubled), the prepared copy, the stamp; registrations (a segment's
+    // first piece touches at most 4 cells, each further one at most 3 new ones, and pieces are
+    // at most 1 + PIECES_PER_SEGMENT per segment on average); buckets (head and stamp, at most
+    // 4 per segment rounded up to a power of two).
+    let pieces = 1 + PIECES_PER_SEGMENT as usize;
+    let per = 2 * size_of::<Seg>() + 2 * 16 + size_of::<Prep>() + 4 + (1 + 3 * pieces) * 8 + 8 * 8;
+    segments.saturating_mul(per)
+}
+
 impl Overlap {
     /// Total overlapping length of `segs` (in print order), mm.
     pub fn layer(&mut self, segs: &[Seg], default_width: f64) -> f64 {
-        if segs.len() < 2 || segs.len() >= u32::MAX as usize {
+        if segs.len() < 2 || segs.len() >= (u32::MAX / 2) as usize {
             return 0.0;
         }
         let mut wmax = 0.0f64;
@@ -197,13 +274,17 @@ impl Overlap {
         if wmax <= 0.0 {
             wmax = if default_width > 0.0 && default_width.is_finite() { default_width } else { 0.4 };
         }
-        let cs = (3.0 * wmax).max(0.5);
+        // Long segments grow the cell so that the layer makes at most PIECES_PER_SEGMENT pieces
+        // per segment on average.
+        let total_span: f64 = segs.iter().filter_map(span).sum();
+        let cs = (3.0 * wmax).max(0.5).max(total_span / (PIECES_PER_SEGMENT * segs.len() as f64));
+        let total_pieces: usize = segs.iter().map(|s| span(s).map_or(0, |sp| pieces(sp, cs))).sum();
         let grow = 0.5 * wmax + 1e-9;
 
         // Incremental grid: query a segment against what is registered, then register it.
         // A bucket is walked at most once per query and holds a segment at most once (both
         // through `bucket_stamp`); each segment is tested at most once per query (`stamp`).
-        let buckets = (segs.len() * 4).next_power_of_two().max(64);
+        let buckets = (2 * total_pieces).clamp(segs.len(), 4 * segs.len()).next_power_of_two().max(64);
         let probe_mask = (buckets - 1) as u64;
         self.head.clear();
         self.head.resize(buckets, u32::MAX);
@@ -217,22 +298,24 @@ impl Overlap {
         let mut total = 0.0;
         for (j, b) in segs.iter().enumerate() {
             let j32 = j as u32;
-            // Stamps: 2j for the query, 2j + 1 for the registration (segments < u32::MAX / 2
-            // per layer; beyond that, no bucket is skipped, which changes nothing but speed).
-            let (q_mark, r_mark) = if j < (u32::MAX / 2) as usize { (2 * j32, 2 * j32 + 1) } else { (u32::MAX, u32::MAX) };
+            // Stamps: 2j for the query, 2j + 1 for the registration.
+            let (q_mark, r_mark) = (2 * j32, 2 * j32 + 1);
             self.intervals.clear();
             let bp = &self.prep[j];
             let (head, nodes, stamp, bstamp, intervals, prep) =
                 (&self.head, &self.nodes, &mut self.stamp, &mut self.bucket_stamp, &mut self.intervals, &self.prep);
             if !nodes.is_empty() {
+                let mut merge_at = 16;
                 for_piece_cells(b, cs, grow, |cx, cy| {
                     let k = bucket(cx, cy, probe_mask) as usize;
-                    if bstamp[k] == q_mark && q_mark != u32::MAX {
-                        return;
+                    if bstamp[k] == q_mark {
+                        return true;
                     }
                     bstamp[k] = q_mark;
                     let mut link = head[k];
-                    while link != u32::MAX {
+                    let mut walked = 0;
+                    while link != u32::MAX && walked < MAX_WALK {
+                        walked += 1;
                         let [next, i] = nodes[link as usize];
                         link = next;
                         let i = i as usize;
@@ -242,38 +325,39 @@ impl Overlap {
                         stamp[i] = j32;
                         if let Some(iv) = on_segment(&prep[i], bp) {
                             intervals.push(iv);
+                            // Covered end to end (to rounding): stop looking.
+                            if covers(iv) {
+                                return false;
+                            }
+                            if intervals.len() >= merge_at {
+                                merge(intervals);
+                                if intervals.len() == 1 && covers(intervals[0]) {
+                                    return false;
+                                }
+                                merge_at = (2 * intervals.len()).max(16);
+                            }
                         }
                     }
+                    true
                 });
             }
             {
                 let (head, nodes, bstamp) = (&mut self.head, &mut self.nodes, &mut self.bucket_stamp);
                 for_piece_cells(b, cs, 0.0, |cx, cy| {
                     let k = bucket(cx, cy, probe_mask) as usize;
-                    if bstamp[k] == r_mark && r_mark != u32::MAX {
-                        return;
+                    if bstamp[k] != r_mark {
+                        bstamp[k] = r_mark;
+                        nodes.push([head[k], j32]);
+                        head[k] = (nodes.len() - 1) as u32;
                     }
-                    bstamp[k] = r_mark;
-                    nodes.push([head[k], j32]);
-                    head[k] = (nodes.len() - 1) as u32;
+                    true
                 });
             }
             if self.intervals.is_empty() {
                 continue;
             }
-            self.intervals.sort_by(|x, y| x.0.total_cmp(&y.0));
-            let mut covered = 0.0;
-            let (mut lo, mut hi) = self.intervals[0];
-            for &(l, h) in &self.intervals[1..] {
-                if l > hi {
-                    covered += hi - lo;
-                    lo = l;
-                    hi = h;
-                } else if h > hi {
-                    hi = h;
-                }
-            }
-            covered += hi - lo;
+            merge(&mut self.intervals);
+            let covered = self.intervals.iter().map(|(lo, hi)| hi - lo).sum::<f64>();
             let (dx, dy) = (b.b[0] - b.a[0], b.b[1] - b.a[1]);
             total += covered * (dx * dx + dy * dy).sqrt();
         }

@@ -71,6 +71,15 @@ pub fn parse_number(s: &[u8]) -> Option<(f64, usize)> {
     Some((if neg { -v } else { v }, i))
 }
 
+/// Largest magnitude a word's number may have: 10 km (or 10 km of filament, 10^7 mm/min, 10^7
+/// ms of dwell). No machine reaches it, absolute E of the largest spool stays far below it, and
+/// sums of such numbers over any file stay finite (no inf or NaN totals).
+pub const MAX_WORD_MAGNITUDE: f64 = 1.0e7;
+/// Smallest positive feed rate (`F`, mm/min) and acceleration (`M204`, mm/s²) accepted: one
+/// micrometre per minute. Slower is not a speed any machine runs at, and a feed near zero would
+/// make the time estimate infinite.
+pub const MIN_RATE: f64 = 1.0e-3;
+
 /// Parameter words of one line: a value per letter A–Z.
 #[derive(Clone, Copy, Debug)]
 pub struct Words {
@@ -227,9 +236,34 @@ pub fn lex_line(s: &[u8]) -> Result<Line<'_>, String> {
                 let k = (letter - b'A') as usize;
                 match num {
                     Some((v, n)) => {
+                        let text = &s[i..i + n];
                         i += n;
-                        if !v.is_finite() {
-                            return Err(format!("the number after {} is out of range", letter as char));
+                        if let Some(len) = exponent_len(&s[i..]) {
+                            // Firmware reads `X1e10` as X1 followed by an E word: refuse the
+                            // ambiguity rather than pick a reading.
+                            let exp = String::from_utf8_lossy(&s[i..i + len]);
+                            return Err(format!(
+                                "{}{}{exp} has an exponent, which G-code numbers do not have (a printer would read '{exp}' as an E word)",
+                                letter as char,
+                                String::from_utf8_lossy(text),
+                            ));
+                        }
+                        if !v.is_finite() || v.abs() > MAX_WORD_MAGNITUDE {
+                            return Err(format!(
+                                "{}{} is out of range: numbers are at most {MAX_WORD_MAGNITUDE:.0} in size (10 km), far beyond any machine",
+                                letter as char,
+                                String::from_utf8_lossy(text)
+                            ));
+                        }
+                        if v > 0.0 && v < MIN_RATE && is_rate(cmd, letter) {
+                            return Err(format!(
+                                "{}{} is slower than {MIN_RATE} (mm/min or mm/s²), which no machine runs at",
+                                letter as char,
+                                String::from_utf8_lossy(text)
+                            ));
+                        }
+                        if words.mask & (1 << k) != 0 {
+                            return Err(format!("{} appears twice on the line", letter as char));
                         }
                         words.vals[k] = v;
                         words.mask |= 1 << k;
@@ -257,6 +291,28 @@ pub fn lex_line(s: &[u8]) -> Result<Line<'_>, String> {
         }
     }
     Ok(Line { cmd, words, comment: None })
+}
+
+/// Length of an exponent (`e5`, `e-3`, `e+10`) at the start of `s`, if there is one. Only a
+/// lowercase `e` counts: `X10E5` is the compact form of `X10 E5`.
+#[inline]
+fn exponent_len(s: &[u8]) -> Option<usize> {
+    if s.first() != Some(&b'e') {
+        return None;
+    }
+    let sign = usize::from(matches!(s.get(1), Some(b'+' | b'-')));
+    let digits = s[1 + sign..].iter().take_while(|b| b.is_ascii_digit()).count();
+    (digits > 0).then_some(1 + sign + digits)
+}
+
+/// Whether `letter` of `cmd` is a feed rate or an acceleration (bounded below by [`MIN_RATE`]).
+#[inline]
+fn is_rate(cmd: Command, letter: u8) -> bool {
+    match cmd {
+        Command::G(0..=3, 0) | Command::Modal => letter == b'F',
+        Command::M(204) => matches!(letter, b'S' | b'P' | b'T'),
+        _ => false,
+    }
 }
 
 fn printable(b: u8) -> String {
@@ -339,5 +395,28 @@ mod tests {
         let l = lex_line(b"X5 (c) Y6").unwrap();
         assert_eq!(l.cmd, Command::Modal);
         assert_eq!(l.words.get(b'Y'), Some(6.0));
+    }
+
+    #[test]
+    fn refusals() {
+        // Exponents (lowercase e right after a number) are refused; uppercase E is the E word.
+        for s in ["G1 X1e5", "G1 E1e300", "G1 Y2.5e-3", "X3e+2", "g1 x1e1"] {
+            let e = lex_line(s.as_bytes()).unwrap_err();
+            assert!(e.contains("exponent"), "{s}: {e}");
+        }
+        let l = lex_line(b"G1X1E5").unwrap();
+        assert_eq!((l.words.get(b'X'), l.words.get(b'E')), (Some(1.0), Some(5.0)));
+        // A lone `e` after a number is an E word without a number (refused as such).
+        assert!(lex_line(b"G1 X1e").unwrap_err().contains("E is not followed"));
+        // Twice the same letter; magnitudes; rates.
+        assert!(lex_line(b"G1 X1 X2").unwrap_err().contains("twice"));
+        assert!(lex_line(b"G1 X-10000000 E10000000").is_ok());
+        assert!(lex_line(b"G1 X10000000.001").unwrap_err().contains("out of range"));
+        assert!(lex_line(b"G1 F0.001").is_ok());
+        assert!(lex_line(b"G1 F0.0009").unwrap_err().contains("slower"));
+        assert!(lex_line(b"M204 T0.0000001").unwrap_err().contains("slower"));
+        assert!(lex_line(b"G4 S0.0000001").is_ok());
+        // Commands the analyzer does not interpret keep free-form arguments.
+        assert!(lex_line(b"M117 1e5 X1e5 X1e99999").is_ok());
     }
 }

@@ -15,10 +15,14 @@ use time::MotionTimer;
 
 /// Moves shorter than this (mm) have no XYZ motion.
 pub const MOTION_EPS: f64 = 1e-9;
-/// Longest preview chord of an arc, mm.
-const ARC_CHORD_MM: f64 = 0.5;
-/// Largest preview angle step of an arc, rad (10°).
-const ARC_STEP_RAD: f64 = std::f64::consts::PI / 18.0;
+/// Largest distance between an arc and the chords that stand for it in the preview and the
+/// overlap measure, mm (a fortieth of a typical line width: invisible, and it does not move
+/// the overlap figure).
+pub const ARC_TOLERANCE_MM: f64 = 0.01;
+/// Chords per arc at most (an arc turns at most once). Bounds the work per `G2`/`G3` line
+/// whatever its radius; arcs larger than about 200 mm in radius reach it and deviate a little
+/// more than [`ARC_TOLERANCE_MM`] (0.03 mm for a 100 mm full circle).
+pub const MAX_ARC_CHORDS: usize = 128;
 /// Feed rate before any F word, mm/min.
 pub const DEFAULT_FEED_MM_MIN: f64 = 1500.0;
 /// Acceleration before any M204, mm/s².
@@ -54,6 +58,15 @@ impl Move {
     pub fn moves(&self) -> bool {
         self.len > MOTION_EPS && self.len.is_finite()
     }
+}
+
+/// Chords an arc of radius `r` turning `ang` radians is drawn with: each within
+/// [`ARC_TOLERANCE_MM`] of the arc and turning at most 90°, at most [`MAX_ARC_CHORDS`].
+pub fn arc_chords(r: f64, ang: f64) -> usize {
+    let half_pi = std::f64::consts::FRAC_PI_2;
+    let step = if r > ARC_TOLERANCE_MM { (2.0 * libm::acos(1.0 - ARC_TOLERANCE_MM / r)).min(half_pi) } else { half_pi };
+    let n = ang.abs() / step;
+    if n.is_nan() { 1 } else { n.ceil().clamp(1.0, MAX_ARC_CHORDS as f64) as usize }
 }
 
 /// What one line did.
@@ -325,9 +338,7 @@ impl Motion {
         let mut pts = std::mem::take(&mut self.arc_pts);
         pts.clear();
         if need_points {
-            let n1 = (xy / ARC_CHORD_MM).ceil();
-            let n2 = (ang.abs() / ARC_STEP_RAD).ceil();
-            let n = if n1.is_finite() { n1.max(n2).clamp(1.0, 1024.0) as usize } else { 1 };
+            let n = arc_chords(r, ang);
             for k in 1..n {
                 let f = k as f64 / n as f64;
                 let th = th0 + ang * f;
@@ -372,5 +383,25 @@ impl Motion {
             self.line(l.cmd, &l.words, false);
         }
         true
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::f64::consts::{FRAC_PI_2, PI};
+
+    #[test]
+    fn arc_chords_follow_the_tolerance_and_the_cap() {
+        // A quarter circle of 10 mm: chords of 2·acos(1 − 0.01/10) ≈ 5.1°.
+        assert_eq!(arc_chords(10.0, FRAC_PI_2), 18);
+        assert_eq!(arc_chords(10.0, -FRAC_PI_2), 18);
+        // Huge radii reach the cap; tiny ones still get 4 chords a turn.
+        assert_eq!(arc_chords(1e7, 2.0 * PI), MAX_ARC_CHORDS);
+        assert_eq!(arc_chords(1e300, 2.0 * PI), MAX_ARC_CHORDS);
+        assert_eq!(arc_chords(0.001, 2.0 * PI), 4);
+        // Degenerate input gives one chord.
+        assert_eq!(arc_chords(10.0, 0.0), 1);
+        assert_eq!(arc_chords(10.0, f64::NAN), 1);
     }
 }

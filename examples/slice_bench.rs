@@ -30,7 +30,7 @@ fn main() {
         let t = Instant::now();
         let g = gcode::write_gcode(&s.toolpath, &writer).expect("writes");
         let tw = t.elapsed().as_secs_f64();
-        let ae = analyze::estimate(g.text.len() as f64, &analyze::Options { collect_preview: true, ..Default::default() });
+        let ae = analyze::plan(e.get("segments"), e.get("layers"), &analyze::Options { collect_preview: true, ..Default::default() });
         let t = Instant::now();
         analyze::analyze("bench.gcode", g.text.as_bytes(), &analyze::Options { collect_preview: true, ..Default::default() }).expect("analyses");
         let ta = t.elapsed().as_secs_f64();

@@ -489,7 +489,8 @@ fn plan(kind: &dyn crate::jobs::JobKind, ctx: &mut Ctx) -> Result<Plan, Error> {
     if stages.iter().all(|e| e.refused.is_none()) {
         let segments = stages.last().map_or(0.0, |e| e.get("segments"));
         let writer = gcode::estimate(segments, &writer_options(ctx.design));
-        let analyzer = analyze::estimate(writer.get("gcode_bytes"), &analyzer_options(ctx.design, &RunOptions { collect_preview: true }));
+        let layers = stages.iter().map(|e| e.get("layers")).fold(0.0, f64::max);
+        let analyzer = analyze::plan(segments, layers, &analyzer_options(ctx.design, &RunOptions { collect_preview: true }));
         stages.push(writer);
         stages.push(analyzer);
     }

@@ -299,8 +299,22 @@ pub fn analyze(file: &str, bytes: &[u8], options: &Options) -> Result<Analysis, 
     machine::run(file, bytes, options, &est)
 }
 
-/// PROVISIONAL (replaced by the analyzer's own estimate when issue 7's analyzer work merges):
-/// the analyzer's work on `gcode_bytes` of G-code.
-pub fn estimate(gcode_bytes: f64, _options: &Options) -> crate::budget::Estimate {
-    crate::budget::Estimate::new("analyze").cost(3.0 * gcode_bytes, gcode_bytes * 1e-8).budgets("a smaller G-code file")
+/// Analyzer time per segment on the reference machine, s (`cargo run --release --example
+/// slice_bench`, G-code of sliced solids; hostile overlapping layers cost up to 10 µs).
+const SECONDS_PER_SEGMENT: f64 = 1.0e-6;
+
+/// The analyzer's work on the G-code a run will write, before it is written (the run's plan):
+/// `segments` moves over `layers` layers, from the upstream stages' estimates. Memory by
+/// [`peak_bytes`] (a layer taken as twice the mean), refused over [`MAX_PEAK_BYTES`] as the
+/// analysis itself would be.
+pub fn plan(segments: f64, layers: f64, options: &Options) -> crate::budget::Estimate {
+    let layers = layers.max(1.0);
+    let largest = (2.0 * segments / layers).min(segments).min(MAX_LAYER_SEGMENTS as f64);
+    let bytes = peak_bytes(segments.min(usize::MAX as f64 / 4.0) as usize, layers as usize, largest as usize, options.collect_preview) as f64;
+    let fix = "print fewer or thicker layers, less infill, or a smaller part";
+    crate::budget::Estimate::new("analyze")
+        .quantity("segments", "Moves read back", segments, "")
+        .cost(bytes, segments * SECONDS_PER_SEGMENT)
+        .limit("the analysis' memory", bytes, MAX_PEAK_BYTES as f64, "bytes", fix)
+        .budgets(fix)
 }

@@ -113,6 +113,10 @@ pub fn cases() -> Vec<Case> {
                 Ok(Prepared { size, run: Box::new(move || gcode::write_gcode(&tp, &o).map(drop).map_err(err)) })
             },
         },
+        Case { name: "analyze/print", unit: "moves", prepare: |k| Ok(analyze_case(testgen::gcode::perimeter_print(50_000 * k), (50_000 * k) as f64)) },
+        Case { name: "analyze/repeated", unit: "moves", prepare: |k| Ok(analyze_case(testgen::gcode::repeated_moves(20_000 * k), (20_000 * k) as f64)) },
+        Case { name: "analyze/long-moves", unit: "moves", prepare: |k| Ok(analyze_case(testgen::gcode::long_moves(20_000 * k), (20_000 * k) as f64)) },
+        Case { name: "analyze/arcs", unit: "arcs", prepare: |k| Ok(analyze_case(testgen::gcode::large_arcs(100 * k), (100 * k) as f64)) },
         Case {
             name: "lattice/honeycomb",
             unit: "mm²",

@@ -30,7 +30,7 @@ const BYTES_PER_TRIANGLE: f64 = 24.0;
 /// What a mesh measures for the estimate.
 struct MeshStats {
     triangles: usize,
-    /// Σ over triangles of the layers its Z span crosses.
+    /// Σ over triangles of the layers its Z span crosses (expected: span / layer height).
     crossings: f64,
     /// Enclosed volume, mm³ (absolute value of the signed sum).
     volume: f64,
@@ -55,7 +55,8 @@ fn stats(mesh: &Mesh, layer_height: f64) -> MeshStats {
     for t in &mesh.triangles {
         let (a, b, c) = (v(t[0]), v(t[1]), v(t[2]));
         let (lo, hi) = (a[2].min(b[2]).min(c[2]), a[2].max(b[2]).max(c[2]));
-        s.crossings += ((hi - lo) / layer_height).floor() + 1.0;
+        // The expected number of planes, spaced `layer_height`, that cut a span of this height.
+        s.crossings += (hi - lo) / layer_height;
         let u = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
         let w = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
         let n = [u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]];

@@ -94,6 +94,27 @@ fn three_mf_sibling_objects_read_in_linear_time() {
     assert_linear("3MF siblings", gen::three_mf_siblings, "a.3mf", 4_000, 8);
 }
 
+#[test]
+fn three_mf_estimate_counts_in_linear_time() {
+    let _g = lock();
+    // The estimate's counting pass over the XML (no numbers parsed, nothing stored per element).
+    let (small, big) = (gen::three_mf(60_000), gen::three_mf(480_000));
+    let time = |b: &[u8]| {
+        let t = Instant::now();
+        std::hint::black_box(estimate("a.3mf", b).unwrap());
+        t.elapsed().as_secs_f64()
+    };
+    let (mut ts, mut tb) = (f64::MAX, f64::MAX);
+    for _ in 0..3 {
+        ts = ts.min(time(&small));
+        tb = tb.min(time(&big));
+    }
+    let k = estimate("a.3mf", &big).unwrap().triangles as f64 / estimate("a.3mf", &small).unwrap().triangles as f64;
+    let (ratio, limit) = (tb / ts, k.powf(1.2) * NOISE);
+    println!("3MF estimate: {:.1} ms → {:.1} ms, ratio {ratio:.2} (×{k:.2} input), exponent {:.2}", ts * 1e3, tb * 1e3, ratio.ln() / k.ln());
+    assert!(ratio < limit, "3MF estimate: time grew {ratio:.1}× for {k:.1}× the input (limit {limit:.1})");
+}
+
 // ---------- nesting, forged and multiplied counts ----------
 
 #[test]
@@ -426,10 +447,12 @@ fn child_peak_probe() {
     let path = std::path::PathBuf::from(path);
     let name = path.file_name().unwrap().to_string_lossy().into_owned();
     let bytes = std::fs::read(&path).unwrap();
+    let t = Instant::now();
     let (im, rss) = peak_rss_during(|| read_mesh(&name, &bytes, &Options::default()).unwrap());
+    let dt = t.elapsed().as_secs_f64();
     std::hint::black_box(&im);
     if let Some(rss) = rss {
-        println!("WEFT_PEAK {rss}");
+        println!("\nWEFT_PEAK {rss} {dt:.3} s");
     }
 }
 
@@ -497,6 +520,7 @@ fn limits_are_consistent() {
     bytes[80..84].copy_from_slice(&(MAX_TRIANGLES as u32).to_le_bytes());
     let est = estimate("max.stl", &bytes).unwrap();
     assert_eq!(est.triangles, n);
+    println!("binary STL at the limit: estimated peak {} MiB", est.peak_bytes >> 20);
     assert!(est.peak_bytes <= MAX_IMPORT_BYTES, "{} MiB", est.peak_bytes >> 20);
     assert!(est.check("max.stl").is_ok());
 }

@@ -8,6 +8,12 @@
 //! triangle list, then clean it ([`repair`]): weld close vertices, drop degenerate and
 //! duplicate triangles, count open edges. The output order follows the file order, so the
 //! same bytes give the same [`Mesh`] on every run and platform.
+//!
+//! Bounded: every parser and the cleaner are linear in the input (`tests/import_hostile.rs`
+//! checks the growth of each), and the counts are checked against [`MAX_TRIANGLES`] and
+//! [`MAX_IMPORT_BYTES`] before mesh memory is allocated; [`estimate`] gives the same counts
+//! and the memory peak without reading. Strings from files reach messages only through
+//! [`clean`] (bounded length, no control characters).
 
 mod obj;
 mod repair;
@@ -20,24 +26,29 @@ use serde::Serialize;
 pub use threemf::{MAX_MODEL_PART_BYTES, MAX_XML_DEPTH};
 
 /// Most triangles [`read_mesh`] accepts (counted before cleaning; a 3MF counts every build
-/// instance). Checked before any mesh memory is allocated, from the binary STL header, a
-/// token scan of ASCII STL and OBJ, and the 3MF counts as its XML streams.
+/// instance). Checked before any mesh memory is allocated: from the binary STL header, a
+/// token scan of ASCII STL and OBJ, and the 3MF counts as its XML streams and before the
+/// build is placed.
 ///
 /// Why 5 M: the browser worker has about 2 GB of wasm memory for a whole run and slicing
-/// follows import, so an import should peak under about 1 GB. Measured (heap high-water
-/// mark of `read_mesh`, `tests/import_hostile.rs::peak_memory_per_triangle`, closed
-/// spheres): binary STL 95 B/triangle on top of the file's own 50 B/triangle, 3MF 88 B,
-/// OBJ 87 B, ASCII STL 95 B on top of its ~190 B/triangle of text. 5 M binary-STL triangles
-/// are a 250 MB file and peak at about 730 MB in all; the earlier reader peaked at 164 B/triangle
-/// (625 MiB for a 4 M-triangle, 200 MB STL in wasm; 1.69 GB RSS for 10 M natively). Meshes
-/// that large are scans or over-tessellated exports, which slice the same once decimated.
+/// follows import, so import should peak under about 1 GB ([`MAX_IMPORT_BYTES`]).
+/// Measured (`memory_per_triangle` in `tests/import_hostile.rs`: resident high-water mark
+/// of `read_mesh` in a fresh process, glibc unmapping every freed block, 2 M-triangle
+/// spheres), beyond the file's own bytes: binary and ASCII STL 64 B/triangle, OBJ and 3MF
+/// 42, a binary-STL soup where nothing welds (the worst case) 107; [`estimate`] bounds them
+/// at 111, 43, 73. So a binary STL at the limit (a 250 MB file) peaks at about 0.6 GB, and
+/// at most at its estimate of 718 MiB whatever its geometry, leaving room for slicing. The
+/// previous importer peaked at 102 B/triangle beyond the file (same measurement; 625 MiB of
+/// wasm memory for a 4 M-triangle, 200 MB STL; 1.69 GB RSS for 10 M natively) and had no
+/// bound for soups. Meshes this large are scans or over-tessellated exports, which slice
+/// the same once decimated.
 pub const MAX_TRIANGLES: usize = 5_000_000;
 
 /// Most memory an import may need by [`estimate`]: the input's own bytes plus the reader's
 /// and cleaner's high-water mark. 1 GiB keeps import within half of the browser worker's
 /// ~2 GB, leaving the rest for slicing. It binds before [`MAX_TRIANGLES`] only for inputs
-/// that are large for their triangle count: ASCII STL (≈190 bytes of text per triangle),
-/// OBJ or 3MF with many unused vertices, triangle soups.
+/// that are large for their triangle count: ASCII STL (≈190 bytes of text per triangle, so
+/// about 3.7 M triangles fit), OBJ or 3MF with many unused vertices or many small objects.
 pub const MAX_IMPORT_BYTES: u64 = 1 << 30;
 
 /// Default vertex-weld distance in mm: vertices closer than this become one.
@@ -326,8 +337,8 @@ pub fn read_mesh(file: &str, bytes: &[u8], options: &Options) -> Result<Imported
 /// Detects the format of `bytes` from their content; `file`'s extension only breaks ties.
 ///
 /// STL: binary when the length is exactly what the header's triangle count says (84 + 50·n
-/// bytes), else ASCII when the start reads as text ([`text_problem`]) beginning with
-/// `solid`. A `.stl` that is neither is read as a damaged binary STL, so the error says where
+/// bytes), else ASCII when the start reads as text (no NUL and at most 4 other control
+/// bytes in the first KiB) beginning with `solid`. A `.stl` that is neither is read as a damaged binary STL, so the error says where
 /// it was cut short and why it is not ASCII (trailing bytes after the promised triangles,
 /// which some exporters leave, are ignored).
 pub fn detect_format(file: &str, bytes: &[u8]) -> Result<Format, Error> {

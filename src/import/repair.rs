@@ -28,7 +28,7 @@ const NONE: u32 = u32::MAX;
 /// Twice the area below this fraction of the longest edge squared counts as zero area.
 const ZERO_AREA_RATIO: f64 = 1e-12;
 
-/// Bytes of a [`Table`] for `n` entries.
+/// Bytes of a [`Table`] for `n` entries (fixed size, or grown to hold `n`).
 fn table_bytes(n: u64) -> u64 {
     4 * n.saturating_mul(2).max(16).next_power_of_two()
 }
@@ -38,7 +38,8 @@ fn table_bytes(n: u64) -> u64 {
 /// (map + table), weld (table, chain, map), triangle dedupe (table), compaction (id map,
 /// then shrinking copies), open edges (a `u64` per corner).
 pub(super) fn extra_peak(v: u64, t: u64) -> u64 {
-    let dedupe = 4 * v + table_bytes(v);
+    // The dedupe table starts small and doubles: at most the full size plus the half it left.
+    let dedupe = 4 * v + table_bytes(v) + table_bytes(v) / 2;
     let weld = 8 * v + table_bytes(v);
     let tris = table_bytes(t);
     let compact = 12 * v.max(t);
@@ -181,6 +182,28 @@ impl Table {
         }
     }
 
+    /// Doubles the table when one more entry would fill it past half; `hash` gives the hash
+    /// of an id already in it. Used where the final count is unknown and usually far below
+    /// the bound (exact duplicates: an STL's corners are ~6 copies of each vertex).
+    fn reserve_one(&mut self, entries: usize, hash: impl Fn(u32) -> u64) {
+        if 2 * (entries + 1) <= self.slots.len() {
+            return;
+        }
+        let size = 2 * self.slots.len();
+        let old = std::mem::replace(&mut self.slots, vec![NONE; size]);
+        self.mask = size - 1;
+        for id in old.into_iter().filter(|&id| id != NONE) {
+            let mut at = hash(id) as usize & self.mask;
+            while let Some(s) = self.slots.get_mut(at) {
+                if *s == NONE {
+                    *s = id;
+                    break;
+                }
+                at = (at + 1) & self.mask;
+            }
+        }
+    }
+
     /// The slot holding the id `same` accepts, or the empty slot where it would go.
     #[inline]
     fn slot(&self, h: u64, same: impl Fn(u32) -> bool) -> usize {
@@ -244,7 +267,9 @@ fn key(v: &[f32; 3]) -> [u32; 3] {
 /// down in place; returns the map input index → unique index.
 fn dedupe_exact(vertices: &mut Vec<[f32; 3]>, seed: u64) -> Vec<u32> {
     let n = vertices.len();
-    let mut table = Table::new(n);
+    // Sized for an STL's typical 1 unique in 6 and grown as needed: a sparse table of all
+    // corners would be 12× larger than its entries and miss the caches on every lookup.
+    let mut table = Table::new(n / 6);
     let mut map = Vec::with_capacity(n);
     let mut unique = 0usize;
     for i in 0..n {
@@ -253,6 +278,7 @@ fn dedupe_exact(vertices: &mut Vec<[f32; 3]>, seed: u64) -> Vec<u32> {
         let k = key(&p);
         let found = {
             let vs = &*vertices;
+            table.reserve_one(unique, |id| vs.get(id as usize).map_or(0, |q| hash3(seed, key(q))));
             table.find_or_insert(hash3(seed, k), unique as u32, |id| vs.get(id as usize).map(key) == Some(k))
         };
         match found {

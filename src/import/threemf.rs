@@ -752,7 +752,10 @@ fn normalize_path(p: &str) -> String {
 
 /// The name after any namespace prefix.
 fn local(name: &str) -> &str {
-    name.rsplit(':').next().unwrap_or(name)
+    match name.rfind(':') {
+        Some(i) => name.get(i + 1..).unwrap_or(name),
+        None => name,
+    }
 }
 
 /// The values of the attributes named `keys` (local names; the first of duplicates wins;

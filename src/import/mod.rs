@@ -507,6 +507,23 @@ mod tests {
     }
 
     #[test]
+    fn strings_are_bounded_and_numbers_grouped() {
+        assert_eq!(clean("a\u{1b}[2Jb\n"), "a\u{FFFD}[2Jb\u{FFFD}");
+        let long = clean(&"é".repeat(1000));
+        assert_eq!(long.chars().count(), MAX_SHOWN_CHARS + 1);
+        assert!(long.ends_with('…'));
+        assert_eq!(show(&[b'x'; 100]).chars().count(), 33);
+        assert_eq!((group(0), group(999), group(1000), group(544_761_204)), ("0".into(), "999".into(), "1,000".into(), "544,761,204".into()));
+    }
+
+    #[test]
+    fn text_rule() {
+        assert!(text_problem(b"solid a\x01b\n").is_none());
+        assert!(text_problem(b"solid \x01\x02\x03\x04\x05").unwrap().contains("5 control bytes (the first at byte 6)"));
+        assert!(text_problem(b"solid a\0").unwrap().contains("byte 7 is 0x00"));
+    }
+
+    #[test]
     fn detect() {
         assert_eq!(detect_format("x", b"PK\x03\x04rest").unwrap(), Format::ThreeMf);
         assert_eq!(detect_format("x", b"  solid a\nfacet normal 0 0 0\n").unwrap(), Format::StlAscii);

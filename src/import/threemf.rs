@@ -1194,6 +1194,26 @@ pub(crate) mod tests {
     }
 
     #[test]
+    fn not_utf8_names_the_line() {
+        let m = model("millimeter", TRI, "").replace("type=\"model\"", "type=\"mod\u{FFFD}el\"");
+        let mut bytes = m.into_bytes();
+        let at = bytes.windows(3).position(|w| w == "\u{FFFD}".as_bytes()).unwrap();
+        bytes.splice(at..at + 3, [0xFFu8]);
+        let e = read_3mf("t.3mf", &zip_of_bytes(&[("3D/3dmodel.model", &bytes)])).unwrap_err().to_string();
+        assert!(e.contains("3D/3dmodel.model line 4") && e.contains("not UTF-8"), "{e}");
+    }
+
+    fn zip_of_bytes(entries: &[(&str, &[u8])]) -> Vec<u8> {
+        let mut w = zip::ZipWriter::new(Cursor::new(Vec::new()));
+        let opts = zip::write::SimpleFileOptions::default();
+        for (name, body) in entries {
+            w.start_file(*name, opts).unwrap();
+            w.write_all(body).unwrap();
+        }
+        w.finish().unwrap().into_inner()
+    }
+
+    #[test]
     fn counting_matches_reading() {
         let res = format!(
             r#"{TRI}

@@ -1,6 +1,8 @@
 //! Stable-toolchain fuzz smoke test: thousands of seeded, deterministic mutations of every
-//! fixture (bit flips, truncation, insertion, duplicated chunks, odd numbers in text, the
-//! XML inside 3MF files) must make `read_mesh` return `Ok` or `Err`, never panic or hang.
+//! fixture and of small hostile inputs from `weft::testgen::mesh` (bit flips, truncation,
+//! insertion, duplicated chunks, odd numbers in text, control bytes near the start, the XML
+//! inside 3MF files) must make `read_mesh` and `estimate` return `Ok` or `Err`, never panic
+//! or hang; when both succeed the estimate's triangle count must be the one read.
 //!
 //! The real fuzzers live in `fuzz/` (cargo-fuzz); this runs in plain `cargo test`.
 
@@ -9,7 +11,7 @@ use rand_pcg::Pcg64;
 use std::io::{Cursor, Read, Write};
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
-use weft::import::{read_mesh, Options};
+use weft::import::{estimate, read_mesh, Options};
 
 const NUMBERS: &[&str] = &[
     "0", "-0", "1", "-1", "nan", "NaN", "inf", "-inf", "1e39", "-1e39", "3.4028236e38", "1e-45", "4294967295",
@@ -28,7 +30,12 @@ fn rand_below(rng: &mut Pcg64, n: usize) -> usize {
 /// One random mutation of `data`.
 fn mutate(rng: &mut Pcg64, data: &mut Vec<u8>) {
     let len = data.len();
-    match rng.next_u32() % 8 {
+    match rng.next_u32() % 9 {
+        8 => {
+            // A control byte in the first KiB (the STL text rule allows a few).
+            let at = rand_below(rng, len.min(1024) + 1);
+            data.insert(at, 1 + (rng.next_u32() % 31) as u8);
+        }
         0 => {
             for _ in 0..1 + rand_below(rng, 8) {
                 if len > 0 {
@@ -103,6 +110,16 @@ fn check(name: &str, seed: u64, input: &[u8], worst: &mut Duration) {
         let _ = std::fs::write(&dump, input);
         panic!("read_mesh panicked on {name} mutation seed {seed}; input saved to {}", dump.display());
     }
+    let est = std::panic::catch_unwind(|| estimate(name, input));
+    if est.is_err() {
+        let dump = std::env::temp_dir().join(format!("weft-fuzz-smoke-{name}-{seed}.bin"));
+        let _ = std::fs::write(&dump, input);
+        panic!("estimate panicked on {name} mutation seed {seed}; input saved to {}", dump.display());
+    }
+    if let (Ok(im), Ok(est)) = (result.as_ref().unwrap(), est.unwrap()) {
+        assert_eq!(est.triangles, im.report.triangles_read as u64, "{name} seed {seed}: estimate {est:?}");
+        assert!(est.peak_bytes >= input.len() as u64);
+    }
     if let Ok(im) = result.unwrap() {
         let n = im.mesh.vertices.len();
         assert!(im.mesh.triangles.iter().flatten().all(|&i| (i as usize) < n), "{name} seed {seed}: index out of range");
@@ -143,10 +160,18 @@ fn mutated_fixtures_never_panic() {
         .collect();
     names.sort();
     assert!(names.len() >= 8, "fixtures missing: {names:?}");
+    let mut seeds: Vec<(String, Vec<u8>)> = names.iter().map(|n| (n.clone(), std::fs::read(dir.join(n)).unwrap())).collect();
+    // Small hostile inputs made by the generators (never committed as files).
+    use weft::testgen::mesh as gen;
+    seeds.push(("gen-control.stl".into(), gen::ascii_stl_control_byte(24)));
+    seeds.push(("gen.obj".into(), gen::obj(24)));
+    seeds.push(("gen-siblings.3mf".into(), gen::three_mf_siblings(3)));
+    seeds.push(("gen-nested.3mf".into(), gen::three_mf_nested(8)));
+    seeds.push(("gen-too-deep.3mf".into(), gen::three_mf_nested(weft::import::MAX_XML_DEPTH + 1)));
     let mut worst = Duration::ZERO;
     let mut runs = 0;
-    for (k, name) in names.iter().enumerate() {
-        let original = std::fs::read(dir.join(name)).unwrap();
+    for (k, (name, original)) in seeds.iter().enumerate() {
+        let original = original.clone();
         // Fewer rounds for big files so the test stays fast in debug builds.
         // WEFT_FUZZ_ROUNDS=n multiplies the rounds for a longer local run.
         let scale: u64 = std::env::var("WEFT_FUZZ_ROUNDS").ok().and_then(|v| v.parse().ok()).unwrap_or(1);

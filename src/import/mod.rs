@@ -8,6 +8,12 @@
 //! triangle list, then clean it ([`repair`]): weld close vertices, drop degenerate and
 //! duplicate triangles, count open edges. The output order follows the file order, so the
 //! same bytes give the same [`Mesh`] on every run and platform.
+//!
+//! Bounded: every parser and the cleaner are linear in the input (`tests/import_hostile.rs`
+//! checks the growth of each), and the counts are checked against [`MAX_TRIANGLES`] and
+//! [`MAX_IMPORT_BYTES`] before mesh memory is allocated; [`estimate`] gives the same counts
+//! and the memory peak without reading. Strings from files reach messages only through
+//! [`clean`] (bounded length, no control characters).
 
 mod obj;
 mod repair;
@@ -17,10 +23,39 @@ mod threemf;
 use crate::geom::Mesh;
 use serde::Serialize;
 
-pub use threemf::{MAX_MODEL_PART_BYTES, MAX_TRIANGLES};
+pub use threemf::{MAX_MODEL_PART_BYTES, MAX_XML_DEPTH};
+
+/// Most triangles [`read_mesh`] accepts (counted before cleaning; a 3MF counts every build
+/// instance). Checked before any mesh memory is allocated: from the binary STL header, a
+/// token scan of ASCII STL and OBJ, and the 3MF counts as its XML streams and before the
+/// build is placed.
+///
+/// Why 5 M: the browser worker has about 2 GB of wasm memory for a whole run and slicing
+/// follows import, so import should peak under about 1 GB ([`MAX_IMPORT_BYTES`]).
+/// Measured (`memory_per_triangle` in `tests/import_hostile.rs`: resident high-water mark
+/// of `read_mesh` in a fresh process, glibc unmapping every freed block, 2 M-triangle
+/// spheres), beyond the file's own bytes: binary and ASCII STL 64 B/triangle, OBJ and 3MF
+/// 42, a binary-STL soup where nothing welds (the worst case) 107; [`estimate`] bounds them
+/// at 111, 43, 73. So a binary STL at the limit (a 250 MB file) peaks at about 0.6 GB, and
+/// at most at its estimate of 718 MiB whatever its geometry, leaving room for slicing. The
+/// previous importer peaked at 102 B/triangle beyond the file (same measurement; 625 MiB of
+/// wasm memory for a 4 M-triangle, 200 MB STL; 1.69 GB RSS for 10 M natively) and had no
+/// bound for soups. Meshes this large are scans or over-tessellated exports, which slice
+/// the same once decimated.
+pub const MAX_TRIANGLES: usize = 5_000_000;
+
+/// Most memory an import may need by [`estimate`]: the input's own bytes plus the reader's
+/// and cleaner's high-water mark. 1 GiB keeps import within half of the browser worker's
+/// ~2 GB, leaving the rest for slicing. It binds before [`MAX_TRIANGLES`] only for inputs
+/// that are large for their triangle count: ASCII STL (≈190 bytes of text per triangle, so
+/// about 3.7 M triangles fit), OBJ or 3MF with many unused vertices or many small objects.
+pub const MAX_IMPORT_BYTES: u64 = 1 << 30;
 
 /// Default vertex-weld distance in mm: vertices closer than this become one.
 pub const DEFAULT_WELD_TOLERANCE_MM: f64 = 1e-4;
+
+/// Longest string from a file (a name, a unit, a token) shown in a message, in characters.
+pub const MAX_SHOWN_CHARS: usize = 80;
 
 /// Import options.
 #[derive(Clone, Debug, PartialEq)]
@@ -81,6 +116,61 @@ pub struct Imported {
     pub report: ImportReport,
 }
 
+/// What reading a file will cost, from [`estimate`], before any mesh memory is allocated.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, serde::Deserialize)]
+pub struct Estimate {
+    /// Detected format.
+    pub format: Format,
+    /// Upper bound of the triangles read (before cleaning; 3MF: every build instance).
+    /// Exact for binary STL, and for ASCII STL, OBJ and 3MF that parse.
+    pub triangles: u64,
+    /// Vertices read (before welding); same bounds as `triangles`.
+    pub vertices: u64,
+    /// Upper bound of the memory [`read_mesh`] holds at its peak, in bytes, the input's own
+    /// bytes included (in the browser they sit in wasm memory too) and cleaning (weld,
+    /// duplicate removal) included.
+    pub peak_bytes: u64,
+}
+
+impl Estimate {
+    /// The error [`read_mesh`] gives for this estimate, if it is over a limit.
+    pub fn check(&self, file: &str) -> Result<(), Error> {
+        let fix = |tris: u64| {
+            format!(
+                "decimate the mesh (e.g. in PrusaSlicer: right-click the object, Simplify model) to under {} triangles, or split it into parts",
+                group(tris)
+            )
+        };
+        if self.triangles > MAX_TRIANGLES as u64 {
+            return Err(Error::TooLarge {
+                file: file.to_string(),
+                problem: format!("the mesh has {} triangles, limit {}", group(self.triangles), group(MAX_TRIANGLES as u64)),
+                fix: fix(MAX_TRIANGLES as u64),
+            });
+        }
+        if self.peak_bytes > MAX_IMPORT_BYTES {
+            // Scale the triangle count down to what would fit, for the fix.
+            let fits = (self.triangles as f64 * MAX_IMPORT_BYTES as f64 / self.peak_bytes as f64) as u64;
+            let text = matches!(self.format, Format::StlAscii | Format::Obj);
+            let mut fix = fix(fits.max(1));
+            if text {
+                fix.push_str("; binary STL or 3MF of the same mesh is 4–10× smaller");
+            }
+            return Err(Error::TooLarge {
+                file: file.to_string(),
+                problem: format!(
+                    "reading {} triangles from this file needs about {} MiB of memory, limit {} MiB",
+                    group(self.triangles),
+                    group(self.peak_bytes >> 20),
+                    group(MAX_IMPORT_BYTES >> 20)
+                ),
+                fix,
+            });
+        }
+        Ok(())
+    }
+}
+
 /// Why a file could not be read. Every message names the file, where, and what to do.
 #[derive(Debug, thiserror::Error, Clone, PartialEq)]
 pub enum Error {
@@ -116,6 +206,17 @@ pub enum Error {
         /// File name.
         file: String,
     },
+    /// The mesh is over [`MAX_TRIANGLES`] or [`MAX_IMPORT_BYTES`]; refused before its memory
+    /// was allocated.
+    #[error("{file}: {problem}; {fix}")]
+    TooLarge {
+        /// File name.
+        file: String,
+        /// The count or size and the limit.
+        problem: String,
+        /// What to change.
+        fix: String,
+    },
 }
 
 /// Builds an [`Error::Malformed`].
@@ -136,18 +237,79 @@ pub(crate) struct RawMesh {
     pub triangles: Vec<[u32; 3]>,
 }
 
+/// Estimates what [`read_mesh`] will need for `bytes` without reading the mesh: the binary
+/// STL header, a token scan of ASCII STL and OBJ (no number parsing), a counting pass over a
+/// 3MF's XML (inflated in 64 KiB pieces, nothing kept but the object graph). At most one
+/// pass over the bytes (the inflated bytes for 3MF); errors are those `read_mesh` gives for
+/// the same damage where the scan meets it.
+pub fn estimate(file: &str, bytes: &[u8]) -> Result<Estimate, Error> {
+    let format = detect_format(file, bytes)?;
+    let input = bytes.len() as u64;
+    let (vertices, triangles, peak) = match format {
+        Format::StlBinary => {
+            let (v, t) = stl::binary_counts(bytes);
+            (v, t, raw_peak(v, t))
+        }
+        Format::StlAscii => {
+            let (v, t) = stl::scan_ascii(bytes);
+            (v, t, raw_peak(v, t))
+        }
+        Format::Obj => {
+            let (v, t) = obj::scan_obj(bytes);
+            (v, t, raw_peak(v, t))
+        }
+        Format::ThreeMf => {
+            let c = threemf::count_3mf(file, bytes)?;
+            (c.vertices, c.triangles, c.peak_bytes)
+        }
+    };
+    Ok(Estimate { format, triangles, vertices, peak_bytes: input.saturating_add(peak) })
+}
+
+/// Memory an import uses whatever its size: stack, small allocations, parser buffers.
+pub(crate) const FIXED_PEAK_BYTES: u64 = 2 << 20;
+
+/// Peak bytes of reading into an exactly reserved [`RawMesh`] of `v` vertices and `t`
+/// triangles and cleaning it ([`repair::extra_peak`]).
+fn raw_peak(v: u64, t: u64) -> u64 {
+    raw_bytes(v, t).saturating_add(repair::extra_peak(v, t)).saturating_add(FIXED_PEAK_BYTES)
+}
+
+/// Bytes of a [`RawMesh`] of `v` vertices and `t` triangles.
+pub(crate) fn raw_bytes(v: u64, t: u64) -> u64 {
+    v.saturating_add(t).saturating_mul(12)
+}
+
 /// Reads a mesh from `bytes`; `file` is only used in messages and to hint the format
 /// (content decides: "solid" + facets → ASCII STL, zip → 3MF, `v `/`f ` lines → OBJ).
+///
+/// Before any mesh memory is allocated the counts are checked against [`MAX_TRIANGLES`]
+/// and [`MAX_IMPORT_BYTES`] (as [`estimate`] computes them; for 3MF while the XML streams
+/// and before build items are placed); over a limit is [`Error::TooLarge`].
 ///
 /// The result is cleaned (see [`ImportReport`]): vertices closer than
 /// [`Options::weld_tolerance_mm`] are welded, degenerate and duplicate triangles dropped.
 pub fn read_mesh(file: &str, bytes: &[u8], options: &Options) -> Result<Imported, Error> {
     let format = detect_format(file, bytes)?;
     let mut unit_scale = 1.0;
+    let input = bytes.len() as u64;
+    let check = |v: u64, t: u64| Estimate { format, triangles: t, vertices: v, peak_bytes: input.saturating_add(raw_peak(v, t)) }.check(file);
     let raw = match format {
-        Format::StlBinary => stl::read_binary(file, bytes)?,
-        Format::StlAscii => stl::read_ascii(file, bytes)?,
-        Format::Obj => obj::read_obj(file, bytes)?,
+        Format::StlBinary => {
+            let (v, t) = stl::binary_counts(bytes);
+            check(v, t)?;
+            stl::read_binary(file, bytes)?
+        }
+        Format::StlAscii => {
+            let (v, t) = stl::scan_ascii(bytes);
+            check(v, t)?;
+            stl::read_ascii(file, bytes, (v, t))?
+        }
+        Format::Obj => {
+            let (v, t) = obj::scan_obj(bytes);
+            check(v, t)?;
+            obj::read_obj(file, bytes, (v, t))?
+        }
         Format::ThreeMf => {
             let (raw, scale) = threemf::read_3mf(file, bytes)?;
             unit_scale = scale;
@@ -172,9 +334,13 @@ pub fn read_mesh(file: &str, bytes: &[u8], options: &Options) -> Result<Imported
     Ok(Imported { mesh: repaired.mesh, report })
 }
 
-/// Detects the format of `bytes` from their content; `file`'s extension only breaks ties
-/// (a binary `.stl` whose triangle count disagrees with its length is read as a damaged
-/// binary STL, so the error says where it was cut short).
+/// Detects the format of `bytes` from their content; `file`'s extension only breaks ties.
+///
+/// STL: binary when the length is exactly what the header's triangle count says (84 + 50·n
+/// bytes), else ASCII when the start reads as text (no NUL and at most 4 other control
+/// bytes in the first KiB) beginning with `solid`. A `.stl` that is neither is read as a damaged binary STL, so the error says where
+/// it was cut short and why it is not ASCII (trailing bytes after the promised triangles,
+/// which some exporters leave, are ignored).
 pub fn detect_format(file: &str, bytes: &[u8]) -> Result<Format, Error> {
     if bytes.is_empty() {
         return Err(Error::Empty { file: file.to_string() });
@@ -185,7 +351,7 @@ pub fn detect_format(file: &str, bytes: &[u8]) -> Result<Format, Error> {
     if stl::binary_count_matches(bytes) {
         return Ok(Format::StlBinary);
     }
-    let text = looks_like_text(bytes);
+    let text = text_problem(bytes).is_none();
     let body = skip_bom_and_space(bytes);
     if text && starts_with_ignore_case(body, b"solid") {
         return Ok(Format::StlAscii);
@@ -200,7 +366,12 @@ pub fn detect_format(file: &str, bytes: &[u8]) -> Result<Format, Error> {
     if text && hint.as_deref() == Some("obj") {
         return Ok(Format::Obj);
     }
-    Err(Error::UnknownFormat { file: file.to_string(), detail: describe_start(bytes, text) })
+    let mut detail = describe_start(bytes, text);
+    if starts_with_ignore_case(body, b"solid") || hint.as_deref() == Some("stl") {
+        detail.push_str("; ");
+        detail.push_str(&stl::why_not_stl(bytes));
+    }
+    Err(Error::UnknownFormat { file: file.to_string(), detail })
 }
 
 fn extension(file: &str) -> Option<String> {
@@ -208,10 +379,27 @@ fn extension(file: &str) -> Option<String> {
     Some(ext.to_ascii_lowercase())
 }
 
-/// True when the first KiB is text: no NUL and no control bytes other than whitespace.
-fn looks_like_text(bytes: &[u8]) -> bool {
+/// Control bytes (other than tab, CR, LF, form feed) a text start may hold: exporters leave
+/// the odd one in a solid name; binary data has dozens per KiB.
+const TEXT_CONTROL_BYTES: usize = 4;
+
+/// `None` when the first KiB reads as text: no NUL byte and at most
+/// [`TEXT_CONTROL_BYTES`] other control bytes; else why not, with the byte offset.
+pub(crate) fn text_problem(bytes: &[u8]) -> Option<String> {
     let head = bytes.get(..bytes.len().min(1024)).unwrap_or(bytes);
-    head.iter().all(|&b| b >= 0x20 || matches!(b, b'\n' | b'\r' | b'\t' | 0x0c))
+    let is_control = |b: u8| b < 0x20 && !matches!(b, b'\n' | b'\r' | b'\t' | 0x0c);
+    if let Some(at) = head.iter().position(|&b| b == 0) {
+        return Some(format!("byte {at} is 0x00, which text never holds"));
+    }
+    let controls = head.iter().filter(|&&b| is_control(b)).count();
+    if controls > TEXT_CONTROL_BYTES {
+        let first = head.iter().position(|&b| is_control(b)).unwrap_or(0);
+        return Some(format!(
+            "the first {} bytes hold {controls} control bytes (the first at byte {first}), more than the {TEXT_CONTROL_BYTES} text may hold",
+            head.len()
+        ));
+    }
+    None
 }
 
 pub(crate) fn skip_bom_and_space(bytes: &[u8]) -> &[u8] {
@@ -256,53 +444,6 @@ fn describe_start(bytes: &[u8], text: bool) -> String {
     }
 }
 
-/// Cheap deterministic hasher for integer keys (lookups only; never iterated for output).
-#[derive(Default, Clone, Copy)]
-pub(crate) struct FxHasher(u64);
-
-impl std::hash::Hasher for FxHasher {
-    #[inline]
-    fn finish(&self) -> u64 {
-        // Final avalanche so the low bits (bucket index) depend on every input bit: float
-        // bit patterns of round numbers end in long runs of zeros.
-        let mut h = self.0;
-        h ^= h >> 29;
-        h = h.wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        h ^ (h >> 32)
-    }
-    #[inline]
-    fn write(&mut self, bytes: &[u8]) {
-        let mut chunks = bytes.chunks_exact(8);
-        for c in &mut chunks {
-            let mut w = [0u8; 8];
-            w.copy_from_slice(c);
-            self.write_u64(u64::from_le_bytes(w));
-        }
-        let rest = chunks.remainder();
-        if !rest.is_empty() {
-            let mut w = [0u8; 8];
-            w.get_mut(..rest.len()).unwrap_or_default().copy_from_slice(rest);
-            self.write_u64(u64::from_le_bytes(w));
-        }
-    }
-    #[inline]
-    fn write_u32(&mut self, i: u32) {
-        self.write_u64(i as u64);
-    }
-    #[inline]
-    fn write_u64(&mut self, i: u64) {
-        self.0 = (self.0.rotate_left(5) ^ i).wrapping_mul(0x51_7c_c1_b7_27_22_0a_95);
-    }
-    #[inline]
-    fn write_usize(&mut self, i: usize) {
-        self.write_u64(i as u64);
-    }
-}
-
-pub(crate) type FxBuild = std::hash::BuildHasherDefault<FxHasher>;
-pub(crate) type FxHashMap<K, V> = std::collections::HashMap<K, V, FxBuild>;
-pub(crate) type FxHashSet<K> = std::collections::HashSet<K, FxBuild>;
-
 /// Parses a finite float; `None` for junk, NaN or infinity.
 pub(crate) fn parse_finite(token: &[u8]) -> Option<f64> {
     let s = std::str::from_utf8(token).ok()?;
@@ -310,12 +451,39 @@ pub(crate) fn parse_finite(token: &[u8]) -> Option<f64> {
     v.is_finite().then_some(v)
 }
 
-/// A token for messages: at most 32 characters, lossy UTF-8.
+/// A token for messages: at most 32 characters, lossy UTF-8, control characters replaced.
 pub(crate) fn show(token: &[u8]) -> String {
-    let s = String::from_utf8_lossy(token);
-    let mut out: String = s.chars().take(32).collect();
-    if s.chars().count() > 32 {
-        out.push('…');
+    clean_n(&String::from_utf8_lossy(token.get(..token.len().min(4 * 32 + 4)).unwrap_or(token)), 32)
+}
+
+/// A string from a file (name, unit, path, parser message) for messages and reports: at
+/// most [`MAX_SHOWN_CHARS`] characters ("…" marks the cut), control characters replaced by
+/// "�", so a huge or hostile name cannot flood or garble a message.
+pub fn clean(s: &str) -> String {
+    clean_n(s, MAX_SHOWN_CHARS)
+}
+
+fn clean_n(s: &str, max: usize) -> String {
+    let mut out = String::with_capacity(s.len().min(4 * max + 3));
+    for (i, c) in s.chars().enumerate() {
+        if i == max {
+            out.push('…');
+            break;
+        }
+        out.push(if c.is_control() { '\u{FFFD}' } else { c });
+    }
+    out
+}
+
+/// `n` with thousands separators: 5,000,000.
+pub(crate) fn group(n: u64) -> String {
+    let digits = n.to_string();
+    let mut out = String::with_capacity(digits.len() + digits.len() / 3);
+    for (i, c) in digits.chars().enumerate() {
+        if i > 0 && (digits.len() - i) % 3 == 0 {
+            out.push(',');
+        }
+        out.push(c);
     }
     out
 }
@@ -336,6 +504,23 @@ mod tests {
         assert!(e.contains("STEP"), "{e}");
         let e = read_mesh("a.png", b"\x89PNG\r\n\x1a\n\0\0\0", &o).unwrap_err().to_string();
         assert!(e.contains("89 50 4e 47"), "{e}");
+    }
+
+    #[test]
+    fn strings_are_bounded_and_numbers_grouped() {
+        assert_eq!(clean("a\u{1b}[2Jb\n"), "a\u{FFFD}[2Jb\u{FFFD}");
+        let long = clean(&"é".repeat(1000));
+        assert_eq!(long.chars().count(), MAX_SHOWN_CHARS + 1);
+        assert!(long.ends_with('…'));
+        assert_eq!(show(&[b'x'; 100]).chars().count(), 33);
+        assert_eq!((group(0), group(999), group(1000), group(544_761_204)), ("0".into(), "999".into(), "1,000".into(), "544,761,204".into()));
+    }
+
+    #[test]
+    fn text_rule() {
+        assert!(text_problem(b"solid a\x01b\n").is_none());
+        assert!(text_problem(b"solid \x01\x02\x03\x04\x05").unwrap().contains("5 control bytes (the first at byte 6)"));
+        assert!(text_problem(b"solid a\0").unwrap().contains("byte 7 is 0x00"));
     }
 
     #[test]

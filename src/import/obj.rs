@@ -14,10 +14,30 @@ pub(super) fn looks_like_obj(bytes: &[u8]) -> bool {
     })
 }
 
-/// Reads an OBJ file.
-pub(super) fn read_obj(file: &str, bytes: &[u8]) -> Result<RawMesh, Error> {
+/// (vertices, triangles) of an OBJ from a scan of statement names and face corner counts,
+/// no number parsing: exact for a file that reads (a face of k corners is k − 2 triangles).
+pub(super) fn scan_obj(bytes: &[u8]) -> (u64, u64) {
+    let (mut v, mut t) = (0u64, 0u64);
+    for line in bytes.split(|&b| b == b'\n') {
+        let line = match line.iter().position(|&b| b == b'#') {
+            Some(c) => line.get(..c).unwrap_or_default(),
+            None => line,
+        };
+        let mut tokens = line.split(|b| b.is_ascii_whitespace()).filter(|t| !t.is_empty());
+        match tokens.next() {
+            Some(b"v") => v += 1,
+            Some(b"f") => t += (tokens.count() as u64).saturating_sub(2),
+            _ => {}
+        }
+    }
+    (v, t)
+}
+
+/// Reads an OBJ file; `(vertices, triangles)` from [`scan_obj`] (already checked against
+/// the limits) size the arrays once.
+pub(super) fn read_obj(file: &str, bytes: &[u8], (v, t): (u64, u64)) -> Result<RawMesh, Error> {
     let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
-    let mut mesh = RawMesh::default();
+    let mut mesh = RawMesh { vertices: Vec::with_capacity(v as usize), triangles: Vec::with_capacity(t as usize) };
     let mut poly: Vec<u32> = Vec::with_capacity(8);
     for (i, line) in bytes.split(|&b| b == b'\n').enumerate() {
         let n = i + 1;
@@ -97,11 +117,15 @@ fn face_index(file: &str, line: usize, token: &[u8], defined: usize) -> Result<u
 mod tests {
     use super::*;
 
+    fn read_obj_(file: &str, bytes: &[u8]) -> Result<RawMesh, Error> {
+        read_obj(file, bytes, scan_obj(bytes))
+    }
+
     #[test]
     fn reads_all_face_forms() {
         let s = "# comment\nmtllib x.mtl\no thing\nv 0 0 0 1\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\nvn 0 0 1\ng grp\nusemtl m\ns off\n\
                  f 1 2 3\r\nf 1/1 3/1 4/1\nf 1//1 2//1 3//1\nf 1/1/1 2/1/1 3/1/1\nf -4 -3 -2 -1\nl 1 2\n";
-        let m = read_obj("a.obj", s.as_bytes()).unwrap();
+        let m = read_obj("a.obj", s.as_bytes(), (0, 0)).unwrap();
         assert_eq!(m.vertices.len(), 4);
         assert_eq!(m.triangles.len(), 6);
         assert_eq!(m.triangles[4], [0, 1, 2]);
@@ -111,19 +135,19 @@ mod tests {
     #[test]
     fn errors_name_the_line() {
         let s = "v 0 0 0\nv 1 0 0\nv 1 1 0\n\n\n\nf 1 2 9\n";
-        let e = read_obj("a.obj", s.as_bytes()).unwrap_err().to_string();
+        let e = read_obj("a.obj", s.as_bytes(), (0, 0)).unwrap_err().to_string();
         assert!(e.contains("line 7") && e.contains("vertex 9") && e.contains("only 3"), "{e}");
-        let e = read_obj("a.obj", b"v 0 0 0\nf -1 -2 -3\n").unwrap_err().to_string();
+        let e = read_obj_("a.obj", b"v 0 0 0\nf -1 -2 -3\n").unwrap_err().to_string();
         assert!(e.contains("line 2") && e.contains("vertex -2"), "{e}");
-        let e = read_obj("a.obj", b"v 0 0\n").unwrap_err().to_string();
+        let e = read_obj_("a.obj", b"v 0 0\n").unwrap_err().to_string();
         assert!(e.contains("line 1") && e.contains("z coordinate") && e.contains("end of the line"), "{e}");
-        let e = read_obj("a.obj", b"v 0 0 0\nf 0 1 1\n").unwrap_err().to_string();
+        let e = read_obj_("a.obj", b"v 0 0 0\nf 0 1 1\n").unwrap_err().to_string();
         assert!(e.contains("line 2") && e.contains("start at 1"), "{e}");
-        let e = read_obj("a.obj", b"v 0 0 0\nf 1 1\n").unwrap_err().to_string();
+        let e = read_obj_("a.obj", b"v 0 0 0\nf 1 1\n").unwrap_err().to_string();
         assert!(e.contains("line 2") && e.contains("2 vertices"), "{e}");
-        let e = read_obj("a.obj", b"v 0 0 0\nf 1 x 1\n").unwrap_err().to_string();
+        let e = read_obj_("a.obj", b"v 0 0 0\nf 1 x 1\n").unwrap_err().to_string();
         assert!(e.contains("\"x\""), "{e}");
-        let e = read_obj("a.obj", b"v 0 0 0\nf 1 -9223372036854775808 1\n").unwrap_err().to_string();
+        let e = read_obj_("a.obj", b"v 0 0 0\nf 1 -9223372036854775808 1\n").unwrap_err().to_string();
         assert!(e.contains("line 2"), "{e}");
     }
 

@@ -2,9 +2,16 @@
 //! triangles, count open edges.
 //!
 //! Deterministic: vertices keep the order of their first appearance and triangles the file
-//! order; hash maps are used only for lookups, never iterated.
+//! order; hash tables are used only for lookups, never iterated.
+//!
+//! Bounded and linear on any input: every step works in place on the raw arrays (kept items
+//! move down, never up) and looks up through open-addressing tables of `u32` ids sized once
+//! from the input counts (no growth, no rehash), so the memory high-water mark is a fixed
+//! function of the counts ([`extra_peak`]), whatever the geometry. The hash is seeded from
+//! the vertex data itself, so a file cannot be crafted to make its keys collide (which
+//! would make each lookup scan the table: quadratic).
 
-use super::{FxHashMap, FxHashSet, RawMesh};
+use super::RawMesh;
 use crate::geom::Mesh;
 
 /// A cleaned mesh and what was done to it.
@@ -21,72 +28,100 @@ const NONE: u32 = u32::MAX;
 /// Twice the area below this fraction of the longest edge squared counts as zero area.
 const ZERO_AREA_RATIO: f64 = 1e-12;
 
+/// Bytes of a [`Table`] for `n` entries (fixed size, or grown to hold `n`).
+fn table_bytes(n: u64) -> u64 {
+    4 * n.saturating_mul(2).max(16).next_power_of_two()
+}
+
+/// Upper bound of the bytes [`repair`] allocates beyond the raw mesh it is given
+/// (`v` vertices, `t` triangles, 12 bytes each, reused in place), by step: exact dedupe
+/// (map + table), weld (table, chain, map), triangle dedupe (table), compaction (id map,
+/// then shrinking copies), open edges (a `u64` per corner).
+pub(super) fn extra_peak(v: u64, t: u64) -> u64 {
+    // The dedupe table starts small and doubles: at most the full size plus the half it left.
+    let dedupe = 4 * v + table_bytes(v) + table_bytes(v) / 2;
+    let weld = 8 * v + table_bytes(v);
+    let tris = table_bytes(t);
+    let compact = 12 * v.max(t);
+    let edges = 24 * t;
+    dedupe.max(weld).max(tris).max(compact).max(edges)
+}
+
 /// Cleans `raw`. `tolerance_mm` ≤ 0 (or NaN, or below 1 nm) welds only identical positions.
 pub(super) fn repair(raw: RawMesh, tolerance_mm: f64) -> Repaired {
-    let RawMesh { vertices, triangles } = raw;
+    let RawMesh { mut vertices, mut triangles } = raw;
+    let seed = seed_of(&vertices);
     // 1. Identical positions → one vertex (first appearance order).
-    let (unique, exact_map) = dedupe_exact(&vertices);
-    drop(vertices);
+    let map = dedupe_exact(&mut vertices, seed);
+    remap(&mut triangles, &map);
+    drop(map);
     // 2. Weld positions closer than the tolerance.
-    let (welded, weld_map) = if tolerance_mm.is_finite() && tolerance_mm >= 1e-6 {
-        weld(&unique, tolerance_mm)
+    if tolerance_mm.is_finite() && tolerance_mm >= 1e-6 {
+        let map = weld(&mut vertices, tolerance_mm, seed);
+        remap(&mut triangles, &map);
     } else if tolerance_mm == f64::INFINITY {
-        (unique.first().copied().into_iter().collect(), vec![0; unique.len()])
-    } else {
-        let ids = (0..unique.len() as u32).collect();
-        (unique, ids)
-    };
-    let map = |i: u32| -> u32 {
-        exact_map.get(i as usize).and_then(|&u| weld_map.get(u as usize)).copied().unwrap_or(NONE)
-    };
+        let map = vec![0u32; vertices.len()];
+        vertices.truncate(1);
+        remap(&mut triangles, &map);
+    }
+    let welded = &vertices;
 
-    // 3. Degenerate and duplicate triangles.
-    let mut kept: Vec<[u32; 3]> = Vec::with_capacity(triangles.len());
-    let mut seen: FxHashSet<[u32; 3]> = FxHashSet::default();
-    seen.reserve(triangles.len());
+    // 3. Degenerate and duplicate triangles, kept ones moved down in place.
     let (mut degenerate_removed, mut duplicates_removed) = (0, 0);
-    for t in &triangles {
-        let t = [map(t[0]), map(t[1]), map(t[2])];
-        if t.contains(&NONE) || t[0] == t[1] || t[1] == t[2] || t[0] == t[2] || zero_area(&welded, t) {
+    let mut seen = Table::new(triangles.len());
+    let mut kept = 0usize;
+    for i in 0..triangles.len() {
+        let Some(&t) = triangles.get(i) else { break };
+        if t.contains(&NONE) || t[0] == t[1] || t[1] == t[2] || t[0] == t[2] || zero_area(welded, t) {
             degenerate_removed += 1;
             continue;
         }
-        let mut key = t;
-        key.sort_unstable();
-        if !seen.insert(key) {
+        let key = sorted(t);
+        let h = hash3(seed ^ 0x7472_6973, key);
+        let found = seen.find_or_insert(h, kept as u32, |id| triangles.get(id as usize).map(|&u| sorted(u)) == Some(key));
+        if found.is_some() {
             duplicates_removed += 1;
             continue;
         }
-        kept.push(t);
+        if let Some(slot) = triangles.get_mut(kept) {
+            *slot = t;
+        }
+        kept += 1;
     }
     drop(seen);
-    drop(triangles);
+    triangles.truncate(kept);
 
     // 4. Keep referenced vertices only, in welded order.
-    let mut new_id = vec![NONE; welded.len()];
-    for t in &kept {
+    let mut new_id = vec![NONE; vertices.len()];
+    for t in &triangles {
         for &i in t {
             if let Some(slot) = new_id.get_mut(i as usize) {
                 *slot = 0;
             }
         }
     }
-    let mut out_vertices = Vec::new();
-    for (slot, v) in new_id.iter_mut().zip(&welded) {
-        if *slot == 0 {
-            *slot = out_vertices.len() as u32;
-            out_vertices.push(*v);
+    let mut used = 0usize;
+    for i in 0..vertices.len() {
+        if new_id.get(i) == Some(&0) {
+            if let (Some(&v), Some(id)) = (vertices.get(i), new_id.get_mut(i)) {
+                *id = used as u32;
+                if let Some(dst) = vertices.get_mut(used) {
+                    *dst = v;
+                }
+                used += 1;
+            }
         }
     }
-    for t in &mut kept {
-        for i in t.iter_mut() {
-            *i = new_id.get(*i as usize).copied().unwrap_or(0);
-        }
-    }
+    vertices.truncate(used);
+    remap(&mut triangles, &new_id);
+    drop(new_id);
+    // The mesh lives on through slicing: give back what the raw arrays over-held.
+    vertices.shrink_to_fit();
+    triangles.shrink_to_fit();
 
     // 5. Open edges: undirected edges used by exactly one triangle.
-    let mut edges: Vec<u64> = Vec::with_capacity(kept.len().saturating_mul(3));
-    for t in &kept {
+    let mut edges: Vec<u64> = Vec::with_capacity(triangles.len().saturating_mul(3));
+    for t in &triangles {
         for k in 0..3 {
             let (a, b) = (t[k], t[(k + 1) % 3]);
             let (lo, hi) = if a < b { (a, b) } else { (b, a) };
@@ -95,13 +130,131 @@ pub(super) fn repair(raw: RawMesh, tolerance_mm: f64) -> Repaired {
     }
     edges.sort_unstable();
     let open_edges = edges.chunk_by(|a, b| a == b).filter(|run| run.len() == 1).count();
+    drop(edges);
 
-    Repaired {
-        mesh: Mesh { vertices: out_vertices, triangles: kept },
-        degenerate_removed,
-        duplicates_removed,
-        open_edges,
+    Repaired { mesh: Mesh { vertices, triangles }, degenerate_removed, duplicates_removed, open_edges }
+}
+
+/// Replaces every index `i` by `map[i]` (`NONE` when out of range: dropped as degenerate).
+fn remap(triangles: &mut [[u32; 3]], map: &[u32]) {
+    for t in triangles.iter_mut() {
+        for i in t.iter_mut() {
+            *i = map.get(*i as usize).copied().unwrap_or(NONE);
+        }
     }
+}
+
+fn sorted(mut t: [u32; 3]) -> [u32; 3] {
+    t.sort_unstable();
+    t
+}
+
+/// Open-addressing table of `u32` ids with linear probing; the keys live in the caller's
+/// array (compared through a closure). Sized once to a power of two ≥ 2× the most entries
+/// it will hold, so it is at most half full and probe runs stay short.
+struct Table {
+    slots: Vec<u32>,
+    mask: usize,
+}
+
+impl Table {
+    fn new(entries: usize) -> Self {
+        let size = (table_bytes(entries as u64) / 4) as usize;
+        Table { slots: vec![NONE; size], mask: size - 1 }
+    }
+
+    /// The id whose key equals the one hashed to `h` (`same` decides), else inserts `id` and
+    /// returns `None`. Always ends: the table is never full.
+    #[inline]
+    fn find_or_insert(&mut self, h: u64, id: u32, same: impl Fn(u32) -> bool) -> Option<u32> {
+        let mut at = h as usize & self.mask;
+        loop {
+            match self.slots.get(at).copied() {
+                Some(NONE) | None => {
+                    if let Some(s) = self.slots.get_mut(at) {
+                        *s = id;
+                    }
+                    return None;
+                }
+                Some(other) if same(other) => return Some(other),
+                Some(_) => at = (at + 1) & self.mask,
+            }
+        }
+    }
+
+    /// Doubles the table when one more entry would fill it past half; `hash` gives the hash
+    /// of an id already in it. Used where the final count is unknown and usually far below
+    /// the bound (exact duplicates: an STL's corners are ~6 copies of each vertex).
+    fn reserve_one(&mut self, entries: usize, hash: impl Fn(u32) -> u64) {
+        if 2 * (entries + 1) <= self.slots.len() {
+            return;
+        }
+        let size = 2 * self.slots.len();
+        let old = std::mem::replace(&mut self.slots, vec![NONE; size]);
+        self.mask = size - 1;
+        for id in old.into_iter().filter(|&id| id != NONE) {
+            let mut at = hash(id) as usize & self.mask;
+            while let Some(s) = self.slots.get_mut(at) {
+                if *s == NONE {
+                    *s = id;
+                    break;
+                }
+                at = (at + 1) & self.mask;
+            }
+        }
+    }
+
+    /// The slot holding the id `same` accepts, or the empty slot where it would go.
+    #[inline]
+    fn slot(&self, h: u64, same: impl Fn(u32) -> bool) -> usize {
+        let mut at = h as usize & self.mask;
+        loop {
+            match self.slots.get(at).copied() {
+                Some(NONE) | None => return at,
+                Some(other) if same(other) => return at,
+                Some(_) => at = (at + 1) & self.mask,
+            }
+        }
+    }
+}
+
+/// A seed that depends on every vertex bit: keys chosen to collide under one seed change
+/// the seed.
+fn seed_of(vertices: &[[f32; 3]]) -> u64 {
+    let mut h: u64 = 0x6a09_e667_f3bc_c909 ^ vertices.len() as u64;
+    for v in vertices {
+        let w = (v[0].to_bits() as u64) | ((v[1].to_bits() as u64) << 32);
+        h = (h.rotate_left(23) ^ w).wrapping_mul(0x9e37_79b9_7f4a_7c15);
+        h = (h.rotate_left(23) ^ v[2].to_bits() as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15);
+    }
+    finish(h)
+}
+
+#[inline]
+fn finish(mut h: u64) -> u64 {
+    h ^= h >> 29;
+    h = h.wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    h ^= h >> 32;
+    h = h.wrapping_mul(0x94d0_49bb_1331_11eb);
+    h ^ (h >> 31)
+}
+
+#[inline]
+fn hash3(seed: u64, k: [u32; 3]) -> u64 {
+    let mut h = seed;
+    for w in k {
+        h = (h.rotate_left(5) ^ w as u64).wrapping_mul(0x51_7c_c1_b7_27_22_0a_95);
+    }
+    finish(h)
+}
+
+#[inline]
+fn hash3_64(seed: u64, k: [u64; 3]) -> u64 {
+    let mut h = seed;
+    for w in k {
+        h = (h.rotate_left(5) ^ w).wrapping_mul(0x51_7c_c1_b7_27_22_0a_95);
+    }
+    finish(h)
 }
 
 /// Bits of a coordinate with -0.0 folded into +0.0.
@@ -110,78 +263,115 @@ fn key(v: &[f32; 3]) -> [u32; 3] {
     [(v[0] + 0.0).to_bits(), (v[1] + 0.0).to_bits(), (v[2] + 0.0).to_bits()]
 }
 
-/// Unique positions in first-appearance order, and the map input index → unique index.
-fn dedupe_exact(vertices: &[[f32; 3]]) -> (Vec<[f32; 3]>, Vec<u32>) {
-    let mut index: FxHashMap<[u32; 3], u32> = FxHashMap::default();
-    index.reserve(vertices.len() / 2 + 1);
-    let mut unique = Vec::with_capacity(vertices.len() / 2 + 1);
-    let mut map = Vec::with_capacity(vertices.len());
-    for v in vertices {
-        let next = unique.len() as u32;
-        let id = *index.entry(key(v)).or_insert(next);
-        if id == next {
-            unique.push([v[0] + 0.0, v[1] + 0.0, v[2] + 0.0]);
+/// Keeps the first of each set of identical positions, in first-appearance order, moved
+/// down in place; returns the map input index → unique index.
+fn dedupe_exact(vertices: &mut Vec<[f32; 3]>, seed: u64) -> Vec<u32> {
+    let n = vertices.len();
+    // Sized for an STL's typical 1 unique in 6 and grown as needed: a sparse table of all
+    // corners would be 12× larger than its entries and miss the caches on every lookup.
+    let mut table = Table::new(n / 6);
+    let mut map = Vec::with_capacity(n);
+    let mut unique = 0usize;
+    for i in 0..n {
+        let Some(&v) = vertices.get(i) else { break };
+        let p = [v[0] + 0.0, v[1] + 0.0, v[2] + 0.0];
+        let k = key(&p);
+        let found = {
+            let vs = &*vertices;
+            table.reserve_one(unique, |id| vs.get(id as usize).map_or(0, |q| hash3(seed, key(q))));
+            table.find_or_insert(hash3(seed, k), unique as u32, |id| vs.get(id as usize).map(key) == Some(k))
+        };
+        match found {
+            Some(id) => map.push(id),
+            None => {
+                // unique ≤ i: the slot was read already.
+                if let Some(dst) = vertices.get_mut(unique) {
+                    *dst = p;
+                }
+                map.push(unique as u32);
+                unique += 1;
+            }
         }
-        map.push(id);
     }
-    (unique, map)
+    vertices.truncate(unique);
+    map
 }
 
 /// Greedy weld in input order: each position joins the earliest kept position within `tol`
 /// (checked in a grid of cells 4·tol wide, looking into a neighbour cell only when the
-/// point is within `tol` of that side), else it is kept itself.
-fn weld(points: &[[f32; 3]], tol: f64) -> (Vec<[f32; 3]>, Vec<u32>) {
+/// point is within `tol` of that side), else it is kept itself. Kept positions move down in
+/// place; returns the map input index → kept index. A cell's kept points are pairwise ≥ tol
+/// apart, so at most ~125 share a cell: each lookup is O(1).
+fn weld(points: &mut Vec<[f32; 3]>, tol: f64, seed: u64) -> Vec<u32> {
     let cell = 4.0 * tol;
     let tol2 = tol * tol;
-    let mut heads: FxHashMap<[u64; 3], u32> = FxHashMap::default();
-    heads.reserve(points.len());
-    let mut next_in_cell: Vec<u32> = Vec::with_capacity(points.len());
-    let mut kept: Vec<[f32; 3]> = Vec::with_capacity(points.len());
-    let mut map = Vec::with_capacity(points.len());
-    for p in points {
+    let n = points.len();
+    // Cell → the most recent kept point in it; `next_in_cell` chains the earlier ones.
+    let mut heads = Table::new(n);
+    let mut next_in_cell: Vec<u32> = Vec::with_capacity(n);
+    let mut map = Vec::with_capacity(n);
+    let mut kept = 0usize;
+    let home = |p: &[f32; 3]| -> [u64; 3] { [0, 1, 2].map(|a| cell_key((p[a] as f64 / cell).floor())) };
+    for i in 0..n {
+        let Some(&p) = points.get(i) else { break };
         let pd = [p[0] as f64, p[1] as f64, p[2] as f64];
         // Cell coordinates as f64 bits: exact for any magnitude, no integer overflow.
         let mut lo = [0f64; 3];
         let mut hi = [0f64; 3];
-        let mut home = [0f64; 3];
+        let mut own = [0f64; 3];
         for a in 0..3 {
             let s = pd[a] / cell;
             let f = s.floor();
-            home[a] = f;
+            own[a] = f;
             let frac = (s - f) * cell;
             lo[a] = if frac < tol { f - 1.0 } else { f };
             hi[a] = if cell - frac < tol { f + 1.0 } else { f };
         }
         let mut best = NONE;
-        for x in dedup2(lo[0], hi[0]) {
-            for y in dedup2(lo[1], hi[1]) {
-                for z in dedup2(lo[2], hi[2]) {
-                    let mut r = heads.get(&cell_key([x, y, z])).copied().unwrap_or(NONE);
-                    while let Some(q) = kept.get(r as usize) {
-                        let d = [q[0] as f64 - pd[0], q[1] as f64 - pd[1], q[2] as f64 - pd[2]];
-                        if d[0] * d[0] + d[1] * d[1] + d[2] * d[2] < tol2 && r < best {
-                            best = r;
+        {
+            let ps = &*points;
+            let in_cell = |id: u32, c: [u64; 3]| ps.get(id as usize).map(home) == Some(c);
+            for x in dedup2(lo[0], hi[0]) {
+                for y in dedup2(lo[1], hi[1]) {
+                    for z in dedup2(lo[2], hi[2]) {
+                        let c = [cell_key(x), cell_key(y), cell_key(z)];
+                        let at = heads.slot(hash3_64(seed, c), |id| in_cell(id, c));
+                        let mut r = heads.slots.get(at).copied().unwrap_or(NONE);
+                        while let Some(q) = ps.get(r as usize).filter(|_| r != NONE) {
+                            let d = [q[0] as f64 - pd[0], q[1] as f64 - pd[1], q[2] as f64 - pd[2]];
+                            if d[0] * d[0] + d[1] * d[1] + d[2] * d[2] < tol2 && r < best {
+                                best = r;
+                            }
+                            r = next_in_cell.get(r as usize).copied().unwrap_or(NONE);
                         }
-                        r = next_in_cell.get(r as usize).copied().unwrap_or(NONE);
                     }
                 }
             }
         }
         if best == NONE {
-            best = kept.len() as u32;
-            kept.push(*p);
-            let slot = heads.entry(cell_key(home)).or_insert(NONE);
-            next_in_cell.push(*slot);
-            *slot = best;
+            best = kept as u32;
+            // kept ≤ i: the slot was read already.
+            if let Some(dst) = points.get_mut(kept) {
+                *dst = p;
+            }
+            kept += 1;
+            let c = own.map(cell_key);
+            let ps = &*points;
+            let at = heads.slot(hash3_64(seed, c), |id| ps.get(id as usize).map(home) == Some(c));
+            if let Some(s) = heads.slots.get_mut(at) {
+                next_in_cell.push(*s);
+                *s = best;
+            }
         }
         map.push(best);
     }
-    (kept, map)
+    points.truncate(kept);
+    map
 }
 
 #[inline]
-fn cell_key(c: [f64; 3]) -> [u64; 3] {
-    [(c[0] + 0.0).to_bits(), (c[1] + 0.0).to_bits(), (c[2] + 0.0).to_bits()]
+fn cell_key(c: f64) -> u64 {
+    (c + 0.0).to_bits()
 }
 
 /// `[a]` or `[a, b]` (b only when it differs), as an iterator.

@@ -25,6 +25,37 @@ pub(super) fn binary_count_matches(bytes: &[u8]) -> bool {
     }
 }
 
+/// (vertices, triangles) a binary STL read gives: the header's count, capped by the
+/// records the file actually holds (a forged count cannot make us allocate more).
+pub(super) fn binary_counts(bytes: &[u8]) -> (u64, u64) {
+    let n = count(bytes).map_or(0, |n| n as u64);
+    let held = (bytes.len().saturating_sub(HEADER) / RECORD) as u64;
+    let n = n.min(held);
+    (3 * n, n)
+}
+
+/// Why `bytes` is not ASCII STL: no `solid` start, or not text (with the byte offset).
+fn why_not_ascii(bytes: &[u8]) -> String {
+    if !super::starts_with_ignore_case(super::skip_bom_and_space(bytes), b"solid") {
+        return "it does not start with \"solid\"".to_string();
+    }
+    super::text_problem(bytes).unwrap_or_else(|| "its start reads as text".to_string())
+}
+
+/// Why `bytes` is neither binary nor ASCII STL, both rules named (for unknown formats).
+pub(super) fn why_not_stl(bytes: &[u8]) -> String {
+    let binary = match count(bytes) {
+        Some(n) => format!(
+            "not binary STL: the header promises {} triangles ({} bytes) but the file is {} bytes",
+            super::group(n as u64),
+            super::group(HEADER as u64 + RECORD as u64 * n as u64),
+            super::group(bytes.len() as u64)
+        ),
+        None => format!("not binary STL: {} bytes is shorter than the 84-byte header", bytes.len()),
+    };
+    format!("{binary}; not ASCII STL: {}", why_not_ascii(bytes))
+}
+
 /// Reads a binary STL. Bytes after the promised triangles are ignored.
 pub(super) fn read_binary(file: &str, bytes: &[u8]) -> Result<RawMesh, Error> {
     let Some(n) = count(bytes) else {
@@ -43,7 +74,13 @@ pub(super) fn read_binary(file: &str, bytes: &[u8]) -> Result<RawMesh, Error> {
         return Err(malformed(
             file,
             format!("triangle {} (byte {})", i + 1, HEADER as u64 + RECORD as u64 * i),
-            format!("the header promises {n} triangles ({expected} bytes) but the file ends after {len} bytes"),
+            format!(
+                "the header promises {} triangles ({} bytes) but the file ends after {} bytes, and it is not ASCII STL either ({})",
+                super::group(n),
+                super::group(expected),
+                super::group(len),
+                why_not_ascii(bytes)
+            ),
             REEXPORT,
         ));
     }
@@ -132,10 +169,34 @@ fn is(token: &[u8], word: &str) -> bool {
     token.eq_ignore_ascii_case(word.as_bytes())
 }
 
-/// Reads an ASCII STL.
-pub(super) fn read_ascii(file: &str, bytes: &[u8]) -> Result<RawMesh, Error> {
+/// (vertices, triangles) of an ASCII STL from a token scan without number parsing, the same
+/// grammar as [`read_ascii`]: exact for a file that reads (a loop of k vertices is k − 2
+/// triangles), and the reader fails before passing it otherwise.
+pub(super) fn scan_ascii(bytes: &[u8]) -> (u64, u64) {
     let mut lx = Lexer::new(bytes);
-    let mut mesh = RawMesh::default();
+    let (mut v, mut t, mut k) = (0u64, 0u64, 0u64);
+    while let Some((tok, _)) = lx.next() {
+        if is(tok, "solid") || is(tok, "endsolid") {
+            lx.skip_line();
+        } else if is(tok, "normal") || is(tok, "vertex") {
+            k += u64::from(is(tok, "vertex"));
+            for _ in 0..3 {
+                lx.next();
+            }
+        } else if is(tok, "endloop") {
+            v += k;
+            t += k.saturating_sub(2);
+            k = 0;
+        }
+    }
+    (v, t)
+}
+
+/// Reads an ASCII STL; `(vertices, triangles)` from [`scan_ascii`] (already checked against
+/// the limits) size the arrays once.
+pub(super) fn read_ascii(file: &str, bytes: &[u8], (v, t): (u64, u64)) -> Result<RawMesh, Error> {
+    let mut lx = Lexer::new(bytes);
+    let mut mesh = RawMesh { vertices: Vec::with_capacity(v as usize), triangles: Vec::with_capacity(t as usize) };
     let fix = "the file is not valid ASCII STL; export it again (binary STL is smaller and safer)";
     let expected = |what: &str, got: Option<(&[u8], usize)>, line_at_end: usize| -> Error {
         match got {
@@ -285,7 +346,7 @@ mod tests {
     fn ascii_tolerant() {
         let s = "SOLID cube\r\n  Facet Normal 0 0 nan\r\n outer loop\r\n vertex 0 0 0\r\n VERTEX 1 0 0\r\n vertex 0 1 0\r\n endloop\r\n endfacet\r\nendsolid cube\r\n\
                  solid second one\n facet normal 0 0 1 outer loop vertex 0 0 1 vertex 1 0 1 vertex 1 1 1 vertex 0 1 1 endloop endfacet\n";
-        let m = read_ascii("a.stl", s.as_bytes()).unwrap();
+        let m = read_ascii("a.stl", s.as_bytes(), (0, 0)).unwrap();
         assert_eq!(m.triangles.len(), 3, "quad facet becomes a fan of two");
         assert_eq!(m.vertices.len(), 7);
     }
@@ -293,23 +354,23 @@ mod tests {
     #[test]
     fn ascii_errors_name_the_line() {
         let s = "solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 one 0\nendloop\nendfacet\nendsolid\n";
-        let e = read_ascii("a.stl", s.as_bytes()).unwrap_err().to_string();
+        let e = read_ascii("a.stl", s.as_bytes(), (0, 0)).unwrap_err().to_string();
         assert!(e.contains("line 6") && e.contains("y coordinate") && e.contains("\"one\""), "{e}");
 
         let s = "solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 1 0\nendloop\nendfct\n";
-        let e = read_ascii("a.stl", s.as_bytes()).unwrap_err().to_string();
+        let e = read_ascii("a.stl", s.as_bytes(), (0, 0)).unwrap_err().to_string();
         assert!(e.contains("line 8") && e.contains("\"endfacet\""), "{e}");
 
         let s = "solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\n";
-        let e = read_ascii("a.stl", s.as_bytes()).unwrap_err().to_string();
+        let e = read_ascii("a.stl", s.as_bytes(), (0, 0)).unwrap_err().to_string();
         assert!(e.contains("line 5") && e.contains("ends"), "{e}");
 
         let s = "solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 inf\n";
-        let e = read_ascii("a.stl", s.as_bytes()).unwrap_err().to_string();
+        let e = read_ascii("a.stl", s.as_bytes(), (0, 0)).unwrap_err().to_string();
         assert!(e.contains("line 4") && e.contains("finite"), "{e}");
 
         let s = "solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 0 0 1\nendloop\nendfacet\n";
-        let e = read_ascii("a.stl", s.as_bytes()).unwrap_err().to_string();
+        let e = read_ascii("a.stl", s.as_bytes(), (0, 0)).unwrap_err().to_string();
         assert!(e.contains("line 6") && e.contains("2 vertices"), "{e}");
     }
 }

@@ -73,6 +73,11 @@ fn box_toolpath(scale: usize) -> Result<(Toolpath, f64), String> {
 /// Every case, in the order printed.
 pub fn cases() -> Vec<Case> {
     vec![
+        Case { name: "import/stl-binary", unit: "triangles", prepare: |k| Ok(mesh_case(testgen::mesh::binary_stl_sphere(50_000 * k), "a.stl", (50_000 * k) as f64)) },
+        Case { name: "import/stl-ascii", unit: "triangles", prepare: |k| Ok(mesh_case(testgen::mesh::ascii_stl(20_000 * k), "a.stl", (20_000 * k) as f64)) },
+        Case { name: "import/obj", unit: "triangles", prepare: |k| Ok(mesh_case(testgen::mesh::obj(20_000 * k), "a.obj", (20_000 * k) as f64)) },
+        Case { name: "import/3mf", unit: "triangles", prepare: |k| Ok(mesh_case(testgen::mesh::three_mf(20_000 * k), "a.3mf", (20_000 * k) as f64)) },
+        Case { name: "import/3mf-objects", unit: "objects", prepare: |k| Ok(mesh_case(testgen::mesh::three_mf_siblings(2_000 * k), "a.3mf", (2_000 * k) as f64)) },
         Case {
             name: "gcode/template",
             unit: "bytes",

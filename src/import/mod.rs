@@ -535,10 +535,3 @@ mod tests {
         assert_eq!(detect_format("x", &bin).unwrap(), Format::StlBinary);
     }
 }
-
-/// PROVISIONAL (replaced by the importer's own estimate when issue 7's import work merges):
-/// the importer's work on `bytes`, from their size.
-pub fn estimate(_file: &str, bytes: &[u8]) -> Result<crate::budget::Estimate, Error> {
-    let n = bytes.len() as f64;
-    Ok(crate::budget::Estimate::new("import").quantity("file_bytes", "File", n, "bytes").cost(3.3 * n, n * 2e-8).budgets("simplify the mesh"))
-}

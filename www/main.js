@@ -1212,7 +1212,7 @@ async function runDesign({ confirmed = false, fromLink = false } = {}) {
     const { plan } = await workers.request({ type: MSG.ESTIMATE, design: state.json });
     state.plan = plan;
     if (plan.refusal) {
-      showError(`${plan.refusal}\nNothing was run; your design is kept.`);
+      showError(`${plan.refusal}. Nothing was run; your design is kept.`);
       return;
     }
     if (plan.ask && !confirmed) {

@@ -50,105 +50,6 @@ impl Flat {
     }
 }
 
-/// The graph laid out for the iteration loop: nodes renumbered along a Z-order (Morton) curve
-/// of their positions, edges by their first node in that order, so that a path growing
-/// through neighbouring struts touches neighbouring memory. On a 200 mm lattice the arrays
-/// are tens of MB: in the original numbering (stroke order, row by row) every step across a
-/// row was a cache miss and the time per strut grew about 8× from 10 mm to 160 mm domains;
-/// laid out this way it stays within about 2× (see the `paths_scaling` test).
-///
-/// Only the memory layout changes: the incomplete-node list starts in the original node order
-/// and every node's edges are scanned in the original order, so every random draw and every
-/// choice is the same as on the original numbering.
-struct Layout {
-    /// Per physical node: `[first incidence, end of incidences, free edges, place in the
-    /// incomplete list]` (one cache line holds what a path start needs).
-    node: Vec<[u32; 4]>,
-    /// Incidences `(physical edge, physical other end, length)`, CSR by physical node, each
-    /// node's in the graph's order (increasing original edge index).
-    adj: Vec<(u32, u32, f64)>,
-    /// The incomplete list at the start of an iteration: physical ids of the nodes with edges,
-    /// in original node order.
-    incomplete0: Vec<u32>,
-    /// Original node of every physical node.
-    node_of: Vec<u32>,
-    /// Original edge of every physical edge.
-    edge_of: Vec<u32>,
-}
-
-impl Layout {
-    fn new(graph: &Graph) -> Layout {
-        let n = graph.nodes.len();
-        let m = graph.edges.len();
-        // Z-order of the nodes on a 2¹⁶ × 2¹⁶ grid over their bounding box (ties: original order).
-        let mut lo = crate::geom::DVec2::splat(f64::INFINITY);
-        let mut hi = crate::geom::DVec2::splat(f64::NEG_INFINITY);
-        for p in &graph.nodes {
-            lo = lo.min(*p);
-            hi = hi.max(*p);
-        }
-        let span = (hi - lo).max_element().max(1e-9);
-        let scale = 65535.0 / span;
-        let spread = |v: u32| -> u32 {
-            let mut x = v & 0xFFFF;
-            x = (x | (x << 8)) & 0x00FF_00FF;
-            x = (x | (x << 4)) & 0x0F0F_0F0F;
-            x = (x | (x << 2)) & 0x3333_3333;
-            (x | (x << 1)) & 0x5555_5555
-        };
-        let mut order: Vec<(u32, u32)> = graph
-            .nodes
-            .iter()
-            .enumerate()
-            .map(|(v, p)| {
-                let q = (*p - lo) * scale;
-                let (x, y) = (q.x.clamp(0.0, 65535.0) as u32, q.y.clamp(0.0, 65535.0) as u32);
-                (spread(x) | (spread(y) << 1), v as u32)
-            })
-            .collect();
-        order.sort_unstable();
-        let node_of: Vec<u32> = order.iter().map(|&(_, v)| v).collect();
-        let mut phys = vec![0u32; n];
-        for (p, &v) in node_of.iter().enumerate() {
-            phys[v as usize] = p as u32;
-        }
-        const NONE: u32 = u32::MAX;
-        let mut edge_phys = vec![NONE; m];
-        let mut edge_of = Vec::with_capacity(m);
-        let mut node = Vec::with_capacity(n);
-        let mut adj = Vec::with_capacity(2 * m);
-        for &v in &node_of {
-            let v = v as usize;
-            let start = adj.len() as u32;
-            for &e in graph.incident(v) {
-                if edge_phys[e] == NONE {
-                    edge_phys[e] = edge_of.len() as u32;
-                    edge_of.push(e as u32);
-                }
-                adj.push((edge_phys[e], phys[graph.other(e, v)], graph.edges[e].length));
-            }
-            node.push([start, adj.len() as u32, 0, 0]);
-        }
-        let incomplete0: Vec<u32> = (0..n).filter(|&v| graph.degree(v) > 0).map(|v| phys[v]).collect();
-        for (k, &p) in incomplete0.iter().enumerate() {
-            node[p as usize][3] = k as u32;
-        }
-        Layout { node, adj, incomplete0, node_of, edge_of }
-    }
-
-    /// Resets every node's free-edge count and place in the incomplete list.
-    fn reset(&mut self, incomplete: &mut Vec<u32>) {
-        for r in &mut self.node {
-            r[2] = r[1] - r[0];
-        }
-        incomplete.clear();
-        incomplete.extend_from_slice(&self.incomplete0);
-        for (k, &p) in self.incomplete0.iter().enumerate() {
-            self.node[p as usize][3] = k as u32;
-        }
-    }
-}
-
 /// Runs `iterations` (≥ 1) GIPPO iterations.
 pub(crate) fn run(graph: &Graph, iterations: u32, maximise: bool, rng: &mut Pcg64) -> Solution {
     let n = graph.nodes.len();
@@ -158,10 +59,22 @@ pub(crate) fn run(graph: &Graph, iterations: u32, maximise: bool, rng: &mut Pcg6
     }
     let mut iteration_scores = Vec::with_capacity(iterations as usize);
     let total_length = graph.total_length();
-    let mut lay = Layout::new(graph);
+    let degree: Vec<u32> = (0..n).map(|v| graph.degree(v) as u32).collect();
+    // Compact adjacency: (edge, other end, length) per incidence, CSR by node.
+    let mut adj_start: Vec<u32> = Vec::with_capacity(n + 1);
+    let mut adj: Vec<(u32, u32, f64)> = Vec::with_capacity(2 * m);
+    for v in 0..n {
+        adj_start.push(adj.len() as u32);
+        for &e in graph.incident(v) {
+            adj.push((e as u32, graph.other(e, v) as u32, graph.edges[e].length));
+        }
+    }
+    adj_start.push(adj.len() as u32);
 
     let mut used = vec![false; m];
+    let mut free = degree.clone();
     let mut incomplete: Vec<u32> = Vec::with_capacity(n);
+    let mut pos = vec![0u32; n];
     let mut front: Vec<u32> = Vec::with_capacity(m);
     let mut back: Vec<u32> = Vec::with_capacity(m);
     let mut cur = Flat::default();
@@ -172,8 +85,14 @@ pub(crate) fn run(graph: &Graph, iterations: u32, maximise: bool, rng: &mut Pcg6
 
     for _ in 0..iterations {
         used.fill(false);
-        lay.reset(&mut incomplete);
-        let (node, adj) = (&mut lay.node, &lay.adj);
+        free.copy_from_slice(&degree);
+        incomplete.clear();
+        for v in 0..n {
+            if degree[v] > 0 {
+                pos[v] = incomplete.len() as u32;
+                incomplete.push(v as u32);
+            }
+        }
         cur.clear();
         let mut weighted = 0.0;
         let mut paths = 0usize;
@@ -192,11 +111,10 @@ pub(crate) fn run(graph: &Graph, iterations: u32, maximise: bool, rng: &mut Pcg6
                     if !at_back && fnode == bnode {
                         break;
                     }
-                    let [a0, a1, free, _] = node[ext];
-                    if free == 0 {
+                    if free[ext] == 0 {
                         continue;
                     }
-                    for &(e, w, len) in &adj[a0 as usize..a1 as usize] {
+                    for &(e, w, len) in &adj[adj_start[ext] as usize..adj_start[ext + 1] as usize] {
                         let (e, w) = (e as usize, w as usize);
                         if used[e] {
                             continue;
@@ -226,13 +144,13 @@ pub(crate) fn run(graph: &Graph, iterations: u32, maximise: bool, rng: &mut Pcg6
                 length += len;
                 let ext = if at_back { bnode } else { fnode };
                 for v in [ext, w] {
-                    node[v][2] -= 1;
-                    if node[v][2] == 0 {
+                    free[v] -= 1;
+                    if free[v] == 0 {
                         // Swap-remove from the incomplete list.
-                        let p = node[v][3] as usize;
+                        let p = pos[v] as usize;
                         let last = *incomplete.last().expect("node listed");
                         incomplete[p] = last;
-                        node[last as usize][3] = p as u32;
+                        pos[last as usize] = p as u32;
                         incomplete.pop();
                     }
                 }
@@ -260,13 +178,6 @@ pub(crate) fn run(graph: &Graph, iterations: u32, maximise: bool, rng: &mut Pcg6
             std::mem::swap(&mut cur, &mut best);
         }
     }
-    // Back to the graph's numbering.
-    for e in &mut best.edges {
-        *e = lay.edge_of[*e as usize];
-    }
-    for v in &mut best.first {
-        *v = lay.node_of[*v as usize];
-    }
 
     // Best solution → chains, longest first (segments, then length; stable).
     let mut chains = Vec::with_capacity(best.starts.len());
@@ -285,192 +196,4 @@ pub(crate) fn run(graph: &Graph, iterations: u32, maximise: bool, rng: &mut Pcg6
     }
     super::order::sort_longest_first(&mut chains, graph);
     Solution { chains, score: best_score, iteration_scores }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::geom::{DVec2, Feature, Stroke, StrokeLayer};
-    use rand_core::SeedableRng;
-
-    /// The loop as first written (original numbering), to check that the layout changes nothing.
-    fn reference(graph: &Graph, iterations: u32, maximise: bool, rng: &mut Pcg64) -> (Vec<u32>, Vec<u32>, Vec<u32>, Vec<f64>) {
-        let n = graph.nodes.len();
-        let m = graph.edges.len();
-        if m == 0 {
-            return Default::default();
-        }
-        let mut iteration_scores = Vec::with_capacity(iterations as usize);
-        let total_length = graph.total_length();
-        let degree: Vec<u32> = (0..n).map(|v| graph.degree(v) as u32).collect();
-        // Compact adjacency: (edge, other end, length) per incidence, CSR by node.
-        let mut adj_start: Vec<u32> = Vec::with_capacity(n + 1);
-        let mut adj: Vec<(u32, u32, f64)> = Vec::with_capacity(2 * m);
-        for v in 0..n {
-            adj_start.push(adj.len() as u32);
-            for &e in graph.incident(v) {
-                adj.push((e as u32, graph.other(e, v) as u32, graph.edges[e].length));
-            }
-        }
-        adj_start.push(adj.len() as u32);
-
-        let mut used = vec![false; m];
-        let mut free = degree.clone();
-        let mut incomplete: Vec<u32> = Vec::with_capacity(n);
-        let mut pos = vec![0u32; n];
-        let mut front: Vec<u32> = Vec::with_capacity(m);
-        let mut back: Vec<u32> = Vec::with_capacity(m);
-        let mut cur = Flat::default();
-        let mut best = Flat::default();
-        cur.edges.reserve(m);
-        best.edges.reserve(m);
-        let mut best_score = f64::NEG_INFINITY;
-
-        for _ in 0..iterations {
-            used.fill(false);
-            free.copy_from_slice(&degree);
-            incomplete.clear();
-            for v in 0..n {
-                if degree[v] > 0 {
-                    pos[v] = incomplete.len() as u32;
-                    incomplete.push(v as u32);
-                }
-            }
-            cur.clear();
-            let mut weighted = 0.0;
-            let mut paths = 0usize;
-
-            while !incomplete.is_empty() {
-                let start = incomplete[below(rng, incomplete.len())] as usize;
-                let (mut fnode, mut bnode) = (start, start);
-                front.clear();
-                back.clear();
-                let mut length = 0.0;
-                loop {
-                    // Candidate (at_back, edge, length) over both extremities.
-                    let mut pick: Option<(bool, usize, usize, f64)> = None;
-                    let mut ties = 0u64;
-                    for (at_back, ext) in [(true, bnode), (false, fnode)] {
-                        if !at_back && fnode == bnode {
-                            break;
-                        }
-                        if free[ext] == 0 {
-                            continue;
-                        }
-                        for &(e, w, len) in &adj[adj_start[ext] as usize..adj_start[ext + 1] as usize] {
-                            let (e, w) = (e as usize, w as usize);
-                            if used[e] {
-                                continue;
-                            }
-                            match pick {
-                                None => {
-                                    pick = Some((at_back, e, w, len));
-                                    ties = 1;
-                                }
-                                Some((_, _, _, bl)) => {
-                                    let better = if maximise { len > bl + TIE_MM } else { len < bl - TIE_MM };
-                                    if better {
-                                        pick = Some((at_back, e, w, len));
-                                        ties = 1;
-                                    } else if (len - bl).abs() <= TIE_MM {
-                                        ties += 1;
-                                        if below(rng, ties as usize) == 0 {
-                                            pick = Some((at_back, e, w, len));
-                                        }
-                                    }
-                                }
-                            }
-                        }
-                    }
-                    let Some((at_back, e, w, len)) = pick else { break };
-                    used[e] = true;
-                    length += len;
-                    let ext = if at_back { bnode } else { fnode };
-                    for v in [ext, w] {
-                        free[v] -= 1;
-                        if free[v] == 0 {
-                            // Swap-remove from the incomplete list.
-                            let p = pos[v] as usize;
-                            let last = *incomplete.last().expect("node listed");
-                            incomplete[p] = last;
-                            pos[last as usize] = p as u32;
-                            incomplete.pop();
-                        }
-                    }
-                    if at_back {
-                        back.push(e as u32);
-                        bnode = w;
-                    } else {
-                        front.push(e as u32);
-                        fnode = w;
-                    }
-                }
-                // Path = reverse(front) ++ back, starting at the front extremity.
-                cur.starts.push(cur.edges.len() as u32);
-                cur.first.push(fnode as u32);
-                cur.edges.extend(front.iter().rev());
-                cur.edges.extend_from_slice(&back);
-                let segments = front.len() + back.len();
-                weighted += length * segments as f64;
-                paths += 1;
-            }
-            let score = weighted / (total_length * paths as f64);
-            iteration_scores.push(score);
-            if score > best_score {
-                best_score = score;
-                std::mem::swap(&mut cur, &mut best);
-            }
-        }
-
-        (best.edges, best.starts, best.first, iteration_scores)
-    }
-
-    /// A messy layer: a honeycomb-ish grid of struts plus random crossing strokes.
-    fn layer(n: usize, seed: u64) -> StrokeLayer {
-        let mut s = seed | 1;
-        let mut rnd = move || {
-            s ^= s << 13;
-            s ^= s >> 7;
-            s ^= s << 17;
-            (s % 1_000_000) as f64 / 1e6
-        };
-        let mut strokes = Vec::new();
-        for i in 0..n {
-            for j in 0..n {
-                let (x, y) = (i as f64, j as f64 * 0.9);
-                strokes.push(Stroke { points: vec![DVec2::new(x, y), DVec2::new(x + 1.0, y + 0.3 * rnd())], feature: Feature::Lattice });
-                if (i + j) % 2 == 0 {
-                    strokes.push(Stroke { points: vec![DVec2::new(x, y), DVec2::new(x, y + 0.9)], feature: Feature::Lattice });
-                }
-            }
-        }
-        for _ in 0..n {
-            let (a, b) = (DVec2::new(rnd(), rnd()) * n as f64, DVec2::new(rnd(), rnd()) * n as f64);
-            strokes.push(Stroke { points: vec![a, b], feature: Feature::Contour });
-        }
-        StrokeLayer { z: 0.2, height: 0.2, strokes }
-    }
-
-    #[test]
-    fn the_memory_layout_changes_no_choice() {
-        for (n, seed) in [(3, 1), (12, 7), (30, 3), (60, 11)] {
-            let g = crate::paths::build_graph(&layer(n, seed), 0.005);
-            for maximise in [true, false] {
-                let (edges, starts, first, scores) = reference(&g, 7, maximise, &mut Pcg64::seed_from_u64(seed));
-                let sol = run(&g, 7, maximise, &mut Pcg64::seed_from_u64(seed));
-                assert_eq!(sol.iteration_scores, scores);
-                // The same paths (run sorts them longest first; compare as sets of edge lists).
-                let mut want: Vec<(u32, Vec<usize>)> = (0..starts.len())
-                    .map(|i| {
-                        let end = starts.get(i + 1).map_or(edges.len(), |&x| x as usize);
-                        (first[i], edges[starts[i] as usize..end].iter().map(|&e| e as usize).collect())
-                    })
-                    .collect();
-                let mut got: Vec<(u32, Vec<usize>)> = sol.chains.iter().map(|c| (c.nodes[0] as u32, c.edges.clone())).collect();
-                want.sort();
-                got.sort();
-                assert_eq!(got, want, "n {n}, seed {seed}");
-            }
-        }
-    }
 }

@@ -88,9 +88,11 @@ pub(crate) struct MeshGrid {
 }
 
 /// Most bucket entries of a mesh of `tris` triangles: 32 per triangle (a regular mesh needs
-/// 1–4), at least 4M and at most 32M (128 MiB). A grid holding more gets coarser cells.
+/// 1–4), at most 32M (128 MiB). A grid holding more gets coarser cells. Proportional to the
+/// triangles, so a fan of long wedges keeps its cell size as it gets more of them (its casts
+/// then test a number of wedges proportional to the wedges, not to their square).
 pub(crate) fn bucket_budget(tris: usize) -> usize {
-    tris.saturating_mul(32).clamp(4 << 20, 32 << 20)
+    tris.saturating_mul(32).clamp(1024, 32 << 20)
 }
 
 /// Calls `f` with every cell (of the `nx × ny` grid of `cell`-wide cells from `lo`) that the
@@ -144,6 +146,12 @@ fn cover(t: &Tri, lo: DVec2, cell: f64, nx: usize, ny: usize, f: &mut dyn FnMut(
 /// Faces meeting at a vertex are smoothed together when their normals are within this angle
 /// (cos 40°): curved surfaces get continuous normals, sharp edges (a box's rim) stay sharp.
 const CREASE_COS: f64 = 0.766_044_443_118_978;
+/// cos 19.9°: faces within this of their mean normal are pairwise within the crease angle
+/// (with a margin for rounding).
+const HALF_CREASE_COS: f64 = 0.940_288_0;
+/// Most faces at a vertex smoothed pair by pair (cost valence²) when they are not all within
+/// the crease angle of each other.
+const MAX_SMOOTH_VALENCE: usize = 1024;
 
 impl MeshGrid {
     /// `None` when no triangle has an XY footprint.
@@ -211,6 +219,26 @@ impl MeshGrid {
                 fill[i as usize] += 1;
             }
         }
+        // A vertex shared by many faces (a cone's apex: every wedge) would cost valence² to
+        // smooth face by face. When all its faces lie within half the crease angle of their
+        // mean normal, every pair passes the crease test, so every corner there gets the same
+        // sum, taken once in the same order (same bits). Otherwise, above
+        // `MAX_SMOOTH_VALENCE` faces, its corners keep their faces' own normals (sharp).
+        let corner_at = |g: &Face, vi: usize| g.idx.iter().position(|&x| x as usize == vi).unwrap_or(0);
+        let shared: Vec<Option<DVec3>> = (0..nv)
+            .map(|vi| {
+                let around = &vfaces[vstart[vi] as usize..vstart[vi + 1] as usize];
+                if around.len() <= 8 {
+                    return None;
+                }
+                let mean = around.iter().fold(DVec3::ZERO, |m, &g| m + faces[g as usize].n).normalize_or_zero();
+                let tight = around.iter().all(|&g| faces[g as usize].n.dot(mean) >= HALF_CREASE_COS);
+                tight.then(|| around.iter().fold(DVec3::ZERO, |sum, &g| {
+                    let g = &faces[g as usize];
+                    sum + g.n * g.angle[corner_at(g, vi)]
+                }))
+            })
+            .collect();
         let mut tris = Vec::new();
         let mut lo = DVec2::splat(f64::INFINITY);
         let mut hi = DVec2::splat(f64::NEG_INFINITY);
@@ -223,14 +251,21 @@ impl MeshGrid {
             let mut n = [f.n; 3];
             for (k, nk) in n.iter_mut().enumerate() {
                 let vi = f.idx[k] as usize;
-                let mut sum = DVec3::ZERO;
-                for &g in &vfaces[vstart[vi] as usize..vstart[vi + 1] as usize] {
-                    let g = &faces[g as usize];
-                    if g.n.dot(f.n) >= CREASE_COS {
-                        let corner = g.idx.iter().position(|&x| x as usize == vi).unwrap_or(0);
-                        sum += g.n * g.angle[corner];
+                let around = &vfaces[vstart[vi] as usize..vstart[vi + 1] as usize];
+                let sum = match shared[vi] {
+                    Some(sum) => sum,
+                    None if around.len() > MAX_SMOOTH_VALENCE => continue,
+                    None => {
+                        let mut sum = DVec3::ZERO;
+                        for &g in around {
+                            let g = &faces[g as usize];
+                            if g.n.dot(f.n) >= CREASE_COS {
+                                sum += g.n * g.angle[corner_at(g, vi)];
+                            }
+                        }
+                        sum
                     }
-                }
+                };
                 let s = sum.normalize_or_zero();
                 if s != DVec3::ZERO {
                     *nk = s;

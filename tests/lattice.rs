@@ -312,7 +312,14 @@ fn bad_parameters_and_dense_lattices_are_refused() {
         assert!(matches!(run(p.clone(), rect10()), Err(Error::BadParameter { .. } | Error::BadOptions { .. })), "{p:?}");
     }
     let big = Domain::Rectangle { width_mm: 300.0, height_mm: 300.0 };
-    assert!(matches!(run(Pattern::Honeycomb { hexagon_radius_mm: 0.05 }, big), Err(Error::TooDense { .. })));
+    match run(Pattern::Honeycomb { hexagon_radius_mm: 0.05 }, big) {
+        Err(e @ Error::OverBudget(_)) => {
+            let msg = e.to_string();
+            assert!(msg.starts_with("the lattice: struts on one layer would be about "), "{msg}");
+            assert!(msg.contains(", limit 2M: use a hexagon radius ≥ 0.24 mm or a smaller domain"), "{msg}");
+        }
+        other => panic!("{:?}", other.map(|l| l.report)),
+    }
     assert!(matches!(run(Pattern::default(), Domain::Rectangle { width_mm: 0.0, height_mm: 1.0 }), Err(Error::EmptyDomain)));
 }
 

@@ -147,9 +147,33 @@ impl Kind for LatticeKind {
         j
     }
 
-    fn estimate(_j: &LatticeJob, _ctx: &mut Ctx) -> Result<Vec<crate::budget::Estimate>, Error> {
-        // Replaced by the lattice, paths and non-planar stage estimates (issue 7, in progress).
-        Ok(Vec::new())
+    /// The lattice, paths and (when set) non-planar stages' estimates, chained: each stage's
+    /// input is the previous one's estimated output. A solid domain is measured from its mesh
+    /// (box, footprint, volume: [`lattice::DomainSize::of_mesh`]), not sliced.
+    fn estimate(j: &LatticeJob, ctx: &mut Ctx) -> Result<Vec<crate::budget::Estimate>, Error> {
+        let size = match j.domain {
+            Domain::Solid => {
+                let input = j.input.as_ref().ok_or_else(|| Error::NoInput("a solid lattice domain needs a mesh: load one, or pass --input mesh=FILE".into()))?;
+                let mesh = ctx.mesh("mesh", input)?;
+                lattice::DomainSize::of_mesh(&mesh, j.lattice.layer_thickness_mm)
+            }
+            _ => lattice::DomainSize::planar(&j.domain, &j.lattice),
+        };
+        let lat = lattice::estimate(&size, &j.lattice, line_width(ctx.design));
+        let optimised = paths::estimate(&paths::Work::of_lattice(&lat), &j.paths);
+        let mut out = vec![lat];
+        if let Some(np) = &j.nonplanar {
+            let surface = match (&np.surface, &j.surface_input) {
+                (nonplanar::Surface::Mesh, Some(input)) => Some(nonplanar::SurfaceSize::of_mesh(&*ctx.mesh("surface", input)?, size.min, size.max)),
+                _ => None,
+            };
+            let projected = nonplanar::estimate(&nonplanar::Work::of_paths(&optimised, size.min, size.max), surface.as_ref(), np);
+            out.push(optimised);
+            out.push(projected);
+        } else {
+            out.push(optimised);
+        }
+        Ok(out)
     }
 
     fn run(j: &LatticeJob, ctx: &mut Ctx) -> Result<Product, Error> {
@@ -216,6 +240,10 @@ fn strokes(j: &LatticeJob, ctx: &mut Ctx) -> Result<Out<Vec<StrokeLayer>>, Error
     let domains: Out<Vec<LayerDomain>> = match j.domain {
         // Built inside the stage, so a cached run does not build them again.
         Domain::Rectangle { .. } | Domain::Disc { .. } | Domain::TensileSpecimen { .. } => {
+            // Refused before the layers' polygons are built (many layers of a big disc are
+            // themselves large).
+            let size = lattice::DomainSize::planar(&j.domain, &j.lattice);
+            lattice::estimate(&size, &j.lattice, line_width(design)).check().map_err(|e| Error::stage("lattice", lattice::Error::OverBudget(e)))?;
             ctx.stage("domains", "domains", &(&j.domain, &j.lattice), &[], |_| Ok((lattice::planar_domains(&j.domain, &j.lattice).unwrap_or_default(), None)))?
         }
         Domain::Solid => {

@@ -30,6 +30,7 @@ use serde::{Deserialize, Serialize};
 mod arrowhead;
 mod crop;
 mod domain;
+mod estimate;
 mod graph;
 mod grids;
 mod honeycomb;
@@ -42,6 +43,7 @@ mod voronoi;
 
 pub use arrowhead::{INNER_DEPTH as ARROWHEAD_INNER_DEPTH, OUTER_DEPTH as ARROWHEAD_OUTER_DEPTH};
 pub use domain::{disc_sides, DISC_CHORD_ERROR_MM};
+pub use estimate::{estimate, DomainSize, PatternStats};
 pub use thumbnail::thumbnail;
 pub use trim::{MARGIN_UM as TRIM_MARGIN_UM, MAX_ANGLE_DEG as TRIM_MAX_ANGLE_DEG};
 pub use voronoi::VORONOI_SEED_SALT;
@@ -50,7 +52,11 @@ use crop::Clipper;
 use graph::{Graph, Rect};
 use trim::Guard;
 
-/// Most struts one layer may have (estimated before generating).
+/// Most struts one layer may have (generated, before cropping; estimated before generating).
+/// A layer's strut graph and its crop take about 120 bytes per strut and the path optimiser
+/// about 300 per edge while it works on the layer: 2M struts keep one layer well under half a
+/// GiB in the browser worker, and GIPPO's default 500 iterations over them under the time
+/// budget (about 4 min on the reference machine).
 pub const MAX_STRUTS_PER_LAYER: usize = 2_000_000;
 /// Smallest cell size / strand distance, mm.
 pub const MIN_CELL_MM: f64 = 0.05;
@@ -282,14 +288,10 @@ pub enum Error {
         /// Allowed range / remedy.
         fix: String,
     },
-    /// The pattern would have too many struts.
-    #[error("the lattice would have about {struts} struts on a layer (limit {limit}); use larger cells or a smaller domain")]
-    TooDense {
-        /// Estimated struts.
-        struts: usize,
-        /// Limit.
-        limit: usize,
-    },
+    /// The work would be over a limit ([`MAX_STRUTS_PER_LAYER`], the shared memory or time
+    /// budgets), found by [`estimate`] before generating anything.
+    #[error("the lattice: {0}")]
+    OverBudget(#[from] crate::budget::OverBudget),
     /// Nothing to fill.
     #[error("the domain is empty: there is no area to fill")]
     EmptyDomain,
@@ -340,6 +342,7 @@ pub fn generate(
     for o in &options.overrides {
         validate(&o.pattern)?;
     }
+    estimate(&DomainSize::of_layers(domains), options, line_width_mm).check()?;
     let mut out = Lattice::default();
     let n = domains.len();
     // Identical layers (same regions, pattern and angle) are generated once.
@@ -441,8 +444,10 @@ pub(crate) fn estimate_struts(p: &Pattern, rect: Rect) -> f64 {
 /// The pattern's strut graph over `rect` (pattern frame), after the density guard.
 pub(crate) fn pattern_graph(p: &Pattern, rect: Rect, seed: u64) -> Result<Graph, Error> {
     let est = estimate_struts(p, rect);
-    if est.is_nan() || est > MAX_STRUTS_PER_LAYER as f64 {
-        return Err(Error::TooDense { struts: est.min(usize::MAX as f64) as usize, limit: MAX_STRUTS_PER_LAYER });
+    let limit = MAX_STRUTS_PER_LAYER as f64;
+    if est.is_nan() || est > limit {
+        let fix = estimate::denser_fix(p, est, limit);
+        return Err(Error::OverBudget(crate::budget::OverBudget { what: "struts on one layer".into(), value: est, limit, unit: "", fix }));
     }
     let mut g = match *p {
         Pattern::Honeycomb { hexagon_radius_mm } => honeycomb::honeycomb(hexagon_radius_mm, rect),

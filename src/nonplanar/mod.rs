@@ -6,8 +6,11 @@
 //! a grid over mesh triangles), `project.rs` (splitting and lifting), `collision.rs`.
 
 mod collision;
+mod estimate;
 mod project;
 mod surface;
+
+pub use estimate::{estimate, SurfaceSize, Work};
 
 use crate::settings::{num, other, vec3, Field, Kind};
 use crate::geom::{Mesh, Toolpath};
@@ -113,6 +116,10 @@ pub enum Error {
     /// No point of the lattice lies over the surface.
     #[error("the lattice does not lie over the surface anywhere; move the surface under the lattice")]
     NothingOver,
+    /// The work would be over the shared memory or time budgets, found by [`estimate`]
+    /// before anything is projected.
+    #[error("the projection: {0}")]
+    OverBudget(#[from] crate::budget::OverBudget),
 }
 
 /// Projects a planar toolpath onto the surface.
@@ -144,12 +151,21 @@ pub enum Error {
 ///   exactly; meshes against the tangent plane under the midpoint.
 /// - Each output layer's `z` is its highest projected Z; `height` is kept (equation 4's LT).
 ///
+/// The work is estimated first ([`Work::of_toolpath`], [`SurfaceSize::of_mesh`],
+/// [`estimate`]); over the budgets: [`Error::OverBudget`], before anything is allocated.
+///
 /// Options: `max_segment_mm` in [0.01, 10], radius > 0 and finite coordinates, else
-/// [`Error::BadOption`]; [`Surface::Mesh`] needs a mesh with triangles
+/// [`Error::BadOptions`]; [`Surface::Mesh`] needs a mesh with triangles
 /// ([`Error::NoSurfaceMesh`]). Deterministic (f64 only, no hash maps): identical on native
 /// and wasm.
 pub fn project(toolpath: &Toolpath, surface_mesh: Option<&Mesh>, options: &Options) -> Result<Projected, Error> {
     validate(options)?;
+    let work = Work::of_toolpath(toolpath);
+    let size = match (&options.surface, surface_mesh) {
+        (Surface::Mesh, Some(m)) => Some(SurfaceSize::of_mesh(m, work.min, work.max)),
+        _ => None,
+    };
+    estimate(&work, size.as_ref(), options).check()?;
     let caster = surface::Caster::new(&options.surface, surface_mesh)?;
     project::run(toolpath, &caster, options.max_segment_mm)
 }

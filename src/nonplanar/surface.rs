@@ -87,9 +87,71 @@ pub(crate) struct MeshGrid {
     items: Vec<u32>,
 }
 
+/// Most bucket entries of a mesh of `tris` triangles: 32 per triangle (a regular mesh needs
+/// 1–4), at most 32M (128 MiB). A grid holding more gets coarser cells. Proportional to the
+/// triangles, so a fan of long wedges keeps its cell size as it gets more of them (its casts
+/// then test a number of wedges proportional to the wedges, not to their square).
+pub(crate) fn bucket_budget(tris: usize) -> usize {
+    tris.saturating_mul(32).clamp(1024, 32 << 20)
+}
+
+/// Calls `f` with every cell (of the `nx × ny` grid of `cell`-wide cells from `lo`) that the
+/// XY projection of `t`, grown by a hair, overlaps: row by row, the x-extent of the triangle
+/// within the row's band. Bounding boxes alone put a long thin triangle (a cone's fan) in
+/// every cell of its box: a 100,000-triangle cone then needed billions of entries.
+///
+/// The hair (1e-6 of the triangle's size, plus 1 nm) covers every point [`MeshGrid::cast`]'s
+/// barycentric test (tolerance 1e-9) accepts, so each cell lists every triangle a ray in it
+/// can hit, in increasing order: casts find exactly what they found with box buckets.
+fn cover(t: &Tri, lo: DVec2, cell: f64, nx: usize, ny: usize, f: &mut dyn FnMut(usize)) {
+    let p = [t.v[0].truncate(), t.v[1].truncate(), t.v[2].truncate()];
+    let bmin = p[0].min(p[1]).min(p[2]);
+    let bmax = p[0].max(p[1]).max(p[2]);
+    let hair = 1e-6 * (bmax - bmin).max_element() + 1e-6;
+    let idx = |v: f64, n: usize| ((v / cell).floor().max(0.0) as usize).min(n - 1);
+    let (y0, y1) = (idx(bmin.y - hair - lo.y, ny), idx(bmax.y + hair - lo.y, ny));
+    for cy in y0..=y1 {
+        // The band of the row, grown by the hair; the triangle's x-extent within it.
+        let (b0, b1) = (lo.y + cy as f64 * cell - hair, lo.y + (cy + 1) as f64 * cell + hair);
+        let (b0, b1) = if cy == 0 { (f64::NEG_INFINITY, b1) } else { (b0, b1) };
+        let (b0, b1) = if cy == ny - 1 { (b0, f64::INFINITY) } else { (b0, b1) };
+        let (mut xmin, mut xmax) = (f64::INFINITY, f64::NEG_INFINITY);
+        for k in 0..3 {
+            let (a, b) = (p[k], p[(k + 1) % 3]);
+            if a.y >= b0 && a.y <= b1 {
+                xmin = xmin.min(a.x);
+                xmax = xmax.max(a.x);
+            }
+            if a.y != b.y {
+                for yb in [b0, b1] {
+                    let t = (yb - a.y) / (b.y - a.y);
+                    if t > 0.0 && t < 1.0 {
+                        let x = a.x + (b.x - a.x) * t;
+                        xmin = xmin.min(x);
+                        xmax = xmax.max(x);
+                    }
+                }
+            }
+        }
+        if xmin > xmax {
+            continue;
+        }
+        let (x0, x1) = (idx(xmin - hair - lo.x, nx), idx(xmax + hair - lo.x, nx));
+        for cx in x0..=x1 {
+            f(cy * nx + cx);
+        }
+    }
+}
+
 /// Faces meeting at a vertex are smoothed together when their normals are within this angle
 /// (cos 40°): curved surfaces get continuous normals, sharp edges (a box's rim) stay sharp.
 const CREASE_COS: f64 = 0.766_044_443_118_978;
+/// cos 19.9°: faces within this of their mean normal are pairwise within the crease angle
+/// (with a margin for rounding).
+const HALF_CREASE_COS: f64 = 0.940_288_0;
+/// Most faces at a vertex smoothed pair by pair (cost valence²) when they are not all within
+/// the crease angle of each other.
+const MAX_SMOOTH_VALENCE: usize = 1024;
 
 impl MeshGrid {
     /// `None` when no triangle has an XY footprint.
@@ -157,6 +219,26 @@ impl MeshGrid {
                 fill[i as usize] += 1;
             }
         }
+        // A vertex shared by many faces (a cone's apex: every wedge) would cost valence² to
+        // smooth face by face. When all its faces lie within half the crease angle of their
+        // mean normal, every pair passes the crease test, so every corner there gets the same
+        // sum, taken once in the same order (same bits). Otherwise, above
+        // `MAX_SMOOTH_VALENCE` faces, its corners keep their faces' own normals (sharp).
+        let corner_at = |g: &Face, vi: usize| g.idx.iter().position(|&x| x as usize == vi).unwrap_or(0);
+        let shared: Vec<Option<DVec3>> = (0..nv)
+            .map(|vi| {
+                let around = &vfaces[vstart[vi] as usize..vstart[vi + 1] as usize];
+                if around.len() <= 8 {
+                    return None;
+                }
+                let mean = around.iter().fold(DVec3::ZERO, |m, &g| m + faces[g as usize].n).normalize_or_zero();
+                let tight = around.iter().all(|&g| faces[g as usize].n.dot(mean) >= HALF_CREASE_COS);
+                tight.then(|| around.iter().fold(DVec3::ZERO, |sum, &g| {
+                    let g = &faces[g as usize];
+                    sum + g.n * g.angle[corner_at(g, vi)]
+                }))
+            })
+            .collect();
         let mut tris = Vec::new();
         let mut lo = DVec2::splat(f64::INFINITY);
         let mut hi = DVec2::splat(f64::NEG_INFINITY);
@@ -169,14 +251,21 @@ impl MeshGrid {
             let mut n = [f.n; 3];
             for (k, nk) in n.iter_mut().enumerate() {
                 let vi = f.idx[k] as usize;
-                let mut sum = DVec3::ZERO;
-                for &g in &vfaces[vstart[vi] as usize..vstart[vi + 1] as usize] {
-                    let g = &faces[g as usize];
-                    if g.n.dot(f.n) >= CREASE_COS {
-                        let corner = g.idx.iter().position(|&x| x as usize == vi).unwrap_or(0);
-                        sum += g.n * g.angle[corner];
+                let around = &vfaces[vstart[vi] as usize..vstart[vi + 1] as usize];
+                let sum = match shared[vi] {
+                    Some(sum) => sum,
+                    None if around.len() > MAX_SMOOTH_VALENCE => continue,
+                    None => {
+                        let mut sum = DVec3::ZERO;
+                        for &g in around {
+                            let g = &faces[g as usize];
+                            if g.n.dot(f.n) >= CREASE_COS {
+                                sum += g.n * g.angle[corner_at(g, vi)];
+                            }
+                        }
+                        sum
                     }
-                }
+                };
                 let s = sum.normalize_or_zero();
                 if s != DVec3::ZERO {
                     *nk = s;
@@ -192,31 +281,37 @@ impl MeshGrid {
             return None;
         }
         let size = (hi - lo).max(DVec2::splat(1e-6));
-        let cell = ((size.x * size.y / tris.len() as f64).sqrt() * 1.5).max(size.x.max(size.y) / 1024.0).max(1e-6);
-        let nx = ((size.x / cell).ceil() as usize).clamp(1, 1024);
-        let ny = ((size.y / cell).ceil() as usize).clamp(1, 1024);
-        let mut g = MeshGrid { tris, min: lo, cell, nx, ny, start: vec![0; nx * ny + 1], items: Vec::new() };
-        let ranges: Vec<(usize, usize, usize, usize)> = g.tris.iter().map(|t| g.cell_range(t)).collect();
-        for &(x0, x1, y0, y1) in &ranges {
-            for cy in y0..=y1 {
-                for cx in x0..=x1 {
-                    g.start[cy * nx + cx + 1] += 1;
-                }
+        let mut cell = ((size.x * size.y / tris.len() as f64).sqrt() * 1.5).max(size.x.max(size.y) / 1024.0).max(1e-6);
+        // Coarser cells until the buckets fit their budget (long thin triangles, e.g. a
+        // cone's fan, cross many cells).
+        let budget = bucket_budget(tris.len());
+        let (nx, ny, start) = loop {
+            let nx = ((size.x / cell).ceil() as usize).clamp(1, 1024);
+            let ny = ((size.y / cell).ceil() as usize).clamp(1, 1024);
+            let mut start = vec![0u32; nx * ny + 1];
+            let mut items = 0usize;
+            for t in &tris {
+                cover(t, lo, cell, nx, ny, &mut |c| {
+                    start[c + 1] += 1;
+                    items += 1;
+                });
             }
-        }
+            if items <= budget || (nx == 1 && ny == 1) {
+                break (nx, ny, start);
+            }
+            cell *= 1.5;
+        };
+        let mut g = MeshGrid { tris, min: lo, cell, nx, ny, start, items: Vec::new() };
         for c in 0..nx * ny {
             g.start[c + 1] += g.start[c];
         }
         let mut fill = g.start.clone();
         g.items = vec![0; g.start[nx * ny] as usize];
-        for (ti, &(x0, x1, y0, y1)) in ranges.iter().enumerate() {
-            for cy in y0..=y1 {
-                for cx in x0..=x1 {
-                    let c = cy * nx + cx;
-                    g.items[fill[c] as usize] = ti as u32;
-                    fill[c] += 1;
-                }
-            }
+        for (ti, t) in g.tris.iter().enumerate() {
+            cover(t, lo, cell, nx, ny, &mut |c| {
+                g.items[fill[c] as usize] = ti as u32;
+                fill[c] += 1;
+            });
         }
         Some(g)
     }
@@ -225,15 +320,6 @@ impl MeshGrid {
         let cx = ((x - self.min.x) / self.cell).floor().clamp(0.0, (self.nx - 1) as f64) as usize;
         let cy = ((y - self.min.y) / self.cell).floor().clamp(0.0, (self.ny - 1) as f64) as usize;
         (cx, cy)
-    }
-
-    fn cell_range(&self, t: &Tri) -> (usize, usize, usize, usize) {
-        let lo = t.v[0].truncate().min(t.v[1].truncate()).min(t.v[2].truncate());
-        let hi = t.v[0].truncate().max(t.v[1].truncate()).max(t.v[2].truncate());
-        let eps = 1e-9;
-        let (x0, y0) = self.cell_of(lo.x - eps, lo.y - eps);
-        let (x1, y1) = self.cell_of(hi.x + eps, hi.y + eps);
-        (x0, x1, y0, y1)
     }
 
     fn cast(&self, x: f64, y: f64) -> Option<Hit> {

@@ -16,11 +16,13 @@ pub mod graph;
 pub mod matching;
 pub mod metrics;
 
+mod estimate;
 mod euler;
 mod gippo;
 mod order;
 mod postman;
 
+pub use estimate::{estimate, Work, MAX_GIPPO_STEPS};
 pub use graph::{build_graph, Edge, Graph};
 
 use crate::settings::{int, num, other, Field, Kind};
@@ -166,12 +168,18 @@ pub enum Error {
         /// Each value out of range, with the allowed range.
         problems: Vec<crate::settings::Problem>,
     },
+    /// The work would be over a limit ([`MAX_GIPPO_STEPS`], the shared memory or time
+    /// budgets), found by [`estimate`] before building anything.
+    #[error("path optimisation: {0}")]
+    OverBudget(#[from] crate::budget::OverBudget),
 }
 
 /// Optimises every layer. `line_width_mm` is written into the paths; `seed` seeds GIPPO.
 ///
 /// Each stroke layer becomes one toolpath layer (same z and height) whose paths print every
 /// graph edge exactly once. `progress` is called after each layer with the fraction done.
+/// The work is estimated first ([`Work::of_layers`], [`estimate`]); over a limit:
+/// [`Error::OverBudget`], before anything is built.
 pub fn optimise(
     layers: &[StrokeLayer],
     options: &Options,
@@ -180,6 +188,7 @@ pub fn optimise(
     progress: &mut dyn FnMut(f32),
 ) -> Result<Optimised, Error> {
     validate(options)?;
+    estimate(&Work::of_layers(layers), options).check()?;
     let mut toolpath = Toolpath::default();
     let mut report = PathsReport { method: Some(options.method), layers: Vec::with_capacity(layers.len()) };
     let mut last_end: Option<DVec2> = None;

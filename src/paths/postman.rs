@@ -11,7 +11,7 @@
 //! printed exactly once.
 
 use super::euler::{circuits, component_starts, odd_by_component, walk_nodes, AugEdge};
-use super::graph::{Graph, IntMap};
+use super::graph::Graph;
 use super::matching::{min_pairing, CANDIDATES_PER_NODE};
 use super::Chain;
 use std::cell::RefCell;
@@ -97,6 +97,49 @@ impl Dijkstra {
     }
 }
 
+/// Pair distances `(i, j, d)` (i < j) found so far, looked up by pair: the last one found for a
+/// pair wins. A hash map of them was a cache miss per insert on big layers; a CSR by `i`
+/// built at the first look-up keeps the candidate search sequential.
+#[derive(Default)]
+struct Known {
+    found: Vec<(usize, usize, f64)>,
+    /// Entries of `found` covered by the index.
+    indexed: usize,
+    start: Vec<usize>,
+    /// `(j, d)` by `i`, each `i`'s sorted by `j`, one per pair.
+    items: Vec<(usize, f64)>,
+}
+
+impl Known {
+    fn get(&mut self, n: usize, i: usize, j: usize) -> Option<f64> {
+        if self.indexed != self.found.len() {
+            self.index(n);
+        }
+        let list = &self.items[self.start[i]..self.start[i + 1]];
+        list.binary_search_by(|&(k, _)| k.cmp(&j)).ok().map(|x| list[x].1)
+    }
+
+    fn index(&mut self, n: usize) {
+        // Stable by (i, j): the last of a run is the one found last.
+        let mut order: Vec<usize> = (0..self.found.len()).collect();
+        order.sort_by_key(|&x| (self.found[x].0, self.found[x].1));
+        self.start = vec![0; n + 1];
+        self.items.clear();
+        for (k, &x) in order.iter().enumerate() {
+            let (i, j, d) = self.found[x];
+            if order.get(k + 1).is_some_and(|&y| (self.found[y].0, self.found[y].1) == (i, j)) {
+                continue;
+            }
+            self.start[i + 1] += 1;
+            self.items.push((j, d));
+        }
+        for i in 0..n {
+            self.start[i + 1] += self.start[i];
+        }
+        self.indexed = self.found.len();
+    }
+}
+
 /// Continuous result: one chain (open walk) per component, and the total length of the
 /// duplicated (travelled) struts before cutting the circuits open, mm.
 pub(crate) struct PostmanPaths {
@@ -123,7 +166,8 @@ pub(crate) fn run(graph: &Graph) -> PostmanPaths {
         for (i, &v) in nodes.iter().enumerate() {
             local[v] = i;
         }
-        let known: RefCell<IntMap<(usize, usize), f64>> = RefCell::new(IntMap::default());
+        // Graph distances found by the candidate searches, for the matching's improvement step.
+        let known = RefCell::new(Known::default());
         let partner = {
             let dij_cell = RefCell::new(&mut dij);
             let mut candidates = |active: &[usize]| -> Vec<(f64, usize, usize)> {
@@ -142,7 +186,7 @@ pub(crate) fn run(graph: &Graph) -> PostmanPaths {
                         if v != src && mark[v] == stamp {
                             let j = local[v];
                             out.push((dist, i.min(j), i.max(j)));
-                            known.insert((i.min(j), i.max(j)), dist);
+                            known.found.push((i.min(j), i.max(j), dist));
                             found += 1;
                         }
                         found < k
@@ -150,7 +194,7 @@ pub(crate) fn run(graph: &Graph) -> PostmanPaths {
                 }
                 out
             };
-            let mut cost = |i: usize, j: usize| known.borrow().get(&(i.min(j), i.max(j))).copied();
+            let mut cost = |i: usize, j: usize| known.borrow_mut().get(nodes.len(), i.min(j), i.max(j));
             min_pairing(nodes.len(), &mut candidates, &mut cost)
         };
         // Duplicate the struts along each pair's shortest path.

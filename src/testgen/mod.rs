@@ -5,4 +5,5 @@
 
 pub mod design;
 pub mod gcode;
+pub mod lattice;
 pub mod mesh;

@@ -256,7 +256,7 @@ fn gippo_iterations_over_the_step_limit_are_refused_with_the_iterations_that_fit
     };
     let msg = e.to_string();
     assert!(msg.starts_with("GIPPO steps (iterations × struts) would be about "), "{msg}");
-    assert!(msg.contains(", limit 8G: use at most "), "{msg}");
+    assert!(msg.contains(", limit 5G: use at most "), "{msg}");
     assert_eq!(e.limit, MAX_GIPPO_STEPS);
     let most = number_after(&msg, "use at most");
     assert!((10.0..100_000.0).contains(&most), "{msg}");

@@ -56,7 +56,7 @@ use trim::Guard;
 /// A layer's strut graph and its crop take about 120 bytes per strut and the path optimiser
 /// about 300 per edge while it works on the layer: 2M struts keep one layer well under half a
 /// GiB in the browser worker, and GIPPO's default 500 iterations over them under the time
-/// budget (about 4 min on the reference machine).
+/// budget (about 3 min on the reference machine).
 pub const MAX_STRUTS_PER_LAYER: usize = 2_000_000;
 /// Smallest cell size / strand distance, mm.
 pub const MIN_CELL_MM: f64 = 0.05;
@@ -290,7 +290,7 @@ pub enum Error {
     },
     /// The work would be over a limit ([`MAX_STRUTS_PER_LAYER`], the shared memory or time
     /// budgets), found by [`estimate`] before generating anything.
-    #[error("the lattice: {0}")]
+    #[error("{0}")]
     OverBudget(#[from] crate::budget::OverBudget),
     /// Nothing to fill.
     #[error("the domain is empty: there is no area to fill")]

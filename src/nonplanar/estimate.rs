@@ -174,7 +174,7 @@ impl SurfaceSize {
         };
         let (mut entries, mut over) = count(cell);
         while entries > budget && cell < size.max_element() {
-            cell *= 1.5;
+            cell *= 1.1;
             (entries, over) = count(cell);
         }
         let nx = (size.x / cell).ceil().clamp(1.0, 1024.0);

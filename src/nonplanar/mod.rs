@@ -118,7 +118,7 @@ pub enum Error {
     NothingOver,
     /// The work would be over the shared memory or time budgets, found by [`estimate`]
     /// before anything is projected.
-    #[error("the projection: {0}")]
+    #[error("{0}")]
     OverBudget(#[from] crate::budget::OverBudget),
 }
 

@@ -95,6 +95,18 @@ pub(crate) fn bucket_budget(tris: usize) -> usize {
     tris.saturating_mul(32).clamp(1024, 32 << 20)
 }
 
+/// About how many cells of side `cell` the triangles' footprints meet: a shape of area A and
+/// perimeter P meets about A/c² + 2P/(πc) + 1 of them.
+fn estimated_entries(tris: &[Tri], cell: f64) -> f64 {
+    tris.iter()
+        .map(|t| {
+            let p = [t.v[0].truncate(), t.v[1].truncate(), t.v[2].truncate()];
+            let perimeter = p[0].distance(p[1]) + p[1].distance(p[2]) + p[2].distance(p[0]);
+            0.5 * t.det.abs() / (cell * cell) + 2.0 * perimeter / (std::f64::consts::PI * cell) + 1.0
+        })
+        .sum()
+}
+
 /// Calls `f` with every cell (of the `nx × ny` grid of `cell`-wide cells from `lo`) that the
 /// XY projection of `t`, grown by a hair, overlaps: row by row, the x-extent of the triangle
 /// within the row's band. Bounding boxes alone put a long thin triangle (a cone's fan) in
@@ -285,6 +297,11 @@ impl MeshGrid {
         // Coarser cells until the buckets fit their budget (long thin triangles, e.g. a
         // cone's fan, cross many cells).
         let budget = bucket_budget(tris.len());
+        // Counting the entries at a cell size costs as much as the entries: start from the
+        // first size whose entries, estimated from each triangle's area and perimeter, fit.
+        while estimated_entries(&tris, cell) > budget as f64 && cell < size.max_element() {
+            cell *= 1.1;
+        }
         let (nx, ny, start) = loop {
             let nx = ((size.x / cell).ceil() as usize).clamp(1, 1024);
             let ny = ((size.y / cell).ceil() as usize).clamp(1, 1024);
@@ -299,7 +316,7 @@ impl MeshGrid {
             if items <= budget || (nx == 1 && ny == 1) {
                 break (nx, ny, start);
             }
-            cell *= 1.5;
+            cell *= 1.1;
         };
         let mut g = MeshGrid { tris, min: lo, cell, nx, ny, start, items: Vec::new() };
         for c in 0..nx * ny {

@@ -170,7 +170,7 @@ pub enum Error {
     },
     /// The work would be over a limit ([`MAX_GIPPO_STEPS`], the shared memory or time
     /// budgets), found by [`estimate`] before building anything.
-    #[error("path optimisation: {0}")]
+    #[error("{0}")]
     OverBudget(#[from] crate::budget::OverBudget),
 }
 

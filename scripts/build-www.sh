@@ -92,21 +92,44 @@ sed "s#from 'three';#from './three.module.js';#" \
 cp "$three/LICENSE" www/vendor/three-LICENSE.txt
 
 # --- example designs ---------------------------------------------------------------------
+# index.json lists each example with its job kind and one-line description (from the design)
+# and a thumbnail: the example run by the wasm just built (thumbnailSvg), drawn as a small SVG.
 rm -rf www/examples
 mkdir -p www/examples
-node --input-type=module - <<'JS'
-import { readdirSync, readFileSync, copyFileSync, writeFileSync } from "node:fs";
+WEFT_PKG="$pkg_dir" node --input-type=module - <<'JS'
+import { readdirSync, readFileSync, copyFileSync, writeFileSync, existsSync } from "node:fs";
+import { resolve } from "node:path";
+import { pathToFileURL } from "node:url";
+const pkg = resolve(process.env.WEFT_PKG);
+let weft = null;
+if (existsSync(`${pkg}/weft.js`) && existsSync(`${pkg}/weft_bg.wasm`)) {
+  weft = await import(pathToFileURL(`${pkg}/weft.js`).href);
+  weft.initSync({ module: readFileSync(`${pkg}/weft_bg.wasm`) });
+}
 const files = readdirSync("examples").filter((f) => f.endsWith(".json")).sort();
 const index = files.map((file) => {
-  let name = file.replace(/\.json$/, "");
+  const entry = { name: file.replace(/\.json$/, ""), file, kind: "", description: "" };
+  let text = "";
   try {
-    const d = JSON.parse(readFileSync(`examples/${file}`, "utf8"));
-    if (d && typeof d.name === "string" && d.name) name = d.name;
+    text = readFileSync(`examples/${file}`, "utf8");
+    const d = JSON.parse(text);
+    if (d && typeof d.name === "string" && d.name) entry.name = d.name;
+    if (typeof d?.description === "string") entry.description = d.description;
+    if (typeof d?.job?.kind === "string") entry.kind = d.job.kind;
   } catch { /* not valid JSON: still listed; the page reports the parse error */ }
   copyFileSync(`examples/${file}`, `www/examples/${file}`);
-  return { name, file };
+  if (weft) {
+    try {
+      const thumb = file.replace(/\.json$/, ".svg");
+      writeFileSync(`www/examples/${thumb}`, weft.thumbnailSvg(text, 96));
+      entry.thumbnail = thumb;
+    } catch (err) {
+      console.log(`[build-www] no thumbnail for ${file}: ${err.message ?? err}`);
+    }
+  }
+  return entry;
 });
 writeFileSync("www/examples/index.json", JSON.stringify(index, null, 2) + "\n");
-console.log(`[build-www] www/examples: ${index.length} design(s)`);
+console.log(`[build-www] www/examples: ${index.length} design(s), ${index.filter((e) => e.thumbnail).length} thumbnail(s)`);
 JS
 say "done"

@@ -36,6 +36,7 @@ pub mod settings;
 pub mod jobs;
 pub mod report;
 pub mod testgen;
+pub mod thumbnail;
 
 pub use design::Design;
 pub use pipeline::{run, RunOptions, RunOutput};

@@ -50,6 +50,10 @@ enum Command {
         /// Override a design field: PATH=VALUE (repeatable), e.g. job.slice.layer_height_mm=0.1.
         #[arg(long = "set", value_name = "PATH=VALUE")]
         set: Vec<String>,
+        /// Use a printer profile (replaces the design's printer section, before any --set):
+        /// generic-220, prusa-mk4, ender-3, bioprinter-pneumatic.
+        #[arg(long, value_name = "ID")]
+        printer: Option<String>,
         /// No progress on stderr.
         #[arg(long, short)]
         quiet: bool,
@@ -182,10 +186,14 @@ fn cmd_run(
     report: Option<PathBuf>,
     inputs: &[String],
     set: &[String],
+    printer: Option<&str>,
     quiet: bool,
     dry_run: bool,
 ) -> Result<(), String> {
     let mut design = load_design(design)?;
+    if let Some(id) = printer {
+        design.printer = weft::gcode::presets::preset(id).map_err(|e| format!("--printer: {e}"))?.printer;
+    }
     if !set.is_empty() {
         design = design.with_overrides(set).map_err(|e| e.to_string())?;
     }
@@ -202,6 +210,17 @@ fn cmd_run(
             None => Ok(()),
         };
     }
+    // The page asks before a big job; the CLI runs it, saying what it is first. The cache keeps
+    // the imports the estimate read for the run.
+    let registry = Registry::builtin();
+    let mut cache = pipeline::Cache::new();
+    if !quiet {
+        if let Ok(plan) = pipeline::estimate(&registry, &mut cache, &design, &files) {
+            if let Some(ask) = plan.ask.as_deref().filter(|_| plan.refused.is_none()) {
+                eprintln!("weft: a big job: {ask} (weft run --dry-run states every stage)");
+            }
+        }
+    }
     let show = !quiet && std::io::stderr().is_terminal();
     let mut last = (String::new(), -1i32);
     let mut progress = |stage: &str, f: f32| {
@@ -211,7 +230,7 @@ fn cmd_run(
             last = (stage.to_string(), pct);
         }
     };
-    let result = pipeline::run(&design, &files, &RunOptions::default(), &mut progress);
+    let result = pipeline::run_in(&registry, &mut cache, &design, &files, &RunOptions::default(), &mut progress);
     if show {
         eprint!("\r                \r");
     }
@@ -368,7 +387,9 @@ fn scaling_bench() -> Result<(), String> {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
-        Command::Run { design, out, report, input, set, quiet, dry_run } => cmd_run(&design, out, report, &input, &set, quiet, dry_run),
+        Command::Run { design, out, report, input, set, printer, quiet, dry_run } => {
+            cmd_run(&design, out, report, &input, &set, printer.as_deref(), quiet, dry_run)
+        }
         Command::Analyze { file, json } => cmd_analyze(&file, json),
         Command::New => {
             print!("{}", Design::default().to_json_pretty());

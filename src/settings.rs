@@ -64,6 +64,13 @@ pub struct Field {
     /// Allowed values of a choice.
     #[serde(skip_serializing_if = "<[_]>::is_empty")]
     pub choices: &'static [&'static str],
+    /// One line of plain words per choice (what picking it gives), in `choices` order; empty
+    /// when the field's `doc` says it all.
+    #[serde(skip_serializing_if = "<[_]>::is_empty")]
+    pub choice_docs: &'static [&'static str],
+    /// Shown as a percentage (the design stores the fraction 0–1, as written in it).
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub percent: bool,
     /// Help text: one line of plain words.
     pub doc: &'static str,
     /// JSON value a [`Kind::Section`] takes when switched on.
@@ -88,21 +95,33 @@ pub const MAX_TEXT_BYTES: usize = 256;
 /// A real number in `min..=max` with a form `step`.
 #[allow(clippy::too_many_arguments)] // a table row constructor: one argument per column
 pub const fn num(path: &'static str, section: &'static str, label: &'static str, unit: &'static str, min: f64, max: f64, step: f64, doc: &'static str) -> Field {
-    Field { path, section, label, unit, kind: Kind::Number, min: Some(min), max: Some(max), step: Some(step), choices: &[], doc, default: None, when: None, widget: None, max_len: None }
+    Field { path, section, label, unit, kind: Kind::Number, min: Some(min), max: Some(max), step: Some(step), choices: &[], choice_docs: &[], percent: false, doc, default: None, when: None, widget: None, max_len: None }
 }
 /// A whole number in `min..=max`.
 pub const fn int(path: &'static str, section: &'static str, label: &'static str, min: f64, max: f64, doc: &'static str) -> Field {
-    Field { path, section, label, unit: "", kind: Kind::Integer, min: Some(min), max: Some(max), step: Some(1.0), choices: &[], doc, default: None, when: None, widget: None, max_len: None }
+    Field { path, section, label, unit: "", kind: Kind::Integer, min: Some(min), max: Some(max), step: Some(1.0), choices: &[], choice_docs: &[], percent: false, doc, default: None, when: None, widget: None, max_len: None }
 }
 /// A field without a numeric range (bool, text, choice, section).
 pub const fn other(path: &'static str, section: &'static str, label: &'static str, kind: Kind, choices: &'static [&'static str], doc: &'static str) -> Field {
-    Field { path, section, label, unit: "", kind, min: None, max: None, step: None, choices, doc, default: None, when: None, widget: None, max_len: None }
+    Field { path, section, label, unit: "", kind, min: None, max: None, step: None, choices, choice_docs: &[], percent: false, doc, default: None, when: None, widget: None, max_len: None }
 }
 /// Three numbers, each in `min..=max`.
 #[allow(clippy::too_many_arguments)] // a table row constructor: one argument per column
 pub const fn vec3(path: &'static str, section: &'static str, label: &'static str, unit: &'static str, min: f64, max: f64, step: f64, doc: &'static str) -> Field {
-    Field { path, section, label, unit, kind: Kind::Vec3, min: Some(min), max: Some(max), step: Some(step), choices: &[], doc, default: None, when: None, widget: None, max_len: None }
+    Field { path, section, label, unit, kind: Kind::Vec3, min: Some(min), max: Some(max), step: Some(step), choices: &[], choice_docs: &[], percent: false, doc, default: None, when: None, widget: None, max_len: None }
 }
+/// `f` with one line of plain words per choice.
+pub const fn choice_docs(mut f: Field, docs: &'static [&'static str]) -> Field {
+    f.choice_docs = docs;
+    f
+}
+
+/// `f` shown as a percentage in the form.
+pub const fn percent(mut f: Field) -> Field {
+    f.percent = true;
+    f
+}
+
 /// `f`, edited with the page's `widget`.
 pub const fn widget(mut f: Field, widget: &'static str) -> Field {
     f.widget = Some(widget);

@@ -42,6 +42,16 @@ pub fn design_schema() -> Result<JsValue, JsError> {
     to_js(&schema::schema(&Registry::builtin()))
 }
 
+/// Runs a design that needs no files and draws its result as a small SVG (the example list's
+/// thumbnails, made by scripts/build-www.sh).
+#[wasm_bindgen(js_name = thumbnailSvg)]
+pub fn thumbnail_svg(json: &str, size_px: u32) -> Result<String, JsError> {
+    let design = Design::from_json("design", json).map_err(js_err)?;
+    let out = pipeline::run(&design, &Files::new(), &RunOptions { collect_preview: true }, &mut |_, _| {}).map_err(js_err)?;
+    let preview = out.preview.unwrap_or_default();
+    Ok(crate::thumbnail::svg(&preview, &crate::thumbnail::Options { size_px, ..Default::default() }))
+}
+
 /// Parses and validates a design; returns it normalised (pretty JSON).
 #[wasm_bindgen(js_name = validateDesign)]
 pub fn validate_design(json: &str) -> Result<String, JsError> {

@@ -17,6 +17,11 @@ const PROGRESS_DELAY_MS = 500;
 /** Extensions of G-code files analysed and previewed when no input slot takes them. */
 const GCODE_EXT = ["gcode", "gco", "g", "nc"];
 const INSPECT_DEBOUNCE_MS = 200;
+/** Wait after an edit before estimating the next run, ms. */
+const ESTIMATE_DEBOUNCE_MS = 250;
+/** Jobs estimated under this re-run by themselves after an edit (when the user lets them), s. */
+const AUTO_RUN_SECONDS = 0.5;
+const AUTO_RUN_KEY = "weft.autoRun";
 /** Side of the square a pattern thumbnail shows, mm. */
 const THUMB_MM = 6;
 /** Stroke colour of the pattern thumbnails. */
@@ -39,8 +44,18 @@ const state = {
    * for worker restarts and share links); the worker gets a transferred copy.
    */
   files: new Map(),
-  /** last result shown: {report, gcode: Uint8Array, fileName, ms} */
+  /**
+   * last result shown: {report, gcode: Uint8Array, fileName, ms, json}; `json` is the design
+   * it was made from (null for a G-code file read as it is), so an edit marks it out of date.
+   */
   result: null,
+  /** the estimate of the current design: {json, plan} or {json, error} */
+  estimate: null,
+  /**
+   * Names the page gave (the default design's, the examples', dropped files' stems): a design
+   * with one of these follows a dropped part's name; a name the user typed or loaded stays.
+   */
+  autoNames: new Set(),
   /** the plan (every stage's estimate) of the last run asked for */
   plan: null,
   /** chosen group (e.g. layer) per stage card */
@@ -120,8 +135,21 @@ async function start() {
 
 /** The design kept in this browser (or the default), then a share link's on top (undoable). */
 function loadInitialDesign() {
-  setDesign(storedDesign() ?? weft.defaultDesign(), { record: false });
-  if (location.hash.startsWith("#d=")) openShare(location.hash);
+  try {
+    state.autoNames.add(JSON.parse(weft.defaultDesign()).name);
+  } catch { /* no default name to follow */ }
+  const stored = storedDesign();
+  setDesign(stored ?? weft.defaultDesign(), { record: false });
+  if (location.hash.startsWith("#d=")) {
+    openShare(location.hash);
+    return;
+  }
+  // A first visit shows a part at once (the default design is light) and what to do next.
+  if (!stored) {
+    showNotice("Welcome to weft. This is the default part, a 20 mm cube: drop your own STL, OBJ or 3MF on the page " +
+      "to slice it, change a setting on the left, or open an example below the preview.");
+    runDesign({ auto: true });
+  }
 }
 
 function storedDesign() {
@@ -172,7 +200,10 @@ function askForMissing(what) {
  * @param {{record?: boolean}} opts  record: push the previous design on the undo stack
  */
 function setDesign(json, { record = true } = {}) {
-  if (json === state.json) return;
+  if (json === state.json) {
+    refreshFreshness();
+    return;
+  }
   if (record && state.json) {
     state.undo.push(state.json);
     if (state.undo.length > UNDO_LIMIT) state.undo.shift();
@@ -186,6 +217,8 @@ function setDesign(json, { record = true } = {}) {
   renderForm();
   updateButtons();
   scheduleInspect();
+  refreshFreshness();
+  scheduleEstimate();
 }
 
 function undo() {
@@ -325,17 +358,37 @@ function renderForm() {
   for (const [path, view] of fieldViews) writeField(view, getPath(state.design, path));
   renderSlots();
   renderPatternPickers();
+  renderPresetPicker();
   $("download").textContent = `Download ${gcodeExtension() === "gcode" ? "G-code" : `.${gcodeExtension()}`}`;
   if (viewsKey !== jobKind().name) buildViews();
 }
 
+/**
+ * The form: the design's name and job, its inputs, the job's own settings, then the machine
+ * (printer, material, speeds: every field outside `job`) folded behind a printer-profile
+ * picker, since a newcomer changes the job's settings first.
+ */
 function buildForm(fields, slots, key) {
   formKey = key;
   fieldViews.clear();
   const host = $("schema-fields");
+  const machineOpen = $("machine")?.open ?? false;
   host.replaceChildren();
   $("design-fields").replaceChildren();
   buildSlots(slots);
+  const machine = document.createElement("details");
+  machine.id = "machine";
+  machine.className = "machine";
+  machine.open = machineOpen;
+  const summary = document.createElement("summary");
+  const title = document.createElement("span");
+  title.className = "machine-title";
+  title.textContent = "Printer, material and speeds";
+  const current = document.createElement("span");
+  current.id = "machine-summary";
+  current.className = "machine-summary";
+  summary.append(title, " ", current);
+  machine.append(summary, buildPresetPicker());
   const sections = new Map([["design", $("design-fields")]]);
   for (const f of fields) {
     const slot = slots.find((s) => f.path.startsWith(`${s.path}.`));
@@ -352,10 +405,67 @@ function buildForm(fields, slots, key) {
       legend.textContent = titleCase(f.section || "other");
       fs.append(legend);
       sections.set(name, fs);
-      host.append(fs);
+      (isMachineField(f) ? machine : host).append(fs);
     }
     sections.get(name).append(buildField(f));
   }
+  host.append(machine);
+}
+
+/** A field of the machine (printer, material, speeds) rather than of the design or its job. */
+function isMachineField(f) {
+  return !f.job && !f.path.startsWith("job.") && f.path !== "name" && f.path !== "seed" && f.path !== "description";
+}
+
+/** The printer-profile picker (schema.printer_presets): picking one sets the printer section. */
+function buildPresetPicker() {
+  const wrap = document.createElement("div");
+  wrap.className = "field preset-picker";
+  const label = document.createElement("label");
+  label.htmlFor = "printer-preset";
+  label.textContent = "Printer profile";
+  const control = document.createElement("span");
+  control.className = "control";
+  const select = document.createElement("select");
+  select.id = "printer-preset";
+  select.title = "Pick your kind of printer; every value below stays editable";
+  for (const p of schema.printer_presets ?? []) {
+    const o = new Option(p.label, p.id);
+    o.title = p.doc;
+    select.append(o);
+  }
+  select.append(new Option("Custom (edited below)", "custom"));
+  select.addEventListener("change", () => {
+    const p = (schema.printer_presets ?? []).find((x) => x.id === select.value);
+    if (!p) return;
+    const problem = setFields([["printer", JSON.stringify(p.printer)]]);
+    if (problem) showError(problem);
+  });
+  const doc = document.createElement("p");
+  doc.className = "field-doc";
+  doc.id = "printer-preset-doc";
+  control.append(select);
+  wrap.append(label, control, doc);
+  return wrap;
+}
+
+/** The picker shows the profile the printer section equals (key order aside), else custom. */
+function renderPresetPicker() {
+  const select = $("printer-preset");
+  if (!select) return;
+  const current = canonical(state.design?.printer);
+  const match = (schema.printer_presets ?? []).find((p) => canonical(p.printer) === current);
+  select.value = match ? match.id : "custom";
+  $("printer-preset-doc").textContent = match ? match.doc : "Your own values: pick a profile to start again from one.";
+  const m = state.design?.material?.name;
+  $("machine-summary").textContent = `${state.design?.printer?.name ?? ""}${m ? ` · ${m}` : ""}`;
+}
+
+/** JSON with sorted keys, to compare values regardless of key order. */
+function canonical(v) {
+  if (Array.isArray(v)) return `[${v.map(canonical).join(",")}]`;
+  if (v && typeof v === "object") return `{${Object.keys(v).sort().map((k) => `${JSON.stringify(k)}:${canonical(v[k])}`).join(",")}}`;
+  return JSON.stringify(v);
 }
 
 function buildField(f) {
@@ -384,11 +494,12 @@ function buildField(f) {
     control.append(el);
     return el;
   };
+  const scale = f.percent ? 100 : 1; // shown in percent, stored as the design says
   const numeric = (el) => {
     el.type = "number";
-    if (f.min !== undefined && f.min !== null) el.min = String(f.min);
-    if (f.max !== undefined && f.max !== null) el.max = String(f.max);
-    el.step = f.step !== undefined && f.step !== null ? String(f.step) : f.kind === "integer" ? "1" : "any";
+    if (f.min !== undefined && f.min !== null) el.min = String(f.min * scale);
+    if (f.max !== undefined && f.max !== null) el.max = String(f.max * scale);
+    el.step = f.step !== undefined && f.step !== null ? String(f.step * scale) : f.kind === "integer" ? "1" : "any";
     el.inputMode = f.kind === "integer" ? "numeric" : "decimal";
   };
   switch (f.kind) {
@@ -403,7 +514,7 @@ function buildField(f) {
       // The job selector lists the schema's job kinds by label.
       const options = f.path === "job.kind"
         ? schema.job_kinds.map((k) => [k.name, k.label ?? k.name, k.doc])
-        : (f.choices ?? []).map((c) => (typeof c === "object" && c !== null ? [c.value ?? c.name, c.label ?? c.name, c.doc] : [c, String(c)]));
+        : (f.choices ?? []).map((c, i) => (typeof c === "object" && c !== null ? [c.value ?? c.name, c.label ?? c.name, c.doc] : [c, String(c), f.choice_docs?.[i]]));
       for (const [value, text, doc] of options) {
         const o = document.createElement("option");
         o.value = JSON.stringify(value);
@@ -439,13 +550,24 @@ function buildField(f) {
   if (f.kind !== "bool" && f.kind !== "section" && f.kind !== "text") {
     const unit = document.createElement("span"); // empty too, so the inputs line up
     unit.className = "unit";
-    unit.textContent = f.unit ?? "";
+    unit.textContent = f.percent ? "%" : f.unit ?? "";
     control.append(unit);
   }
-  const view = { f, inputs, error, wrap };
+  // The job's own settings say what they do in a line under them (the machine's keep it in
+  // their tooltip); a choice says what the picked value gives.
+  let doc = null;
+  if (!isMachineField(f) && (f.doc || f.choice_docs?.length) && f.kind !== "section") {
+    doc = document.createElement("p");
+    doc.className = "field-doc";
+    doc.id = `${id}-doc`;
+    doc.textContent = f.doc ?? "";
+    for (const el of inputs) el.setAttribute("aria-describedby", `${error.id} ${doc.id}`);
+  }
+  const view = { f, inputs, error, wrap, doc };
   for (const el of inputs) el.addEventListener("change", () => commitField(view));
   fieldViews.set(f.path, view);
   wrap.append(label, control, error);
+  if (doc) wrap.append(doc);
   return wrap;
 }
 
@@ -460,8 +582,12 @@ function writeField(view, value) {
   setFieldError(view, null);
   if (f.kind === "bool") inputs[0].checked = Boolean(value);
   else if (f.kind === "section") inputs[0].checked = value !== undefined && value !== null;
-  else if (f.kind === "choice") inputs[0].value = JSON.stringify(value);
-  else if (f.kind === "vec3") inputs.forEach((el, i) => { el.value = Array.isArray(value) ? String(value[i]) : ""; });
+  else if (f.kind === "choice") {
+    inputs[0].value = JSON.stringify(value);
+    const i = (f.choices ?? []).findIndex((c) => (typeof c === "object" && c !== null ? c.value ?? c.name : c) === value);
+    if (view.doc && f.choice_docs?.[i]) view.doc.textContent = `${f.choice_docs[i]}`;
+  } else if (f.kind === "vec3") inputs.forEach((el, i) => { el.value = Array.isArray(value) ? String(value[i]) : ""; });
+  else if (f.percent && typeof value === "number") inputs[0].value = String(Number((value * 100).toPrecision(12)));
   else inputs[0].value = value === undefined || value === null ? "" : String(value);
 }
 
@@ -473,7 +599,12 @@ function readField({ f, inputs }) {
     case "choice": return inputs[0].value;
     case "text": return JSON.stringify(inputs[0].value);
     case "vec3": return `[${inputs.map((el) => el.value.trim() || "null").join(",")}]`;
-    default: return inputs[0].value.trim();
+    default: {
+      const text = inputs[0].value.trim();
+      // A percentage back to the fraction the design stores (anything else is left for the
+      // design's own check to name).
+      return f.percent && text !== "" && Number.isFinite(Number(text)) ? String(Number((Number(text) / 100).toPrecision(12))) : text;
+    }
   }
 }
 
@@ -493,6 +624,7 @@ function commitField(view) {
 }
 
 function setFieldError(view, message) {
+  const was = !view.error.hidden;
   view.error.hidden = !message;
   view.error.textContent = message ?? "";
   view.wrap.classList.toggle("invalid", Boolean(message));
@@ -500,6 +632,12 @@ function setFieldError(view, message) {
     if (message) el.setAttribute("aria-invalid", "true");
     else el.removeAttribute("aria-invalid");
   }
+  if (was !== Boolean(message)) refreshFreshness();
+}
+
+/** Fields showing a value the design refused (their message is shown under them). */
+function invalidFields() {
+  return [...fieldViews.values()].filter((v) => !v.error.hidden);
 }
 
 // --- input slots: one drop zone per slot of the job kind ---------------------------------
@@ -740,11 +878,29 @@ function useFiles(slot, names) {
   const had = namedFiles(getPath(state.design, slot.path)).map((f) => f.name);
   const all = slot.multiple ? [...new Set([...had, ...names])] : [names[names.length - 1]];
   try {
-    setDesign(weft.fillSlot(state.json, slot.name, all));
+    let next = weft.fillSlot(state.json, slot.name, all);
+    // The part names the design (downloads, G-code header), unless the user named it.
+    const part = currentSlots().find((s) => s.kind === "mesh" && !s.multiple);
+    const name = String(state.design?.name ?? "");
+    if (part?.name === slot.name && (state.autoNames.has(name) || !name.trim())) {
+      const stem = fileStem(all[all.length - 1]);
+      if (stem) {
+        state.autoNames.add(stem);
+        next = weft.setField(next, "name", JSON.stringify(stem));
+      }
+    }
+    setDesign(next);
     return null;
   } catch (err) {
     return messageOf(err);
   }
+}
+
+/** A file name without folders and extension, as a design name. */
+function fileStem(name) {
+  const base = String(name).split(/[\\/]/).pop() ?? "";
+  const i = base.lastIndexOf(".");
+  return (i > 0 ? base.slice(0, i) : base).replace(/[\u0000-\u001f\u007f]/g, "").trim().slice(0, 80);
 }
 
 /** Reads files into a slot (worker first, so a bad file is refused at once), then uses them. */
@@ -1185,6 +1341,140 @@ function cancel() {
 }
 
 // ---------------------------------------------------------------------------------------
+// Freshness: a result belongs to the design it was made from; the next run is estimated
+// ---------------------------------------------------------------------------------------
+/** Why the result shown does not match the form (null when it does, or when there is none). */
+function staleReason() {
+  const r = state.result;
+  if (!r || r.json === null || r.json === undefined) return null;
+  const invalid = invalidFields();
+  if (invalid.length) {
+    const v = invalid[0];
+    return `“${v.f.label || v.f.path}” is not valid, so the design cannot run: the preview, numbers and download are of the previous run.`;
+  }
+  if (r.json !== state.json) return "Settings changed since this result: the preview, numbers and download are of the previous run.";
+  return null;
+}
+
+/** Dims the preview, numbers and cards of a result that no longer matches the design. */
+function refreshFreshness() {
+  const reason = staleReason();
+  document.querySelector(".view")?.classList.toggle("stale-result", Boolean(reason));
+  $("stale").hidden = !reason;
+  $("stale-text").textContent = reason ?? "";
+  $("stale-run").disabled = invalidFields().length > 0;
+  const download = $("download");
+  download.title = reason ? "Runs the changed design first, then saves its G-code" : "Save the G-code of the last result";
+  download.dataset.stale = String(Boolean(reason));
+}
+
+let estimateTimer = 0;
+let estimateSeq = 0;
+/** Estimates the current design in the worker (debounced), shows it, then maybe re-runs. */
+function scheduleEstimate() {
+  clearTimeout(estimateTimer);
+  estimateTimer = setTimeout(estimateNow, ESTIMATE_DEBOUNCE_MS);
+}
+
+async function estimateNow() {
+  const json = state.json;
+  const seq = ++estimateSeq;
+  if (missingFiles().length) {
+    state.estimate = { json, error: `load ${missingFiles().map((m) => m.name).join(", ")} to estimate` };
+    showEstimate();
+    return;
+  }
+  try {
+    const { plan } = await workers.request({ type: MSG.ESTIMATE, design: json });
+    if (seq !== estimateSeq) return;
+    state.estimate = { json, plan };
+  } catch (err) {
+    if (err.cancelled || seq !== estimateSeq) return;
+    state.estimate = { json, error: messageOf(err) };
+  }
+  showEstimate();
+  maybeAutoRun();
+}
+
+/** The estimate line: what the next run will make and take. */
+function showEstimate() {
+  const e = state.estimate;
+  const el = $("estimate");
+  el.classList.remove("over", "ask");
+  if (!e || e.json !== state.json) {
+    el.textContent = "Estimating…";
+    return;
+  }
+  if (e.error) {
+    el.textContent = `Next run: ${e.error}`;
+    return;
+  }
+  const p = e.plan;
+  el.textContent = `Next run: ${planSummary(p)}`;
+  if (p.refusal) {
+    el.classList.add("over");
+    el.textContent += ` · too big: ${p.refusal}`;
+  } else if (p.ask) {
+    el.classList.add("ask");
+    el.textContent += " · big: you will be asked first";
+  }
+}
+
+/** A plan in a few words: layers, segments, G-code, time, memory. */
+function planSummary(p) {
+  const quantity = (key) => Math.max(0, ...(p.stages ?? []).flatMap((s) => (s.quantities ?? []).filter((q) => q.key === key).map((q) => q.value)));
+  const count = (n) => (n >= 1e6 ? `${(n / 1e6).toFixed(n >= 1e7 ? 0 : 1)}M` : n >= 1e4 ? `${Math.round(n / 1e3)}k` : String(Math.round(n)));
+  const parts = [];
+  const layers = quantity("layers");
+  if (layers) parts.push(`${count(layers)} layer${layers === 1 ? "" : "s"}`);
+  if (p.segments) parts.push(`${count(p.segments)} segments`);
+  if (p.gcode_bytes) parts.push(`${humanBytes(p.gcode_bytes)} of G-code`);
+  parts.push(p.seconds < 1 ? "under 1 s" : `about ${formatSeconds(p.seconds)}`);
+  if (p.peak_bytes) parts.push(`${humanBytes(p.peak_bytes)} of memory`);
+  return parts.join(" · ");
+}
+
+function formatSeconds(s) {
+  if (s < 90) return `${Math.round(s)} s`;
+  if (s < 5400) return `${Math.round(s / 60)} min`;
+  return `${(s / 3600).toFixed(1)} h`;
+}
+
+function autoRunWanted() {
+  try {
+    return localStorage.getItem(AUTO_RUN_KEY) !== "0";
+  } catch {
+    return true;
+  }
+}
+
+/** Re-runs a light job after an edit (live preview), when the user lets it and nothing runs. */
+function maybeAutoRun() {
+  const e = state.estimate;
+  if (!$("auto-run").checked || !e?.plan || e.json !== state.json) return;
+  if (!state.result || state.result.json === null || state.result.json === state.json) return; // nothing shown from a design, or fresh
+  const p = e.plan;
+  if (p.refusal || p.ask || !(p.seconds < AUTO_RUN_SECONDS) || jobs.active.size) return;
+  runDesign({ auto: true });
+}
+
+/** Download: the result when it matches the design, else the design is run first. */
+function downloadResult() {
+  const r = state.result;
+  if (!r?.gcode) return;
+  if (!staleReason()) {
+    download(r.gcode, r.fileName, "text/x-gcode");
+    return;
+  }
+  if (invalidFields().length) {
+    runDesign(); // says which field to fix
+    return;
+  }
+  runDesign({ then: () => download(state.result.gcode, state.result.fileName, "text/x-gcode") });
+  showNotice("The settings changed since the last run: running the design first; the download starts when it is done.");
+}
+
+// ---------------------------------------------------------------------------------------
 // Actions
 // ---------------------------------------------------------------------------------------
 let latestRun = 0;
@@ -1195,7 +1485,17 @@ let latestRun = 0;
  * @param {{confirmed?: boolean, fromLink?: boolean}} opts  confirmed: the user said "run
  *   anyway"; fromLink: opened from a share link (which never runs a big job by itself)
  */
-async function runDesign({ confirmed = false, fromLink = false } = {}) {
+async function runDesign({ confirmed = false, fromLink = false, auto = false, then = null } = {}) {
+  const invalid = invalidFields();
+  if (invalid.length) {
+    // The form shows a value the design does not hold: running would use the last valid one.
+    if (!auto) {
+      const v = invalid[0];
+      showError(`${v.f.label || v.f.path}: ${v.error.textContent}\nFix ${invalid.length > 1 ? `this and ${invalid.length - 1} other field${invalid.length > 2 ? "s" : ""}` : "it"} (or undo) to run; nothing was run.`);
+      v.inputs[0]?.focus();
+    }
+    return;
+  }
   const missing = missingFiles();
   if (missing.length) {
     const { slot, name } = missing[0];
@@ -1203,14 +1503,18 @@ async function runDesign({ confirmed = false, fromLink = false } = {}) {
       `(drop it on the page)${slot.kind === "mesh" && schema.builtin_shapes.length ? " or pick a built-in shape" : ""}.`);
     return;
   }
+  if (!auto) $("notice").hidden = true; // an old notice (cancelled, opened…) is about the past
   const token = jobs.begin("starting");
   const mine = ++latestRun;
   const name = designName();
   const ext = gcodeExtension();
+  const json = state.json;
   jobs.stages = jobKind().stages ?? [];
   try {
-    const { plan } = await workers.request({ type: MSG.ESTIMATE, design: state.json });
+    const { plan } = await workers.request({ type: MSG.ESTIMATE, design: json });
     state.plan = plan;
+    state.estimate = { json, plan };
+    showEstimate();
     if (plan.refusal) {
       showError(`${plan.refusal}. Nothing was run; your design is kept.`);
       return;
@@ -1218,11 +1522,14 @@ async function runDesign({ confirmed = false, fromLink = false } = {}) {
     if (plan.ask && !confirmed) {
       const opened = fromLink ? "This shared design was opened without running it: it is " : "This is ";
       showNotice(`${opened}${plan.ask}, peak memory ${humanBytes(plan.peak_bytes)}. Run it anyway?`, null,
-        { label: "Run anyway", run: () => runDesign({ confirmed: true }) });
+        { label: "Run anyway", run: () => runDesign({ confirmed: true, then }) });
       return;
     }
-    const res = await workers.request({ type: MSG.RUN, design: state.json }, (s, f) => jobs.progress(s, f));
-    if (mine === latestRun) showResult(res, `${name}.${ext}`);
+    const res = await workers.request({ type: MSG.RUN, design: json }, (s, f) => jobs.progress(s, f));
+    if (mine === latestRun) {
+      showResult(res, `${name}.${ext}`, json);
+      then?.();
+    }
   } catch (err) {
     if (!err.cancelled) showError(messageOf(err));
   } finally {
@@ -1232,6 +1539,9 @@ async function runDesign({ confirmed = false, fromLink = false } = {}) {
 
 /** Opens files from the picker or a drop: designs, slot files, G-code. */
 async function openFiles(fileList) {
+  // One part dropped on a job that is not the default one (a lattice) may mean "fill this
+  // part" or "slice this part": ask, with the choices the schema's job kinds allow.
+  if (fileList.length === 1 && askWhatFileIsFor(fileList[0])) return;
   // Files for the same slot travel together (a `multiple` slot takes them all at once).
   const bySlot = new Map();
   for (const file of fileList) {
@@ -1244,6 +1554,49 @@ async function openFiles(fileList) {
     }
   }
   for (const [slot, files] of bySlot) await loadIntoSlot(slot, files);
+}
+
+/** The job kind of the default design (the plain slicer). */
+function defaultJobKind() {
+  let name;
+  try {
+    name = JSON.parse(weft.defaultDesign()).job.kind;
+  } catch {
+    return null;
+  }
+  return schema.job_kinds.find((k) => k.name === name) ?? null;
+}
+
+/**
+ * A file dropped on a job other than the default one, which the default job also takes (a
+ * part dropped on a lattice design): asks what it is for instead of guessing; true if asked.
+ */
+function askWhatFileIsFor(file) {
+  const kind = jobKind();
+  const plainKind = defaultJobKind();
+  if (!plainKind || kind.name === plainKind.name) return false;
+  const here = currentSlots().filter((s) => accepts(s, file.name));
+  const there = (plainKind.slots ?? []).filter((s) => accepts(s, file.name));
+  if (!here.length || !there.length) return false;
+  if (here.some((s) => namedFiles(getPath(state.design, s.path)).some((f) => f.name === file.name))) return false;
+  const actions = here.map((s) => ({ label: s.label ?? s.name, title: s.doc, run: () => loadIntoSlot(s, [file]) }));
+  actions.push({
+    label: plainKind.label ?? plainKind.name,
+    title: plainKind.doc,
+    run: async () => {
+      const problem = setFields([["job.kind", JSON.stringify(plainKind.name)]]);
+      if (problem) {
+        showError(problem);
+        return;
+      }
+      const slot = currentSlots().find((s) => accepts(s, file.name));
+      if (slot) await loadIntoSlot(slot, [file]);
+    },
+  });
+  const uses = here.map((s) => `its “${s.label ?? s.name}”${s.doc ? ` (${s.doc.replace(/\.$/, "")})` : ""}`).join(" or ");
+  showNotice(`What is ${file.name} for? This design is a “${kind.label ?? kind.name}” job: use the file as ${uses}, ` +
+    `or switch to “${plainKind.label ?? plainKind.name}” and use it as the part.`, null, actions);
+  return true;
 }
 
 /**
@@ -1288,10 +1641,10 @@ async function openFile(file) {
 }
 
 let resultCount = 0;
-function showResult(res, fileName) {
+function showResult(res, fileName, json = null) {
   resultCount++;
   const { report, preview: buffers, gcode } = res;
-  state.result = { report, gcode, fileName, ms: res.ms };
+  state.result = { report, gcode, fileName, ms: res.ms, json };
   $("download").disabled = !(gcode && gcode.byteLength);
   const origin = state.design?.printer?.origin;
   preview?.setResult(buffers, { origin: typeof origin === "string" ? origin : "corner" });
@@ -1299,6 +1652,7 @@ function showResult(res, fileName) {
   renderReport($("report"), report, state);
   if (res.request === "run") scheduleInspect(0); // views of a loaded solid know their count now
   hideErrorUnlessCrash();
+  refreshFreshness();
 }
 
 function renderStats(report, gcode, ms) {
@@ -1314,15 +1668,15 @@ function renderStats(report, gcode, ms) {
     ["Filament", num(a.filament_mm ?? g.filament_mm), "mm"],
     ["Travel", num(a.travel_mm ?? g.travel_mm), "mm"],
     ["Retractions", num(a.retractions ?? g.retractions, 0), ""],
-    ["Overlap", num(a.overlap_mm), "mm"],
-    ["GIPPO score", num(a.gippo_score, 3), ""],
+    ["Overlap", num(a.overlap_mm), "mm", "Length printed over the same place twice (0 is ideal)."],
+    ["GIPPO score", num(a.gippo_score, 3), "", "The paper's equation 1 on this G-code: higher means longer and fewer paths."],
     ["Estimated time", formatDuration(a.estimated_time_s ?? g.estimated_time_s), "h:m:s"],
     ["G-code", gcode ? formatBytes(gcode.byteLength) : "–", ""],
   ];
   if (typeof ms === "number") rows.push(["Worker time", num(ms / 1000, 2), "s"]);
   const reused = (report?.stages ?? []).filter((s) => s.cached).length;
   if (reused) rows.push(["Stages reused", `${reused} of ${report.stages.length}`, ""]);
-  $("stats").replaceChildren(metricList(rows.map(([label, value, unit]) => ({ label, value, unit })), ""));
+  $("stats").replaceChildren(metricList(rows.map(([label, value, unit, hint]) => ({ label, value, unit, hint })), ""));
 }
 
 function download(data, name, type) {
@@ -1378,9 +1732,14 @@ function wireUi() {
   $("cancel").addEventListener("click", cancel);
   $("undo").addEventListener("click", undo);
   $("redo").addEventListener("click", redo);
-  $("download").addEventListener("click", () => {
-    const r = state.result;
-    if (r?.gcode) download(r.gcode, r.fileName, "text/x-gcode");
+  $("download").addEventListener("click", downloadResult);
+  $("stale-run").addEventListener("click", () => runDesign());
+  $("auto-run").checked = autoRunWanted();
+  $("auto-run").addEventListener("change", (e) => {
+    try {
+      localStorage.setItem(AUTO_RUN_KEY, e.target.checked ? "1" : "0");
+    } catch { /* storage disabled: the choice lasts this visit */ }
+    maybeAutoRun();
   });
   $("download-design").addEventListener("click", () => download(`${state.json}\n`, `${designName()}.json`, "application/json"));
   $("share").addEventListener("click", share);
@@ -1412,6 +1771,9 @@ function wireUi() {
       redo();
     } else if (key === "enter") {
       e.preventDefault();
+      // A number typed and not yet committed (no change event before the shortcut) counts.
+      const view = t instanceof HTMLElement && t.dataset.path ? fieldViews.get(t.dataset.path) : null;
+      if (view) commitField(view);
       runDesign();
     }
   });
@@ -1449,22 +1811,83 @@ function updateButtons() {
   $("redo").disabled = state.redo.length === 0;
 }
 
+/**
+ * The examples (www/examples/index.json, made by scripts/build-www.sh), grouped by job kind
+ * in the toolbar's menu and in the gallery: a thumbnail and one line each.
+ */
 async function fillExamples() {
   const select = $("examples");
+  let list = [];
   try {
     const res = await fetch("examples/index.json");
     if (!res.ok) throw new Error(`HTTP ${res.status}`);
-    const list = await res.json();
-    for (const { name, file } of list) select.append(new Option(name, file));
-    if (!list.length) select.disabled = true;
+    list = await res.json();
   } catch {
     select.disabled = true; // examples are optional (generated by scripts/build-www.sh)
+    return;
   }
+  if (!list.length) select.disabled = true;
+  const kinds = [...schema.job_kinds.map((k) => k.name), ...new Set(list.map((e) => e.kind))];
+  const groups = [...new Set(kinds)].map((kind) => ({
+    kind,
+    label: schema.job_kinds.find((k) => k.name === kind)?.label ?? (kind || "Other"),
+    doc: schema.job_kinds.find((k) => k.name === kind)?.doc ?? "",
+    items: list.filter((e) => (e.kind ?? "") === kind),
+  })).filter((g) => g.items.length);
+  const gallery = $("gallery-groups");
+  gallery.replaceChildren();
+  for (const g of groups) {
+    const og = document.createElement("optgroup");
+    og.label = g.label;
+    const section = document.createElement("section");
+    section.className = "gallery-group";
+    section.dataset.kind = g.kind;
+    const h = document.createElement("h3");
+    h.textContent = g.label;
+    const doc = document.createElement("p");
+    doc.className = "hint";
+    doc.textContent = g.doc;
+    const items = document.createElement("div");
+    items.className = "gallery-items";
+    for (const e of g.items) {
+      state.autoNames.add(e.name);
+      const o = new Option(e.name, e.file);
+      if (e.description) o.title = e.description;
+      og.append(o);
+      const b = document.createElement("button");
+      b.type = "button";
+      b.className = "example";
+      b.dataset.file = e.file;
+      if (e.thumbnail) {
+        const img = document.createElement("img");
+        img.src = `examples/${encodeURIComponent(e.thumbnail)}`;
+        img.alt = "";
+        img.width = 72;
+        img.height = 72;
+        img.loading = "lazy";
+        b.append(img);
+      }
+      const text = document.createElement("span");
+      text.className = "example-text";
+      const name = document.createElement("strong");
+      name.textContent = e.name;
+      const line = document.createElement("span");
+      line.textContent = e.description ?? "";
+      text.append(name, line);
+      b.append(text);
+      b.addEventListener("click", () => openExample(e.file));
+      items.append(b);
+    }
+    select.append(og);
+    section.append(h, doc, items);
+    gallery.append(section);
+  }
+  $("gallery").hidden = !groups.length;
 }
 
-async function openExample() {
+async function openExample(chosen) {
   const select = $("examples");
-  const file = select.value;
+  const file = typeof chosen === "string" ? chosen : select.value;
   select.value = "";
   if (!file) return;
   try {
@@ -1494,20 +1917,21 @@ function hideErrorUnlessCrash() {
   if (Date.now() - crashShownAt > 8000) hideError();
 }
 /**
- * Shows a notice (as text); with `link`, a read-only field holding it; with `action`, a
- * button that runs `action.run` and closes the notice.
+ * Shows a notice (as text); with `link`, a read-only field holding it; with `action` (one or
+ * a list of {label, title?, run}), buttons that close the notice and run their action.
  */
 function showNotice(message, link, action) {
   const text = $("notice-text");
   text.textContent = message;
-  if (action) {
+  for (const a of Array.isArray(action) ? action : action ? [action] : []) {
     const button = document.createElement("button");
     button.type = "button";
     button.className = "notice-action";
-    button.textContent = action.label;
+    button.textContent = a.label;
+    if (a.title) button.title = a.title;
     button.addEventListener("click", () => {
       $("notice").hidden = true;
-      action.run();
+      a.run();
     });
     text.append(" ", button);
   }

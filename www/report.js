@@ -134,6 +134,13 @@ export function metricList(metrics, className = "metrics") {
       dd.append(u);
     }
     div.append(dt, dd);
+    // What the number means, in one line where it is shown (a tooltip is not seen on a phone).
+    if (m.hint) {
+      const hint = document.createElement("dd");
+      hint.className = "metric-hint";
+      hint.textContent = m.hint;
+      div.append(hint);
+    }
     dl.append(div);
   }
   return dl;

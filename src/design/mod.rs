@@ -23,6 +23,8 @@ pub const DESIGN_VERSION: u32 = 1;
 /// each `{design_name}` of the templates, and it names the output file (cut to
 /// [`MAX_FILE_STEM_BYTES`] there); 256 bytes is a long title.
 pub const MAX_NAME_BYTES: usize = 256;
+/// Longest description, bytes (UTF-8): one line on what the design makes.
+pub const MAX_DESCRIPTION_BYTES: usize = 512;
 
 /// Largest design JSON read, bytes (4 MiB). A design is settings and names; the largest parts
 /// are the templates (2 × [`crate::gcode::MAX_TEMPLATE_BYTES`]), the files embedded by a share
@@ -64,6 +66,9 @@ pub struct Design {
     pub version: u32,
     /// Name, used for the output file (`<name>.gcode`).
     pub name: String,
+    /// One line on what the design makes (the page's example list shows it); optional.
+    #[serde(default, skip_serializing_if = "String::is_empty")]
+    pub description: String,
     /// Seed of every random choice (same seed → same G-code).
     #[serde(default)]
     pub seed: u64,
@@ -202,6 +207,7 @@ impl Default for Design {
         Design {
             version: DESIGN_VERSION,
             name: "cube-20mm".into(),
+            description: String::new(),
             seed: 1,
             printer: Printer::default(),
             material: Material::default(),
@@ -608,6 +614,7 @@ mod tests {
         let long = |n: usize| "a".repeat(n);
         for (path, limit) in [
             ("name", MAX_NAME_BYTES),
+            ("description", MAX_DESCRIPTION_BYTES),
             ("printer.name", crate::settings::MAX_TEXT_BYTES),
             ("material.name", crate::settings::MAX_TEXT_BYTES),
             ("printer.start_gcode", crate::gcode::MAX_TEMPLATE_BYTES),

@@ -3,7 +3,7 @@
 //! slots and views, and the menus' default values. [`validate`] checks a design with the same
 //! rows plus each job kind's own rules.
 
-use super::{Design, Input, Problem, MAX_FILE_NAME_BYTES, MAX_INPUT_FILES, MAX_NAME_BYTES};
+use super::{Design, Input, Problem, MAX_DESCRIPTION_BYTES, MAX_FILE_NAME_BYTES, MAX_INPUT_FILES, MAX_NAME_BYTES};
 use super::share::MAX_EMBEDDED_CHARS;
 use crate::geom::shapes::Shape;
 use crate::geom::Feature;
@@ -15,6 +15,7 @@ use serde::Serialize;
 /// Rows of the design's own fields.
 pub const DESIGN_FIELDS: &[Field] = &[
     max_len(other("name", "Design", "Name", Kind::Text, &[], "Names the downloaded file and the G-code header."), MAX_NAME_BYTES),
+    max_len(other("description", "Design", "Description", Kind::Text, &[], "One line on what the design makes (optional)."), MAX_DESCRIPTION_BYTES),
     int("seed", "Design", "Random seed", 0.0, 9.007199254740991e15, "Seeds every random choice: the same seed gives the same G-code."),
 ];
 
@@ -115,6 +116,8 @@ pub struct Schema {
     pub patterns: Vec<Choice>,
     /// Output flavours: `printer.flavor` value → file extension (the download's name).
     pub flavors: Vec<FlavorInfo>,
+    /// Printer profiles (the page's printer picker; `weft run --printer ID`).
+    pub printer_presets: Vec<crate::gcode::presets::Preset>,
 }
 
 /// An output flavour as the page names its downloads.
@@ -163,7 +166,8 @@ pub fn schema(registry: &Registry) -> Schema {
         .into_iter()
         .map(|f| FlavorInfo { name: serde_json::to_value(f).ok().and_then(|v| v.as_str().map(String::from)).unwrap_or_default(), extension: f.file_extension() })
         .collect();
-    Schema { version: super::DESIGN_VERSION, fields: rows(registry), features, job_kinds, builtin_shapes, patterns, flavors }
+    let printer_presets = crate::gcode::presets::presets();
+    Schema { version: super::DESIGN_VERSION, fields: rows(registry), features, job_kinds, builtin_shapes, patterns, flavors, printer_presets }
 }
 
 /// The schema as JSON (the CLI's `weft schema`, tests).
@@ -186,7 +190,7 @@ pub fn validate(design: &Design, registry: &Registry) -> Vec<Problem> {
     let kind_rows = kind.fields();
     settings::check_rows(&root, &kind_rows, &mut out);
     check_strings(&root, &[common_rows(), kind_rows].concat(), &mut out);
-    for path in ["name", "printer.name", "material.name"] {
+    for path in ["name", "description", "printer.name", "material.name"] {
         // A name over its length limit is refused for that already.
         if let Some(Value::String(s)) = path.split('.').try_fold(&root, |v, k| v.get(k)).filter(|v| v.as_str().is_some_and(|s| s.len() <= MAX_NAME_BYTES)) {
             out.extend(one_line(path, s, "a name"));

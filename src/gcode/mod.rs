@@ -14,6 +14,7 @@ mod flavor;
 pub mod format;
 mod out;
 mod poses;
+pub mod presets;
 mod template;
 mod writer;
 

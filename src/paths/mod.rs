@@ -25,7 +25,7 @@ mod postman;
 pub use estimate::{estimate, Work, MAX_GIPPO_STEPS};
 pub use graph::{build_graph, Edge, Graph};
 
-use crate::settings::{int, num, other, Field, Kind};
+use crate::settings::{choice_docs, int, num, other, Field, Kind};
 use crate::geom::{DVec2, DVec3, Feature, Path, StrokeLayer, Toolpath, Pass};
 use metrics::Run;
 use rand_core::SeedableRng;
@@ -286,9 +286,20 @@ pub fn validate(options: &Options) -> Result<(), Error> {
 /// Rows of [`Options`] (paths relative to the options): ranges, units, help, shared by the
 /// design's form and [`optimise`]'s own check.
 pub const FIELDS: &[Field] = &[
-    other("method", "Paths", "Optimiser", Kind::Choice, &["gippo_max", "gippo_min", "euler", "continuous"], "gippo_*: the paper's randomised search; euler: the proven minimum number of paths; continuous: one nozzle path per component."),
+    choice_docs(
+        other("method", "Paths", "Optimiser", Kind::Choice, &["gippo_max", "gippo_min", "euler", "continuous"], "How the struts are joined into nozzle paths."),
+        &[
+            "The paper's randomised search (GIPPO): grows paths towards the farthest neighbour; keeps the best of its iterations.",
+            "GIPPO growing towards the nearest neighbour instead: the paper's comparison case.",
+            "The fewest paths possible (one per pair of odd joints): fewest starts and stops.",
+            "One continuous nozzle path per connected piece: the nozzle never lifts, some struts are travelled over twice.",
+        ],
+    ),
     int("iterations", "Paths", "GIPPO iterations", 1.0, 100000.0, "The paper uses 500."),
-    other("order", "Paths", "Path order", Kind::Choice, &["longest_first", "min_travel"], "longest_first is the paper's."),
+    choice_docs(
+        other("order", "Paths", "Path order", Kind::Choice, &["longest_first", "min_travel"], "The order the paths are printed in."),
+        &["Longest paths first, as the paper prints them.", "Each next path starts near where the last ended: less travel between paths."],
+    ),
     num("merge_tolerance_mm", "Paths", "Node merge tolerance", "mm", 0.0001, 1.0, 0.001, "Strut ends closer than this are one node."),
     int("short_path_segments", "Paths", "Short path below", 0.0, 1000.0, "Paths with fewer segments are slowed down (the paper: 4)."),
     num("short_path_speed_factor", "Paths", "Short path speed", "×", 0.01, 1.0, 0.05, "The paper: 0.6."),

@@ -26,7 +26,7 @@ mod plane;
 mod regions;
 mod stitch;
 
-use crate::settings::{int, num, Field};
+use crate::settings::{int, num, percent, Field};
 use crate::geom::tolerance::UNITS_PER_MM;
 use crate::geom::{DVec2, Feature, Mesh, Polygon, Toolpath, Pass};
 use i_overlay::i_shape::int::shape::{IntShape, IntShapes};
@@ -173,7 +173,7 @@ pub const FIELDS: &[Field] = &[
     num("layer_height_mm", "Slicing", "Layer height", "mm", 0.01, 2.0, 0.01, "LT in GIPPO equation 4."),
     int("perimeters", "Slicing", "Perimeters", 0.0, 50.0, "Loops around each region."),
     num("line_width_mm", "Slicing", "Line width", "mm", 0.05, 5.0, 0.01, "Width of perimeters and infill."),
-    num("infill_density", "Slicing", "Infill density", "", 0.0, 1.0, 0.05, "0 = hollow, 1 = solid."),
+    percent(num("infill_density", "Slicing", "Infill density", "", 0.0, 1.0, 0.05, "How much of the inside is filled: 0 % hollow, 100 % solid.")),
     num("infill_angle_deg", "Slicing", "Infill angle", "°", -360.0, 360.0, 1.0, "Odd layers add 90°."),
     int("solid_layers", "Slicing", "Solid layers (top and bottom)", 0.0, 1000.0, ""),
     num("gap_closing_mm", "Slicing", "Gap closing", "mm", 0.0, 5.0, 0.01, "Open contour ends closer than this are joined."),

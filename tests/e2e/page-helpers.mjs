@@ -26,9 +26,12 @@ export function collectErrors(page) {
   return errors;
 }
 
-/** Waits until the page has initialised and holds a design. */
+/**
+ * Waits until the page has initialised, holds a design, and has finished what it does by
+ * itself on opening (a first visit runs the default part).
+ */
 export async function waitReady(page) {
-  await page.waitForFunction(() => window.weft && window.weft.design, null, { timeout: 30000 });
+  await page.waitForFunction(() => window.weft && window.weft.design && !window.weft.busy, null, { timeout: 60000 });
 }
 
 /** Waits for the page to show one more result than `before`; fails on a visible error. */

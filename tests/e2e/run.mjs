@@ -16,6 +16,7 @@ import { execFileSync } from "node:child_process";
 import { join, resolve } from "node:path";
 import { ROOT, serve } from "./server.mjs";
 import { latticeChecks } from "./lattice-checks.mjs";
+import { newcomerChecks } from "./newcomer-checks.mjs";
 import {
   collectErrors, colouredPixels, downloadGcode, launchChromium, waitReady, waitResult as waitResultWithin,
 } from "./page-helpers.mjs";
@@ -108,6 +109,11 @@ const base = server.url;
 const browser = await launchChromium();
 const newPage = async () => {
   const context = await browser.newContext({ viewport: VIEWPORT, acceptDownloads: true });
+  // Checks run what they mean to run: no live re-run of light jobs after an edit (check 18
+  // switches it on to test it).
+  await context.addInitScript(() => {
+    if (localStorage.getItem("weft.autoRun") === null) localStorage.setItem("weft.autoRun", "0");
+  });
   // Nothing may leave the origin.
   await context.route(/^(?!http:\/\/127\.0\.0\.1:\d+\/|blob:|data:)/, (route) => {
     offOrigin.push(route.request().url());
@@ -335,6 +341,7 @@ await check(9, "temperature change → re-run reuses every stage before gcode; G
   const a = await download(page, "temp-a.gcode");
   const field = "#f-material-nozzle_temp_c";
   if (!(await page.$(field))) throw new Error(`no ${field} in the form`);
+  await page.click("#machine > summary"); // the machine's settings are folded under the job's
   const old = Number(await page.inputValue(field));
   await page.fill(field, String(old + 7));
   await page.dispatchEvent(field, "change");
@@ -449,7 +456,7 @@ await check(17, "hostile share links: a name of HTML stays text and runs nothing
     if (!/without running/.test(notice)) throw new Error(`unclear notice: ${notice}`);
     const state = await p.evaluate(() => ({
       name: JSON.parse(window.weft.design).name, count: window.weft.resultCount, busy: window.weft.busy,
-      imgs: document.querySelectorAll("img").length, shown: document.querySelector("#name, [data-path='name']")?.value ?? null,
+      imgs: document.querySelectorAll("img:not(#gallery img)").length, shown: document.querySelector("#name, [data-path='name']")?.value ?? null,
     }));
     if (state.name !== design.name) throw new Error(`the name was changed to ${state.name}`);
     if (state.count !== 0 || state.busy) throw new Error("the big shared design ran by itself");
@@ -460,7 +467,7 @@ await check(17, "hostile share links: a name of HTML stays text and runs nothing
     const error = await p.textContent("#error-text");
     if (!/limit/.test(error) || !/Nothing was run/.test(error)) throw new Error(`unclear refusal: ${error}`);
     if (await p.evaluate(() => window.weft.resultCount)) throw new Error("the design over the budget ran");
-    if (await p.evaluate(() => document.querySelectorAll("img").length)) throw new Error("a name became HTML");
+    if (await p.evaluate(() => document.querySelectorAll("img:not(#gallery img)").length)) throw new Error("a name became HTML");
     if (seen.length) throw new Error(`a script ran: dialog "${seen[0]}"`);
     if (errors.length) throw new Error(`console errors:\n${errors.join("\n")}`);
     return `asked: "${notice.slice(0, 80)}…"; refused: "${error.split("\n")[0].slice(0, 100)}"`;
@@ -468,6 +475,8 @@ await check(17, "hostile share links: a name of HTML stays text and runs nothing
     await context.close();
   }
 });
+
+await newcomerChecks({ base, check, newPage, outDir: OUT, first: 18, cube });
 
 if (main.errors.length) console.log(`note: console errors in the main page:\n  ${main.errors.join("\n  ")}`);
 if (offOrigin.length) console.log(`note: blocked requests leaving the origin:\n  ${[...new Set(offOrigin)].join("\n  ")}`);

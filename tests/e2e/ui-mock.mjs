@@ -67,6 +67,7 @@ await check("print-order slider hides later moves", async () => {
 
 await check("temperature change → stages before gcode reused", async () => {
   const before = await page.evaluate(() => window.weft.resultCount);
+  await page.evaluate(() => { document.getElementById("machine").open = true; });
   await page.fill("#f-material-nozzle_temp_c", "215");
   await page.dispatchEvent("#f-material-nozzle_temp_c", "change");
   await page.click("#slice");

@@ -179,9 +179,9 @@ fn validate(options: &Options) -> Result<(), Error> {
 /// ranges, units, help, shared by the design's form and [`project`]'s own check.
 pub const FIELDS: &[Field] = &[
     Field { default: Some("{\"surface\":{\"kind\":\"sphere\"}}"), ..other("", "Non-planar", "Print on a surface", Kind::Section, &[], "Project every layer onto a surface along Z.") },
-    other("surface.kind", "Non-planar", "Surface", Kind::Choice, &["sphere", "cylinder", "mesh"], "mesh: the loaded surface file."),
-    num("surface.radius_mm", "Non-planar", "Radius", "mm", 0.1, 10000.0, 0.1, ""),
-    vec3("surface.center_mm", "Non-planar", "Centre X, Y, Z", "mm", -10000.0, 10000.0, 0.1, ""),
+    other("surface.kind", "Non-planar", "Surface", Kind::Choice, &["sphere", "cylinder", "mesh"], "The shape printed on: a sphere, a cylinder, or a loaded surface mesh."),
+    num("surface.radius_mm", "Non-planar", "Radius", "mm", 0.1, 10000.0, 0.1, "Radius of the sphere or cylinder."),
+    vec3("surface.center_mm", "Non-planar", "Centre X, Y, Z", "mm", -10000.0, 10000.0, 0.1, "Where the sphere's centre is, in bed coordinates."),
     num("surface.axis_z_mm", "Non-planar", "Axis height", "mm", -10000.0, 10000.0, 0.1, "The cylinder lies along X."),
-    num("max_segment_mm", "Non-planar", "Longest segment", "mm", 0.01, 10.0, 0.01, "Segments are split so Z follows the surface."),
+    num("max_segment_mm", "Non-planar", "Longest segment", "mm", 0.01, 10.0, 0.01, "Long lines are split into pieces this short so the nozzle follows the curve."),
 ];

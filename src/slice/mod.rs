@@ -169,14 +169,14 @@ fn validate(o: &Options) -> Result<(), Error> {
 /// Rows of [`Options`] (paths relative to the options): ranges, units, help, shared by the
 /// design's form and [`slice`]'s own check.
 pub const FIELDS: &[Field] = &[
-    num("first_layer_height_mm", "Slicing", "First layer height", "mm", 0.01, 2.0, 0.01, "Thicker first layers stick better."),
-    num("layer_height_mm", "Slicing", "Layer height", "mm", 0.01, 2.0, 0.01, "LT in GIPPO equation 4."),
-    int("perimeters", "Slicing", "Perimeters", 0.0, 50.0, "Loops around each region."),
-    num("line_width_mm", "Slicing", "Line width", "mm", 0.05, 5.0, 0.01, "Width of perimeters and infill."),
+    num("first_layer_height_mm", "Slicing", "First layer height", "mm", 0.01, 2.0, 0.01, "Height of the first layer: a thicker one sticks to the bed better."),
+    num("layer_height_mm", "Slicing", "Layer height", "mm", 0.01, 2.0, 0.01, "Height of every other layer: thinner is smoother and slower (LT of GIPPO equation 4)."),
+    int("perimeters", "Slicing", "Perimeters", 0.0, 50.0, "Walls: closed loops printed around the outline of each layer."),
+    num("line_width_mm", "Slicing", "Line width", "mm", 0.05, 5.0, 0.01, "Width of each printed line, usually about the nozzle diameter."),
     percent(num("infill_density", "Slicing", "Infill density", "", 0.0, 1.0, 0.05, "How much of the inside is filled: 0 % hollow, 100 % solid.")),
-    num("infill_angle_deg", "Slicing", "Infill angle", "°", -360.0, 360.0, 1.0, "Odd layers add 90°."),
-    int("solid_layers", "Slicing", "Solid layers (top and bottom)", 0.0, 1000.0, ""),
-    num("gap_closing_mm", "Slicing", "Gap closing", "mm", 0.0, 5.0, 0.01, "Open contour ends closer than this are joined."),
+    num("infill_angle_deg", "Slicing", "Infill angle", "°", -360.0, 360.0, 1.0, "Direction of the infill lines; every other layer turns by 90°."),
+    int("solid_layers", "Slicing", "Solid layers (top and bottom)", 0.0, 1000.0, "Fully filled layers that close the part at its top and bottom."),
+    num("gap_closing_mm", "Slicing", "Gap closing", "mm", 0.0, 5.0, 0.01, "Repairs small holes in a mesh: outline ends closer than this are joined."),
 ];
 
 /// Layer tops, heights and cutting heights for a mesh whose top is at `top` mm: layers are

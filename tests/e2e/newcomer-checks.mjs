@@ -257,7 +257,7 @@ export async function newcomerChecks({ base, check, newPage, outDir, first, cube
     const { page, context } = await fresh("/www/", { width: 390, height: 844 });
     try {
       const order = await page.evaluate(() => {
-        const v = document.querySelector(".view").getBoundingClientRect().top;
+        const v = document.querySelector(".canvas-wrap").getBoundingClientRect().top;
         const s = document.querySelector(".sidebar").getBoundingClientRect().top;
         return { v, s };
       });

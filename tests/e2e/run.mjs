@@ -409,8 +409,11 @@ await check(16, "every example run in Chromium gives the G-code recorded in test
   const golden = new Map(readFileSync(join(ROOT, "tests/golden/gcode.sha256"), "utf8").trim().split("\n")
     .map((l) => l.split(/\s+/)).map(([h, n]) => [n.replace(/\.gcode$/, ""), h]));
   const { page: p, context } = await newPage();
+  // Each example is also kept as a screenshot at 1280 × 800 (tests/e2e/out/examples/), to look at.
+  await p.setViewportSize({ width: 1280, height: 800 });
+  mkdirSync(join(OUT, "examples"), { recursive: true });
   await p.goto(`${base}/www/`);
-  await p.evaluate(() => window.weft.ready);
+  await waitReady(p);
   await p.waitForFunction(() => document.querySelectorAll("#examples option[value]:not([value=''])").length > 0);
   const files = await p.$$eval("#examples option", (os) => os.map((o) => o.value).filter(Boolean));
   const wrong = [];
@@ -425,6 +428,7 @@ await check(16, "every example run in Chromium gives the G-code recorded in test
       return [...new Uint8Array(d)].map((b) => b.toString(16).padStart(2, "0")).join("");
     });
     if (hash !== golden.get(name)) wrong.push(`${name}: ${hash.slice(0, 12)}… ≠ ${golden.get(name).slice(0, 12)}…`);
+    await p.screenshot({ path: join(OUT, "examples", `${name}.png`) });
   }
   await context.close();
   if (wrong.length) throw new Error(wrong.join("; "));

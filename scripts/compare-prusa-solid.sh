@@ -13,7 +13,9 @@
 # euler, continuous) and order (longest_first, min_travel).
 # PrusaSlicer (Debian's prusa-slicer): honeycomb infill at the lattice's solid fraction
 # (honeycomb 1.155 w/R = 25 %, Voronoi 2 w √ρ = 31 %), 0.2 mm infill lines, no perimeters and no
-# solid layers, so it prints only the infill of each layer, as the lattice does.
+# solid layers, so it prints only the infill of each layer, as the lattice does; and again at
+# the density whose extruded length matches weft's (PrusaSlicer's honeycomb at 25 % extrudes
+# ~1.5× the lattice's length: 16.5 % and 20.8 % give the same length as weft).
 #
 # Usage: scripts/compare-prusa-solid.sh        (prints a Markdown table; files in $OUT)
 # Environment: WEFT_BIN (default target/release/weft), PRUSA (default prusa-slicer),
@@ -63,18 +65,18 @@ with open(path, "wb") as f:
 EOF
 }
 
-# name | design | facets | PrusaSlicer fill density
+# name | design | facets | PrusaSlicer fill densities (nominal solid fraction, same length as weft)
 spec() {
   case $1 in
-    honeycomb) echo "examples/honeycomb-10mm.json 96 25%" ;;
-    voronoi) echo "examples/voronoi-10mm.json 84 31%" ;;
+    honeycomb) echo "examples/honeycomb-10mm.json 96 25% 16.5%" ;;
+    voronoi) echo "examples/voronoi-10mm.json 84 31% 20.8%" ;;
     *) echo "unknown part $1" >&2; exit 1 ;;
   esac
 }
 
 rows=()
 for part in $parts; do
-  read -r design facets density < <(spec "$part")
+  read -r design facets densities < <(spec "$part")
   stl="$out/sphere-30mm-$facets.stl"
   sphere_stl 15 "$facets" "$stl"
   for method in gippo_max euler continuous; do
@@ -88,17 +90,19 @@ for part in $parts; do
       rows+=("$part|weft $method, $order|$g.json|$(echo "$t1 - $t0" | bc)")
     done
   done
-  g="$out/$part-prusa.gcode"
-  say "PrusaSlicer: $part, honeycomb infill $density"
-  t0=$(date +%s.%N)
-  "$prusa" --export-gcode --layer-height 0.148 --first-layer-height 0.148 \
-    --nozzle-diameter 0.2 --filament-diameter 1.75 \
-    --perimeters 0 --top-solid-layers 0 --bottom-solid-layers 0 --solid-infill-below-area 0 \
-    --fill-pattern honeycomb --fill-density "$density" --extrusion-width 0.2 --first-layer-extrusion-width 0.2 \
-    --skirts 0 --brim-width 0 -o "$g" "$stl" >&2
-  t1=$(date +%s.%N)
-  "$weft" analyze "$g" --json > "$g.json"
-  rows+=("$part|$("$prusa" --help 2>/dev/null | grep -m1 -o "PrusaSlicer-[0-9.]*" | tr - " "), honeycomb $density|$g.json|$(echo "$t1 - $t0" | bc)")
+  for density in $densities; do
+    g="$out/$part-prusa-${density%\%}.gcode"
+    say "PrusaSlicer: $part, honeycomb infill $density"
+    t0=$(date +%s.%N)
+    "$prusa" --export-gcode --layer-height 0.148 --first-layer-height 0.148 \
+      --nozzle-diameter 0.2 --filament-diameter 1.75 \
+      --perimeters 0 --top-solid-layers 0 --bottom-solid-layers 0 --solid-infill-below-area 0 \
+      --fill-pattern honeycomb --fill-density "$density" --extrusion-width 0.2 --first-layer-extrusion-width 0.2 \
+      --skirts 0 --brim-width 0 -o "$g" "$stl" >&2
+    t1=$(date +%s.%N)
+    "$weft" analyze "$g" --json > "$g.json"
+    rows+=("$part|$("$prusa" --help 2>/dev/null | grep -m1 -o "PrusaSlicer-[0-9.]*" | tr - " "), honeycomb infill $density|$g.json|$(echo "$t1 - $t0" | bc)")
+  done
 done
 
 python3 - "${rows[@]}" <<'EOF'
@@ -110,5 +114,6 @@ for row in sys.argv[1:]:
     a = json.load(open(path))
     a = a.get("report", a)
     tr, ex = a["travel_mm"], a["extruded_mm"]
-    print(f"| {part} | {label} | {a['layers']} | {a['extrusion_paths']} | {tr:,.0f} | {ex:,.0f} | {tr / ex:.2f} | {a['retractions']} | {a['estimated_time_s']:,.0f} | {float(wall):.1f} |".replace(",", " "))
+    n = lambda x: f"{x:,.0f}".replace(",", " ")
+    print(f"| {part} | {label} | {a['layers']} | {n(a['extrusion_paths'])} | {n(tr)} | {n(ex)} | {tr / ex:.2f} | {n(a['retractions'])} | {n(a['estimated_time_s'])} | {float(wall):.1f} |")
 EOF

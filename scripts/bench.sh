@@ -5,8 +5,10 @@
 # Usage: scripts/bench.sh                 (CARGO_TARGET_DIR is honoured; default ./target)
 #        BENCH_TRIANGLES=200000 BENCH_GCODE_MB=20 scripts/bench.sh   (a quick run)
 #        BENCH_LATTICE_ONLY=1 scripts/bench.sh   (only the lattice path-optimisation benchmarks)
+#        BENCH_SCALING_ONLY=1 scripts/bench.sh   (only the growth benchmark: every `weft bench
+#            --scaling` case at 1×, 4×, 16× in a fresh worker each, then natively; one table)
 # The wasm is built with the cargo feature `bench` (the benchmark exports the worker calls:
-# benchMeshStl, benchDesign, benchAnalyze, BenchLattice) into its own directory, default
+# benchMeshStl, benchDesign, benchAnalyze, BenchLattice, benchScalingCases, BenchScaling) into its own directory, default
 # <target dir>/pkg-bench (WEFT_PKG_DIR overrides), which tests/e2e/bench.mjs serves as /pkg/;
 # the production ./pkg (scripts/build-www.sh without features) is left as it is.
 set -euo pipefail
@@ -22,4 +24,7 @@ say "WEFT_WASM_FEATURES=bench WEFT_PKG_DIR=$WEFT_PKG_DIR scripts/build-www.sh"
 WEFT_WASM_FEATURES=bench bash scripts/build-www.sh >&2
 
 say "machine: $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2- | sed 's/^ //'), $(nproc) cores, $(free -g | awk '/^Mem:/{print $2}') GiB RAM; load: $(cut -d' ' -f1-3 /proc/loadavg)"
+# The mode variables (BENCH_SCALING_ONLY, BENCH_LATTICE_ONLY, BENCH_CACHE_ONLY, BENCH_REPEATS…)
+# reach tests/e2e/bench.mjs through the environment.
+[ "${BENCH_SCALING_ONLY:-}" = 1 ] && say "BENCH_SCALING_ONLY=1: growth benchmark only (worker, then weft bench --scaling)"
 WEFT_BIN="${WEFT_BIN:-$target_dir/release/weft}" node tests/e2e/bench.mjs

@@ -350,7 +350,8 @@ pub fn pattern_thumbnail(pattern_json: &str, size_mm: f64, seed: u64) -> Result<
     Ok(crate::lattice::thumbnail(&pattern, size_mm, seed).into_iter().flat_map(|s| s.map(|x| x as f32)).collect())
 }
 
-/// Benchmark workloads, built only with `--features bench` (the benchmark page's wasm), so
+/// Benchmark workloads (`benchMeshStl`, `benchDesign`, `benchAnalyze`, `BenchLattice`,
+/// `benchScalingCases`, `BenchScaling`), built only with `--features bench` (the benchmark page's wasm), so
 /// the production module does not carry them.
 #[cfg(feature = "bench")]
 mod bench_exports {
@@ -403,6 +404,48 @@ mod bench_exports {
         #[wasm_bindgen(js_name = targetMs)]
         pub fn target_ms(&self) -> f64 {
             self.0.target_ms()
+        }
+    }
+
+    /// The scaling cases' names (`weft bench --scaling`, `src/bench/scaling.rs`), in order.
+    #[wasm_bindgen(js_name = benchScalingCases)]
+    pub fn bench_scaling_cases() -> Vec<String> {
+        crate::bench::scaling::cases().iter().map(|c| c.name.to_string()).collect()
+    }
+
+    /// Benchmark workload: one scaling case at one scale, prepared by [`BenchScaling::new`]
+    /// (not timed) with `bench::scaling::prepare`, the same input `weft bench --scaling`
+    /// makes; [`BenchScaling::run`] runs it once and is timed in the worker with
+    /// `performance.now()` (`std::time::Instant` panics on wasm32-unknown-unknown).
+    #[wasm_bindgen]
+    pub struct BenchScaling {
+        prepared: crate::bench::scaling::Prepared,
+        unit: &'static str,
+    }
+
+    #[wasm_bindgen]
+    impl BenchScaling {
+        /// Prepares case `name` (e.g. `paths/gippo`) at `scale` (1, 4 or 16).
+        #[wasm_bindgen(constructor)]
+        pub fn new(name: &str, scale: usize) -> Result<BenchScaling, JsError> {
+            let unit = crate::bench::scaling::cases().iter().find(|c| c.name == name).map(|c| c.unit).unwrap_or("");
+            let prepared = crate::bench::scaling::prepare(name, scale).map_err(js_err)?;
+            Ok(BenchScaling { prepared, unit })
+        }
+
+        /// Runs the case's work once.
+        pub fn run(&self) -> Result<(), JsError> {
+            (self.prepared.run)().map_err(js_err)
+        }
+
+        /// The input's size in the case's unit.
+        pub fn size(&self) -> f64 {
+            self.prepared.size
+        }
+
+        /// What the size counts (`triangles`, `mm²`…).
+        pub fn unit(&self) -> String {
+            self.unit.into()
         }
     }
 }

@@ -6,6 +6,10 @@
 //! built-in shapes and lattices; preparing an input is not timed. Peak memory needs a process
 //! per measurement: the CLI runs each case in a child (`weft bench --scaling-case NAME
 //! --scale K`), which reports its time and its peak resident memory (Linux `VmHWM`).
+//!
+//! The browser worker runs the same cases through [`prepare`] (`BenchScaling` in
+//! `src/wasm.rs`, `tests/e2e/bench.mjs` with `BENCH_SCALING_ONLY=1`) and times
+//! the [`Prepared`] work with `performance.now()` (`Instant` panics on wasm32-unknown-unknown).
 
 use crate::geom::shapes::{uv_sphere, Shape};
 use crate::geom::{StrokeLayer, Toolpath};
@@ -147,13 +151,20 @@ pub fn cases() -> Vec<Case> {
     ]
 }
 
+/// Prepares case `name` at `scale` (not timed): its input, ready to run. The native run
+/// ([`run_case`]) and the browser worker (`BenchScaling` in `src/wasm.rs`, timed in JS) both
+/// start here, so they run the same workload.
+pub fn prepare(name: &str, scale: usize) -> Result<Prepared, String> {
+    let case = cases().into_iter().find(|c| c.name == name).ok_or_else(|| format!("no scaling case '{name}'"))?;
+    (case.prepare)(scale)
+}
+
 /// Runs case `name` at `scale` in this process: (input size, best of three times in s).
 pub fn run_case(name: &str, scale: usize) -> Result<(f64, f64), String> {
     if name == "none" {
         return Ok((0.0, 0.0));
     }
-    let case = cases().into_iter().find(|c| c.name == name).ok_or_else(|| format!("no scaling case '{name}'"))?;
-    let prepared = (case.prepare)(scale)?;
+    let prepared = prepare(name, scale)?;
     let mut best = f64::INFINITY;
     for _ in 0..3 {
         let t = Instant::now();

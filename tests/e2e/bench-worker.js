@@ -25,9 +25,16 @@
 //       (Session.addFile, then Session.run(benchDesign())); after each it posts
 //       { type: "phase", phase } and waits for { cmd: "continue", measured }: the page's
 //       performance.measureUserAgentSpecificMemory() (bytes, or why not), kept as uaMemory.
+//   { cmd: "scaling-cases" }        → { type: "scaling-cases", names }: benchScalingCases().
+//   { cmd: "scaling", name, scale, repeats } → { type: "scaling", name, scale, unit, size,
+//       prepareMs, ms: [...], memory: { init, prepared, run } }: one case of `weft bench
+//       --scaling` (src/bench/scaling.rs) at one scale: new BenchScaling(name, scale) prepares
+//       the input (not timed), run() is timed `repeats` times (default 3, best counts) with
+//       performance.now(). wasm memory never shrinks, so the page uses a fresh worker per
+//       case×scale and reports run − init as the case's peak memory.
 // Run the job in a fresh worker (the page does) so the STL generation does not count in the
 // job's linear memory.
-import init, { BenchLattice, Session, benchAnalyze, benchDesign, benchMeshStl } from "../../pkg/weft.js";
+import init, { BenchLattice, BenchScaling, Session, benchAnalyze, benchDesign, benchMeshStl, benchScalingCases } from "../../pkg/weft.js";
 import { plain } from "../../www/protocol.js"; // reports as objects (JSON text before wasm API v2)
 
 const ready = init();
@@ -48,6 +55,29 @@ self.onmessage = async ({ data }) => {
       const bytes = benchMeshStl(data.triangles);
       const ms = performance.now() - t0;
       self.postMessage({ type: "stl", bytes: bytes.buffer, ms }, [bytes.buffer]);
+      return;
+    }
+    if (data.cmd === "scaling-cases") {
+      self.postMessage({ type: "scaling-cases", names: benchScalingCases() });
+      return;
+    }
+    if (data.cmd === "scaling") {
+      const init = mem();
+      let t = performance.now();
+      const b = new BenchScaling(data.name, data.scale);
+      const prepareMs = performance.now() - t;
+      const prepared = mem();
+      const ms = [];
+      for (let i = 0; i < (data.repeats ?? 3); i++) {
+        t = performance.now();
+        b.run();
+        ms.push(performance.now() - t);
+      }
+      const run = mem();
+      const size = b.size();
+      const unit = b.unit();
+      b.free();
+      self.postMessage({ type: "scaling", name: data.name, scale: data.scale, unit, size, prepareMs, ms, memory: { init, prepared, run } });
       return;
     }
     if (data.cmd === "lattice") {

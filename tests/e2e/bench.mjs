@@ -14,6 +14,10 @@
 //   BENCH_TIMEOUT_S timeout of the browser job, s (default 900)
 //   BENCH_LATTICE_ONLY=1  only the lattice path-optimisation benchmarks (`weft bench --lattice`)
 //   BENCH_REPEATS   timed passes per lattice workload in the worker (default 3)
+//   BENCH_SCALING_ONLY=1  only the growth benchmark: every case of `weft bench --scaling`
+//                   (src/bench/scaling.rs) at 1×, 4×, 16× in the worker (a fresh worker per
+//                   case × scale; BENCH_REPEATS passes, best counts) and natively
+//   BENCH_SCALING_CASES  comma-separated case names to run (default: all)
 //   BENCH_CACHE_ONLY=1  only the stage-cache and big-input memory steps (`weft bench --cache`)
 //   BENCH_CACHE=0   skip those steps in the full run
 //   BENCH_BIG_TRIANGLES  triangles of the big-input memory step, tried in order until one
@@ -33,6 +37,9 @@ const TIMEOUT = Number(process.env.BENCH_TIMEOUT_S ?? 900) * 1000;
 const LATTICE_ONLY = process.env.BENCH_LATTICE_ONLY === "1";
 const REPEATS = Number(process.env.BENCH_REPEATS ?? 3);
 const CACHE_ONLY = process.env.BENCH_CACHE_ONLY === "1";
+const SCALING_ONLY = process.env.BENCH_SCALING_ONLY === "1";
+const SCALING_CASES = process.env.BENCH_SCALING_CASES ? process.env.BENCH_SCALING_CASES.split(",") : null;
+const SCALES = [1, 4, 16]; // src/bench/scaling.rs SCALES
 const CACHE = CACHE_ONLY || process.env.BENCH_CACHE !== "0";
 const BIG_TRIANGLES = (process.env.BENCH_BIG_TRIANGLES ?? "4000000,3000000,2000000,1000000").split(",").map(Number);
 const MB = 1e6;
@@ -90,6 +97,92 @@ function runNative() {
     analyzeMBs: analyze ? Number(analyze[1]) : null,
     analyzePreviewMBs: analyzePreview ? Number(analyzePreview[1]) : null,
   };
+}
+
+/** `weft bench --scaling`: { text, rows: { [case]: { unit, points: [{ size, s, mib }], t, m } } }.
+ *  The command exits non-zero when an exponent is over 1.2; its table is read all the same. */
+function runNativeScaling() {
+  if (!WEFT_BIN) return null;
+  log(`native: ${WEFT_BIN} bench --scaling`);
+  let text;
+  try {
+    text = execFileSync(WEFT_BIN, ["bench", "--scaling"], { cwd: ROOT, encoding: "utf8", maxBuffer: 1 << 24, timeout: TIMEOUT * 4 });
+  } catch (e) {
+    if (!e.stdout) throw e;
+    text = e.stdout + (e.stderr ? `\n${e.stderr}` : "");
+  }
+  const rows = {};
+  const cell = String.raw`(\d+), ([\d.]+), ([\d.]+)`;
+  const re = new RegExp(String.raw`^(\S+)\s+(.+?)\s+${cell}\s+${cell}\s+${cell}\s+(\S+)\s+(\S+)`, "gm");
+  for (const m of text.matchAll(re)) {
+    const points = [0, 1, 2].map((i) => ({ size: Number(m[3 + 3 * i]), s: Number(m[4 + 3 * i]), mib: Number(m[5 + 3 * i]) }));
+    rows[m[1]] = { unit: m[2], points, t: Number(m[12]), m: Number(m[13]) };
+  }
+  return { text, rows };
+}
+
+/** Least-squares slope of log y over log x (src/bench/scaling.rs `exponent`), points with y > 0. */
+function exponent(points) {
+  const p = points.filter(([x, y]) => x > 0 && y > 0).map(([x, y]) => [Math.log(x), Math.log(y)]);
+  if (p.length < 2) return NaN;
+  const mx = p.reduce((a, q) => a + q[0], 0) / p.length;
+  const my = p.reduce((a, q) => a + q[1], 0) / p.length;
+  const sxx = p.reduce((a, q) => a + (q[0] - mx) ** 2, 0);
+  const sxy = p.reduce((a, q) => a + (q[0] - mx) * (q[1] - my), 0);
+  return sxy / sxx;
+}
+
+/** Every scaling case at every scale, each in a fresh worker (fresh wasm memory). */
+async function scalingSteps(page) {
+  const list = await inWorker(page, { cmd: "scaling-cases" });
+  if (list.type !== "scaling-cases") throw new Error(`scaling cases: ${list.message}`);
+  const names = SCALING_CASES ?? list.names;
+  const rows = [];
+  for (const name of names) {
+    const points = [];
+    for (const scale of SCALES) {
+      log(`scaling: ${name} ×${scale} in a fresh worker`);
+      const r = await inWorker(page, { cmd: "scaling", name, scale, repeats: REPEATS });
+      if (r.type !== "scaling") throw new Error(`scaling ${name} ×${scale}: ${r.message}`);
+      points.push(r);
+    }
+    rows.push({ name, unit: points[0].unit, points });
+  }
+  return rows;
+}
+
+function scalingReport(browserRun, native) {
+  const out = [];
+  const wide = (x) => (x == null || Number.isNaN(x) ? "?" : x.toFixed(2));
+  const flag = (x) => (x > 1.2 ? ` ✗` : "");
+  out.push(`## growth with input size: \`weft bench --scaling\` cases at 1×, 4×, 16×, worker and native`);
+  out.push("");
+  out.push(`Browser: Chromium ${browserRun.version}, module Web Worker, wasm (\`new BenchScaling(case, scale)\` prepares, untimed; \`run()\` timed with \`performance.now()\`, best of ${REPEATS}), a fresh worker per case × scale. ` +
+    "Worker memory = wasm linear memory after the runs minus after init (`memory.buffer.byteLength`; it never shrinks, so this is the peak above the fresh module, prepared input included). " +
+    "Native: `weft bench --scaling` (a child process per case × scale, best of 3, peak RSS above an idle process). Exponent = least-squares slope of log(time or memory) over log(size).");
+  out.push("");
+  out.push("| case | unit | sizes 1×, 4×, 16× | worker s 1×, 4×, 16× | **worker time exp.** | native s 1×, 4×, 16× | **native time exp.** | worker ÷ native at 16× | worker MiB 1×, 4×, 16× | **worker memory exp.** | native memory exp. |");
+  out.push("|---|---|---|---|---|---|---|---|---|---|---|");
+  const over = [];
+  for (const r of browserRun.scaling) {
+    const n = native?.rows?.[r.name];
+    const best = r.points.map((p) => Math.min(...p.ms) / 1000);
+    const mib = r.points.map((p) => (p.memory.run - p.memory.init) / MiB);
+    const wt = exponent(r.points.map((p, i) => [p.size, best[i]]));
+    const wm = exponent(r.points.map((p, i) => [p.size, mib[i]]));
+    const sizes = r.points.map((p) => p.size);
+    const same = !n || n.points.every((q, i) => Math.abs(q.size - sizes[i]) <= 0.5 + 1e-6 * sizes[i]) ? "" : " (native sizes differ!)";
+    const ratio = n ? best[2] / n.points[2].s : NaN;
+    if (wt > 1.2 || wm > 1.2) over.push(`worker ${r.name}`);
+    if (n && (n.t > 1.2 || n.m > 1.2)) over.push(`native ${r.name}`);
+    out.push(`| \`${r.name}\` | ${r.unit} | ${sizes.map((x) => x.toFixed(0)).join(", ")}${same} | ${best.map((x) => f(x)).join(", ")} | **${wide(wt)}**${flag(wt)} | ${n ? n.points.map((q) => f(q.s)).join(", ") : "?"} | **${wide(n?.t)}**${flag(n?.t)} | ${Number.isNaN(ratio) ? "?" : `${f(ratio, 2)}×`} | ${mib.map((x) => f(x, 1)).join(", ")} | **${wide(wm)}**${flag(wm)} | ${wide(n?.m)}${flag(n?.m)} |`);
+  }
+  out.push("");
+  out.push(over.length ? `Over 1.2: ${over.join(", ")}.` : `Every exponent ≤ 1.2 (time and memory, worker${native ? " and native" : "; no native run"}).`);
+  out.push("");
+  out.push(`Worker passes (ms) and preparation (ms, untimed in the table): ${browserRun.scaling.map((r) => `${r.name} ${r.points.map((p) => `×${p.scale} [${p.ms.map((x) => f(x, 1)).join(", ")}] prep ${f(p.prepareMs, 0)}, wasm init ${f(p.memory.init / MiB, 1)} MiB`).join("; ")}`).join(" · ")}.`);
+  out.push("");
+  return out.join("\n");
 }
 
 /** `weft bench --cache`: rows { [workload]: { addFile, first, second, ratio, cached } }, s. */
@@ -155,6 +248,7 @@ async function runBrowser() {
     };
 
     if (CACHE_ONLY) return { version, ...(await cacheSteps(page, renderers)) };
+    if (SCALING_ONLY) return { version, scaling: await scalingSteps(page) };
 
     // 0. Lattice path optimisation, in its own fresh worker.
     log(`browser ${version}: lattice path-optimisation workloads in a worker (${REPEATS} passes each)`);
@@ -358,7 +452,17 @@ function cacheReport(browserRun, nativeCache) {
 // ---------------------------------------------------------------------------------------
 // Report
 // ---------------------------------------------------------------------------------------
+const loadBefore = readFileSync("/proc/loadavg", "utf8").split(" ").slice(0, 3).join(" ");
 const browserRun = await runBrowser();
+if (SCALING_ONLY) {
+  const loadBrowser = readFileSync("/proc/loadavg", "utf8").split(" ").slice(0, 3).join(" ");
+  const native = runNativeScaling();
+  const loadNative = readFileSync("/proc/loadavg", "utf8").split(" ").slice(0, 3).join(" ");
+  console.log(scalingReport(browserRun, native));
+  console.log(`Load average (1, 5, 15 min): ${loadBefore} at the start, ${loadBrowser} after the worker runs, ${loadNative} after the native run.`);
+  if (native) console.log("\n<details><summary>weft bench --scaling output</summary>\n\n```text\n" + native.text.trim() + "\n```\n\n</details>");
+  process.exit(0);
+}
 const nativeCache = runNativeCache();
 if (CACHE_ONLY) {
   console.log(cacheReport(browserRun, nativeCache));

@@ -1,10 +1,17 @@
-// 3D toolpath preview: three.js LineSegments over the preview buffers of a result.
+// 3D toolpath preview: every extrusion segment is one instance of a small shaded prism (a
+// "tube" with a diamond cross-section and pointed ends, lit by a light fixed to the camera),
+// or, above TUBE_LIMIT segments, one instanced line lit by its direction and darkened with
+// depth. Both read the same instance attributes.
 //
-// Built for millions of segments: the transferred Float32Array is the position attribute
-// as is; colours are Uint8 normalized attributes computed once per colour mode and cached;
-// the layer range and the print-order limit are one drawRange (a few array lookups per
-// change); nothing is allocated per frame and a frame is drawn only when something changed
-// (no animation loop). Feature names and colours come from the schema (setFeatures).
+// Built for millions of segments: the transferred Float32Array of positions is the instance
+// buffer as is (start and end are two views into it, stride 6); colours are Uint8 normalized
+// per-segment attributes computed once per colour mode and cached; the layer range and the
+// print-order limit are an instance offset and count (a few array lookups per change);
+// nothing is allocated per frame and a frame is drawn only when something changed (no
+// animation loop). The camera is fitted to the part on every new result and on request
+// (Fit, top, front, iso views); its near and far planes follow the part's bounding sphere on
+// every frame, and the zoom is limited to the part's scale, so zoom never clips the part.
+// Feature names and colours come from the schema (setFeatures).
 import * as THREE from "./vendor/three.module.js";
 import { OrbitControls } from "./vendor/OrbitControls.js";
 
@@ -23,13 +30,206 @@ const START_SIZE_PX = 7;
 /** 256-entry "turbo"-like ramp (blue → green → yellow → red), sRGB bytes. */
 const RAMP = buildRamp();
 
+/**
+ * Above this many extrusion segments the preview draws lines (lit by their direction, darker
+ * with depth) instead of tubes: measured in headless Chromium with SwiftShader, where tubes
+ * stop orbiting smoothly (ARCHITECTURE.md, "The 3D preview"). `setStyle` overrides it.
+ */
+export const TUBE_LIMIT = 400000;
+/** Vertical field of view, degrees. */
+const FOV = 30;
+/** Fit: the part's projection spans this fraction of the canvas in its limiting direction. */
+const FILL = 0.86;
+/** Tube width (mm) when the result has no width per segment, and height without layers. */
+const DEFAULT_WIDTH = 0.45;
+const DEFAULT_HEIGHT = 0.2;
+/** Directions from the target to the camera of the camera buttons (z up). */
+const VIEWS = {
+  iso: new THREE.Vector3(-0.55, -1, 0.75).normalize(),
+  top: new THREE.Vector3(0, -1e-3, 1).normalize(), // a hair to the front: +y is up on screen
+  front: new THREE.Vector3(0, -1, 0),
+};
+/** Keys on the focused canvas (shown in the buttons' titles and aria-keyshortcuts). */
+const CAMERA_KEYS = { f: "fit", Home: "fit", 1: "top", 2: "front", 3: "iso" };
+
+// One light fixed to the camera (upper left, in front), a weak fill from the lower right and a
+// small highlight; colours are sRGB bytes, shaded as they are (no colour management).
+const LIGHTS = /* glsl */ `
+const vec3 KEY = vec3(-0.4082, 0.5443, 0.7328);
+const vec3 FILL_LIGHT = vec3(0.6727, -0.3363, 0.6590);
+const vec3 HALF_KEY = vec3(-0.2193, 0.2924, 0.9308);
+`;
+const INSTANCE_ATTRIBUTES = /* glsl */ `
+attribute vec3 iStart;
+attribute vec3 iEnd;
+attribute vec3 iColor;
+#ifdef HAS_WIDTH
+attribute float iWidth;
+#endif
+#ifdef HAS_AXIS
+attribute vec3 iAxis;
+#endif
+uniform float uWidth;
+uniform float uHeight;
+uniform float uPixel;
+uniform vec2 uDepth;
+`;
+
+/**
+ * A tube: a prism with a diamond cross-section (width × layer height, smooth normals so it
+ * shades round) along the segment, with a pointed end half a width long at each end so
+ * consecutive segments join without gaps. `position` is (along, across, up) of the base
+ * geometry: along 0 / 1 the rings at the segment's ends, -1 / 2 the points.
+ */
+const TUBE_VERTEX = /* glsl */ `${INSTANCE_ATTRIBUTES}
+varying vec3 vColor;
+varying vec3 vNormal;
+varying float vFar;
+void main() {
+  vec3 d = iEnd - iStart;
+  float len = length(d);
+  vec3 dir = len > 1e-6 ? d / len : vec3(1.0, 0.0, 0.0);
+#ifdef HAS_AXIS
+  vec3 up = dot(iAxis, iAxis) > 0.25 ? normalize(iAxis) : vec3(0.0, 0.0, 1.0);
+#else
+  vec3 up = vec3(0.0, 0.0, 1.0);
+#endif
+  vec3 side = cross(dir, up);
+  if (dot(side, side) < 1e-6) side = cross(dir, vec3(1.0, 0.0, 0.0));
+  side = normalize(side);
+  up = cross(side, dir);
+#ifdef HAS_WIDTH
+  float w = iWidth > 0.0 ? iWidth : uWidth;
+#else
+  float w = uWidth;
+#endif
+  // Never thinner than about a pixel, however far away.
+  vec4 mid = modelViewMatrix * vec4(0.5 * (iStart + iEnd), 1.0);
+  float pixel = uPixel * (isOrthographic ? 1.0 : max(-mid.z, 1e-6));
+  float rw = max(0.5 * w, 0.6 * pixel);
+  float rh = max(0.5 * min(uHeight, w), 0.6 * pixel);
+  vec3 p;
+  vec3 n;
+  if (position.x < -0.5) {
+    p = iStart - dir * rw;
+    n = -dir;
+  } else if (position.x > 1.5) {
+    p = iEnd + dir * rw;
+    n = dir;
+  } else {
+    p = mix(iStart, iEnd, position.x) + side * (position.y * rw) + up * (position.z * rh);
+    n = side * position.y + up * position.z;
+  }
+  vec4 mv = modelViewMatrix * vec4(p, 1.0);
+  gl_Position = projectionMatrix * mv;
+  vNormal = normalize(normalMatrix * n);
+  vColor = iColor;
+  vFar = clamp((-mv.z - uDepth.x) / uDepth.y, 0.0, 1.0);
+}
+`;
+const TUBE_FRAGMENT = /* glsl */ `${LIGHTS}
+varying vec3 vColor;
+varying vec3 vNormal;
+varying float vFar;
+void main() {
+  vec3 n = normalize(vNormal);
+  float key = max(dot(n, KEY), 0.0);
+  float fill = max(dot(n, FILL_LIGHT), 0.0);
+  float spec = pow(max(dot(n, HALF_KEY), 0.0), 24.0);
+  vec3 c = vColor * (0.12 + 0.8 * key + 0.18 * fill) + 0.25 * spec;
+  gl_FragColor = vec4(c * (1.12 - 0.8 * sqrt(vFar)), 1.0);
+}
+`;
+/** A line per segment: lit by its direction (bright across the light, dim along it) and darker with depth. */
+const LINE_VERTEX = /* glsl */ `${INSTANCE_ATTRIBUTES}${LIGHTS}
+varying vec3 vColor;
+void main() {
+  vec4 mv = modelViewMatrix * vec4(position.x < 0.5 ? iStart : iEnd, 1.0);
+  gl_Position = projectionMatrix * mv;
+  vec3 t = mat3(modelViewMatrix) * (iEnd - iStart);
+  float lt = dot(t, t) > 0.0 ? dot(normalize(t), KEY) : 0.0;
+  float lit = sqrt(max(1.0 - lt * lt, 0.0));
+  float far = clamp((-mv.z - uDepth.x) / uDepth.y, 0.0, 1.0);
+  vColor = iColor * (0.4 + 0.6 * lit) * (1.15 - 0.85 * sqrt(far));
+}
+`;
+const LINE_FRAGMENT = /* glsl */ `
+varying vec3 vColor;
+void main() {
+  gl_FragColor = vec4(vColor, 1.0);
+}
+`;
+
+/** The tube's base geometry (10 vertices, 16 triangles); see TUBE_VERTEX. */
+function tubeGeometry() {
+  const g = new THREE.InstancedBufferGeometry();
+  const ring = [[1, 0], [0, 1], [-1, 0], [0, -1]];
+  const pos = [];
+  for (const along of [0, 1]) for (const [s, t] of ring) pos.push(along, s, t);
+  pos.push(-1, 0, 0, 2, 0, 0);
+  const index = [];
+  for (let k = 0; k < 4; k++) {
+    const k1 = (k + 1) % 4;
+    index.push(k, 4 + k, 4 + k1, k, 4 + k1, k1); // side, counter-clockwise from outside
+    index.push(4 + k, 9, 4 + k1); // end point
+    index.push(k, k1, 8); // start point
+  }
+  g.setAttribute("position", new THREE.Float32BufferAttribute(pos, 3));
+  g.setIndex(index);
+  g.instanceCount = 0;
+  return g;
+}
+
+/** The line's base geometry: the segment's start and end. */
+function lineGeometry() {
+  const g = new THREE.InstancedBufferGeometry();
+  g.setAttribute("position", new THREE.Float32BufferAttribute([0, 0, 0, 1, 0, 0], 3));
+  g.instanceCount = 0;
+  return g;
+}
+
+/** The typical layer height of a result: the median step of its layer z (the first layer's z counts). */
+function layerHeight(z) {
+  if (!z || !z.length) return DEFAULT_HEIGHT;
+  const steps = z[0] > 1e-4 ? [z[0]] : [];
+  for (let i = 1; i < z.length && steps.length < 4000; i++) {
+    const h = z[i] - z[i - 1];
+    if (h > 1e-4) steps.push(h);
+  }
+  if (!steps.length) return DEFAULT_HEIGHT;
+  steps.sort((a, b) => a - b);
+  return Math.min(2, steps[steps.length >> 1]);
+}
+
+/** Distance from `c` to the farthest of (about 300k of) the points x y z … */
+function farthestFrom(c, p) {
+  const step = 3 * Math.max(1, Math.ceil(p.length / 3 / 300000));
+  let r2 = 0;
+  for (let i = 0; i < p.length; i += step) {
+    const dx = p[i] - c.x, dy = p[i + 1] - c.y, dz = p[i + 2] - c.z;
+    const d2 = dx * dx + dy * dy + dz * dz;
+    if (d2 > r2) r2 = d2;
+  }
+  return Math.sqrt(r2);
+}
+
+/** The 8 corners of a box, x y z each. */
+function boxCorners(b) {
+  const out = [];
+  for (let i = 0; i < 8; i++) {
+    out.push(i & 1 ? b.max.x : b.min.x, i & 2 ? b.max.y : b.min.y, i & 4 ? b.max.z : b.min.z);
+  }
+  return new Float32Array(out);
+}
+
 export class Preview {
   /**
    * @param {HTMLCanvasElement} canvas
    * @param {{colorBy: HTMLSelectElement, showTravel: HTMLInputElement,
    *          showStarts?: HTMLInputElement, layerMin: HTMLInputElement, layerMax: HTMLInputElement,
    *          layerLabel: HTMLElement, legend: HTMLElement, moveMax?: HTMLInputElement,
-   *          moveLabel?: HTMLElement, showAxis?: HTMLInputElement}} ui
+   *          moveLabel?: HTMLElement, showAxis?: HTMLInputElement, camera?: HTMLElement}} ui
+   *   `camera`: an element holding buttons with data-camera="fit|top|front|iso"
    * @param {{features?: Array<{code: number, label?: string, name?: string, color: string}>}} [options]
    */
   constructor(canvas, ui, options = {}) {
@@ -41,22 +241,43 @@ export class Preview {
     this.renderer.setClearColor(BACKGROUND, 1);
 
     this.scene = new THREE.Scene();
-    this.camera = new THREE.PerspectiveCamera(35, 1, 0.1, 10000);
+    this.camera = new THREE.PerspectiveCamera(FOV, 1, 0.1, 10000);
     this.camera.up.set(0, 0, 1);
     this.controls = new OrbitControls(this.camera, canvas);
     this.controls.enableDamping = false; // damping needs a continuous loop
     this.controls.screenSpacePanning = true;
     this.controls.listenToKeyEvents(canvas); // arrow keys pan when the canvas has focus
     this.controls.addEventListener("change", () => this.requestRender());
+    // A user's orbit, pan or zoom ends the automatic framing (a resize refits until then).
+    this.controls.addEventListener("start", () => { this.autoFit = false; });
+    /** unit vector from the target to the camera: the view kept by Fit and new results */
+    this.viewDir = VIEWS.iso.clone();
+    this.autoFit = true;
 
     this.plate = new THREE.Group();
     this.scene.add(this.plate);
 
-    this.extrusion = new THREE.LineSegments(
-      new THREE.BufferGeometry(),
-      new THREE.LineBasicMaterial({ vertexColors: true }),
-    );
-    this.extrusion.frustumCulled = false;
+    // Extrusion: one instance per segment, drawn as a tube or as a line (see TUBE_LIMIT).
+    this.uniforms = {
+      uWidth: { value: DEFAULT_WIDTH }, // mm, when the result has no width per segment
+      uHeight: { value: DEFAULT_HEIGHT }, // mm, the tube's height (the layer height)
+      uPixel: { value: 0.001 }, // world size of one drawing-buffer pixel at distance 1
+      uDepth: { value: new THREE.Vector2(0, 1) }, // the part's depth range in view: near, length
+    };
+    this.tubes = new THREE.Mesh(tubeGeometry(), new THREE.ShaderMaterial({
+      uniforms: this.uniforms, vertexShader: TUBE_VERTEX, fragmentShader: TUBE_FRAGMENT,
+    }));
+    this.lines = new THREE.LineSegments(lineGeometry(), new THREE.ShaderMaterial({
+      uniforms: this.uniforms, vertexShader: LINE_VERTEX, fragmentShader: LINE_FRAGMENT,
+    }));
+    for (const o of [this.tubes, this.lines]) {
+      o.frustumCulled = false;
+      o.geometry.instanceCount = 0;
+    }
+    this.lines.visible = false;
+    /** "auto" (tubes up to TUBE_LIMIT segments), "tubes" or "lines"; `drawStyle` is the one in use */
+    this.style = "auto";
+    this.drawStyle = "tubes";
     this.travel = new THREE.LineSegments(
       new THREE.BufferGeometry(),
       new THREE.LineBasicMaterial({ color: TRAVEL_COLOR, transparent: true, opacity: 0.35 }),
@@ -81,13 +302,16 @@ export class Preview {
     );
     this.axis.frustumCulled = false;
     this.axis.visible = Boolean(ui.showAxis?.checked);
-    this.scene.add(this.extrusion, this.travel, this.starts, this.axis);
+    this.scene.add(this.tubes, this.lines, this.travel, this.starts, this.axis);
+    /** instance buffers of the result (positions, axis, width) and the colour mode shown */
+    this.instances = null;
     /** segment index of every path-start marker (increasing) */
     this.startSegment = new Uint32Array(0);
     /** layers shown, and the last G-code move shown (Infinity: all) */
     this.range = { lo: 0, hi: -1, move: Infinity };
-    /** segments drawn now (for tests and the legend) */
+    /** segments drawn now (for tests and the legend), and the first one */
     this.drawn = { extrusion: 0, travel: 0 };
+    this.first = 0;
     /** feature code → sRGB bytes and label (setFeatures) */
     this.featureRgb = new Array(256).fill(null);
     this.featureLabel = new Array(256).fill(null);
@@ -95,7 +319,10 @@ export class Preview {
 
     /** @type {import("./protocol.js").PreviewBuffers|null} */
     this.data = null;
-    /** @type {Map<string, THREE.BufferAttribute>} colour attribute per mode, built on demand */
+    /** part bounds and bounding sphere (null: no result; the plate is framed) */
+    this.bounds = null;
+    this.sphere = null;
+    /** @type {Map<string, THREE.InstancedInterleavedBuffer>} colours per mode (3 bytes a segment), built on demand */
     this.colorCache = new Map();
     this.setFeatures(options.features ?? []);
     this.layers = 0;
@@ -103,13 +330,14 @@ export class Preview {
     this.frameRequested = false;
     this.drawFrame = () => {
       this.frameRequested = false;
+      this.updateClipping();
       this.renderer.render(this.scene, this.camera);
     };
 
     ui.colorBy.addEventListener("change", () => this.applyColors());
     ui.showStarts?.addEventListener("change", () => {
       this.starts.visible = ui.showStarts.checked;
-      this.updateLegend(ui.colorBy.value, this.data ? this.data.positions.length / 6 : 0);
+      this.updateLegend(ui.colorBy.value, this.segmentCount());
       this.requestRender();
     });
     ui.showAxis?.addEventListener("change", () => {
@@ -135,10 +363,21 @@ export class Preview {
     };
     ui.layerMin.addEventListener("input", onRange("min"));
     ui.layerMax.addEventListener("input", onRange("max"));
+    // Camera buttons (data-camera="fit|top|front|iso") and their keys on the canvas.
+    ui.camera?.addEventListener("click", (e) => {
+      const which = e.target.closest?.("[data-camera]")?.dataset.camera;
+      if (which) this.view(which);
+    });
+    canvas.addEventListener("keydown", (e) => {
+      if (e.ctrlKey || e.metaKey || e.altKey) return;
+      const which = CAMERA_KEYS[e.key.length === 1 ? e.key.toLowerCase() : e.key];
+      if (!which) return;
+      e.preventDefault();
+      this.view(which);
+    });
 
     new ResizeObserver(() => this.resize()).observe(canvas.parentElement);
     this.setBed(DEFAULT_BED, "corner");
-    this.fit();
     this.setResult(null);
   }
 
@@ -155,7 +394,12 @@ export class Preview {
     this.renderer.setSize(w, h, false);
     this.camera.aspect = w / h;
     this.camera.updateProjectionMatrix();
+    if (this.autoFit) this.fit();
     this.requestRender();
+  }
+
+  segmentCount() {
+    return this.data ? this.data.positions.length / 6 : 0;
   }
 
   /**
@@ -164,23 +408,41 @@ export class Preview {
    * @param {{origin?: string}} [options]  printer origin: "corner" (default) or "center"
    */
   setResult(data, options = {}) {
-    const geometry = this.extrusion.geometry;
-    const travelGeometry = this.travel.geometry;
-    geometry.dispose();
-    travelGeometry.dispose();
+    this.travel.geometry.dispose();
     this.starts.geometry.dispose();
     this.axis.geometry.dispose();
-    this.colorCache.clear(); // their GPU buffers go with the disposed geometry / GC
+    // The instance buffers go with the geometry (their GPU buffers are freed when no
+    // geometry uses them); fresh geometries also reset three's instance-count bound.
+    this.tubes.geometry.dispose();
+    this.lines.geometry.dispose();
+    this.tubes.geometry = tubeGeometry();
+    this.lines.geometry = lineGeometry();
+    this.colorCache.clear();
     this.data = data;
     this.featureCounts = null;
     this.flowRange = null;
+    this.first = 0;
+    this.drawn = { extrusion: 0, travel: 0 };
 
     const segments = data ? data.positions.length / 6 : 0;
     const empty = new Float32Array(0);
-    this.extrusion.geometry = new THREE.BufferGeometry();
-    this.extrusion.geometry.setAttribute("position", new THREE.BufferAttribute(data?.positions ?? empty, 3));
     this.travel.geometry = new THREE.BufferGeometry();
     this.travel.geometry.setAttribute("position", new THREE.BufferAttribute(data?.travel ?? empty, 3));
+    this.instances = segments > 0 ? {
+      pos: new THREE.InstancedInterleavedBuffer(data.positions, 6, 1),
+      width: data.width?.length >= segments ? new THREE.InstancedInterleavedBuffer(data.width, 1, 1) : null,
+      axis: data.axis?.length >= segments * 3 ? new THREE.InstancedInterleavedBuffer(data.axis, 3, 1) : null,
+      color: null,
+    } : null;
+    const defines = {};
+    if (this.instances?.width) defines.HAS_WIDTH = "";
+    if (this.instances?.axis) defines.HAS_AXIS = "";
+    for (const o of [this.tubes, this.lines]) {
+      if (Object.keys(defines).join() !== Object.keys(o.material.defines).join()) {
+        o.material.defines = defines;
+        o.material.needsUpdate = true;
+      }
+    }
 
     const layerStart = data?.layerStart ?? new Uint32Array(0);
     this.layers = Math.max(0, layerStart.length - 1);
@@ -199,16 +461,61 @@ export class Preview {
     layerMin.value = "0";
     layerMax.value = String(Math.max(0, this.layers - 1));
     const bounds = segments > 0 ? boundsOf(data.positions) : null;
+    this.bounds = bounds;
+    this.sphere = bounds ? bounds.getBoundingSphere(new THREE.Sphere()) : null;
+    this.shadeRadius = bounds ? farthestFrom(this.sphere.center, data.positions) : 0;
+    this.uniforms.uHeight.value = layerHeight(data?.layerZ);
     this.buildStarts();
     this.buildAxis(segments, bounds);
     this.setupMoves(segments);
+    this.chooseStyle();
 
     const bed = data?.bedSize && data.bedSize.length >= 2 && data.bedSize[0] > 0 ? data.bedSize : DEFAULT_BED;
     this.setBed(bed, options.origin ?? "corner");
     this.applyColors(false);
     this.setLayerRange(0, this.layers - 1);
-    this.fit(bounds);
+    this.fit();
     this.requestRender();
+  }
+
+  /**
+   * How the extrusion is drawn: "tubes", "lines", or "auto" (tubes up to TUBE_LIMIT segments).
+   * @param {"auto"|"tubes"|"lines"} style
+   */
+  setStyle(style) {
+    this.style = style;
+    this.chooseStyle();
+    this.updateLegend(this.ui.colorBy.value, this.segmentCount());
+    this.requestRender();
+  }
+
+  chooseStyle() {
+    const segments = this.segmentCount();
+    this.drawStyle = this.style === "auto" ? (segments > TUBE_LIMIT ? "lines" : "tubes") : this.style;
+    this.tubes.visible = this.drawStyle === "tubes";
+    this.lines.visible = this.drawStyle === "lines";
+  }
+
+  /**
+   * Points the instance attributes of both drawings at segments first … first + count - 1: the
+   * buffers stay on the GPU, only the attribute offsets change.
+   */
+  setInstanceRange(first, count) {
+    this.first = first;
+    const inst = this.instances;
+    for (const o of [this.tubes, this.lines]) {
+      const g = o.geometry;
+      if (!inst) {
+        g.instanceCount = 0;
+        continue;
+      }
+      g.setAttribute("iStart", new THREE.InterleavedBufferAttribute(inst.pos, 3, first * 6));
+      g.setAttribute("iEnd", new THREE.InterleavedBufferAttribute(inst.pos, 3, first * 6 + 3));
+      if (inst.color) g.setAttribute("iColor", new THREE.InterleavedBufferAttribute(inst.color, 3, first * 3, true));
+      if (inst.width) g.setAttribute("iWidth", new THREE.InterleavedBufferAttribute(inst.width, 1, first));
+      if (inst.axis) g.setAttribute("iAxis", new THREE.InterleavedBufferAttribute(inst.axis, 3, first * 3));
+      g.instanceCount = inst.color ? count : 0;
+    }
   }
 
   /** Shows layers lo..hi (0-based, inclusive): O(log n). */
@@ -233,7 +540,8 @@ export class Preview {
     const label = this.ui.layerLabel;
     const { lo, hi, move } = this.range;
     if (!d || this.layers === 0) {
-      for (const o of [this.extrusion, this.travel, this.starts, this.axis]) o.geometry.setDrawRange(0, 0);
+      for (const o of [this.travel, this.starts, this.axis]) o.geometry.setDrawRange(0, 0);
+      this.setInstanceRange(0, 0);
       this.drawn = { extrusion: 0, travel: 0 };
       label.textContent = "no layers";
       this.updateMoveLabel();
@@ -246,7 +554,7 @@ export class Preview {
     const limited = move !== Infinity;
     if (limited && this.bySegment) end = Math.max(start, Math.min(end, move + 1));
     else if (limited) end = Math.max(start, Math.min(end, upperBound(d.segmentMove, move)));
-    this.extrusion.geometry.setDrawRange(start * 2, (end - start) * 2);
+    this.setInstanceRange(start, end - start);
     if (this.axisSegments) this.axis.geometry.setDrawRange(start * 2, (end - start) * 2);
     const s0 = lowerBound(this.startSegment, start);
     const s1 = lowerBound(this.startSegment, end);
@@ -399,27 +707,27 @@ export class Preview {
     const mode = this.ui.colorBy.value;
     const d = this.data;
     const segments = d ? d.positions.length / 6 : 0;
-    if (segments > 0) {
-      let attr = this.colorCache.get(mode);
-      if (!attr) {
-        attr = new THREE.BufferAttribute(this.computeColors(mode, segments), 3, true);
-        this.colorCache.set(mode, attr);
+    if (segments > 0 && this.instances) {
+      let colors = this.colorCache.get(mode);
+      if (!colors) {
+        colors = new THREE.InstancedInterleavedBuffer(this.computeColors(mode, segments), 3, 1);
+        this.colorCache.set(mode, colors);
       }
-      this.extrusion.geometry.setAttribute("color", attr);
+      this.instances.color = colors;
+      this.setInstanceRange(this.first, this.drawn.extrusion);
     }
     this.updateLegend(mode, segments);
     if (render) this.requestRender();
   }
 
-  /** @returns {Uint8Array} 2 vertices × RGB per segment */
+  /** @returns {Uint8Array} RGB per segment */
   computeColors(mode, segments) {
     const d = this.data;
-    const out = new Uint8Array(segments * 6);
+    const out = new Uint8Array(segments * 3);
     const put = (i, r, g, b) => {
-      const o = i * 6;
-      out[o] = out[o + 3] = r;
-      out[o + 1] = out[o + 4] = g;
-      out[o + 2] = out[o + 5] = b;
+      out[i * 3] = r;
+      out[i * 3 + 1] = g;
+      out[i * 3 + 2] = b;
     };
     if (mode === "feature" && d.feature.length >= segments) {
       for (let i = 0; i < segments; i++) {
@@ -511,7 +819,14 @@ export class Preview {
       legend.append(item(null, `one colour per extrusion path (${paths.toLocaleString()} paths)`));
     }
     if (this.starts.visible) legend.append(item([255, 255, 255], "path start", true));
-    legend.append(item(null, `${segments.toLocaleString()} segments`));
+    const asLines = this.drawStyle === "lines" && segments > 0;
+    const count = item(null, `${segments.toLocaleString()} segments${asLines ? " · lines" : ""}`);
+    if (asLines) {
+      count.title = this.style === "auto"
+        ? `Drawn as lines: over ${TUBE_LIMIT.toLocaleString()} segments, tubes are too slow to orbit without a fast GPU`
+        : "Drawn as lines";
+    }
+    legend.append(count);
   }
 
   /** Draws the build plate: outline, 10 mm grid, origin axes. */
@@ -525,6 +840,7 @@ export class Preview {
     const x0 = origin === "center" ? -bx / 2 : 0;
     const y0 = origin === "center" ? -by / 2 : 0;
     this.bedBox = new THREE.Box3(new THREE.Vector3(x0, y0, 0), new THREE.Vector3(x0 + bx, y0 + by, Math.min(bx, by) * 0.25));
+    this.bedSphere = this.bedBox.getBoundingSphere(new THREE.Sphere());
 
     const grid = [];
     for (let x = Math.ceil(x0 / 10) * 10; x <= x0 + bx; x += 10) grid.push(x, y0, 0, x, y0 + by, 0);
@@ -548,21 +864,116 @@ export class Preview {
     this.plate.add(plane);
   }
 
-  /** Points the camera at a box (default: the plate) from the front left, above. */
-  fit(box = null) {
-    const b = box ?? this.bedBox;
-    const center = b.getCenter(new THREE.Vector3());
-    const radius = Math.max(1, b.getSize(new THREE.Vector3()).length() / 2);
-    const fov = (this.camera.fov * Math.PI) / 180;
-    const dist = (radius / Math.sin(fov / 2)) * (box ? 1.45 : 1.0);
-    const dir = new THREE.Vector3(-0.55, -1, 0.75).normalize();
-    this.camera.position.copy(center).addScaledVector(dir, dist);
-    this.camera.near = Math.max(0.01, dist / 1000);
-    this.camera.far = dist * 20 + 2000;
-    this.camera.updateProjectionMatrix();
+  /**
+   * Frames the part (the plate when there is none) from the camera's current direction: the
+   * camera looks at the centre of the part's projection, at the distance where the part's
+   * points span FILL of the canvas in its limiting direction.
+   */
+  fit() {
+    const cam = this.camera;
+    const back = cam.position.clone().sub(this.controls.target);
+    if (back.lengthSq() < 1e-12) back.copy(VIEWS.iso);
+    back.normalize();
+    const right = new THREE.Vector3(0, 0, 1).cross(back);
+    if (right.lengthSq() < 1e-12) right.set(1, 0, 0);
+    right.normalize();
+    const up = back.clone().cross(right);
+    const tanY = Math.tan((cam.fov * Math.PI) / 360) * FILL;
+    const tanX = tanY * cam.aspect;
+    const points = this.data && this.bounds ? this.data.positions : boxCorners(this.bedBox);
+    // At most ~300k points: enough to frame, fast at 2M segments.
+    const step = 3 * Math.max(1, Math.ceil(points.length / 3 / 300000));
+    const box = this.bounds ?? this.bedBox;
+    const center = box.getCenter(new THREE.Vector3());
+    let dist = 0;
+    for (let pass = 0; pass < 2; pass++) {
+      // Distance that fits every point: |x| ≤ tanX · depth, |y| ≤ tanY · depth, depth = dist - z.
+      dist = 0;
+      const cx = center.x, cy = center.y, cz = center.z;
+      for (let i = 0; i < points.length; i += step) {
+        const px = points[i] - cx, py = points[i + 1] - cy, pz = points[i + 2] - cz;
+        const x = px * right.x + py * right.y + pz * right.z;
+        const y = px * up.x + py * up.y + pz * up.z;
+        const z = px * back.x + py * back.y + pz * back.z;
+        const need = Math.max(Math.abs(x) / tanX, Math.abs(y) / tanY) + z;
+        if (need > dist) dist = need;
+      }
+      if (pass === 1) break;
+      // Centre the projection: shift the target by the middle of the projected extent.
+      let x0 = Infinity, x1 = -Infinity, y0 = Infinity, y1 = -Infinity;
+      for (let i = 0; i < points.length; i += step) {
+        const px = points[i] - cx, py = points[i + 1] - cy, pz = points[i + 2] - cz;
+        const depth = dist - (px * back.x + py * back.y + pz * back.z);
+        const x = (px * right.x + py * right.y + pz * right.z) / depth;
+        const y = (px * up.x + py * up.y + pz * up.z) / depth;
+        if (x < x0) x0 = x;
+        if (x > x1) x1 = x;
+        if (y < y0) y0 = y;
+        if (y > y1) y1 = y;
+      }
+      center.addScaledVector(right, ((x0 + x1) / 2) * dist).addScaledVector(up, ((y0 + y1) / 2) * dist);
+    }
+    const radius = (this.sphere ?? this.bedSphere).radius;
+    dist = Math.max(dist, radius * 0.05, 1);
+    this.controls.minDistance = Math.max(0.05, radius * 0.02);
+    this.controls.maxDistance = Math.max(dist, radius / Math.sin((cam.fov * Math.PI) / 360)) * 6;
+    cam.position.copy(center).addScaledVector(back, dist);
     this.controls.target.copy(center);
     this.controls.update();
+    this.autoFit = true;
     this.requestRender();
+  }
+
+  /**
+   * A camera view: "fit" frames the part from where the camera looks now; "top", "front" and
+   * "iso" look from that side, then frame the part.
+   * @param {"fit"|"top"|"front"|"iso"} which
+   */
+  view(which) {
+    const dir = VIEWS[which];
+    if (dir) this.camera.position.copy(this.controls.target).add(dir);
+    this.fit();
+  }
+
+  /**
+   * Near and far planes from the part's bounding sphere and the camera's distance to it (the
+   * plate is kept inside the far plane), the depth range of the line shading and the size of a
+   * pixel for the tubes' minimum width. Called before every frame, so after every camera change.
+   */
+  updateClipping() {
+    const cam = this.camera;
+    const part = this.sphere ?? this.bedSphere;
+    cam.updateMatrixWorld();
+    const d = cam.position.distanceTo(part.center);
+    const r = part.radius * 1.02 + 2 * this.uniforms.uWidth.value;
+    const near = Math.max(d * 0.002, Math.min(d - r, d * 0.05), 1e-4);
+    const far = Math.max(d + r, cam.position.distanceTo(this.bedSphere.center) + this.bedSphere.radius) * 1.01;
+    if (near !== cam.near || far !== cam.far) {
+      cam.near = near;
+      cam.far = far;
+      cam.updateProjectionMatrix();
+    }
+    // Depth shading over the part's own depth in this view: the tighter of its box's corners
+    // and the sphere round its centre through its farthest point (a ball's depth is its
+    // diameter, a flat part seen from the top has almost none).
+    const m = cam.matrixWorldInverse.elements;
+    const depthOf = (x, y, z) => -(m[2] * x + m[6] * y + m[10] * z + m[14]);
+    const c = part.center;
+    const shade = this.sphere ? this.shadeRadius : part.radius;
+    let front = depthOf(c.x, c.y, c.z) - shade;
+    let back = front + 2 * shade;
+    const b = this.bounds ?? this.bedBox;
+    let lo = Infinity, hi = -Infinity;
+    for (let i = 0; i < 8; i++) {
+      const z = depthOf(i & 1 ? b.max.x : b.min.x, i & 2 ? b.max.y : b.min.y, i & 4 ? b.max.z : b.min.z);
+      lo = Math.min(lo, z);
+      hi = Math.max(hi, z);
+    }
+    front = Math.max(front, lo);
+    back = Math.min(back, hi);
+    this.uniforms.uDepth.value.set(front, Math.max(back - front, 0.1 * shade, 1e-3));
+    const height = this.renderer.getDrawingBufferSize(this.tmp2 ??= new THREE.Vector2()).y || 1;
+    this.uniforms.uPixel.value = (2 * Math.tan((cam.fov * Math.PI) / 360)) / height;
   }
 }
 

@@ -1,12 +1,12 @@
-// 3D toolpath preview: every extrusion segment is one instance of a small shaded prism (a
-// "tube" with a diamond cross-section and pointed ends, lit by a light fixed to the camera),
-// or, above TUBE_LIMIT segments, one instanced line lit by its direction and darkened with
-// depth. Both read the same instance attributes.
+// 3D toolpath preview: every extrusion segment is drawn as a shaded tube (a camera-facing quad
+// shaded as a round tube with round ends, lit by a light fixed to the camera and darker with
+// depth) or as a line lit by its direction and darker with depth: lines while the camera moves
+// over TUBE_LIMIT segments, and always over STILL_TUBE_LIMIT.
 //
-// Built for millions of segments: the transferred Float32Array of positions is the instance
-// buffer as is (start and end are two views into it, stride 6); colours are Uint8 normalized
-// per-segment attributes computed once per colour mode and cached; the layer range and the
-// print-order limit are an instance offset and count (a few array lookups per change);
+// Built for millions of segments: the segments' ends and widths are one float texture, their
+// colours one byte texture per colour mode (computed once per mode and cached), and the shaders
+// pull a segment's data by vertex index, so a draw needs no vertex buffers; the layer range and
+// the print-order limit are a draw range (a few array lookups per change);
 // nothing is allocated per frame and a frame is drawn only when something changed (no
 // animation loop). The camera is fitted to the part on every new result and on request
 // (Fit, top, front, iso views); its near and far planes follow the part's bounding sphere on
@@ -31,18 +31,22 @@ const START_SIZE_PX = 7;
 const RAMP = buildRamp();
 
 /**
- * Above this many extrusion segments the preview draws lines (lit by their direction, darker
- * with depth) instead of tubes: measured in headless Chromium with SwiftShader, where tubes
- * stop orbiting smoothly (ARCHITECTURE.md, "The 3D preview"). `setStyle` overrides it.
+ * Over this many extrusion segments the preview draws lines (lit by their direction, darker
+ * with depth) while the camera moves, and tubes again once it rests (REST_MS): the count where
+ * orbiting tubes drops under 10 frames a second in headless Chromium with SwiftShader
+ * (tests/e2e/preview-bench.mjs; ARCHITECTURE.md, "The 3D preview"). `setStyle` overrides it.
  */
-export const TUBE_LIMIT = 400000;
+export const TUBE_LIMIT = 10000;
+/** Over this many segments, lines at rest too: one frame of tubes takes over a second there. */
+export const STILL_TUBE_LIMIT = 150000;
+/** Tubes come back this long after the camera stops (ms). */
+const REST_MS = 250;
 /** Vertical field of view, degrees. */
 const FOV = 30;
 /** Fit: the part's projection spans this fraction of the canvas in its limiting direction. */
 const FILL = 0.86;
-/** Tube width (mm) when the result has no width per segment, and height without layers. */
+/** Tube width (mm) when the result has no width per segment. */
 const DEFAULT_WIDTH = 0.45;
-const DEFAULT_HEIGHT = 0.2;
 /** Directions from the target to the camera of the camera buttons (z up). */
 const VIEWS = {
   iso: new THREE.Vector3(-0.55, -1, 0.75).normalize(),
@@ -59,80 +63,88 @@ const vec3 KEY = vec3(-0.4082, 0.5443, 0.7328);
 const vec3 FILL_LIGHT = vec3(0.6727, -0.3363, 0.6590);
 const vec3 HALF_KEY = vec3(-0.2193, 0.2924, 0.9308);
 `;
-const INSTANCE_ATTRIBUTES = /* glsl */ `
-attribute vec3 iStart;
-attribute vec3 iEnd;
-attribute vec3 iColor;
-#ifdef HAS_WIDTH
-attribute float iWidth;
-#endif
-#ifdef HAS_AXIS
-attribute vec3 iAxis;
-#endif
-uniform float uWidth;
-uniform float uHeight;
+/** Width of the segment data textures (texels); a segment's texels are found from its index. */
+const TEX_WIDTH = 4096;
+const TEX_SHIFT = 12;
+// Segment data is pulled from textures by gl_VertexID (no instancing: SwiftShader, the software
+// WebGL of headless browsers and GPU-less machines, pays about 30 µs per instance).
+const SEGMENT_DATA = /* glsl */ `
+uniform highp sampler2D uEnds;   // 2 texels per segment: x y z width, x y z 0 (mm)
+uniform lowp sampler2D uColors;  // 1 texel per segment: sRGB of the colour mode
 uniform float uPixel;
 uniform vec2 uDepth;
+ivec2 texel(int i) { return ivec2(i & ${TEX_WIDTH - 1}, i >> ${TEX_SHIFT}); }
 `;
 
 /**
- * A tube: a prism with a diamond cross-section (width × layer height, smooth normals so it
- * shades round) along the segment, with a pointed end half a width long at each end so
- * consecutive segments join without gaps. `position` is (along, across, up) of the base
- * geometry: along 0 / 1 the rings at the segment's ends, -1 / 2 the points.
+ * A tube: a camera-facing quad round each segment, half a width wider than it on every side,
+ * shaded as a round tube with round ends (an impostor: 4 vertices and 2 triangles a segment,
+ * the round ends cut out in the fragment shader), so consecutive segments join without gaps.
  */
-const TUBE_VERTEX = /* glsl */ `${INSTANCE_ATTRIBUTES}
+const TUBE_VERTEX = /* glsl */ `${SEGMENT_DATA}
 varying vec3 vColor;
-varying vec3 vNormal;
+varying vec2 vAt;              // across (-1 … 1) and along (-1 … len + 1), in radii
+flat varying float vLen;       // the segment's length on screen, in radii
+flat varying vec3 vSide;       // view-space frame of the tube: across, along, towards the eye
+flat varying vec3 vAlong;
+flat varying vec3 vFacing;
+flat varying float vRadius;
+varying vec3 vView;            // the point on the quad, view space
 varying float vFar;
 void main() {
-  vec3 d = iEnd - iStart;
-  float len = length(d);
-  vec3 dir = len > 1e-6 ? d / len : vec3(1.0, 0.0, 0.0);
-#ifdef HAS_AXIS
-  vec3 up = dot(iAxis, iAxis) > 0.25 ? normalize(iAxis) : vec3(0.0, 0.0, 1.0);
-#else
-  vec3 up = vec3(0.0, 0.0, 1.0);
-#endif
-  vec3 side = cross(dir, up);
-  if (dot(side, side) < 1e-6) side = cross(dir, vec3(1.0, 0.0, 0.0));
-  side = normalize(side);
-  up = cross(side, dir);
-#ifdef HAS_WIDTH
-  float w = iWidth > 0.0 ? iWidth : uWidth;
-#else
-  float w = uWidth;
-#endif
+  int seg = gl_VertexID >> 2;
+  int q = gl_VertexID & 3; // the quad's corners: start or end (q >> 1), one side or the other (q & 1)
+  vec4 a = texelFetch(uEnds, texel(2 * seg), 0);
+  vec4 b = texelFetch(uEnds, texel(2 * seg + 1), 0);
+  vec3 p0 = (modelViewMatrix * vec4(a.xyz, 1.0)).xyz;
+  vec3 p1 = (modelViewMatrix * vec4(b.xyz, 1.0)).xyz;
+  vec3 mid = 0.5 * (p0 + p1);
+  vec3 eye = isOrthographic ? vec3(0.0, 0.0, 1.0) : normalize(-mid);
+  vec3 d = p1 - p0;
+  // The segment's direction on screen (any, when it points at the eye).
+  vec3 ds = d - eye * dot(d, eye);
+  vec3 along = dot(ds, ds) > 1e-12 ? normalize(ds) : normalize(cross(eye, vec3(0.0, 1.0, 0.0)) + vec3(1e-6, 0.0, 0.0));
+  vec3 side = normalize(cross(along, eye));
   // Never thinner than about a pixel, however far away.
-  vec4 mid = modelViewMatrix * vec4(0.5 * (iStart + iEnd), 1.0);
-  float pixel = uPixel * (isOrthographic ? 1.0 : max(-mid.z, 1e-6));
-  float rw = max(0.5 * w, 0.6 * pixel);
-  float rh = max(0.5 * min(uHeight, w), 0.6 * pixel);
-  vec3 p;
-  vec3 n;
-  if (position.x < -0.5) {
-    p = iStart - dir * rw;
-    n = -dir;
-  } else if (position.x > 1.5) {
-    p = iEnd + dir * rw;
-    n = dir;
-  } else {
-    p = mix(iStart, iEnd, position.x) + side * (position.y * rw) + up * (position.z * rh);
-    n = side * position.y + up * position.z;
-  }
-  vec4 mv = modelViewMatrix * vec4(p, 1.0);
-  gl_Position = projectionMatrix * mv;
-  vNormal = normalize(normalMatrix * n);
-  vColor = iColor;
-  vFar = clamp((-mv.z - uDepth.x) / uDepth.y, 0.0, 1.0);
+  float r = max(0.5 * a.w, 0.6 * uPixel * (isOrthographic ? 1.0 : max(-mid.z, 1e-6)));
+  float len = dot(d, along) / r;
+  float s = (q & 1) == 0 ? -1.0 : 1.0;
+  vec3 p = (q < 2 ? p0 - along * r : p1 + along * r) + side * (s * r);
+  gl_Position = projectionMatrix * vec4(p, 1.0);
+  vView = p;
+  vRadius = r;
+  vAt = vec2(s, q < 2 ? -1.0 : len + 1.0);
+  vLen = len;
+  vec3 axis = dot(d, d) > 1e-12 ? normalize(d) : along;
+  vSide = side;
+  vAlong = along;
+  vFacing = normalize(cross(side, axis));
+  if (dot(vFacing, eye) < 0.0) vFacing = -vFacing;
+  vColor = texelFetch(uColors, texel(seg), 0).rgb;
+  vFar = clamp((-mid.z - uDepth.x) / uDepth.y, 0.0, 1.0);
 }
 `;
 const TUBE_FRAGMENT = /* glsl */ `${LIGHTS}
+uniform mat4 projectionMatrix;
 varying vec3 vColor;
-varying vec3 vNormal;
+varying vec2 vAt;
+flat varying float vLen;
+flat varying vec3 vSide;
+flat varying vec3 vAlong;
+flat varying vec3 vFacing;
+flat varying float vRadius;
+varying vec3 vView;
 varying float vFar;
 void main() {
-  vec3 n = normalize(vNormal);
+  float end = vAt.y - clamp(vAt.y, 0.0, vLen); // beyond an end, in radii
+  float q = vAt.x * vAt.x + end * end;
+  if (q > 1.0) discard;
+  float h = sqrt(1.0 - q);
+  vec3 n = normalize(vSide * vAt.x + vAlong * end + vFacing * h);
+  // The depth of the tube's surface, not of the quad: tubes that meet or cross intersect as
+  // tubes do (the round end of one segment hides inside the next).
+  vec4 clip = projectionMatrix * vec4(vView + vFacing * (h * vRadius), 1.0);
+  gl_FragDepth = 0.5 + 0.5 * clip.z / clip.w;
   float key = max(dot(n, KEY), 0.0);
   float fill = max(dot(n, FILL_LIGHT), 0.0);
   float spec = pow(max(dot(n, HALF_KEY), 0.0), 24.0);
@@ -141,16 +153,19 @@ void main() {
 }
 `;
 /** A line per segment: lit by its direction (bright across the light, dim along it) and darker with depth. */
-const LINE_VERTEX = /* glsl */ `${INSTANCE_ATTRIBUTES}${LIGHTS}
+const LINE_VERTEX = /* glsl */ `${SEGMENT_DATA}${LIGHTS}
 varying vec3 vColor;
 void main() {
-  vec4 mv = modelViewMatrix * vec4(position.x < 0.5 ? iStart : iEnd, 1.0);
+  int seg = gl_VertexID >> 1;
+  vec3 a = texelFetch(uEnds, texel(2 * seg), 0).xyz;
+  vec3 b = texelFetch(uEnds, texel(2 * seg + 1), 0).xyz;
+  vec4 mv = modelViewMatrix * vec4((gl_VertexID & 1) == 0 ? a : b, 1.0);
   gl_Position = projectionMatrix * mv;
-  vec3 t = mat3(modelViewMatrix) * (iEnd - iStart);
+  vec3 t = mat3(modelViewMatrix) * (b - a);
   float lt = dot(t, t) > 0.0 ? dot(normalize(t), KEY) : 0.0;
   float lit = sqrt(max(1.0 - lt * lt, 0.0));
   float far = clamp((-mv.z - uDepth.x) / uDepth.y, 0.0, 1.0);
-  vColor = iColor * (0.4 + 0.6 * lit) * (1.15 - 0.85 * sqrt(far));
+  vColor = texelFetch(uColors, texel(seg), 0).rgb * (0.4 + 0.6 * lit) * (1.15 - 0.85 * sqrt(far));
 }
 `;
 const LINE_FRAGMENT = /* glsl */ `
@@ -160,45 +175,27 @@ void main() {
 }
 `;
 
-/** The tube's base geometry (10 vertices, 16 triangles); see TUBE_VERTEX. */
-function tubeGeometry() {
-  const g = new THREE.InstancedBufferGeometry();
-  const ring = [[1, 0], [0, 1], [-1, 0], [0, -1]];
-  const pos = [];
-  for (const along of [0, 1]) for (const [s, t] of ring) pos.push(along, s, t);
-  pos.push(-1, 0, 0, 2, 0, 0);
-  const index = [];
-  for (let k = 0; k < 4; k++) {
-    const k1 = (k + 1) % 4;
-    index.push(k, 4 + k, 4 + k1, k, 4 + k1, k1); // side, counter-clockwise from outside
-    index.push(4 + k, 9, 4 + k1); // end point
-    index.push(k, k1, 8); // start point
-  }
-  g.setAttribute("position", new THREE.Float32BufferAttribute(pos, 3));
-  g.setIndex(index);
-  g.instanceCount = 0;
+/** A geometry without attributes: the shaders pull segments by vertex index; drawRange picks them. */
+function segmentGeometry() {
+  const g = new THREE.BufferGeometry();
+  g.setDrawRange(0, 0);
+  g.boundingSphere = new THREE.Sphere(new THREE.Vector3(), 1e9); // never culled or sorted by it
   return g;
 }
 
-/** The line's base geometry: the segment's start and end. */
-function lineGeometry() {
-  const g = new THREE.InstancedBufferGeometry();
-  g.setAttribute("position", new THREE.Float32BufferAttribute([0, 0, 0, 1, 0, 0], 3));
-  g.instanceCount = 0;
-  return g;
+/** A data texture of `texels` texels (TEX_WIDTH wide), `channels` RGBA values each. */
+function segmentTexture(data, texels, type) {
+  const t = new THREE.DataTexture(data, TEX_WIDTH, Math.max(1, Math.ceil(texels / TEX_WIDTH)), THREE.RGBAFormat, type);
+  t.minFilter = t.magFilter = THREE.NearestFilter;
+  t.generateMipmaps = false;
+  t.colorSpace = THREE.NoColorSpace;
+  t.needsUpdate = true;
+  return t;
 }
 
-/** The typical layer height of a result: the median step of its layer z (the first layer's z counts). */
-function layerHeight(z) {
-  if (!z || !z.length) return DEFAULT_HEIGHT;
-  const steps = z[0] > 1e-4 ? [z[0]] : [];
-  for (let i = 1; i < z.length && steps.length < 4000; i++) {
-    const h = z[i] - z[i - 1];
-    if (h > 1e-4) steps.push(h);
-  }
-  if (!steps.length) return DEFAULT_HEIGHT;
-  steps.sort((a, b) => a - b);
-  return Math.min(2, steps[steps.length >> 1]);
+/** Room for `texels` texels, RGBA, in a TEX_WIDTH-wide texture. */
+function textureArray(Type, texels) {
+  return new Type(Math.max(1, Math.ceil(texels / TEX_WIDTH)) * TEX_WIDTH * 4);
 }
 
 /** Distance from `c` to the farthest of (about 300k of) the points x y z … */
@@ -248,8 +245,15 @@ export class Preview {
     this.controls.screenSpacePanning = true;
     this.controls.listenToKeyEvents(canvas); // arrow keys pan when the canvas has focus
     this.controls.addEventListener("change", () => this.requestRender());
-    // A user's orbit, pan or zoom ends the automatic framing (a resize refits until then).
-    this.controls.addEventListener("start", () => { this.autoFit = false; });
+    // A user's orbit, pan or zoom ends the automatic framing (a resize refits until then), and
+    // draws lines while it lasts when the tubes are too many to move smoothly.
+    this.controls.addEventListener("start", () => {
+      this.autoFit = false;
+      this.setMoving(true);
+    });
+    this.controls.addEventListener("end", () => this.setMoving(false));
+    this.moving = false;
+    this.restTimer = 0;
     /** unit vector from the target to the camera: the view kept by Fit and new results */
     this.viewDir = VIEWS.iso.clone();
     this.autoFit = true;
@@ -257,25 +261,24 @@ export class Preview {
     this.plate = new THREE.Group();
     this.scene.add(this.plate);
 
-    // Extrusion: one instance per segment, drawn as a tube or as a line (see TUBE_LIMIT).
+    // Extrusion: a tube (4 vertices, 6 indices) or a line (2 vertices) per segment (see TUBE_LIMIT).
     this.uniforms = {
-      uWidth: { value: DEFAULT_WIDTH }, // mm, when the result has no width per segment
-      uHeight: { value: DEFAULT_HEIGHT }, // mm, the tube's height (the layer height)
+      uEnds: { value: null },
+      uColors: { value: null },
       uPixel: { value: 0.001 }, // world size of one drawing-buffer pixel at distance 1
       uDepth: { value: new THREE.Vector2(0, 1) }, // the part's depth range in view: near, length
     };
-    this.tubes = new THREE.Mesh(tubeGeometry(), new THREE.ShaderMaterial({
-      uniforms: this.uniforms, vertexShader: TUBE_VERTEX, fragmentShader: TUBE_FRAGMENT,
+    this.tubes = new THREE.Mesh(segmentGeometry(), new THREE.ShaderMaterial({
+      uniforms: this.uniforms, vertexShader: TUBE_VERTEX, fragmentShader: TUBE_FRAGMENT, side: THREE.DoubleSide,
     }));
-    this.lines = new THREE.LineSegments(lineGeometry(), new THREE.ShaderMaterial({
+    this.lines = new THREE.LineSegments(segmentGeometry(), new THREE.ShaderMaterial({
       uniforms: this.uniforms, vertexShader: LINE_VERTEX, fragmentShader: LINE_FRAGMENT,
     }));
-    for (const o of [this.tubes, this.lines]) {
-      o.frustumCulled = false;
-      o.geometry.instanceCount = 0;
-    }
+    for (const o of [this.tubes, this.lines]) o.frustumCulled = false;
+    /** segment textures of the result (ends and widths) */
+    this.textures = [];
     this.lines.visible = false;
-    /** "auto" (tubes up to TUBE_LIMIT segments), "tubes" or "lines"; `drawStyle` is the one in use */
+    /** "auto" (see TUBE_LIMIT), "tubes" or "lines"; `drawStyle` is the one in use now */
     this.style = "auto";
     this.drawStyle = "tubes";
     this.travel = new THREE.LineSegments(
@@ -303,8 +306,6 @@ export class Preview {
     this.axis.frustumCulled = false;
     this.axis.visible = Boolean(ui.showAxis?.checked);
     this.scene.add(this.tubes, this.lines, this.travel, this.starts, this.axis);
-    /** instance buffers of the result (positions, axis, width) and the colour mode shown */
-    this.instances = null;
     /** segment index of every path-start marker (increasing) */
     this.startSegment = new Uint32Array(0);
     /** layers shown, and the last G-code move shown (Infinity: all) */
@@ -322,7 +323,7 @@ export class Preview {
     /** part bounds and bounding sphere (null: no result; the plate is framed) */
     this.bounds = null;
     this.sphere = null;
-    /** @type {Map<string, THREE.InstancedInterleavedBuffer>} colours per mode (3 bytes a segment), built on demand */
+    /** @type {Map<string, THREE.DataTexture>} colours per mode (a texel a segment), built on demand */
     this.colorCache = new Map();
     this.setFeatures(options.features ?? []);
     this.layers = 0;
@@ -411,13 +412,11 @@ export class Preview {
     this.travel.geometry.dispose();
     this.starts.geometry.dispose();
     this.axis.geometry.dispose();
-    // The instance buffers go with the geometry (their GPU buffers are freed when no
-    // geometry uses them); fresh geometries also reset three's instance-count bound.
-    this.tubes.geometry.dispose();
-    this.lines.geometry.dispose();
-    this.tubes.geometry = tubeGeometry();
-    this.lines.geometry = lineGeometry();
+    for (const t of this.textures) t.dispose();
+    for (const t of this.colorCache.values()) t.dispose();
+    this.textures = [];
     this.colorCache.clear();
+    this.uniforms.uEnds.value = this.uniforms.uColors.value = null;
     this.data = data;
     this.featureCounts = null;
     this.flowRange = null;
@@ -428,20 +427,25 @@ export class Preview {
     const empty = new Float32Array(0);
     this.travel.geometry = new THREE.BufferGeometry();
     this.travel.geometry.setAttribute("position", new THREE.BufferAttribute(data?.travel ?? empty, 3));
-    this.instances = segments > 0 ? {
-      pos: new THREE.InstancedInterleavedBuffer(data.positions, 6, 1),
-      width: data.width?.length >= segments ? new THREE.InstancedInterleavedBuffer(data.width, 1, 1) : null,
-      axis: data.axis?.length >= segments * 3 ? new THREE.InstancedInterleavedBuffer(data.axis, 3, 1) : null,
-      color: null,
-    } : null;
-    const defines = {};
-    if (this.instances?.width) defines.HAS_WIDTH = "";
-    if (this.instances?.axis) defines.HAS_AXIS = "";
-    for (const o of [this.tubes, this.lines]) {
-      if (Object.keys(defines).join() !== Object.keys(o.material.defines).join()) {
-        o.material.defines = defines;
-        o.material.needsUpdate = true;
+    if (segments > 0) {
+      // Ends and width, two RGBA float texels a segment (the copy is dropped once uploaded).
+      const p = data.positions;
+      const w = data.width?.length >= segments ? data.width : null;
+      const ends = textureArray(Float32Array, 2 * segments);
+      for (let i = 0; i < segments; i++) {
+        const o = i * 8, k = i * 6;
+        ends[o] = p[k];
+        ends[o + 1] = p[k + 1];
+        ends[o + 2] = p[k + 2];
+        ends[o + 3] = w && w[i] > 0 ? w[i] : DEFAULT_WIDTH;
+        ends[o + 4] = p[k + 3];
+        ends[o + 5] = p[k + 4];
+        ends[o + 6] = p[k + 5];
       }
+      const texture = segmentTexture(ends, 2 * segments, THREE.FloatType);
+      texture.onUpdate = () => { texture.image.data = null; };
+      this.textures.push(texture);
+      this.uniforms.uEnds.value = texture;
     }
 
     const layerStart = data?.layerStart ?? new Uint32Array(0);
@@ -464,7 +468,6 @@ export class Preview {
     this.bounds = bounds;
     this.sphere = bounds ? bounds.getBoundingSphere(new THREE.Sphere()) : null;
     this.shadeRadius = bounds ? farthestFrom(this.sphere.center, data.positions) : 0;
-    this.uniforms.uHeight.value = layerHeight(data?.layerZ);
     this.buildStarts();
     this.buildAxis(segments, bounds);
     this.setupMoves(segments);
@@ -479,7 +482,7 @@ export class Preview {
   }
 
   /**
-   * How the extrusion is drawn: "tubes", "lines", or "auto" (tubes up to TUBE_LIMIT segments).
+   * How the extrusion is drawn: "tubes", "lines", or "auto" (see TUBE_LIMIT).
    * @param {"auto"|"tubes"|"lines"} style
    */
   setStyle(style) {
@@ -489,33 +492,69 @@ export class Preview {
     this.requestRender();
   }
 
+  /** The style at rest: tubes up to STILL_TUBE_LIMIT segments in "auto". */
+  restStyle() {
+    return this.style !== "auto" ? this.style : this.segmentCount() > STILL_TUBE_LIMIT ? "lines" : "tubes";
+  }
+
+  /** The camera starts or stops moving: lines while it moves over TUBE_LIMIT segments. */
+  setMoving(on) {
+    clearTimeout(this.restTimer);
+    if (on) {
+      if (this.moving) return;
+      this.moving = true;
+      this.chooseStyle();
+    } else {
+      this.restTimer = setTimeout(() => {
+        this.moving = false;
+        if (this.chooseStyle()) this.requestRender();
+      }, REST_MS);
+    }
+  }
+
+  /** @returns {boolean} whether the style changed */
   chooseStyle() {
-    const segments = this.segmentCount();
-    this.drawStyle = this.style === "auto" ? (segments > TUBE_LIMIT ? "lines" : "tubes") : this.style;
+    const before = this.drawStyle;
+    const moving = this.moving && this.style === "auto" && this.segmentCount() > TUBE_LIMIT;
+    this.drawStyle = moving ? "lines" : this.restStyle();
     this.tubes.visible = this.drawStyle === "tubes";
     this.lines.visible = this.drawStyle === "lines";
+    if (this.drawStyle === "tubes" && this.drawn.extrusion > 0) this.ensureQuads(this.first + this.drawn.extrusion);
+    return before !== this.drawStyle;
   }
 
   /**
-   * Points the instance attributes of both drawings at segments first … first + count - 1: the
-   * buffers stay on the GPU, only the attribute offsets change.
+   * The tubes' index buffer (6 indices a segment, 2 triangles of its 4 vertices), grown to
+   * `segments` in powers of two and kept across results.
    */
-  setInstanceRange(first, count) {
-    this.first = first;
-    const inst = this.instances;
-    for (const o of [this.tubes, this.lines]) {
-      const g = o.geometry;
-      if (!inst) {
-        g.instanceCount = 0;
-        continue;
-      }
-      g.setAttribute("iStart", new THREE.InterleavedBufferAttribute(inst.pos, 3, first * 6));
-      g.setAttribute("iEnd", new THREE.InterleavedBufferAttribute(inst.pos, 3, first * 6 + 3));
-      if (inst.color) g.setAttribute("iColor", new THREE.InterleavedBufferAttribute(inst.color, 3, first * 3, true));
-      if (inst.width) g.setAttribute("iWidth", new THREE.InterleavedBufferAttribute(inst.width, 1, first));
-      if (inst.axis) g.setAttribute("iAxis", new THREE.InterleavedBufferAttribute(inst.axis, 3, first * 3));
-      g.instanceCount = inst.color ? count : 0;
+  ensureQuads(segments) {
+    const index = this.tubes.geometry.index;
+    if (index && index.count >= segments * 6) return;
+    let n = 1024;
+    while (n < segments) n *= 2;
+    const quads = new Uint32Array(n * 6);
+    for (let i = 0, v = 0; i < quads.length; i += 6, v += 4) {
+      quads[i] = v;
+      quads[i + 1] = v + 1;
+      quads[i + 2] = v + 2;
+      quads[i + 3] = v + 2;
+      quads[i + 4] = v + 1;
+      quads[i + 5] = v + 3;
     }
+    const range = this.tubes.geometry.drawRange;
+    this.tubes.geometry.dispose();
+    this.tubes.geometry = segmentGeometry();
+    this.tubes.geometry.setIndex(new THREE.BufferAttribute(quads, 1));
+    this.tubes.geometry.setDrawRange(range.start, range.count);
+  }
+
+  /** Draws segments first … first + count - 1 (both drawings: tubes 6 indices a segment, lines 2 vertices). */
+  setSegmentRange(first, count) {
+    this.first = first;
+    if (!this.uniforms.uEnds.value || !this.uniforms.uColors.value) count = 0;
+    if (count > 0 && this.drawStyle === "tubes") this.ensureQuads(first + count);
+    this.tubes.geometry.setDrawRange(first * 6, count * 6);
+    this.lines.geometry.setDrawRange(first * 2, count * 2);
   }
 
   /** Shows layers lo..hi (0-based, inclusive): O(log n). */
@@ -541,7 +580,7 @@ export class Preview {
     const { lo, hi, move } = this.range;
     if (!d || this.layers === 0) {
       for (const o of [this.travel, this.starts, this.axis]) o.geometry.setDrawRange(0, 0);
-      this.setInstanceRange(0, 0);
+      this.setSegmentRange(0, 0);
       this.drawn = { extrusion: 0, travel: 0 };
       label.textContent = "no layers";
       this.updateMoveLabel();
@@ -554,7 +593,7 @@ export class Preview {
     const limited = move !== Infinity;
     if (limited && this.bySegment) end = Math.max(start, Math.min(end, move + 1));
     else if (limited) end = Math.max(start, Math.min(end, upperBound(d.segmentMove, move)));
-    this.setInstanceRange(start, end - start);
+    this.setSegmentRange(start, end - start);
     if (this.axisSegments) this.axis.geometry.setDrawRange(start * 2, (end - start) * 2);
     const s0 = lowerBound(this.startSegment, start);
     const s1 = lowerBound(this.startSegment, end);
@@ -707,27 +746,27 @@ export class Preview {
     const mode = this.ui.colorBy.value;
     const d = this.data;
     const segments = d ? d.positions.length / 6 : 0;
-    if (segments > 0 && this.instances) {
+    if (segments > 0) {
       let colors = this.colorCache.get(mode);
       if (!colors) {
-        colors = new THREE.InstancedInterleavedBuffer(this.computeColors(mode, segments), 3, 1);
+        colors = segmentTexture(this.computeColors(mode, segments), segments, THREE.UnsignedByteType);
         this.colorCache.set(mode, colors);
       }
-      this.instances.color = colors;
-      this.setInstanceRange(this.first, this.drawn.extrusion);
+      this.uniforms.uColors.value = colors;
+      this.setSegmentRange(this.first, this.drawn.extrusion);
     }
     this.updateLegend(mode, segments);
     if (render) this.requestRender();
   }
 
-  /** @returns {Uint8Array} RGB per segment */
+  /** @returns {Uint8Array} RGBA per segment (A unused), as long as a colour texture */
   computeColors(mode, segments) {
     const d = this.data;
-    const out = new Uint8Array(segments * 3);
+    const out = textureArray(Uint8Array, segments);
     const put = (i, r, g, b) => {
-      out[i * 3] = r;
-      out[i * 3 + 1] = g;
-      out[i * 3 + 2] = b;
+      out[i * 4] = r;
+      out[i * 4 + 1] = g;
+      out[i * 4 + 2] = b;
     };
     if (mode === "feature" && d.feature.length >= segments) {
       for (let i = 0; i < segments; i++) {
@@ -819,12 +858,14 @@ export class Preview {
       legend.append(item(null, `one colour per extrusion path (${paths.toLocaleString()} paths)`));
     }
     if (this.starts.visible) legend.append(item([255, 255, 255], "path start", true));
-    const asLines = this.drawStyle === "lines" && segments > 0;
+    const asLines = this.restStyle() === "lines" && segments > 0;
     const count = item(null, `${segments.toLocaleString()} segments${asLines ? " · lines" : ""}`);
     if (asLines) {
       count.title = this.style === "auto"
-        ? `Drawn as lines: over ${TUBE_LIMIT.toLocaleString()} segments, tubes are too slow to orbit without a fast GPU`
+        ? `Drawn as lines: over ${STILL_TUBE_LIMIT.toLocaleString()} segments, tubes are too slow without a fast GPU`
         : "Drawn as lines";
+    } else if (this.style === "auto" && segments > TUBE_LIMIT) {
+      count.title = `Drawn as lines while the view moves (over ${TUBE_LIMIT.toLocaleString()} segments)`;
     }
     legend.append(count);
   }
@@ -945,7 +986,7 @@ export class Preview {
     const part = this.sphere ?? this.bedSphere;
     cam.updateMatrixWorld();
     const d = cam.position.distanceTo(part.center);
-    const r = part.radius * 1.02 + 2 * this.uniforms.uWidth.value;
+    const r = part.radius * 1.02 + 2 * DEFAULT_WIDTH;
     const near = Math.max(d * 0.002, Math.min(d - r, d * 0.05), 1e-4);
     const far = Math.max(d + r, cam.position.distanceTo(this.bedSphere.center) + this.bedSphere.radius) * 1.01;
     if (near !== cam.near || far !== cam.far) {

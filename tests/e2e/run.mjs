@@ -16,6 +16,7 @@ import { execFileSync } from "node:child_process";
 import { join, resolve } from "node:path";
 import { ROOT, serve } from "./server.mjs";
 import { latticeChecks } from "./lattice-checks.mjs";
+import { previewChecks } from "./preview-checks.mjs";
 import {
   collectErrors, colouredPixels, downloadGcode, launchChromium, waitReady, waitResult as waitResultWithin,
 } from "./page-helpers.mjs";
@@ -468,6 +469,8 @@ await check(17, "hostile share links: a name of HTML stays text and runs nothing
     await context.close();
   }
 });
+
+await previewChecks({ baseUrl: base, check, newPage, first: 18, timeoutMs: JOB_TIMEOUT });
 
 if (main.errors.length) console.log(`note: console errors in the main page:\n  ${main.errors.join("\n  ")}`);
 if (offOrigin.length) console.log(`note: blocked requests leaving the origin:\n  ${[...new Set(offOrigin)].join("\n  ")}`);

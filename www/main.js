@@ -117,7 +117,7 @@ async function start() {
     preview = new Preview($("preview"), {
       colorBy: $("color-by"), showTravel: $("show-travel"), showStarts: $("show-starts"), layerMin: $("layer-min"),
       layerMax: $("layer-max"), layerLabel: $("layer-label"), legend: $("legend"),
-      moveMax: $("move-max"), moveLabel: $("move-label"), showAxis: $("show-axis"),
+      moveMax: $("move-max"), moveLabel: $("move-label"), showAxis: $("show-axis"), camera: $("camera-views"),
     }, { features: schema.features });
   } catch (err) {
     showError(`The 3D preview could not start (${messageOf(err)}); slicing and downloads still work.`);

@@ -17,6 +17,7 @@ import { join, resolve } from "node:path";
 import { ROOT, serve } from "./server.mjs";
 import { latticeChecks } from "./lattice-checks.mjs";
 import { newcomerChecks } from "./newcomer-checks.mjs";
+import { previewChecks } from "./preview-checks.mjs";
 import {
   collectErrors, colouredPixels, downloadGcode, launchChromium, waitReady, waitResult as waitResultWithin,
 } from "./page-helpers.mjs";
@@ -480,7 +481,8 @@ await check(17, "hostile share links: a name of HTML stays text and runs nothing
   }
 });
 
-await newcomerChecks({ base, check, newPage, outDir: OUT, first: 18, cube });
+const next = await previewChecks({ baseUrl: base, check, newPage, first: 18, timeoutMs: JOB_TIMEOUT });
+await newcomerChecks({ base, check, newPage, outDir: OUT, first: typeof next === "number" ? next : 23, cube });
 
 if (main.errors.length) console.log(`note: console errors in the main page:\n  ${main.errors.join("\n  ")}`);
 if (offOrigin.length) console.log(`note: blocked requests leaving the origin:\n  ${[...new Set(offOrigin)].join("\n  ")}`);

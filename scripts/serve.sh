@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
-# Builds the wasm core and the page, then serves the app on http://localhost:${PORT:-8080}/www/
+# Builds the wasm core and the page, then serves the page at http://127.0.0.1:${PORT:-8080}/
+# (only www/ and pkg/: the rest of the repository is never served; see scripts/serve.py).
 # Installs whatever is missing (idempotent): see scripts/build-www.sh.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/build-www.sh
 PORT="${PORT:-8080}"
-echo "weft: serving on http://localhost:$PORT/www/  (Ctrl+C stops)"
-exec python3 -m http.server "$PORT" --bind 127.0.0.1
+echo "weft: Ctrl+C stops the server"
+exec python3 scripts/serve.py --port "$PORT"

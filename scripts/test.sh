@@ -13,6 +13,8 @@ if [ ! -x /usr/bin/chromium ]; then
     || { $sudo_cmd apt-get update >/dev/null && $sudo_cmd apt-get install -y chromium >/dev/null; }
 fi
 
+echo "== serve.py: the page at /, nothing else of the repository"
+python3 tests/serve/check.py
 echo "== Rust tests"
 cargo test --release 2>&1 | tee /tmp/weft-cargo-test.log
 echo "== CLI (release)"

@@ -44,7 +44,7 @@ enum Command {
         #[arg(long)]
         report: Option<PathBuf>,
         /// An input file for a slot of the job: SLOT=FILE (e.g. surface=dome.stl), or FILE for
-        /// the job's first slot (repeatable). `weft slots` lists each job kind's slots.
+        /// the job's first slot (repeatable). `weft jobs` lists each job kind's slots.
         #[arg(long, value_name = "[SLOT=]FILE")]
         input: Vec<String>,
         /// Override a design field: PATH=VALUE (repeatable), e.g. job.slice.layer_height_mm=0.1.
@@ -117,12 +117,73 @@ enum Command {
     },
 }
 
+/// `println!` through [`emit`].
+macro_rules! outln {
+    ($($t:tt)*) => { emit(format_args!("{}\n", format_args!($($t)*))) };
+}
+/// `print!` through [`emit`].
+macro_rules! out {
+    ($($t:tt)*) => { emit(format_args!($($t)*)) };
+}
+/// `eprintln!` through [`emit_err`].
+macro_rules! errln {
+    ($($t:tt)*) => { emit_err(format_args!("{}\n", format_args!($($t)*))) };
+}
+/// `eprint!` through [`emit_err`].
+macro_rules! err {
+    ($($t:tt)*) => { emit_err(format_args!($($t)*)) };
+}
+
+/// Writes to stdout. A closed pipe (`weft analyze x.gcode --json | head`) ends the program
+/// quietly with success: the reader has what it wanted. Any other failure is one error line.
+fn emit(args: std::fmt::Arguments) {
+    use std::io::Write;
+    let mut out = std::io::stdout().lock();
+    if let Err(e) = out.write_fmt(args).and_then(|()| out.flush()) {
+        if e.kind() == std::io::ErrorKind::BrokenPipe {
+            std::process::exit(0);
+        }
+        errln!("weft: error: cannot write the output: {}", io_words(&e));
+        std::process::exit(1);
+    }
+}
+
+/// Writes to stderr, ignoring a closed stderr (there is nowhere left to say anything).
+fn emit_err(args: std::fmt::Arguments) {
+    use std::io::Write;
+    let _ = std::io::stderr().lock().write_fmt(args);
+}
+
+/// A file-system error in words (not "No such file or directory (os error 2)").
+fn io_words(e: &std::io::Error) -> String {
+    use std::io::ErrorKind as K;
+    match e.kind() {
+        K::NotFound => "there is no such file or folder".into(),
+        K::PermissionDenied => "permission denied: this user may not read or write it".into(),
+        K::IsADirectory => "it is a folder, not a file".into(),
+        K::NotADirectory => "a part of the path is a file, not a folder".into(),
+        K::AlreadyExists => "it already exists".into(),
+        K::StorageFull => "the disk is full".into(),
+        K::ReadOnlyFilesystem => "the disk is read-only".into(),
+        K::OutOfMemory => "out of memory".into(),
+        K::FileTooLarge => "the file is too large for this file system".into(),
+        K::BrokenPipe => "the reader of the output went away".into(),
+        _ => {
+            // The system's own words, without Rust's "(os error N)".
+            let text = e.to_string();
+            let text = text.split(" (os error").next().unwrap_or(&text).to_string();
+            let mut c = text.chars();
+            c.next().map_or(text.clone(), |f| f.to_lowercase().collect::<String>() + c.as_str())
+        }
+    }
+}
+
 fn read(path: &Path) -> Result<Vec<u8>, String> {
-    std::fs::read(path).map_err(|e| format!("{}: {e}", path.display()))
+    std::fs::read(path).map_err(|e| format!("{}: cannot read it: {}", path.display(), io_words(&e)))
 }
 
 fn write(path: &Path, bytes: &[u8]) -> Result<(), String> {
-    std::fs::write(path, bytes).map_err(|e| format!("{}: {e}", path.display()))
+    std::fs::write(path, bytes).map_err(|e| format!("{}: cannot write it: {}", path.display(), io_words(&e)))
 }
 
 /// Where to write an output named after the design: `out` as given, inside `out` when it is a
@@ -147,7 +208,7 @@ fn load_design(arg: &str) -> Result<Design, String> {
     }
     let path = Path::new(arg);
     let bytes = read(path)?;
-    let text = String::from_utf8(bytes).map_err(|_| format!("{arg}: not UTF-8 text; a design is a JSON file"))?;
+    let text = String::from_utf8(bytes).map_err(|_| format!("{arg}: this is not a design: a design is a JSON text file and this is not text"))?;
     Design::from_json(&file_name(path), &text).map_err(|e| e.to_string())
 }
 
@@ -201,7 +262,7 @@ fn cmd_run(
     apply_inputs(&mut design, inputs, &mut files)?;
     if dry_run {
         let plan = pipeline::estimate(&Registry::builtin(), &mut pipeline::Cache::disabled(), &design, &files).map_err(|e| e.to_string())?;
-        print!("{}", plan_table(&plan));
+        out!("{}", plan_table(&plan));
         if let Some(path) = report {
             write(&path, serde_json::to_string_pretty(&plan).unwrap_or_default().as_bytes())?;
         }
@@ -226,13 +287,13 @@ fn cmd_run(
     let mut progress = |stage: &str, f: f32| {
         let pct = (f * 100.0) as i32;
         if show && (stage != last.0 || pct / 10 != last.1 / 10) {
-            eprint!("\r{:<10} {:>3}%", stage, pct);
+            err!("\r{:<10} {:>3}%", stage, pct);
             last = (stage.to_string(), pct);
         }
     };
     let result = pipeline::run_in(&registry, &mut cache, &design, &files, &RunOptions::default(), &mut progress);
     if show {
-        eprint!("\r                \r");
+        err!("\r                \r");
     }
     let output = result.map_err(|e| e.to_string())?;
     let out = output_path(out.as_deref(), &design.name, design.printer.flavor.file_extension());
@@ -243,7 +304,7 @@ fn cmd_run(
     }
     if !quiet {
         let a = &output.report.analysis;
-        eprintln!(
+        errln!(
             "{}: {} layers, {} paths, {:.1} mm extruded, {:.1} mm filament, {} retractions, ~{}",
             out.display(),
             a.layers,
@@ -291,17 +352,17 @@ fn cmd_analyze(file: &Path, json: bool) -> Result<(), String> {
     let analysis = weft::analyze::analyze(&file_name(file), &bytes, &Default::default()).map_err(|e| e.to_string())?;
     let r = &analysis.report;
     if json {
-        println!("{}", serde_json::to_string_pretty(r).unwrap_or_default());
+        outln!("{}", serde_json::to_string_pretty(r).unwrap_or_default());
     } else {
-        println!("layers            {}", r.layers);
-        println!("extrusion paths   {}", r.extrusion_paths);
-        println!("extruded          {:.3} mm", r.extruded_mm);
-        println!("travel            {:.3} mm", r.travel_mm);
-        println!("retractions       {}", r.retractions);
-        println!("overlap           {:.3} mm", r.overlap_mm);
-        println!("GIPPO score       {:.4}", r.gippo_score);
-        println!("estimated time    {} ({:.0} s)", hms(r.estimated_time_s), r.estimated_time_s);
-        println!("filament          {:.3} mm", r.filament_mm);
+        outln!("layers            {}", r.layers);
+        outln!("extrusion paths   {}", r.extrusion_paths);
+        outln!("extruded          {:.3} mm", r.extruded_mm);
+        outln!("travel            {:.3} mm", r.travel_mm);
+        outln!("retractions       {}", r.retractions);
+        outln!("overlap           {:.3} mm", r.overlap_mm);
+        outln!("GIPPO score       {:.4}", r.gippo_score);
+        outln!("estimated time    {} ({:.0} s)", hms(r.estimated_time_s), r.estimated_time_s);
+        outln!("filament          {:.3} mm", r.filament_mm);
     }
     Ok(())
 }
@@ -312,20 +373,20 @@ fn cmd_share(design: &Path, inputs: &[String]) -> Result<(), String> {
     apply_inputs(&mut d, inputs, &mut files)?;
     let list: Vec<(&str, &[u8])> = files.names().filter_map(|n| files.get(n).map(|b| (n, b))).collect();
     let link = share::encode(&d, &list);
-    println!("{}", link.fragment);
+    outln!("{}", link.fragment);
     if !link.note.is_empty() {
-        eprintln!("note: {}", link.note);
+        errln!("note: {}", link.note);
     }
     Ok(())
 }
 
 fn cmd_jobs() {
     for k in Registry::builtin().kinds() {
-        println!("{:<10} {}", k.name(), k.doc());
+        outln!("{:<10} {}", k.name(), k.doc());
         let stages: Vec<&str> = k.stages().iter().map(|s| s.name).collect();
-        println!("  stages: {} → gcode → analyze", stages.join(" → "));
+        outln!("  stages: {} → gcode → analyze", stages.join(" → "));
         for s in k.slots() {
-            println!("  --input {}=FILE   {} ({}): {}", s.name, s.label, s.kind.accept().join(" "), s.doc);
+            outln!("  --input {}=FILE   {} ({}): {}", s.name, s.label, s.kind.accept().join(" "), s.doc);
         }
     }
 }
@@ -359,8 +420,8 @@ fn scaling_bench() -> Result<(), String> {
     };
     let idle = std::process::Command::new(&exe).args(["bench", "--scaling-case", "none"]).output().ok();
     let idle_bytes = idle.and_then(|o| String::from_utf8_lossy(&o.stdout).split_whitespace().nth(2).and_then(|w| w.parse::<f64>().ok())).unwrap_or(0.0) * 1024.0;
-    println!("scaling: best of 3 per size; memory = peak resident above an idle process ({:.1} MiB)", idle_bytes / 1048576.0);
-    println!("{:<20} {:>10} {:>22} {:>22} {:>22} {:>6} {:>6}", "case", "unit", "1×: size, s, MiB", "4×", "16×", "t exp", "m exp");
+    outln!("scaling: best of 3 per size; memory = peak resident above an idle process ({:.1} MiB)", idle_bytes / 1048576.0);
+    outln!("{:<20} {:>10} {:>22} {:>22} {:>22} {:>6} {:>6}", "case", "unit", "1×: size, s, MiB", "4×", "16×", "t exp", "m exp");
     let mut over = Vec::new();
     for case in cases() {
         let mut rows = Vec::new();
@@ -371,13 +432,13 @@ fn scaling_bench() -> Result<(), String> {
         let m = exponent(&rows.iter().map(|r| (r.0, (r.2 - idle_bytes).max(1.0))).collect::<Vec<_>>());
         let cells: Vec<String> = rows.iter().map(|r| format!("{:.0}, {:.3}, {:.1}", r.0, r.1, (r.2 - idle_bytes).max(0.0) / 1048576.0)).collect();
         let flag = if t > MAX_EXPONENT || m > MAX_EXPONENT { " ✗" } else { "" };
-        println!("{:<20} {:>10} {:>22} {:>22} {:>22} {:>6.2} {:>6.2}{flag}", case.name, case.unit, cells[0], cells[1], cells[2], t, m);
+        outln!("{:<20} {:>10} {:>22} {:>22} {:>22} {:>6.2} {:>6.2}{flag}", case.name, case.unit, cells[0], cells[1], cells[2], t, m);
         if !flag.is_empty() {
             over.push(case.name);
         }
     }
     if over.is_empty() {
-        println!("every exponent ≤ {MAX_EXPONENT}");
+        outln!("every exponent ≤ {MAX_EXPONENT}");
         Ok(())
     } else {
         Err(format!("growth exponent over {MAX_EXPONENT}: {}", over.join(", ")))
@@ -392,7 +453,7 @@ fn main() -> ExitCode {
         }
         Command::Analyze { file, json } => cmd_analyze(&file, json),
         Command::New => {
-            print!("{}", Design::default().to_json_pretty());
+            out!("{}", Design::default().to_json_pretty());
             Ok(())
         }
         Command::Share { design, input } => cmd_share(&design, &input),
@@ -401,37 +462,37 @@ fn main() -> ExitCode {
             Ok(())
         }
         Command::Bench { scaling_case: Some(name), scale, .. } => weft::bench::scaling::run_case(&name, scale).map(|(size, seconds)| {
-            println!("{size} {seconds} {}", peak_kib().unwrap_or(0));
+            outln!("{size} {seconds} {}", peak_kib().unwrap_or(0));
         }),
         Command::Bench { scaling: true, .. } => scaling_bench(),
         Command::Bench { triangles, gcode_mb, lattice, cache, .. } => {
             if cache {
                 return match weft::bench::run_cache(triangles) {
                     Ok(t) => {
-                        println!("{t}");
+                        outln!("{t}");
                         ExitCode::SUCCESS
                     }
                     Err(e) => {
-                        eprintln!("weft: error: {}", e.replace('\n', "; "));
+                        errln!("weft: error: {}", e.replace('\n', "; "));
                         ExitCode::FAILURE
                     }
                 };
             }
             let all = if lattice { Ok(String::new()) } else { weft::bench::run_all(triangles, gcode_mb) };
-            all.and_then(|a| weft::bench::run_lattice().map(|l| println!("{a}\n{l}")))
+            all.and_then(|a| weft::bench::run_lattice().map(|l| outln!("{a}\n{l}")))
         }
         Command::ExportStl { design, out } => load_design(&design).and_then(|d| {
             let e = weft::export::lattice_stl(&d).map_err(|e| e.to_string())?;
             let out = output_path(Some(&out), &d.name, "stl");
             write(&out, &e.stl)?;
-            eprintln!("{}: {} struts, {} triangles, {:.3} mm of struts", out.display(), e.struts, e.triangles, e.strut_mm);
+            errln!("{}: {} struts, {} triangles, {:.3} mm of struts", out.display(), e.struts, e.triangles, e.strut_mm);
             Ok(())
         }),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("weft: error: {}", e.replace('\n', "; "));
+            errln!("weft: error: {}", e.replace('\n', "; "));
             ExitCode::FAILURE
         }
     }

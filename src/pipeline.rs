@@ -241,7 +241,7 @@ impl<'a> Ctx<'a> {
         let bytes: &[u8] = match (self.files.get(name), embedded) {
             (Some(b), _) => b,
             (None, Some(e)) => {
-                unpacked = share::unpack(e).map_err(Error::Embedded)?;
+                unpacked = share::unpack(e).map_err(|source| Error::Embedded { name: name.clone(), source })?;
                 &unpacked
             }
             (None, None) => return Err(Error::MissingInput { name: name.clone(), slot: slot.into() }),
@@ -341,9 +341,14 @@ pub enum Error {
         /// The slot.
         slot: String,
     },
-    /// The embedded file in a share link is damaged.
-    #[error("the file embedded in the design is damaged: {0}")]
-    Embedded(share::Error),
+    /// The copy of a file inside the design (put there by a share link) is damaged.
+    #[error("the copy of {name} inside the design is damaged (the link it came with was cut short or changed while copying); load {name} itself, or ask for the link again")]
+    Embedded {
+        /// The file's name.
+        name: String,
+        /// What [`share::unpack`] said.
+        source: share::Error,
+    },
     /// Import failed.
     #[error(transparent)]
     Import(#[from] import::Error),
@@ -410,7 +415,7 @@ fn load_input(slot: &str, input: &Input, files: &Files) -> Result<(Mesh, Option<
             let bytes: &[u8] = match (files.get(name), embedded) {
                 (Some(b), _) => b,
                 (None, Some(e)) => {
-                    unpacked = share::unpack(e).map_err(Error::Embedded)?;
+                    unpacked = share::unpack(e).map_err(|source| Error::Embedded { name: name.clone(), source })?;
                     &unpacked
                 }
                 (None, None) => return Err(Error::MissingInput { name: name.clone(), slot: slot.into() }),

@@ -259,7 +259,7 @@ fn check_one(root: &Value, path: &str, f: &Field, out: &mut Vec<Problem>) {
         Kind::Choice => {
             if let Some(s) = v.as_str() {
                 if !f.choices.is_empty() && !f.choices.contains(&s) {
-                    out.push(Problem { path: path.to_string(), message: format!("'{}' is not one of {}", clip(s, 40), f.choices.join(", ")) });
+                    out.push(Problem { path: path.to_string(), message: not_a_choice(s, f.label, f.choices) });
                 }
             }
         }
@@ -272,6 +272,11 @@ fn check_one(root: &Value, path: &str, f: &Field, out: &mut Vec<Problem>) {
         }
         _ => {}
     }
+}
+
+/// The message of a choice not in the list: `'given' is not a choice for Label; use one of: a, b`.
+pub fn not_a_choice(given: &str, label: &str, choices: &[&str]) -> String {
+    format!("'{}' is not a choice for {label}; use one of: {}", clip(given, 40), choices.join(", "))
 }
 
 /// The problem of a string `s` at `path` longer than `limit` bytes (`what` names it).

@@ -236,7 +236,7 @@ fn hostile_designs_fail_with_one_short_line() {
     std::fs::write(&deep, weft::testgen::design::nested_design_json(100_000)).unwrap();
     let e = run_err(&["run", deep.to_str().unwrap()]);
     short(&e);
-    assert!(e.contains("recursion limit"), "{e}");
+    assert!(e.contains("nested more than 128 levels deep, the limit"), "{e}");
     // A 3 kB share link whose design inflates to a 350 kB name; a link that inflates past the limit.
     let e = run_err(&["run", &weft::testgen::design::share_bomb_fragment(3000)]);
     short(&e);
@@ -244,4 +244,62 @@ fn hostile_designs_fail_with_one_short_line() {
     let e = run_err(&["run", &weft::testgen::design::share_bomb_fragment(100_000)]);
     short(&e);
     assert!(e.contains(&format!("more than {} bytes", weft::design::MAX_DESIGN_BYTES)), "{e}");
+}
+
+#[test]
+fn a_closed_stdout_ends_quietly() {
+    use std::io::Read;
+    // 20 000 layers: the JSON report (4 MB) is far larger than a pipe holds, so the writer
+    // meets the closed pipe.
+    let gcode = tmp("many-layers.gcode");
+    let mut text = String::from("G90\nM82\n");
+    for i in 1..=20_000 {
+        text += &format!("G1 Z{:.3} F600\nG1 X10 Y10 E{i}\nG1 X0 Y0\n", 0.2 * i as f64);
+    }
+    std::fs::write(&gcode, text).unwrap();
+    let mut child = weft()
+        .args(["analyze", gcode.to_str().unwrap(), "--json"])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut stdout = child.stdout.take().unwrap();
+    let mut first = [0u8; 16];
+    stdout.read_exact(&mut first).unwrap();
+    assert_eq!(first[0], b'{');
+    drop(stdout); // `| head -c 16`
+    let out = child.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!err.contains("panicked") && err.is_empty(), "stderr: {err}");
+    assert!(out.status.success(), "{:?}", out.status);
+}
+
+#[test]
+fn file_errors_are_in_words() {
+    let e = run_err(&["run", "/nonexistent/design.json"]);
+    assert_eq!(e.trim_end(), "weft: error: /nonexistent/design.json: cannot read it: there is no such file or folder");
+    let dir = std::env::temp_dir();
+    let e = run_err(&["analyze", dir.to_str().unwrap()]);
+    assert_eq!(e.trim_end(), format!("weft: error: {}: cannot read it: it is a folder, not a file", dir.display()));
+}
+
+#[test]
+fn set_errors_name_the_field_and_the_fix() {
+    let honeycomb = repo("examples/honeycomb-10mm.json");
+    for (set, want) in [
+        ("job.paths.method=eulr", "--set: job.paths.method: 'eulr' is not a choice for Optimiser; use one of: gippo_max, gippo_min, euler, continuous"),
+        ("job.paths.iterations=2.5", "--set: job.paths.iterations: GIPPO iterations must be a whole number from 1 to 100000 (got 2.5)"),
+        ("job.paths.iteratons=5", "--set: job.paths.iteratons: is not a setting (did you mean 'iterations'?); the settings of job.paths are: method, iterations, order, merge_tolerance_mm, short_path_segments, short_path_speed_factor"),
+        ("printer.relative_e=yes", "--set: printer.relative_e: Relative extrusion (M83) must be true or false (got \"yes\")"),
+    ] {
+        let e = run_err(&["run", &honeycomb, "--dry-run", "--set", set]);
+        assert_eq!(e.trim_end(), format!("weft: error: {want}"), "{set}");
+    }
+    let junk = tmp("junk.stl");
+    std::fs::write(&junk, (0..300u32).map(|i| (i.wrapping_mul(2654435761) >> 13) as u8).collect::<Vec<u8>>()).unwrap();
+    let e = run_err(&["run", &honeycomb, "--input", junk.to_str().unwrap(), "--dry-run"]);
+    assert_eq!(
+        e.trim_end(),
+        "weft: error: junk.stl is not an STL file: its size does not fit the triangle count a binary STL states at byte 80, and it does not start with the word \"solid\" as a text STL does; export the mesh again as STL, OBJ or 3MF"
+    );
 }

@@ -6,6 +6,7 @@
 
 pub mod schema;
 pub mod share;
+mod words;
 
 use crate::gcode::{Material, Printer, Speeds};
 use crate::geom::shapes::Shape;
@@ -55,8 +56,6 @@ pub const MAX_FILE_STEM_BYTES: usize = 100;
 
 /// Longest quote of a value in an error message, characters.
 const MAX_QUOTE_CHARS: usize = 60;
-/// Longest serde message kept in an error, characters (field lists included).
-const MAX_MESSAGE_CHARS: usize = 2000;
 
 /// A whole job.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -129,7 +128,7 @@ impl<'de> Deserialize<'de> for Job {
         let value = Value::deserialize(d)?;
         match value.get("kind") {
             Some(Value::String(_)) => Ok(Job { value }),
-            _ => Err(serde::de::Error::custom("job needs a \"kind\" (e.g. \"slice\" or \"lattice\")")),
+            _ => Err(serde::de::Error::custom("needs a \"kind\", the job kind (e.g. \"slice\" or \"lattice\")")),
         }
     }
 }
@@ -156,16 +155,16 @@ pub enum Input {
 /// Why a design could not be read.
 #[derive(Debug, thiserror::Error, Clone, PartialEq)]
 pub enum Error {
-    /// Not JSON, or fields of the wrong type / unknown fields.
-    #[error("{source_name}: line {line}, column {column}: {message}")]
+    /// Not JSON, or nested too deeply.
+    #[error("{source_name}: {}{message}", at(*line, *column))]
     Syntax {
         /// Where it came from (file name, "share link", ...).
         source_name: String,
-        /// 1-based line.
+        /// 1-based line (0: no place in a text, e.g. a design built by `--set`).
         line: usize,
         /// 1-based column.
         column: usize,
-        /// serde's message (names the field).
+        /// What is wrong, in words.
         message: String,
     },
     /// A version this build cannot read.
@@ -176,7 +175,14 @@ pub enum Error {
         /// The version in the file.
         found: String,
     },
-    /// Values out of range (all of them listed).
+    /// No `version`: not a design (or not a JSON object at all).
+    #[error("{source_name}: this is not a weft design: it has no \"version\" (a design starts {{\"version\": {DESIGN_VERSION}, \"name\": …}}; `weft new` prints one)")]
+    NotADesign {
+        /// Where it came from.
+        source_name: String,
+    },
+    /// Fields with a wrong value: out of range (all of them listed), of the wrong type, unknown
+    /// or missing (the first one the reader met), each at its dotted path, in words.
     #[error("{source_name}: {}", problems.iter().map(|p| format!("{}: {}", p.path, p.message)).collect::<Vec<_>>().join("\n"))]
     Invalid {
         /// Where it came from.
@@ -200,6 +206,11 @@ pub enum Error {
         /// Why.
         message: String,
     },
+}
+
+/// "line L, column C: ", or nothing for a value without a text.
+fn at(line: usize, column: usize) -> String {
+    if line == 0 { String::new() } else { format!("line {line}, column {column}: ") }
 }
 
 impl Default for Design {
@@ -229,16 +240,13 @@ impl Design {
         if text.len() > MAX_DESIGN_BYTES {
             return Err(Error::TooLarge { source_name: source_name.into(), bytes: text.len() });
         }
-        let syntax = |e: serde_json::Error| Error::Syntax {
+        let value: Value = serde_json::from_str(text).map_err(|e| Error::Syntax {
             source_name: source_name.into(),
             line: e.line(),
             column: e.column(),
-            message: strip_position(&e.to_string()),
-        };
-        let value: Value = serde_json::from_str(text).map_err(syntax)?;
-        check_version(source_name, &value)?;
-        let design: Design = serde_json::from_str(text).map_err(syntax)?;
-        design.normalized(registry, source_name)?.validated(registry, source_name)
+            message: format!("not valid JSON: {}", words::syntax(&e)),
+        })?;
+        Design::from_value_in(registry, source_name, value)
     }
 
     /// Builds a design from a JSON value (used after overrides).
@@ -255,23 +263,19 @@ impl Design {
             return Err(Error::Syntax { source_name: source_name.into(), line: 0, column: 0, message });
         }
         check_version(source_name, &value)?;
-        let design: Design = serde_json::from_value(value).map_err(|e| Error::Syntax {
-            source_name: source_name.into(),
-            line: 0,
-            column: 0,
-            message: strip_position(&e.to_string()),
+        // The design's and its kind's form rows: a wrong value is named by its field's label.
+        let mut rows = schema::common_rows();
+        let kind_name = value.get("job").and_then(|j| j.get("kind")).and_then(Value::as_str).unwrap_or("");
+        if let Some(kind) = registry.get(kind_name) {
+            rows.extend(kind.fields());
+        }
+        let invalid = |p: Problem| Error::Invalid { source_name: source_name.into(), problems: vec![p] };
+        let mut design: Design = serde_path_to_error::deserialize(&value).map_err(|e| invalid(words::problem(&e, "", &value, &rows)))?;
+        let kind = registry.get(design.job.kind()).ok_or_else(|| {
+            invalid(Problem { path: "job.kind".into(), message: words::not_a_choice(design.job.kind(), "the job kind", &registry.names()) })
         })?;
-        design.normalized(registry, source_name)?.validated(registry, source_name)
-    }
-
-    /// The job object rewritten by its kind: defaults filled in, unknown fields refused.
-    fn normalized(mut self, registry: &Registry, source_name: &str) -> Result<Design, Error> {
-        let syntax = |message: String| Error::Syntax { source_name: source_name.into(), line: 0, column: 0, message };
-        let kind = registry.get(self.job.kind()).ok_or_else(|| {
-            syntax(format!("job.kind: unknown job kind '{}'; use one of {}", clip(self.job.kind(), MAX_QUOTE_CHARS), registry.names().join(", ")))
-        })?;
-        self.job.value = kind.normalize(&self.job.value).map_err(|e| syntax(format!("job: {}", strip_position(&e.to_string()))))?;
-        Ok(self)
+        design.job.value = kind.normalize(&design.job.value).map_err(|e| invalid(words::problem(&e, "job", &value, &rows)))?;
+        design.validated(registry, source_name)
     }
 
     /// Pretty JSON (the on-disk form).
@@ -342,7 +346,7 @@ fn check_version(source_name: &str, value: &Value) -> Result<(), Error> {
     match value.get("version") {
         Some(v) if v.as_u64() == Some(DESIGN_VERSION as u64) => Ok(()),
         Some(v) => Err(Error::Version { source_name: source_name.into(), found: clip(&v.to_string(), MAX_QUOTE_CHARS).into_owned() }),
-        None => Err(Error::Version { source_name: source_name.into(), found: "(missing)".into() }),
+        None => Err(Error::NotADesign { source_name: source_name.into() }),
     }
 }
 
@@ -392,36 +396,6 @@ pub fn file_stem(name: &str) -> String {
     } else {
         s.to_string()
     }
-}
-
-/// serde_json appends " at line L column C"; the error variant carries those separately.
-/// Values serde quotes (`` `field` ``, `"text"`) are cut to [`MAX_QUOTE_CHARS`]: a design is
-/// untrusted and its strings may be megabytes long.
-fn strip_position(msg: &str) -> String {
-    let msg = match msg.rfind(" at line ") {
-        Some(i) => &msg[..i],
-        None => msg,
-    };
-    let mut out = String::with_capacity(msg.len().min(MAX_MESSAGE_CHARS * 4));
-    let mut quote: Option<(char, usize)> = None;
-    for c in msg.chars() {
-        match quote {
-            Some((q, _)) if c == q => quote = None,
-            Some((q, n)) => {
-                quote = Some((q, n + 1));
-                if n == MAX_QUOTE_CHARS {
-                    out.push('…');
-                }
-                if n >= MAX_QUOTE_CHARS {
-                    continue;
-                }
-            }
-            None if c == '`' || c == '"' => quote = Some((c, 0)),
-            None => {}
-        }
-        out.push(c);
-    }
-    clip(&out, MAX_MESSAGE_CHARS).into_owned()
 }
 
 /// The top-level key of a place in `value` nested deeper than `limit` ("" for the root
@@ -526,6 +500,64 @@ mod tests {
         v["job"]["colour"] = "red".into();
         let e = Design::from_json("d.json", &v.to_string()).unwrap_err().to_string();
         assert!(e.contains("colour"), "{e}");
+    }
+
+    /// What the reader says about a wrong value: the field's path and label, what it must be
+    /// and the value given; never serde's words (`invalid type`, `u32`, `line 0`).
+    #[test]
+    fn reading_errors_are_in_words() {
+        let lattice = include_str!("../../examples/honeycomb-10mm.json");
+        let d = Design::from_json("t", lattice).unwrap();
+        let set = |a: &str| d.with_overrides(&[a.to_string()]).unwrap_err().to_string();
+        for (assignment, want) in [
+            ("job.paths.iterations=2.5", "job.paths.iterations: GIPPO iterations must be a whole number from 1 to 100000 (got 2.5)"),
+            ("job.paths.iterations=-1", "job.paths.iterations: GIPPO iterations must be a whole number from 1 to 100000 (got -1)"),
+            ("job.paths.iterations=many", "job.paths.iterations: GIPPO iterations must be a whole number from 1 to 100000 (got \"many\")"),
+            ("job.paths.method=eulr", "job.paths.method: 'eulr' is not a choice for Optimiser; use one of: gippo_max, gippo_min, euler, continuous"),
+            ("job.lattice.layers=99999999999", "job.lattice.layers: Layers must be a whole number from 1 to 10000 (got 99999999999)"),
+            ("job.lattice.pattern.kind=hex", "job.lattice.pattern.kind: 'hex' is not a choice for Pattern; use one of: honeycomb, voronoi, penrose, snub_square, arrowhead, reentrant_honeycomb, rectilinear, square_grid, triangle_grid"),
+            ("job.lattice.pattern.hexagon_radius_mm=big", "job.lattice.pattern.hexagon_radius_mm: Hexagon radius must be a number from 0.05 to 1000 mm (got \"big\")"),
+            ("job.domain={\"width_mm\":3}", "job.domain.kind: Domain is missing: add it (one of: rectangle, disc, tensile_specimen, solid)"),
+            ("job.kind=weave", "job.kind: 'weave' is not a choice for the job kind; use one of: slice, lattice"),
+            ("printer.flavor=klipper", "printer.flavor: 'klipper' is not a choice for G-code flavour; use one of: marlin, pneumatic, poses_csv"),
+            ("printer.bed_size_mm=200", "printer.bed_size_mm: Bed size X, Y, Z must be three numbers [x, y, z], each from 10 to 2000 mm (got 200)"),
+            ("printer.bed_size_mm.1=wide", "printer.bed_size_mm.1: Bed size X, Y, Z must be three numbers [x, y, z], each from 10 to 2000 mm (got \"wide\")"),
+            ("printer.relative_e=1", "printer.relative_e: Relative extrusion (M83) must be true or false (got 1)"),
+            ("name=3", "name: Name must be text in double quotes (got 3)"),
+            ("seed=-1", "seed: Random seed must be a whole number from 0 to 9.007199254740991e15 (got -1)"),
+            ("colour=red", "colour: is not a setting; the settings of the design are: version, name, seed, printer, material, speeds, job"),
+            ("job.paths.iteratons=5", "job.paths.iteratons: is not a setting (did you mean 'iterations'?); the settings of job.paths are: method, iterations, order, merge_tolerance_mm, short_path_segments, short_path_speed_factor"),
+            ("job.lattice.overrides=[{\"layer\":\"top\"}]", "job.lattice.overrides.0.layer: must be a whole number from 0 to 4294967295 (got \"top\")"),
+            ("job={}", "job: needs a \"kind\", the job kind (e.g. \"slice\" or \"lattice\")"),
+            ("job.input={\"bultin\":{}}", "job.input: 'bultin' is not allowed here; use one of: builtin, file, files"),
+        ] {
+            assert_eq!(set(assignment), format!("--set: {want}"), "{assignment}");
+        }
+        let cube = Design::default();
+        let e = cube.with_overrides(&["job.input={\"builtin\":{\"shape\":\"cube\",\"size\":[1,2]}}".into()]).unwrap_err().to_string();
+        assert_eq!(e, "--set: job.input.builtin.size: Cube size X, Y, Z must be three numbers [x, y, z], each from 0.01 to 2000 mm (got a list of 2 values)");
+        // From a file: the same words; a JSON syntax error keeps its line and column.
+        let mut v = serde_json::to_value(&cube).unwrap();
+        v["job"]["slice"]["perimeters"] = 2.5.into();
+        assert_eq!(Design::from_json("cube.json", &v.to_string()).unwrap_err().to_string(), "cube.json: job.slice.perimeters: Perimeters must be a whole number from 0 to 50 (got 2.5)");
+        let text = cube.to_json_pretty();
+        let cut = &text[..text.len() / 2];
+        assert_eq!(Design::from_json("cube.json", cut).unwrap_err().to_string().split_once(": not valid JSON: ").map(|(_, m)| m.to_string()).unwrap(), "the text ends before the design does: the file was cut short; save or copy it again");
+        assert_eq!(Design::from_json("d.json", "{\"version\": 1, name: 2}").unwrap_err().to_string(), "d.json: line 1, column 16: not valid JSON: field names must be in double quotes");
+        assert_eq!(Design::from_json("d.json", "{\"version\": 1,}").unwrap_err().to_string(), "d.json: line 1, column 15: not valid JSON: there is a ',' before a closing bracket: remove it");
+        assert_eq!(Design::from_json("d.json", "{\"version\": 1}").unwrap_err().to_string(), "d.json: name: Name is missing: add it (text in double quotes)");
+        assert_eq!(Design::from_json("d.json", "{\"version\": 1, \"name\": \"x\"}").unwrap_err().to_string(), "d.json: job: is missing: add it (`weft new` prints a complete design)");
+        assert_eq!(
+            Design::from_json("d.json", "{\"name\": \"x\"}").unwrap_err().to_string(),
+            "d.json: this is not a weft design: it has no \"version\" (a design starts {\"version\": 1, \"name\": …}; `weft new` prints one)"
+        );
+        // Nothing of serde's vocabulary is left in any of them.
+        for a in ["job.paths.iterations=2.5", "job.paths.method=x", "job.paths.x=1", "job={}", "printer.bed_size_mm=[1]", "seed=\"s\"", "job.lattice.contour=2"] {
+            let e = set(a);
+            for word in ["invalid type", "invalid value", "unknown variant", "unknown field", "missing field", "expected", "u32", "u64", "f64", "line 0", "`"] {
+                assert!(!e.contains(word), "{a}: {e}");
+            }
+        }
     }
 
     #[test]
@@ -681,7 +713,7 @@ mod tests {
         let mut v = serde_json::to_value(Design::default()).unwrap();
         v["printer"][huge.as_str()] = 1.into();
         let e = Design::from_json("d", &v.to_string()).unwrap_err().to_string();
-        assert!(e.len() < 3000 && e.contains("unknown field"), "{}", e.len());
+        assert!(e.len() < 3000 && e.contains("is not a setting"), "{}", e.len());
         let mut v = serde_json::to_value(Design::default()).unwrap();
         v["printer"]["flavor"] = huge.as_str().into();
         let e = Design::from_json("d", &v.to_string()).unwrap_err().to_string();
@@ -706,12 +738,12 @@ mod tests {
         assert!(e.to_string().contains("60000 keys") && e.to_string().contains(&MAX_PATH_DEPTH.to_string()), "{e}");
         // At the limit the path is built, then refused by name.
         let at = crate::testgen::design::deep_set_path(MAX_PATH_DEPTH);
-        assert!(Design::default().with_overrides(&[at]).unwrap_err().to_string().contains("unknown field"));
+        assert!(Design::default().with_overrides(&[at]).unwrap_err().to_string().contains("is not a setting"));
         // A deep value set by --set is refused cleanly.
         let deep = format!("job.x={}{}", "[".repeat(127), "]".repeat(127));
         assert!(Design::default().with_overrides(&[deep]).is_err());
         let e = Design::from_json("d", &crate::testgen::design::nested_design_json(100_000)).unwrap_err();
-        assert!(matches!(e, Error::Syntax { .. }) && e.to_string().contains("recursion limit"), "{e}");
+        assert!(matches!(e, Error::Syntax { .. }) && e.to_string().contains("nested more than 128 levels deep, the limit"), "{e}");
         // A value built in memory, far deeper than the stack would survive dropping.
         let mut v = Value::Null;
         for _ in 0..1_000_000 {

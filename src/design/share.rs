@@ -38,29 +38,46 @@ pub struct ShareLink {
 #[derive(Debug, thiserror::Error, Clone, PartialEq)]
 pub enum Error {
     /// No `d=` in the fragment.
-    #[error("the link has no design in it (expected '#d=…' after the address); ask for the link again")]
+    #[error("this link has no design in it (a weft link ends in '#d=…'); ask for the link again")]
     Missing,
     /// Over [`MAX_FRAGMENT_CHARS`].
-    #[error("the link is {chars} characters long, over the {MAX_FRAGMENT_CHARS}-character limit; share the design file instead")]
+    #[error("this link is {chars} characters long, over the {MAX_FRAGMENT_CHARS}-character limit; share the design file instead")]
     TooLong {
         /// Its length.
         chars: usize,
     },
-    /// Not base64url.
-    #[error("the link is damaged: character {position} is not base64url; copy the whole link again")]
-    NotBase64 {
+    /// A character a link's data never holds (a space, a line break, `%`…).
+    #[error("this link is damaged: character {position} of its design ({}) cannot be in a link, so the link was changed while copying; copy the whole link again", shown(*found))]
+    Character {
         /// 1-based character position within the data.
         position: usize,
+        /// The character.
+        found: char,
     },
-    /// Not deflate data, or too large when inflated.
-    #[error("the link is damaged ({detail}); copy the whole link again")]
-    Corrupt {
-        /// What failed.
-        detail: String,
+    /// The data is cut short or altered: its length or last character is impossible, or it
+    /// does not unpack, or it unpacks to something that is not text.
+    #[error("this link is damaged: it was cut short or changed while copying; ask for the link again")]
+    Damaged,
+    /// It unpacks to more than the limit.
+    #[error("this link unpacks to more than {limit} bytes, the limit for a design: it is not a weft link, or it was altered; ask for the link again or share the design file")]
+    TooBig {
+        /// The limit, bytes.
+        limit: usize,
     },
-    /// The design inside is not valid.
-    #[error("the link's design cannot be used: {0}")]
+    /// The design inside is not valid (the design's own message, naming the field).
+    #[error(transparent)]
     Design(#[from] super::Error),
+}
+
+/// A character as a message quotes it: printable ones in quotes, others by name or code.
+fn shown(c: char) -> String {
+    match c {
+        ' ' => "a space".into(),
+        '\n' | '\r' => "a line break".into(),
+        '\t' => "a tab".into(),
+        c if c.is_control() || c.is_whitespace() => format!("the invisible character U+{:04X}", c as u32),
+        c => format!("'{c}'"),
+    }
 }
 
 /// base64url(deflate(bytes)), as used in links and for embedded meshes.
@@ -76,17 +93,15 @@ pub fn unpack(text: &str) -> Result<Vec<u8>, Error> {
 /// Inverse of [`pack`], refusing data that inflates to more than `limit` bytes (the inflater
 /// stops there: a bomb costs at most `limit` bytes and the time to write them).
 pub fn unpack_limited(text: &str, limit: usize) -> Result<Vec<u8>, Error> {
-    if let Some(i) = text.bytes().position(|b| !(b.is_ascii_alphanumeric() || b == b'-' || b == b'_')) {
-        return Err(Error::NotBase64 { position: i + 1 });
+    if let Some((i, found)) = text.chars().enumerate().find(|&(_, c)| !(c.is_ascii_alphanumeric() || c == '-' || c == '_')) {
+        return Err(Error::Character { position: i + 1, found });
     }
-    let raw = URL_SAFE_NO_PAD
-        .decode(text.as_bytes())
-        .map_err(|e| Error::Corrupt { detail: format!("base64: {e}") })?;
-    miniz_oxide::inflate::decompress_to_vec_with_limit(&raw, limit).map_err(|e| Error::Corrupt {
-        detail: match e.status {
-            miniz_oxide::inflate::TINFLStatus::HasMoreOutput => format!("it unpacks to more than {limit} bytes, the limit"),
-            _ => "the compressed data is cut short or altered".into(),
-        },
+    // Every decoding error left (a length of 4n+1, a last character with bits past the end)
+    // means characters were lost or changed.
+    let raw = URL_SAFE_NO_PAD.decode(text.as_bytes()).map_err(|_| Error::Damaged)?;
+    miniz_oxide::inflate::decompress_to_vec_with_limit(&raw, limit).map_err(|e| match e.status {
+        miniz_oxide::inflate::TINFLStatus::HasMoreOutput => Error::TooBig { limit },
+        _ => Error::Damaged,
     })
 }
 
@@ -156,7 +171,7 @@ pub fn decode(fragment: &str) -> Result<Design, Error> {
         .find_map(|kv| kv.strip_prefix(FRAGMENT_KEY))
         .ok_or(Error::Missing)?;
     let bytes = unpack_limited(data, super::MAX_DESIGN_BYTES)?;
-    let text = std::str::from_utf8(&bytes).map_err(|_| Error::Corrupt { detail: "the design is not UTF-8 text".into() })?;
+    let text = std::str::from_utf8(&bytes).map_err(|_| Error::Damaged)?;
     Ok(Design::from_json("share link", text)?)
 }
 
@@ -206,10 +221,41 @@ mod tests {
     }
 
     #[test]
+    fn damaged_links_say_what_to_do_in_words() {
+        let damaged = "this link is damaged: it was cut short or changed while copying; ask for the link again";
+        // Base64 of a wrong length or with an impossible last character, data that does not
+        // inflate, a design that is not text: all the same to the user.
+        for frag in ["#d=abcdefghij", "#d=abcdefghijn", "#d=abcdefghijk", "#d=AAAA"] {
+            assert_eq!(decode(frag).unwrap_err().to_string(), damaged, "{frag}");
+        }
+        assert_eq!(decode(&format!("#d={}", pack(&[0xff, 0xfe, 0x80]))).unwrap_err().to_string(), damaged);
+        let link = encode(&Design::default(), &[]);
+        assert_eq!(decode(&link.fragment[..link.fragment.len() - 7]).unwrap_err().to_string(), damaged);
+        assert_eq!(
+            decode("#d=ab cd").unwrap_err().to_string(),
+            "this link is damaged: character 3 of its design (a space) cannot be in a link, so the link was changed while copying; copy the whole link again"
+        );
+        assert_eq!(
+            decode("#d=ab%20cd").unwrap_err().to_string(),
+            "this link is damaged: character 3 of its design ('%') cannot be in a link, so the link was changed while copying; copy the whole link again"
+        );
+        assert_eq!(decode("https://x.org/#x=1").unwrap_err().to_string(), "this link has no design in it (a weft link ends in '#d=…'); ask for the link again");
+        let bomb = pack(&vec![b' '; crate::design::MAX_DESIGN_BYTES + 10]);
+        assert_eq!(
+            decode(&format!("#d={bomb}")).unwrap_err().to_string(),
+            "this link unpacks to more than 4194304 bytes, the limit for a design: it is not a weft link, or it was altered; ask for the link again or share the design file"
+        );
+        let mut v = serde_json::to_value(Design::default()).unwrap();
+        v["job"]["slice"]["perimeters"] = 2.5.into();
+        let frag = format!("#d={}", pack(v.to_string().as_bytes()));
+        assert_eq!(decode(&frag).unwrap_err().to_string(), "share link: job.slice.perimeters: Perimeters must be a whole number from 0 to 50 (got 2.5)");
+    }
+
+    #[test]
     fn damaged_links_say_so() {
-        assert!(matches!(decode("#d=!!!!"), Err(Error::NotBase64 { position: 1 })));
+        assert!(matches!(decode("#d=!!!!"), Err(Error::Character { position: 1, found: '!' })));
         assert!(matches!(decode("#x=abc"), Err(Error::Missing)));
-        assert!(matches!(decode("#d=AAAA"), Err(Error::Corrupt { .. })));
+        assert!(matches!(decode("#d=AAAA"), Err(Error::Damaged)));
         let link = encode(&Design::default(), &[]);
         let cut = &link.fragment[..link.fragment.len() / 2];
         assert!(decode(cut).is_err());
@@ -217,6 +263,6 @@ mod tests {
         assert!(matches!(decode(&long), Err(Error::TooLong { .. })));
         // A deflate bomb is refused, not inflated.
         let bomb = pack(&vec![b' '; MAX_INFLATED_BYTES + 10]);
-        assert!(matches!(decode(&format!("#d={bomb}")), Err(Error::Corrupt { .. })));
+        assert!(matches!(decode(&format!("#d={bomb}")), Err(Error::TooBig { .. })));
     }
 }

@@ -188,6 +188,14 @@ pub enum Error {
         /// What the first bytes looked like.
         detail: String,
     },
+    /// A file named `.stl` (or read as one) that is neither binary nor text STL.
+    #[error("{file} is not an STL file: {why}; export the mesh again as STL, OBJ or 3MF")]
+    NotStl {
+        /// File name.
+        file: String,
+        /// Why, in one clause.
+        why: String,
+    },
     /// The file is malformed at a known place.
     #[error("{file}: {place}: {problem}; {fix}")]
     Malformed {
@@ -363,11 +371,18 @@ pub fn detect_format(file: &str, bytes: &[u8]) -> Result<Format, Error> {
     if !text && bytes.len() >= 84 && hint.as_deref() == Some("stl") {
         return Ok(Format::StlBinary);
     }
+    if hint.as_deref() == Some("stl") {
+        let why = match describe_guess(bytes, text) {
+            Some(g) if bytes.len() >= 84 || text => g.to_string(),
+            _ => stl::why_not_stl(bytes),
+        };
+        return Err(Error::NotStl { file: file.to_string(), why });
+    }
     if text && hint.as_deref() == Some("obj") {
         return Ok(Format::Obj);
     }
     let mut detail = describe_start(bytes, text);
-    if starts_with_ignore_case(body, b"solid") || hint.as_deref() == Some("stl") {
+    if starts_with_ignore_case(body, b"solid") {
         detail.push_str("; ");
         detail.push_str(&stl::why_not_stl(bytes));
     }
@@ -413,9 +428,10 @@ fn starts_with_ignore_case(bytes: &[u8], prefix: &[u8]) -> bool {
 }
 
 /// A short human description of the first bytes, for [`Error::UnknownFormat`].
-fn describe_start(bytes: &[u8], text: bool) -> String {
+/// What the file looks like instead, when its start says so.
+fn describe_guess(bytes: &[u8], text: bool) -> Option<&'static str> {
     let body = skip_bom_and_space(bytes);
-    let guess = if starts_with_ignore_case(body, b"ISO-10303-21") {
+    if starts_with_ignore_case(body, b"ISO-10303-21") {
         Some("it looks like a STEP file; export a mesh from your CAD program")
     } else if starts_with_ignore_case(body, b"<!doctype html") || starts_with_ignore_case(body, b"<html") {
         Some("it looks like a web page, not a download of the file")
@@ -427,7 +443,12 @@ fn describe_start(bytes: &[u8], text: bool) -> String {
         Some("too short for a binary STL")
     } else {
         None
-    };
+    }
+}
+
+fn describe_start(bytes: &[u8], text: bool) -> String {
+    let body = skip_bom_and_space(bytes);
+    let guess = describe_guess(bytes, text);
     let shown = if text {
         let head: String = String::from_utf8_lossy(body.get(..body.len().min(24)).unwrap_or(body))
             .chars()

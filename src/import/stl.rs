@@ -34,27 +34,25 @@ pub(super) fn binary_counts(bytes: &[u8]) -> (u64, u64) {
     (3 * n, n)
 }
 
-/// Why `bytes` is not ASCII STL: no `solid` start, or not text (with the byte offset).
-fn why_not_ascii(bytes: &[u8]) -> String {
-    if !super::starts_with_ignore_case(super::skip_bom_and_space(bytes), b"solid") {
-        return "it does not start with \"solid\"".to_string();
+/// Why `bytes` is neither binary nor text STL, in one plain clause (for a file named `.stl`
+/// that is not one, and for unknown formats).
+pub(super) fn why_not_stl(bytes: &[u8]) -> String {
+    let solid = super::starts_with_ignore_case(super::skip_bom_and_space(bytes), b"solid");
+    let binary = match count(bytes) {
+        None => format!("it is {} bytes, shorter than any binary STL (84 bytes)", bytes.len()),
+        Some(_) => "its size does not fit the triangle count a binary STL states at byte 80".to_string(),
+    };
+    match super::text_problem(bytes) {
+        Some(why) if solid => format!("it starts with \"solid\" like a text STL but is not text ({why}), and {binary}"),
+        None if !solid => "it is text, but not a text STL: that starts with the word \"solid\"".to_string(),
+        _ => format!("{binary}, and it does not start with the word \"solid\" as a text STL does"),
     }
-    super::text_problem(bytes).unwrap_or_else(|| "its start reads as text".to_string())
 }
 
-/// Why `bytes` is neither binary nor ASCII STL, both rules named (for unknown formats).
-pub(super) fn why_not_stl(bytes: &[u8]) -> String {
-    let binary = match count(bytes) {
-        Some(n) => format!(
-            "not binary STL: the header promises {} triangles ({} bytes) but the file is {} bytes",
-            super::group(n as u64),
-            super::group(HEADER as u64 + RECORD as u64 * n as u64),
-            super::group(bytes.len() as u64)
-        ),
-        None => format!("not binary STL: {} bytes is shorter than the 84-byte header", bytes.len()),
-    };
-    format!("{binary}; not ASCII STL: {}", why_not_ascii(bytes))
-}
+/// A binary file cut short keeps most of what its header promises; a file whose header
+/// promises over this many times its size is not a binary STL at all (a random header
+/// promises about 10¹¹ bytes).
+const MAX_CUT_RATIO: u64 = 1000;
 
 /// Reads a binary STL. Bytes after the promised triangles are ignored.
 pub(super) fn read_binary(file: &str, bytes: &[u8]) -> Result<RawMesh, Error> {
@@ -70,16 +68,18 @@ pub(super) fn read_binary(file: &str, bytes: &[u8]) -> Result<RawMesh, Error> {
     let expected = HEADER as u64 + RECORD as u64 * n;
     let len = bytes.len() as u64;
     if expected > len {
+        if expected / MAX_CUT_RATIO > len {
+            return Err(Error::NotStl { file: file.to_string(), why: why_not_stl(bytes) });
+        }
         let i = (len - HEADER as u64) / RECORD as u64;
         return Err(malformed(
             file,
             format!("triangle {} (byte {})", i + 1, HEADER as u64 + RECORD as u64 * i),
             format!(
-                "the header promises {} triangles ({} bytes) but the file ends after {} bytes, and it is not ASCII STL either ({})",
-                super::group(n),
-                super::group(expected),
+                "the file ends after {} bytes but its header says it holds {} triangles ({} bytes)",
                 super::group(len),
-                why_not_ascii(bytes)
+                super::group(n),
+                super::group(expected)
             ),
             REEXPORT,
         ));

@@ -352,13 +352,15 @@ fn load<'a>(file: &'a str, bytes: &[u8], counting: bool) -> Result<(Loaded, Load
     if entries > MAX_ZIP_ENTRIES {
         return Err(malformed(
             file,
-            "zip container",
-            format!("the zip directory lists {} entries, more than the {} a 3MF may have", group(entries as u64), group(MAX_ZIP_ENTRIES as u64)),
+            "the archive",
+            format!("it lists {} parts, more than the {} a 3MF may have", group(entries as u64), group(MAX_ZIP_ENTRIES as u64)),
             REEXPORT,
         ));
     }
-    let mut zip = zip::ZipArchive::new(Cursor::new(bytes)).map_err(|e| {
-        malformed(file, "zip container", format!("the 3MF container cannot be opened ({})", clean_n(&e.to_string(), 160)), REEXPORT)
+    // zip's own words ("Could not find EOCD") say nothing to a user: a 3MF is an archive and
+    // this one cannot be opened.
+    let mut zip = zip::ZipArchive::new(Cursor::new(bytes)).map_err(|_| {
+        malformed(file, "the archive", "a 3MF is an archive of parts and this one cannot be opened: it was cut short or damaged", REEXPORT)
     })?;
     let mut ld = Load { file, input: bytes.len() as u64, counting, names: Names::default(), stored: Stored::default() };
     ld.stored.zip_entries = zip.len() as u64;
@@ -542,7 +544,7 @@ fn find_entry(zip: &mut zip::ZipArchive<Cursor<&[u8]>>, lower: &mut Option<BTree
 enum Stop {
     Budget,
     Token,
-    Inflate(String),
+    Inflate,
 }
 
 /// The inflating reader under the XML parser: hands over 64 KiB pieces, counts the lines
@@ -591,7 +593,7 @@ impl<R: Read> BufRead for Source<R> {
                 Ok(n) => n,
                 Err(e) if e.kind() == io::ErrorKind::Interrupted => 0,
                 Err(e) => {
-                    self.stop = Some(Stop::Inflate(e.to_string()));
+                    self.stop = Some(Stop::Inflate);
                     return Err(e);
                 }
             };
@@ -638,7 +640,7 @@ fn stream_entry<'b, T>(
     let file = ld.file;
     let entry = zip
         .by_index(index)
-        .map_err(|e| malformed(file, shown.as_str(), format!("the part cannot be read ({})", clean_n(&e.to_string(), 160)), REEXPORT))?;
+        .map_err(|_| malformed(file, shown.as_str(), "the part cannot be read: the archive is damaged", REEXPORT))?;
     if entry.size() > *budget {
         return Err(bomb(file, &shown));
     }
@@ -661,15 +663,15 @@ fn xml_error<R>(file: &str, part: &str, reader: &Reader<Source<R>>, e: &quick_xm
             format!("an XML tag or text is longer than {} MiB", MAX_TOKEN_BYTES >> 20),
             "this is not a real model (damaged or hostile); export it again",
         ),
-        Some(Stop::Inflate(why)) => malformed(file, part, format!("the part cannot be decompressed ({})", clean_n(why, 160)), REEXPORT),
+        Some(Stop::Inflate) => malformed(file, part, "the part cannot be unpacked: its compressed data is damaged", REEXPORT),
         None => {
             let offset = reader.error_position();
             if matches!(e, quick_xml::Error::Encoding(_)) {
                 return malformed(
                     file,
                     format!("{part} line {line}"),
-                    format!("the XML is not UTF-8 (byte {offset})"),
-                    "save the model as UTF-8 and export again",
+                    format!("byte {offset} is not text: the model was saved in an encoding other than the UTF-8 a 3MF must use"),
+                    "export the model again",
                 );
             }
             malformed(file, format!("{part} line {line} (byte {offset})"), format!("the XML is malformed ({})", clean_n(&e.to_string(), 160)), REEXPORT)
@@ -1143,7 +1145,7 @@ pub(crate) mod tests {
         assert!(e.contains("object 5") && e.contains("line"), "{e}");
 
         let e = read_3mf("t.3mf", b"PK\x03\x04 not really a zip").unwrap_err().to_string();
-        assert!(e.contains("zip container"), "{e}");
+        assert_eq!(e, format!("t.3mf: the archive: a 3MF is an archive of parts and this one cannot be opened: it was cut short or damaged; {REEXPORT}"));
 
         let twice = format!("{TRI}\n{}", TRI.replace("\n", " "));
         let e = read(&[("3D/3dmodel.model", &model("millimeter", &twice, ""))]).unwrap_err().to_string();
@@ -1200,7 +1202,7 @@ pub(crate) mod tests {
         let at = bytes.windows(3).position(|w| w == "\u{FFFD}".as_bytes()).unwrap();
         bytes.splice(at..at + 3, [0xFFu8]);
         let e = read_3mf("t.3mf", &zip_of_bytes(&[("3D/3dmodel.model", &bytes)])).unwrap_err().to_string();
-        assert!(e.contains("3D/3dmodel.model line 4") && e.contains("not UTF-8"), "{e}");
+        assert!(e.contains("3D/3dmodel.model line 4") && e.contains("is not text: the model was saved in an encoding other than the UTF-8"), "{e}");
     }
 
     fn zip_of_bytes(entries: &[(&str, &[u8])]) -> Vec<u8> {

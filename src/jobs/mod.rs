@@ -209,8 +209,8 @@ pub trait JobKind: Sync {
     /// The default `job` object (with `kind`).
     fn default_job(&self) -> Value;
     /// The `job` object parsed and written back with every default filled in, or serde's
-    /// message (which names the field).
-    fn normalize(&self, job: &Value) -> Result<Value, serde_json::Error>;
+    /// error with the path of the field (relative to `job`), which the design puts in words.
+    fn normalize(&self, job: &Value) -> Result<Value, serde_path_to_error::Error<serde_json::Error>>;
     /// Rules that tie fields together (ranges are checked from [`JobKind::fields`]).
     fn validate(&self, design: &Design, job: &Value, out: &mut Vec<Problem>);
     /// `job` after a file was put in `slot` (a lattice fills a loaded solid).
@@ -316,9 +316,11 @@ impl<K: Kind> JobKind for K {
     fn default_job(&self) -> Value {
         with_kind(K::NAME, &K::Settings::default()).unwrap_or(Value::Null)
     }
-    fn normalize(&self, job: &Value) -> Result<Value, serde_json::Error> {
-        let s: K::Settings = serde_json::from_value(without_kind(job))?;
-        with_kind(K::NAME, &s)
+    fn normalize(&self, job: &Value) -> Result<Value, serde_path_to_error::Error<serde_json::Error>> {
+        let s: K::Settings = serde_path_to_error::deserialize(without_kind(job))?;
+        // Writing back settings just read cannot fail (string keys only); were it to, the job
+        // stays as given.
+        Ok(with_kind(K::NAME, &s).unwrap_or_else(|_| job.clone()))
     }
     fn validate(&self, design: &Design, job: &Value, out: &mut Vec<Problem>) {
         if let Ok(s) = settings::<K::Settings>(job) {

@@ -124,7 +124,7 @@ export function decodeShare(fragment) {
   try {
     return JSON.stringify(JSON.parse(atob(s)), null, 2);
   } catch {
-    throw new Error("share link: the fragment is not base64url of a deflated design");
+    throw new Error("this link is damaged: it was cut short or changed while copying; ask for the link again");
   }
 }
 

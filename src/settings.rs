@@ -202,7 +202,13 @@ fn check_number(path: &str, v: f64, f: &Field, out: &mut Vec<Problem>) {
     if !v.is_finite() || v < lo || v > hi {
         let unit = if f.unit.is_empty() { String::new() } else { format!(" {}", f.unit) };
         let what = if f.kind == Kind::Integer { "a whole number" } else { "a number" };
-        out.push(Problem { path: path.to_string(), message: format!("{} is out of range: {} must be {what} from {} to {}{unit}", fmt(v), f.label, fmt(lo), fmt(hi)) });
+        let message = if f.percent {
+            // The form shows it in percent; the design (and --set) hold the fraction.
+            format!("{} is out of range: {} must be a fraction from {} to {} ({} % to {} % in the form)", fmt(v), f.label, fmt(lo), fmt(hi), fmt(lo * 100.0), fmt(hi * 100.0))
+        } else {
+            format!("{} is out of range: {} must be {what} from {} to {}{unit}", fmt(v), f.label, fmt(lo), fmt(hi))
+        };
+        out.push(Problem { path: path.to_string(), message });
     } else if f.kind == Kind::Integer && v.fract() != 0.0 {
         out.push(Problem { path: path.to_string(), message: format!("{} must be a whole number (got {})", f.label, fmt(v)) });
     }

@@ -172,7 +172,7 @@ function openShare(fragment) {
   try {
     json = weft.decodeShare(fragment);
   } catch (err) {
-    showError(`This share link cannot be opened: ${messageOf(err)}\nThe design you had is kept; ask for a new link.`);
+    showError(`${messageOf(err).replace(/^this link/i, "This share link")}\nThe design you had is kept.`);
     return;
   }
   setDesign(json);
@@ -614,8 +614,10 @@ function commitField(view) {
     next = weft.setField(state.json, view.f.path, readField(view));
   } catch (err) {
     view.dirty = true;
-    // setField reuses the CLI's `--set path=value` parser, whose messages may start with "--set:".
-    setFieldError(view, messageOf(err).replace(/^--set:\s*/gm, ""));
+    // setField reuses the CLI's `--set path=value` parser, whose messages may start with
+    // "--set:" and the field's path: under the field itself, neither helps.
+    const path = view.f.path.replace(/[.*+?^${}()|[\]\\]/g, "\\$&");
+    setFieldError(view, messageOf(err).replace(/^--set:\s*/gm, "").replace(new RegExp(`^${path}(\\.[\\w.]+)?:\\s*`, "gm"), ""));
     return;
   }
   view.dirty = false;

@@ -147,7 +147,7 @@ function loadInitialDesign() {
   // A first visit shows a part at once (the default design is light) and what to do next.
   if (!stored) {
     showNotice("Welcome to weft. This is the default part, a 20 mm cube: drop your own STL, OBJ or 3MF on the page " +
-      "to slice it, change a setting on the left, or open an example below the preview.");
+      "to slice it, change its settings, or pick one of the examples (the Examples menu, or the gallery under the results).");
     runDesign({ auto: true });
   }
 }
@@ -1493,7 +1493,9 @@ async function runDesign({ confirmed = false, fromLink = false, auto = false, th
     // The form shows a value the design does not hold: running would use the last valid one.
     if (!auto) {
       const v = invalid[0];
-      showError(`${v.f.label || v.f.path}: ${v.error.textContent}\nFix ${invalid.length > 1 ? `this and ${invalid.length - 1} other field${invalid.length > 2 ? "s" : ""}` : "it"} (or undo) to run; nothing was run.`);
+      const label = v.f.label || v.f.path;
+      const said = v.error.textContent.includes(label) ? v.error.textContent : `${label}: ${v.error.textContent}`;
+      showError(`${said}\nFix ${invalid.length > 1 ? `this and ${invalid.length - 1} other field${invalid.length > 2 ? "s" : ""}` : "it"} (or undo) to run; nothing was run.`);
       v.inputs[0]?.focus();
     }
     return;

@@ -919,8 +919,13 @@ export class Preview {
     if (right.lengthSq() < 1e-12) right.set(1, 0, 0);
     right.normalize();
     const up = back.clone().cross(right);
-    const tanY = Math.tan((cam.fov * Math.PI) / 360) * FILL;
-    const tanX = tanY * cam.aspect;
+    // The controls drawn over the canvas (top row(s), legend and camera buttons at the bottom)
+    // cover bands of it: frame the part in the band between them.
+    const { top, bottom } = this.overlayBands();
+    const free = Math.max(0.3, 1 - top - bottom);
+    const tanHalf = Math.tan((cam.fov * Math.PI) / 360);
+    const tanY = tanHalf * FILL * free;
+    const tanX = tanHalf * FILL * cam.aspect;
     const points = this.data && this.bounds ? this.data.positions : boxCorners(this.bedBox);
     // At most ~300k points: enough to frame, fast at 2M segments.
     const step = 3 * Math.max(1, Math.ceil(points.length / 3 / 300000));
@@ -954,6 +959,10 @@ export class Preview {
       }
       center.addScaledVector(right, ((x0 + x1) / 2) * dist).addScaledVector(up, ((y0 + y1) / 2) * dist);
     }
+    // Centre of the free band, in the canvas's [-1, 1] vertical: move the target so the part
+    // sits there (a positive offset moves the picture up).
+    const shift = bottom - top;
+    center.addScaledVector(up, -shift * tanHalf * dist);
     const radius = (this.sphere ?? this.bedSphere).radius;
     dist = Math.max(dist, radius * 0.05, 1);
     this.controls.minDistance = Math.max(0.05, radius * 0.02);
@@ -963,6 +972,28 @@ export class Preview {
     this.controls.update();
     this.autoFit = true;
     this.requestRender();
+  }
+
+  /**
+   * Fractions of the canvas height covered by the controls drawn over it: from the top (the
+   * view controls) and from the bottom (legend, camera buttons). Zero when they are not laid
+   * out (hidden page, tests without the controls).
+   */
+  overlayBands() {
+    const c = this.canvas.getBoundingClientRect();
+    if (!(c.height > 0)) return { top: 0, bottom: 0 };
+    const topEl = this.ui.colorBy?.closest(".view-controls");
+    const bottomEls = [this.ui.legend, this.ui.camera].filter(Boolean);
+    let top = 0;
+    let bottom = 0;
+    const t = topEl?.getBoundingClientRect();
+    if (t && t.height > 0) top = Math.max(0, t.bottom - c.top);
+    for (const el of bottomEls) {
+      const r = el.getBoundingClientRect();
+      if (r.height > 0 && r.top > c.top + c.height / 2) bottom = Math.max(bottom, c.bottom - r.top);
+    }
+    // Each band at most a third of the canvas: a tall overlay still leaves the part room.
+    return { top: Math.min(top / c.height, 1 / 3), bottom: Math.min(bottom / c.height, 1 / 3) };
   }
 
   /**

@@ -291,7 +291,7 @@ fn paths_report(r: &PathsReport) -> StageReport {
         for (key, label, value, unit, hint) in [
             ("score", "Score", l.score, "", "GIPPO equation 1: higher means longer paths and fewer of them."),
             ("lts", "LTS", l.lts_percent, "%", "Equation 2: share of struts printed in long paths (5 nodes or more)."),
-            ("oe", "OE", l.oe_percent, "%", "Equation 3: how close the path count is to the lower bound (100 % = optimal)."),
+            ("oe", "OE", l.oe_percent, "%", "Equation 3 (optimisation efficiency): length × edges of the long paths over total length × total edges; higher is better."),
             ("travel", "Travel", l.travel_mm, "mm", "Moves between paths without extruding."),
         ] {
             report.metrics.push(crate::report::Metric { key: key.into(), label: label.into(), value, unit: unit.into(), hint: hint.into(), group_index: Some(i) });

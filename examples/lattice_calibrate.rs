@@ -7,14 +7,9 @@
 
 use weft::lattice::{self, Domain, DomainSize, Options, Pattern};
 
-/// CPU time of this thread, s (Linux; wall time elsewhere): other processes on the machine do
-/// not count.
+/// This thread's CPU time, s (wall time where it cannot be read).
 fn cpu() -> f64 {
-    std::fs::read_to_string("/proc/thread-self/schedstat")
-        .ok()
-        .and_then(|s| s.split_whitespace().next().and_then(|v| v.parse::<f64>().ok()))
-        .map(|ns| ns * 1e-9)
-        .unwrap_or_else(|| std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).unwrap().as_secs_f64())
+    weft::bench::thread_cpu_seconds().unwrap_or_else(|| std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).unwrap().as_secs_f64())
 }
 
 fn patterns(scale: f64) -> Vec<Pattern> {

@@ -197,17 +197,36 @@ fn lookup<'a>(root: &'a Value, path: &str) -> Option<&'a Value> {
     path.split('.').try_fold(root, |v, key| v.get(key))
 }
 
+impl Field {
+    /// What a value of this field must be, in words: its kind and range with the unit (a
+    /// percent field as the fraction the design holds, with the form's percentages). The one
+    /// wording of the range checks here and of the design reader's messages (`design::words`).
+    pub fn must_be(&self) -> String {
+        let unit = if self.unit.is_empty() { String::new() } else { format!(" {}", self.unit) };
+        let (lo, hi) = (self.min.map_or_else(String::new, fmt), self.max.map_or_else(String::new, fmt));
+        match self.kind {
+            // The form shows it in percent; the design (and --set) hold the fraction.
+            Kind::Number if self.percent => {
+                let pct = |x: Option<f64>| x.map_or_else(String::new, |x| fmt(x * 100.0));
+                format!("a fraction from {lo} to {hi} ({} % to {} % in the form)", pct(self.min), pct(self.max))
+            }
+            Kind::Number => format!("a number from {lo} to {hi}{unit}"),
+            Kind::Integer => format!("a whole number from {lo} to {hi}{unit}"),
+            Kind::Bool => "true or false".into(),
+            Kind::Text => "text in double quotes".into(),
+            Kind::Choice => format!("one of: {}", self.choices.join(", ")),
+            Kind::Vec3 => format!("three numbers [x, y, z], each from {lo} to {hi}{unit}"),
+            Kind::Section => "a group of settings { … }, or left out to switch it off".into(),
+        }
+    }
+}
+
 fn check_number(path: &str, v: f64, f: &Field, out: &mut Vec<Problem>) {
     let (lo, hi) = (f.min.unwrap_or(f64::MIN), f.max.unwrap_or(f64::MAX));
     if !v.is_finite() || v < lo || v > hi {
-        let unit = if f.unit.is_empty() { String::new() } else { format!(" {}", f.unit) };
-        let what = if f.kind == Kind::Integer { "a whole number" } else { "a number" };
-        let message = if f.percent {
-            // The form shows it in percent; the design (and --set) hold the fraction.
-            format!("{} is out of range: {} must be a fraction from {} to {} ({} % to {} % in the form)", fmt(v), f.label, fmt(lo), fmt(hi), fmt(lo * 100.0), fmt(hi * 100.0))
-        } else {
-            format!("{} is out of range: {} must be {what} from {} to {}{unit}", fmt(v), f.label, fmt(lo), fmt(hi))
-        };
+        // A Vec3 component is one number of the row's range.
+        let f = Field { kind: if f.kind == Kind::Vec3 { Kind::Number } else { f.kind }, min: Some(lo), max: Some(hi), ..*f };
+        let message = format!("{} is out of range: {} must be {}", fmt(v), f.label, f.must_be());
         out.push(Problem { path: path.to_string(), message });
     } else if f.kind == Kind::Integer && v.fract() != 0.0 {
         out.push(Problem { path: path.to_string(), message: format!("{} must be a whole number (got {})", f.label, fmt(v)) });

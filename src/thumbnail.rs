@@ -39,7 +39,7 @@ pub fn svg(preview: &Preview, options: &Options) -> String {
     // Whole layers, evenly skipped, so a part keeps its outline at every height.
     let step = if n > options.max_segments && layers > 0 { n.div_ceil(options.max_segments.max(1)).min(layers) } else { 1 };
     let drawn: Vec<usize> = if layers == 0 {
-        (0..n).collect()
+        (0..n).step_by(n.div_ceil(options.max_segments.max(1)).max(1)).collect()
     } else {
         let mut v = Vec::new();
         let mut l = layers - 1; // the top layer always
@@ -55,14 +55,10 @@ pub fn svg(preview: &Preview, options: &Options) -> String {
         v.sort_unstable();
         v
     };
-    // The view: turned 45° about Z, tilted by `tilt`.
-    let (c, s) = (std::f64::consts::FRAC_1_SQRT_2, std::f64::consts::FRAC_1_SQRT_2);
+    // The view: turned 45° about Z (cos = sin = 1/√2), tilted by `tilt`.
+    let r = std::f64::consts::FRAC_1_SQRT_2;
     let t = options.tilt.clamp(0.0, 1.0);
-    let project = |x: f64, y: f64, z: f64| -> (f64, f64) {
-        let u = (x - y) * c;
-        let v = (x + y) * s * (1.0 - 0.5 * t) + z * t;
-        (u, -v)
-    };
+    let project = |x: f64, y: f64, z: f64| -> (f64, f64) { ((x - y) * r, -((x + y) * r * (1.0 - 0.5 * t) + z * t)) };
     let p = &preview.positions;
     let mut pts: Vec<(f64, f64, f64, f64, u8)> = Vec::with_capacity(drawn.len());
     let (mut min, mut max) = ((f64::INFINITY, f64::INFINITY), (f64::NEG_INFINITY, f64::NEG_INFINITY));

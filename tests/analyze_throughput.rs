@@ -40,11 +40,7 @@ fn big_toolpath(layers: usize) -> Toolpath {
 /// CPU time of this thread in seconds (Linux; 0 elsewhere), so a busy machine does not skew
 /// the figure the way wall time does.
 fn thread_cpu_s() -> f64 {
-    let Ok(stat) = std::fs::read_to_string("/proc/thread-self/stat") else { return 0.0 };
-    let after = &stat[stat.rfind(')').map_or(0, |p| p + 2)..];
-    let f: Vec<&str> = after.split_whitespace().collect();
-    let ticks = f.get(11).and_then(|v| v.parse::<f64>().ok()).unwrap_or(0.0) + f.get(12).and_then(|v| v.parse::<f64>().ok()).unwrap_or(0.0);
-    ticks / 100.0
+    weft::bench::thread_cpu_seconds().unwrap_or(0.0)
 }
 
 #[test]

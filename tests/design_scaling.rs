@@ -14,9 +14,7 @@ const LIMIT: f64 = 2.0 * 5.278_031_643_091_577; // 2 × 4^1.2
 /// This thread's time on a CPU, seconds (Linux: the scheduler's count, so other processes on
 /// a busy machine do not inflate it), or None where it cannot be read.
 fn cpu_time() -> Option<f64> {
-    let s = std::fs::read_to_string("/proc/thread-self/schedstat").ok()?;
-    let ns: u64 = s.split_whitespace().next()?.parse().ok()?;
-    (ns > 0).then_some(ns as f64 * 1e-9)
+    weft::bench::thread_cpu_seconds()
 }
 
 /// Best of 3 times of `reps` runs of `work` on `input`, seconds (CPU time when available,

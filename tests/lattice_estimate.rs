@@ -338,12 +338,9 @@ fn a_cone_fan_surface_is_bucketed_within_its_budget() {
 /// Timed sections run one at a time (the test harness runs tests on parallel threads).
 static TIMING: Mutex<()> = Mutex::new(());
 
+/// This thread's CPU time, s (wall time where it cannot be read).
 fn cpu() -> f64 {
-    std::fs::read_to_string("/proc/thread-self/schedstat")
-        .ok()
-        .and_then(|s| s.split_whitespace().next().and_then(|v| v.parse::<f64>().ok()))
-        .map(|ns| ns * 1e-9)
-        .unwrap_or_else(|| std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).unwrap().as_secs_f64())
+    weft::bench::thread_cpu_seconds().unwrap_or_else(|| std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).unwrap().as_secs_f64())
 }
 
 fn best_of_3(f: &mut dyn FnMut()) -> f64 {

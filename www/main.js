@@ -28,6 +28,8 @@ const THUMB_MM = 6;
 const THUMB_COLOR = "#29a3d6";
 
 let weft; // the wasm module (main-thread instance)
+/** The default design (parsed once): its name, job kind and slot values. */
+let defaults = null;
 let preview = null;
 let schema = { version: 1, fields: [], features: [], job_kinds: [], builtin_shapes: [], patterns: [] };
 /** feature code → {label, color} (schema.features) */
@@ -45,19 +47,24 @@ const state = {
    */
   files: new Map(),
   /**
-   * last result shown: {report, gcode: Uint8Array, fileName, ms, json}; `json` is the design
-   * it was made from (null for a G-code file read as it is), so an edit marks it out of date.
+   * last result shown: {report, gcode: Uint8Array, fileName, ms, json, files}; `json` and
+   * `files` (filesVersion) are what it was made from (json null for a G-code file read as it
+   * is), so an edit marks it out of date.
    */
   result: null,
-  /** the estimate of the current design: {json, plan} or {json, error} */
+  /** the estimate of the current design: {json, files, plan} or {json, files, error} */
   estimate: null,
+  /**
+   * Bumped whenever a loaded file is added, replaced or removed: with the design JSON it says
+   * what a result or an estimate was made from (a file dropped again under the same name
+   * changes no JSON).
+   */
+  filesVersion: 0,
   /**
    * Names the page gave (the default design's, the examples', dropped files' stems): a design
    * with one of these follows a dropped part's name; a name the user typed or loaded stays.
    */
   autoNames: new Set(),
-  /** the plan (every stage's estimate) of the last run asked for */
-  plan: null,
   /** chosen group (e.g. layer) per stage card */
   groups: new Map(),
 };
@@ -111,6 +118,7 @@ async function start() {
     showError(`designSchema() failed: ${messageOf(err)}`);
   }
   styles = featureStyles(schema.features);
+  defaults = JSON.parse(weft.defaultDesign());
   wireUi();
   try {
     const { Preview } = await import("./preview.js");
@@ -135,9 +143,7 @@ async function start() {
 
 /** The design kept in this browser (or the default), then a share link's on top (undoable). */
 function loadInitialDesign() {
-  try {
-    state.autoNames.add(JSON.parse(weft.defaultDesign()).name);
-  } catch { /* no default name to follow */ }
+  state.autoNames.add(defaults.name);
   const stored = storedDesign();
   setDesign(stored ?? weft.defaultDesign(), { record: false });
   if (location.hash.startsWith("#d=")) {
@@ -412,9 +418,12 @@ function buildForm(fields, slots, key) {
   host.append(machine);
 }
 
-/** A field of the machine (printer, material, speeds) rather than of the design or its job. */
+/**
+ * A field of the machine (printer, material, speeds): outside the job and not one of the
+ * design's own (the schema's "Design" section: name, description, seed).
+ */
 function isMachineField(f) {
-  return !f.job && !f.path.startsWith("job.") && f.path !== "name" && f.path !== "seed" && f.path !== "description";
+  return !f.job && !f.path.startsWith("job.") && (f.section ?? "").toLowerCase() !== "design";
 }
 
 /** The printer-profile picker (schema.printer_presets): picking one sets the printer section. */
@@ -922,6 +931,7 @@ async function loadIntoSlot(slot, fileList) {
       // Transfer a copy; keep ours for worker restarts and share links.
       const res = await workers.request({ type: MSG.LOAD, slot: slot.name, name: file.name, bytes: bytes.slice(0) });
       state.files.set(file.name, { slot: slot.name, name: file.name, bytes, info: res.info ?? {} });
+      filesChanged();
       loaded.push(file.name);
     } catch (err) {
       if (!err.cancelled) showError(messageOf(err));
@@ -946,6 +956,14 @@ async function loadIntoSlot(slot, fileList) {
 function forgetFile(name) {
   if (!state.files.delete(name)) return;
   workers.post({ type: MSG.UNLOAD, name });
+  filesChanged();
+}
+
+/** The loaded files changed: results and estimates made before are of other inputs. */
+function filesChanged() {
+  state.filesVersion++;
+  refreshFreshness();
+  scheduleEstimate();
 }
 
 /** Removes a file from its slot; the design falls back to the default value of the slot. */
@@ -957,7 +975,7 @@ function removeFromSlot(slot, name) {
     let next;
     if (slot.multiple) next = { files: named.filter((n) => n !== name) };
     else {
-      const fallback = getPath(JSON.parse(weft.defaultDesign()), slot.path);
+      const fallback = getPath(defaults, slot.path);
       next = fallback && !namedFiles(fallback).length ? fallback : schema.builtin_shapes[0]?.value ?? null;
     }
     const problem = setFields([[slot.path, JSON.stringify(next)]]);
@@ -1355,7 +1373,13 @@ function staleReason() {
     return `“${v.f.label || v.f.path}” is not valid, so the design cannot run: the preview, numbers and download are of the previous run.`;
   }
   if (r.json !== state.json) return "Settings changed since this result: the preview, numbers and download are of the previous run.";
+  if (r.files !== state.filesVersion) return "The input files changed since this result: the preview, numbers and download are of the previous run.";
   return null;
+}
+
+/** Whether `made` (a result or an estimate) was made from the current design and files. */
+function isCurrent(made) {
+  return Boolean(made) && made.json === state.json && made.files === state.filesVersion;
 }
 
 /** Dims the preview, numbers and cards of a result that no longer matches the design. */
@@ -1380,19 +1404,21 @@ function scheduleEstimate() {
 
 async function estimateNow() {
   const json = state.json;
+  const files = state.filesVersion;
   const seq = ++estimateSeq;
-  if (missingFiles().length) {
-    state.estimate = { json, error: `load ${missingFiles().map((m) => m.name).join(", ")} to estimate` };
+  const missing = missingFiles();
+  if (missing.length) {
+    state.estimate = { json, files, error: `load ${missing.map((m) => m.name).join(", ")} to estimate` };
     showEstimate();
     return;
   }
   try {
     const { plan } = await workers.request({ type: MSG.ESTIMATE, design: json });
     if (seq !== estimateSeq) return;
-    state.estimate = { json, plan };
+    state.estimate = { json, files, plan };
   } catch (err) {
     if (err.cancelled || seq !== estimateSeq) return;
-    state.estimate = { json, error: messageOf(err) };
+    state.estimate = { json, files, error: messageOf(err) };
   }
   showEstimate();
   maybeAutoRun();
@@ -1403,7 +1429,7 @@ function showEstimate() {
   const e = state.estimate;
   const el = $("estimate");
   el.classList.remove("over", "ask");
-  if (!e || e.json !== state.json) {
+  if (!isCurrent(e)) {
     el.textContent = "Estimating…";
     return;
   }
@@ -1453,8 +1479,8 @@ function autoRunWanted() {
 /** Re-runs a light job after an edit (live preview), when the user lets it and nothing runs. */
 function maybeAutoRun() {
   const e = state.estimate;
-  if (!$("auto-run").checked || !e?.plan || e.json !== state.json) return;
-  if (!state.result || state.result.json === null || state.result.json === state.json) return; // nothing shown from a design, or fresh
+  if (!$("auto-run").checked || !e?.plan || !isCurrent(e)) return;
+  if (!state.result || state.result.json === null || isCurrent(state.result)) return; // nothing shown from a design, or fresh
   const p = e.plan;
   if (p.refusal || p.ask || !(p.seconds < AUTO_RUN_SECONDS) || jobs.active.size) return;
   runDesign({ auto: true });
@@ -1513,12 +1539,16 @@ async function runDesign({ confirmed = false, fromLink = false, auto = false, th
   const name = designName();
   const ext = gcodeExtension();
   const json = state.json;
+  const files = state.filesVersion;
   jobs.stages = jobKind().stages ?? [];
   try {
-    const { plan } = await workers.request({ type: MSG.ESTIMATE, design: json });
-    state.plan = plan;
-    state.estimate = { json, plan };
-    showEstimate();
+    // The estimate made after the last edit is this design's plan; otherwise ask for it.
+    const known = isCurrent(state.estimate) ? state.estimate.plan : null;
+    const plan = known ?? (await workers.request({ type: MSG.ESTIMATE, design: json })).plan;
+    if (!known) {
+      state.estimate = { json, files, plan };
+      showEstimate();
+    }
     if (plan.refusal) {
       showError(`${plan.refusal}. Nothing was run; your design is kept.`);
       return;
@@ -1531,7 +1561,7 @@ async function runDesign({ confirmed = false, fromLink = false, auto = false, th
     }
     const res = await workers.request({ type: MSG.RUN, design: json }, (s, f) => jobs.progress(s, f));
     if (mine === latestRun) {
-      showResult(res, `${name}.${ext}`, json);
+      showResult(res, `${name}.${ext}`, json, files);
       then?.();
     }
   } catch (err) {
@@ -1562,13 +1592,7 @@ async function openFiles(fileList) {
 
 /** The job kind of the default design (the plain slicer). */
 function defaultJobKind() {
-  let name;
-  try {
-    name = JSON.parse(weft.defaultDesign()).job.kind;
-  } catch {
-    return null;
-  }
-  return schema.job_kinds.find((k) => k.name === name) ?? null;
+  return schema.job_kinds.find((k) => k.name === defaults?.job?.kind) ?? null;
 }
 
 /**
@@ -1645,10 +1669,10 @@ async function openFile(file) {
 }
 
 let resultCount = 0;
-function showResult(res, fileName, json = null) {
+function showResult(res, fileName, json = null, files = state.filesVersion) {
   resultCount++;
   const { report, preview: buffers, gcode } = res;
-  state.result = { report, gcode, fileName, ms: res.ms, json };
+  state.result = { report, gcode, fileName, ms: res.ms, json, files };
   $("download").disabled = !(gcode && gcode.byteLength);
   const origin = state.design?.printer?.origin;
   preview?.setResult(buffers, { origin: typeof origin === "string" ? origin : "corner" });

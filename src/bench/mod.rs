@@ -34,6 +34,15 @@ pub fn repeat_to(seed: &str, bytes: usize) -> String {
 
 pub mod scaling;
 
+/// CPU time of the calling thread, seconds (Linux: the scheduler's count in nanoseconds, so
+/// other processes on a busy machine do not inflate it); `None` where it cannot be read. The
+/// one clock of the benchmarks, the calibration examples and the tests' growth checks.
+pub fn thread_cpu_seconds() -> Option<f64> {
+    let s = std::fs::read_to_string("/proc/thread-self/schedstat").ok()?;
+    let ns: u64 = s.split_whitespace().next()?.parse().ok()?;
+    (ns > 0).then_some(ns as f64 * 1e-9)
+}
+
 /// The honeycomb-10mm example (embedded so the wasm build has it).
 pub const HONEYCOMB_10MM_JSON: &str = include_str!("../../examples/honeycomb-10mm.json");
 /// The ball-burst-disc-48mm example.
@@ -156,14 +165,6 @@ mod native {
         std::fs::write("/proc/self/clear_refs", "5").is_ok()
     }
 
-    /// CPU time of this thread, s (Linux; `None` elsewhere).
-    fn thread_cpu_s() -> Option<f64> {
-        let stat = std::fs::read_to_string("/proc/thread-self/stat").ok()?;
-        let after = &stat[stat.rfind(')')? + 2..];
-        let f: Vec<&str> = after.split_whitespace().collect();
-        let ticks = f.get(11)?.parse::<f64>().ok()? + f.get(12)?.parse::<f64>().ok()?;
-        Some(ticks / 100.0)
-    }
 
     struct Timed {
         stages: Vec<(String, f64)>,
@@ -196,11 +197,11 @@ mod native {
         let options = crate::analyze::Options { collect_preview, ..Default::default() };
         let mut best: Option<(f64, Option<f64>, usize)> = None;
         for _ in 0..ANALYZE_REPEATS {
-            let c = thread_cpu_s();
+            let c = super::thread_cpu_seconds();
             let t = Instant::now();
             let a = crate::analyze::analyze("bench.gcode", gcode, &options).map_err(|e| e.to_string())?;
             let s = t.elapsed().as_secs_f64();
-            let cpu = thread_cpu_s().zip(c).map(|(b, a)| b - a);
+            let cpu = super::thread_cpu_seconds().zip(c).map(|(b, a)| b - a);
             let paths = a.report.extrusion_paths;
             drop(a);
             if best.is_none_or(|b| s < b.0) {

@@ -6,7 +6,7 @@
 //! row when it has one (its label, what it must be, the value given), else in general words.
 //! A JSON syntax error becomes one plain clause ([`syntax`]).
 
-use crate::settings::{clip, fmt, Kind, Problem, Row};
+use crate::settings::{clip, Kind, Problem, Row};
 use serde_json::Value;
 
 /// Longest quote of a value or name, characters.
@@ -176,21 +176,6 @@ fn row_of<'a>(rows: &'a [Row], root: &Value, path: &str) -> Option<&'a Row> {
     rows.iter().find(|r| r.path == parent && r.field.kind == Kind::Vec3)
 }
 
-/// What the row's field must be, in words.
-fn must_be(row: &Row) -> String {
-    let f = &row.field;
-    let unit = if f.unit.is_empty() { String::new() } else { format!(" {}", f.unit) };
-    let (lo, hi) = (f.min.map_or_else(String::new, fmt), f.max.map_or_else(String::new, fmt));
-    match f.kind {
-        Kind::Number => format!("a number from {lo} to {hi}{unit}"),
-        Kind::Integer => format!("a whole number from {lo} to {hi}{unit}"),
-        Kind::Bool => "true or false".into(),
-        Kind::Text => "text in double quotes".into(),
-        Kind::Choice => format!("one of: {}", f.choices.join(", ")),
-        Kind::Vec3 => format!("three numbers [x, y, z], each from {lo} to {hi}{unit}"),
-        Kind::Section => "a group of settings { … }, or left out to switch it off".into(),
-    }
-}
 
 pub(crate) use crate::settings::not_a_choice;
 
@@ -241,7 +226,7 @@ fn dotted(path: &serde_path_to_error::Path, prefix: &str) -> String {
 fn wrong_value(rows: &[Row], root: &Value, path: &str, got: String, want: &str) -> String {
     match row_of(rows, root, path) {
         Some(r) if r.field.kind == Kind::Choice && got.starts_with('"') => not_a_choice(got.trim_matches('"'), r.field.label, r.field.choices),
-        Some(r) => format!("{} must be {} (got {got})", r.field.label, must_be(r)),
+        Some(r) => format!("{} must be {} (got {got})", r.field.label, r.field.must_be()),
         None => format!("must be {} (got {got})", wanted(want)),
     }
 }
@@ -308,7 +293,7 @@ pub(crate) fn problem(err: &serde_path_to_error::Error<serde_json::Error>, prefi
         Said::Missing { name } => {
             path = join(&path, &clip(name, QUOTE));
             match row_of(rows, root, &path) {
-                Some(r) => format!("{} is missing: add it ({})", r.field.label, must_be(r)),
+                Some(r) => format!("{} is missing: add it ({})", r.field.label, r.field.must_be()),
                 None => "is missing: add it (`weft new` prints a complete design)".into(),
             }
         }

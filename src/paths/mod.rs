@@ -295,14 +295,14 @@ pub const FIELDS: &[Field] = &[
             "One continuous nozzle path per connected piece: the nozzle never lifts, some struts are travelled over twice.",
         ],
     ),
-    int("iterations", "Paths", "GIPPO iterations", 1.0, 100000.0, "The paper uses 500."),
+    int("iterations", "Paths", "GIPPO iterations", 1.0, 100000.0, "How many randomised tries GIPPO makes; it keeps the best (the paper uses 500)."),
     choice_docs(
         other("order", "Paths", "Path order", Kind::Choice, &["longest_first", "min_travel"], "The order the paths are printed in."),
         &["Longest paths first, as the paper prints them.", "Each next path starts near where the last ended: less travel between paths."],
     ),
     num("merge_tolerance_mm", "Paths", "Node merge tolerance", "mm", 0.0001, 1.0, 0.001, "Strut ends closer than this are one node."),
-    int("short_path_segments", "Paths", "Short path below", 0.0, 1000.0, "Paths with fewer segments are slowed down (the paper: 4)."),
-    num("short_path_speed_factor", "Paths", "Short path speed", "×", 0.01, 1.0, 0.05, "The paper: 0.6."),
+    int("short_path_segments", "Paths", "Short path below", 0.0, 1000.0, "Paths with fewer struts than this are printed slower, so they stick (the paper: 4)."),
+    num("short_path_speed_factor", "Paths", "Short path speed", "×", 0.01, 1.0, 0.05, "Speed of those short paths, as a fraction of the lattice speed (the paper: 0.6)."),
 ];
 
 /// A walk through the graph: a GIPPO / Euler path, or a continuous component walk whose

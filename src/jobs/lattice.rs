@@ -296,6 +296,21 @@ fn paths_report(r: &PathsReport) -> StageReport {
         ] {
             report.metrics.push(crate::report::Metric { key: key.into(), label: label.into(), value, unit: unit.into(), hint: hint.into(), group_index: Some(i) });
         }
+        if l.pairing_mm > 0.0 || l.pairing_lower_bound_mm > 0.0 {
+            let hint = if l.pairing_optimal {
+                "Joining the odd joints: provably the shortest possible (0 % above the optimum)."
+            } else {
+                "Joining the odd joints: at most this far above the shortest possible (pairing ÷ a proven lower bound)."
+            };
+            report.metrics.push(crate::report::Metric {
+                key: "pairing_gap".into(),
+                label: "Pairing above optimum".into(),
+                value: (l.pairing_gap - 1.0) * 100.0,
+                unit: "%".into(),
+                hint: hint.into(),
+                group_index: Some(i),
+            });
+        }
     }
     let mut scores = Plot {
         key: "scores".into(),
@@ -334,9 +349,9 @@ fn paths_report(r: &PathsReport) -> StageReport {
         key: "layers".into(),
         title: "Paths per layer".into(),
         group: None,
-        columns: ["Layer", "Struts", "Odd nodes", "Lower bound", "Paths", "Score", "Travel", "Retractions"]
+        columns: ["Layer", "Struts", "Odd nodes", "Lower bound", "Paths", "Score", "Travel", "Retractions", "Pairing", "Pairing bound", "Pairing quality"]
             .iter()
-            .zip(["", "", "", "", "", "", "mm", ""])
+            .zip(["", "", "", "", "", "", "mm", "", "mm", "mm", ""])
             .map(|(label, unit)| Column { label: (*label).into(), unit: unit.into() })
             .collect(),
         rows: r
@@ -354,6 +369,9 @@ fn paths_report(r: &PathsReport) -> StageReport {
                     serde_json::json!((l.score * 1e4).round() / 1e4),
                     serde_json::json!((l.travel_mm * 100.0).round() / 100.0),
                     l.retractions.into(),
+                    serde_json::json!((l.pairing_mm * 1000.0).round() / 1000.0),
+                    serde_json::json!((l.pairing_lower_bound_mm * 1000.0).round() / 1000.0),
+                    l.pairing_quality().into(),
                 ],
             })
             .collect(),

@@ -155,8 +155,28 @@ pub fn estimate(work: &Work, options: &Options) -> Estimate {
     if options.order == Order::MinTravel {
         seconds += paths * ORDER_PATH;
     }
+    // Exact pairing (euler, continuous): per layer at most `exact_pairing_seconds` of estimated
+    // solve (the same estimate that decides it), as if each layer's odd nodes were one
+    // component; its dense tables for the largest solve that fits.
+    let mut exact_bytes = 0.0;
+    if matches!(options.method, Method::Euler | Method::Continuous) && layers > 0.0 {
+        let per_layer = (odd / layers).round() as usize;
+        let layer_edges = mean_layer.round() as usize;
+        let one = if options.method == Method::Euler {
+            super::matching::exact_seconds(per_layer)
+        } else {
+            super::postman::exact_seconds(per_layer, layer_edges)
+        };
+        seconds += layers * one.min(options.exact_pairing_seconds);
+        let n_fit = (options.exact_pairing_seconds / super::matching::EXACT_SECONDS_PER_CUBE).cbrt();
+        let n = (per_layer as f64).min(n_fit);
+        exact_bytes = n * n * super::matching::EXACT_BYTES_PER_SQUARE;
+    }
     let segments = edges + paths + approach;
-    let bytes = work.edges_max_layer.min(edges) * BYTES_PER_EDGE_WORKING + paths * BYTES_PER_PATH + segments * BYTES_PER_POINT;
+    let bytes = work.edges_max_layer.min(edges) * BYTES_PER_EDGE_WORKING
+        + paths * BYTES_PER_PATH
+        + segments * BYTES_PER_POINT
+        + exact_bytes;
     let fewer = match options.method {
         Method::GippoMax | Method::GippoMin => "use fewer GIPPO iterations, larger cells or a smaller domain",
         _ => "use larger cells, fewer layers or a smaller domain",

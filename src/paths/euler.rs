@@ -129,27 +129,42 @@ pub(crate) fn component_starts(graph: &Graph, odd: &[Vec<usize>]) -> Vec<usize> 
     starts
 }
 
-/// Euler result: paths in circuit order (component by component) and the total length of the
-/// odd-node pairing (the virtual edges), mm.
+/// Euler result: paths in circuit order (component by component), the total length of the
+/// odd-node pairing (the virtual edges), mm, a proven lower bound on it, and whether it is
+/// optimal (every component solved exactly or at its bound).
 pub(crate) struct EulerPaths {
     pub chains: Vec<Chain>,
     pub pairing_mm: f64,
+    pub lower_bound_mm: f64,
+    pub optimal: bool,
 }
 
-/// Minimum-path decomposition of every component.
-pub(crate) fn run(graph: &Graph) -> EulerPaths {
+/// Minimum-path decomposition of every component. Components are paired exactly, in order,
+/// while the estimated exact solves ([`super::matching::exact_seconds`]) fit in
+/// `exact_seconds` (for the layer); the rest by the heuristic.
+pub(crate) fn run(graph: &Graph, exact_seconds: f64) -> EulerPaths {
     let mut aug: Vec<AugEdge> =
         graph.edges.iter().enumerate().map(|(i, e)| AugEdge { a: e.a, b: e.b, base: i, real: true }).collect();
     let odd = odd_by_component(graph);
     let mut pairing_mm = 0.0;
+    let mut lower_bound_mm = 0.0;
+    let mut optimal = true;
+    let mut left = exact_seconds;
     for nodes in &odd {
         if nodes.is_empty() {
             continue;
         }
         let pts: Vec<DVec2> = nodes.iter().map(|&v| graph.nodes[v]).collect();
-        let (pairs, total) = pair_points(&pts);
-        pairing_mm += total;
-        for (i, j) in pairs {
+        let cost = super::matching::exact_seconds(pts.len());
+        let exact = cost <= left;
+        if exact {
+            left -= cost;
+        }
+        let p = pair_points(&pts, exact);
+        pairing_mm += p.total;
+        lower_bound_mm += p.lower_bound;
+        optimal &= p.optimal;
+        for (i, j) in p.pairs {
             aug.push(AugEdge { a: nodes[i], b: nodes[j], base: NONE, real: false });
         }
     }
@@ -188,5 +203,5 @@ pub(crate) fn run(graph: &Graph) -> EulerPaths {
             chains.push(cur);
         }
     }
-    EulerPaths { chains, pairing_mm }
+    EulerPaths { chains, pairing_mm, lower_bound_mm, optimal }
 }

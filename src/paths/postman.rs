@@ -140,35 +140,81 @@ impl Known {
     }
 }
 
-/// Continuous result: one chain (open walk) per component, and the total length of the
-/// duplicated (travelled) struts before cutting the circuits open, mm.
+/// Continuous result: one chain (open walk) per component; the total length of the
+/// duplicated (travelled) struts before cutting the circuits open, mm (after duplicates of one
+/// strut cancel in pairs: a T-join of the odd nodes); a proven lower bound on the shortest
+/// such length (the Chinese postman's); whether it is that shortest.
 pub(crate) struct PostmanPaths {
     pub chains: Vec<Chain>,
     pub pairing_mm: f64,
+    pub lower_bound_mm: f64,
+    pub optimal: bool,
 }
 
-/// Chinese-postman walks of every component.
-pub(crate) fn run(graph: &Graph) -> PostmanPaths {
+/// Seconds per (source × component edge) of the all-pairs Dijkstra an exact solve needs (an
+/// upper bound: each search stops when it has reached every odd node).
+pub(crate) const DIJKSTRA_EDGE_SECONDS: f64 = 0.1e-6;
+
+/// Nodes the 2-opt step's bounded Dijkstra settles at most when a pair's distance is not yet
+/// known (keeps the heuristic linear when a leftover pair is long).
+const SWAP_SEARCH_NODES: usize = 256;
+
+/// Estimated seconds of pairing `odd` odd nodes of a component of `edges` edges exactly.
+pub(crate) fn exact_seconds(odd: usize, edges: usize) -> f64 {
+    super::matching::exact_seconds(odd) + odd as f64 * edges as f64 * DIJKSTRA_EDGE_SECONDS
+}
+
+/// Chinese-postman walks of every component. Components are paired exactly (graph distances
+/// between all their odd nodes, blossom), in order, while the estimated solves
+/// ([`exact_seconds`]) fit in `exact_budget` seconds (for the layer); the rest by the
+/// heuristic with a dual lower bound.
+pub(crate) fn run(graph: &Graph, exact_budget: f64) -> PostmanPaths {
+    const NONE: usize = usize::MAX;
     let n = graph.nodes.len();
     let mut aug: Vec<AugEdge> =
         graph.edges.iter().enumerate().map(|(i, e)| AugEdge { a: e.a, b: e.b, base: i, real: true }).collect();
     let odd = odd_by_component(graph);
     let mut dij = Dijkstra::new(n);
-    let mut local = vec![usize::MAX; n];
+    let mut local = vec![NONE; n];
     let mut mark = vec![0u32; n];
     let mut stamp = 0u32;
-    let mut pairing_mm = 0.0;
+    let mut comp_edges = vec![0usize; graph.components];
+    for e in &graph.edges {
+        comp_edges[graph.component[e.a]] += 1;
+    }
+    // Times each strut is duplicated: an even count cancels (the walk needs only parity).
+    let mut duplicated = vec![0u32; graph.edges.len()];
+    // Per component: proven lower bound (None: optimal, the travelled length itself).
+    let mut bounds: Vec<Option<f64>> = vec![None; graph.components];
+    let mut left = exact_budget;
 
-    for nodes in &odd {
+    for (c, nodes) in odd.iter().enumerate() {
         if nodes.is_empty() {
             continue;
         }
+        let m = nodes.len();
         for (i, &v) in nodes.iter().enumerate() {
             local[v] = i;
         }
-        // Graph distances found by the candidate searches, for the matching's improvement step.
-        let known = RefCell::new(Known::default());
-        let partner = {
+        let cost = exact_seconds(m, comp_edges[c]);
+        let partner = if cost <= left {
+            left -= cost;
+            let mut dist = vec![0.0; m * m];
+            for i in 0..m.saturating_sub(1) {
+                let mut need = m - 1 - i;
+                dij.run(graph, nodes[i], &mut |v, d| {
+                    let j = local[v];
+                    if j != NONE && j > i {
+                        dist[i * m + j] = d;
+                        need -= 1;
+                    }
+                    need > 0
+                });
+            }
+            super::matching::exact_pairing(m, &dist)
+        } else {
+            // Graph distances found by the candidate searches, for the matching's improvement step.
+            let known = RefCell::new(Known::default());
             let dij_cell = RefCell::new(&mut dij);
             let mut candidates = |active: &[usize]| -> Vec<(f64, usize, usize)> {
                 stamp += 1;
@@ -194,38 +240,70 @@ pub(crate) fn run(graph: &Graph) -> PostmanPaths {
                 }
                 out
             };
-            let mut cost = |i: usize, j: usize| known.borrow_mut().get(nodes.len(), i.min(j), i.max(j));
-            min_pairing(nodes.len(), &mut candidates, &mut cost)
+            // Known distances, else a Dijkstra from i bounded by `limit`.
+            let mut cost = |i: usize, j: usize, limit: f64| -> Option<f64> {
+                if let Some(d) = known.borrow_mut().get(m, i.min(j), i.max(j)) {
+                    return (d < limit).then_some(d);
+                }
+                let (src, dst) = (nodes[i], nodes[j]);
+                let mut reached = None;
+                let mut settled = 0usize;
+                dij_cell.borrow_mut().run(graph, src, &mut |v, d| {
+                    settled += 1;
+                    if d >= limit || settled > SWAP_SEARCH_NODES {
+                        return false;
+                    }
+                    if v == dst {
+                        reached = Some(d);
+                        return false;
+                    }
+                    true
+                });
+                reached
+            };
+            let (partner, first) = min_pairing(m, &mut candidates, &mut cost);
+            bounds[c] = Some(super::matching::dual_lower_bound(m, &first, CANDIDATES_PER_NODE));
+            partner
         };
         // Duplicate the struts along each pair's shortest path.
         for (i, &j) in partner.iter().enumerate() {
-            if j == usize::MAX || i > j {
+            if j == NONE || i > j {
                 continue;
             }
             let (src, dst) = (nodes[i], nodes[j]);
-            let mut reached = f64::NAN;
-            dij.run(graph, src, &mut |v, dist| {
-                if v == dst {
-                    reached = dist;
-                    false
-                } else {
-                    true
-                }
+            let mut reached = false;
+            dij.run(graph, src, &mut |v, _| {
+                reached = v == dst;
+                !reached
             });
-            if reached.is_nan() {
+            if !reached {
                 continue; // Unreachable: cannot happen within a component.
             }
-            pairing_mm += reached;
             let mut v = dst;
             while v != src {
                 let e = dij.pred[v];
-                aug.push(AugEdge { a: graph.edges[e].a, b: graph.edges[e].b, base: e, real: false });
+                duplicated[e] += 1;
                 v = graph.other(e, v);
             }
         }
         for &v in nodes {
-            local[v] = usize::MAX;
+            local[v] = NONE;
         }
+    }
+    let mut travelled = vec![0.0f64; graph.components];
+    for (e, &k) in duplicated.iter().enumerate() {
+        if k % 2 == 1 {
+            let edge = &graph.edges[e];
+            travelled[graph.component[edge.a]] += edge.length;
+            aug.push(AugEdge { a: edge.a, b: edge.b, base: e, real: false });
+        }
+    }
+    let (mut pairing_mm, mut lower_bound_mm, mut optimal) = (0.0, 0.0, true);
+    for c in 0..graph.components {
+        pairing_mm += travelled[c];
+        let lb = bounds[c].map_or(travelled[c], |b| b.min(travelled[c]));
+        optimal &= lb >= travelled[c];
+        lower_bound_mm += lb;
     }
 
     let starts = component_starts(graph, &odd);
@@ -275,5 +353,5 @@ pub(crate) fn run(graph: &Graph) -> PostmanPaths {
         }
         chains.push(chain);
     }
-    PostmanPaths { chains, pairing_mm }
+    PostmanPaths { chains, pairing_mm, lower_bound_mm, optimal }
 }

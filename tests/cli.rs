@@ -289,7 +289,7 @@ fn set_errors_name_the_field_and_the_fix() {
     for (set, want) in [
         ("job.paths.method=eulr", "--set: job.paths.method: 'eulr' is not a choice for Optimiser; use one of: gippo_max, gippo_min, euler, continuous"),
         ("job.paths.iterations=2.5", "--set: job.paths.iterations: GIPPO iterations must be a whole number from 1 to 100000 (got 2.5)"),
-        ("job.paths.iteratons=5", "--set: job.paths.iteratons: is not a setting (did you mean 'iterations'?); the settings of job.paths are: method, iterations, order, merge_tolerance_mm, short_path_segments, short_path_speed_factor, exact_pairing_seconds"),
+        ("job.paths.iteratons=5", "--set: job.paths.iteratons: is not a setting (did you mean 'iterations'?); the settings of job.paths are: method, iterations, order, merge_tolerance_mm, short_path_segments, short_path_speed_factor, exact_pairing_seconds, direction_deg"),
         ("printer.relative_e=yes", "--set: printer.relative_e: Relative extrusion (M83) must be true or false (got \"yes\")"),
     ] {
         let e = run_err(&["run", &honeycomb, "--dry-run", "--set", set]);

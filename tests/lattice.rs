@@ -351,12 +351,12 @@ fn pore_fractions_reach_table_1() {
         println!("default {p:?}: pores {:.3}", l.report.pore_fraction_per_layer[0]);
     }
     let table = [
-        (Pattern::Honeycomb { hexagon_radius_mm: 0.95 }, 0.75),
-        (Pattern::Voronoi { density_per_mm2: 0.6 }, 0.69),
-        (Pattern::Penrose { cell_size_mm: 1.23 }, 0.59),
-        (Pattern::SnubSquare { cell_size_mm: 1.17 }, 0.55),
-        (Pattern::Arrowhead { cell_width_mm: 1.65, cell_height_mm: 1.65 }, 0.55),
-        (Pattern::ReentrantHoneycomb { cell_width_mm: 1.85, cell_height_mm: 1.85 }, 0.63),
+        (Pattern::Honeycomb { hexagon_radius_mm: 0.92 }, 0.75),
+        (Pattern::Voronoi { density_per_mm2: 0.84 }, 0.69),
+        (Pattern::Penrose { cell_size_mm: 1.05 }, 0.59),
+        (Pattern::SnubSquare { cell_size_mm: 1.01 }, 0.55),
+        (Pattern::Arrowhead { cell_width_mm: 1.24, cell_height_mm: 1.24 }, 0.55),
+        (Pattern::ReentrantHoneycomb { cell_width_mm: 1.73, cell_height_mm: 1.73 }, 0.63),
     ];
     for (p, want) in table {
         // Voronoi varies with the seed (about ±3 % on 60 cells): average 8 seeds.
@@ -364,7 +364,8 @@ fn pore_fractions_reach_table_1() {
         let got = (1..=seeds).map(|s| gen(p.clone(), &rect10(), 1, 0.0, s).report.pore_fraction_per_layer[0]).sum::<f64>()
             / seeds as f64;
         println!("table 1 {p:?}: pores {got:.3} (paper {want})");
-        assert!((got - want).abs() < 0.03, "{p:?}: {got} vs {want}");
+        // Union of the struts (a joint counted once): the examples' parameters.
+        assert!((got - want).abs() < 0.02, "{p:?}: {got} vs {want}");
     }
 }
 

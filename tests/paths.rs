@@ -239,8 +239,10 @@ fn euler_reaches_the_lower_bound() {
         let r = &out.report.layers[0];
         assert_eq!(r.paths, r.lower_bound_paths, "{name}");
         assert_eq!(printed_segments(&out.toolpath, 0), graph_segments(&build_graph(&l, TOL)), "{name}");
-        // Every path after the first is a free travel.
-        assert_eq!(r.retractions, r.paths.saturating_sub(1), "{name}");
+        // Every path after the first is a free travel; the G-code retracts for those at least
+        // the default printer's 1 mm long.
+        assert!(r.retractions <= r.paths.saturating_sub(1), "{name}");
+        assert_eq!(r.retractions, weft::gcode::retractions_per_pass(&out.toolpath, &weft::gcode::Printer::default())[0], "{name}");
         if r.odd_nodes > 0 {
             assert!(r.pairing_mm > 0.0, "{name}");
         }

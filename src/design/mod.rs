@@ -526,7 +526,7 @@ mod tests {
             ("name=3", "name: Name must be text in double quotes (got 3)"),
             ("seed=-1", "seed: Random seed must be a whole number from 0 to 9.007199254740991e15 (got -1)"),
             ("colour=red", "colour: is not a setting; the settings of the design are: version, name, description, seed, printer, material, speeds, job"),
-            ("job.paths.iteratons=5", "job.paths.iteratons: is not a setting (did you mean 'iterations'?); the settings of job.paths are: method, iterations, order, merge_tolerance_mm, short_path_segments, short_path_speed_factor, exact_pairing_seconds"),
+            ("job.paths.iteratons=5", "job.paths.iteratons: is not a setting (did you mean 'iterations'?); the settings of job.paths are: method, iterations, order, merge_tolerance_mm, short_path_segments, short_path_speed_factor, exact_pairing_seconds, direction_deg"),
             ("job.lattice.overrides=[{\"layer\":\"top\"}]", "job.lattice.overrides.0.layer: must be a whole number from 0 to 4294967295 (got \"top\")"),
             ("job={}", "job: needs a \"kind\", the job kind (e.g. \"slice\" or \"lattice\")"),
             ("job.input={\"bultin\":{}}", "job.input: 'bultin' is not allowed here; use one of: builtin, file, files"),

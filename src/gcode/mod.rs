@@ -489,6 +489,36 @@ pub fn check_fits(size_mm: [f64; 3], printer: &Printer) -> Result<(), Error> {
     if fits { Ok(()) } else { Err(Error::OutsideBed { size_mm, bed_mm: bed, below_plate_mm: 0.0 }) }
 }
 
+/// Retractions the writer makes for each pass of `toolpath` on `printer` (the same rule as
+/// [`write_gcode`]: a path reached by a free travel — no strut route, or the very first path
+/// — retracts when the travel's XY length is at least `retraction.min_travel_mm`, never on
+/// the first travel of the file, never with `retraction.length_mm` 0, never for the
+/// pneumatic and poses flavours; measured on the tool tip). The final retraction before the
+/// end template is not counted in any pass.
+pub fn retractions_per_pass(toolpath: &Toolpath, printer: &Printer) -> Vec<usize> {
+    let r = &printer.retraction;
+    let on = r.length_mm > 0.0 && printer.flavor == Flavor::Marlin;
+    let mut pos: Option<crate::geom::DVec3> = None;
+    toolpath
+        .passes
+        .iter()
+        .map(|pass| {
+            let mut n = 0;
+            for path in pass.paths.iter().filter(|p| p.points.len() >= 2) {
+                let to = path.points[0];
+                if let Some(from) = pos {
+                    let dxy = ((to.x - from.x) * (to.x - from.x) + (to.y - from.y) * (to.y - from.y)).sqrt();
+                    if on && path.approach.is_none() && dxy > 1e-9 && dxy >= r.min_travel_mm {
+                        n += 1;
+                    }
+                }
+                pos = Some(*path.points.last().expect("two points"));
+            }
+            n
+        })
+        .collect()
+}
+
 /// Writes `toolpath` as G-code.
 ///
 /// Layout: a comment header with totals (PrusaSlicer and Cura styles), the start template,

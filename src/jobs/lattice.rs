@@ -184,8 +184,14 @@ impl Kind for LatticeKind {
     fn run(j: &LatticeJob, ctx: &mut Ctx) -> Result<Product, Error> {
         let strokes = strokes(j, ctx)?;
         let design = ctx.design;
-        let optimised = ctx.stage("paths", "paths", &(&j.paths, line_width(design), design.seed), &[strokes.key], |progress| {
-            let o = paths::optimise(&strokes, &j.paths, line_width(design), design.seed, progress).map_err(|e| Error::stage("paths", e))?;
+        // The printer's retraction rule is in the key: the report counts its retractions.
+        let key = (&j.paths, line_width(design), design.seed, &design.printer.retraction, design.printer.flavor);
+        let optimised = ctx.stage("paths", "paths", &key, &[strokes.key], |progress| {
+            let mut o = paths::optimise(&strokes, &j.paths, line_width(design), design.seed, progress).map_err(|e| Error::stage("paths", e))?;
+            let counts = crate::gcode::retractions_per_pass(&o.toolpath, &design.printer);
+            for (l, n) in o.report.layers.iter_mut().zip(counts) {
+                l.retractions = n;
+            }
             let report = paths_report(&o.report);
             Ok((o.toolpath, Some(report)))
         })?;
@@ -292,7 +298,11 @@ fn paths_report(r: &PathsReport) -> StageReport {
             ("score", "Score", l.score, "", "GIPPO equation 1: higher means longer paths and fewer of them."),
             ("lts", "LTS", l.lts_percent, "%", "Equation 2: share of struts printed in long paths (5 nodes or more)."),
             ("oe", "OE", l.oe_percent, "%", "Equation 3 (optimisation efficiency): length × edges of the long paths over total length × total edges; higher is better."),
-            ("travel", "Travel", l.travel_mm, "mm", "Moves between paths without extruding."),
+            ("travel", "Travel", l.travel_mm, "mm", "Moves without extruding: into the layer, between paths, and along struts retraced by a continuous walk."),
+            ("circuit_travel", "Travel in circuit order", l.circuit_travel_mm, "mm", "The same travel with the paths in the order the optimiser walks them."),
+            ("pairing", "Pairing", l.pairing_mm, "mm", "Length of the odd-joint pairing (euler, continuous): the travel a perfect order would need."),
+            ("travel_per_pairing", "Travel ÷ pairing", ratio(l.travel_mm, l.pairing_mm), "", "Travel over pairing length (0 when there is no pairing)."),
+            ("retractions", "Retractions", l.retractions as f64, "", "Retractions the G-code makes in this layer (free travels at least the printer's minimum length)."),
         ] {
             report.metrics.push(crate::report::Metric { key: key.into(), label: label.into(), value, unit: unit.into(), hint: hint.into(), group_index: Some(i) });
         }
@@ -339,7 +349,7 @@ fn paths_report(r: &PathsReport) -> StageReport {
     if !scores.series.is_empty() {
         report.plots.push(scores);
     }
-    report.plots.push(per_layer_bars(r, "classes", "Path classes", "Class", &["long (≥ 15 nodes)", "medium (5–14)", "short (< 5)"], |l| {
+    report.plots.push(per_layer_bars(r, "classes", "Path classes", "Class", &["long (> 15 nodes)", "medium (5–15)", "short (< 5)"], |l| {
         vec![l.long_paths as f64, l.medium_paths as f64, l.short_paths as f64]
     }));
     report.plots.push(per_layer_bars(r, "bound", "Paths against the proven minimum", "", &["lower bound", "printed"], |l| {
@@ -349,9 +359,9 @@ fn paths_report(r: &PathsReport) -> StageReport {
         key: "layers".into(),
         title: "Paths per layer".into(),
         group: None,
-        columns: ["Layer", "Struts", "Odd nodes", "Lower bound", "Paths", "Score", "Travel", "Retractions", "Pairing", "Pairing bound", "Pairing quality"]
+        columns: ["Layer", "Struts", "Odd nodes", "Lower bound", "Paths", "Score", "Pairing", "Travel", "Travel ÷ pairing", "Retractions", "Pairing bound", "Pairing quality"]
             .iter()
-            .zip(["", "", "", "", "", "", "mm", "", "mm", "mm", ""])
+            .zip(["", "", "", "", "", "", "mm", "mm", "", "", "mm", ""])
             .map(|(label, unit)| Column { label: (*label).into(), unit: unit.into() })
             .collect(),
         rows: r
@@ -367,9 +377,10 @@ fn paths_report(r: &PathsReport) -> StageReport {
                     l.lower_bound_paths.into(),
                     l.paths.into(),
                     serde_json::json!((l.score * 1e4).round() / 1e4),
+                    serde_json::json!((l.pairing_mm * 100.0).round() / 100.0),
                     serde_json::json!((l.travel_mm * 100.0).round() / 100.0),
+                    serde_json::json!((ratio(l.travel_mm, l.pairing_mm) * 1000.0).round() / 1000.0),
                     l.retractions.into(),
-                    serde_json::json!((l.pairing_mm * 1000.0).round() / 1000.0),
                     serde_json::json!((l.pairing_lower_bound_mm * 1000.0).round() / 1000.0),
                     l.pairing_quality().into(),
                 ],
@@ -377,6 +388,11 @@ fn paths_report(r: &PathsReport) -> StageReport {
             .collect(),
     });
     report
+}
+
+/// `a / b`, 0 when `b` is 0.
+fn ratio(a: f64, b: f64) -> f64 {
+    if b > 0.0 { a / b } else { 0.0 }
 }
 
 /// A bar plot of path counts with one bar series per layer.

@@ -35,6 +35,7 @@ mod graph;
 mod grids;
 mod honeycomb;
 mod penrose;
+mod pores;
 mod reentrant;
 mod snub_square;
 mod thumbnail;
@@ -248,9 +249,10 @@ pub struct LatticeReport {
     pub layers: usize,
     /// Strokes per layer.
     pub strokes_per_layer: Vec<usize>,
-    /// Pattern area fraction left open (pores), per layer, with struts `line_width` wide (0–1).
-    /// An estimate: `1 − Σ(strut length × line width) / region area`, clamped to 0–1 (strut
-    /// overlaps at nodes are counted twice, so dense lattices read slightly too closed).
+    /// Pattern area fraction left open (pores), per layer, with struts `line_width` wide (0–1):
+    /// `1 − area of the union of the struts / region area` (each strut a `line_width`-wide
+    /// band with a round joint at every point, overlaps counted once, clipped to the regions;
+    /// the paper's "pores area" of Table 1). Contours and handles are not struts.
     pub pore_fraction_per_layer: Vec<f64>,
     /// Lattice struts (cropped pieces) per layer.
     pub struts_per_layer: Vec<usize>,
@@ -611,7 +613,7 @@ fn layer(
     seed: u64,
 ) -> Result<(Vec<Stroke>, usize, f64, usize), Error> {
     let mut strokes = Vec::new();
-    let (mut length, mut slivers) = (0.0, 0);
+    let mut slivers = 0;
     let rad = angle_deg.to_radians();
     let (c, s) = if angle_deg == 0.0 { (1.0, 0.0) } else { (libm::cos(rad), libm::sin(rad)) };
     // Regions' bounding box in the pattern frame (turned back by the layer angle).
@@ -638,7 +640,7 @@ fn layer(
         let rect = bb.grown(cell_length(pattern));
         let g = pattern_graph(pattern, rect, seed)?;
         let clip = Clipper::new(&d.regions);
-        (length, slivers) = crop_graph(&g, (c, s), &clip, Some(&guard), Feature::Lattice, &mut strokes);
+        (_, slivers) = crop_graph(&g, (c, s), &clip, Some(&guard), Feature::Lattice, &mut strokes);
     }
     let struts = strokes.len();
     for (k, ring) in rings[..contour_rings].iter().enumerate() {
@@ -663,8 +665,7 @@ fn layer(
         let (_, sl) = crop_graph(&g, (1.0, 0.0), &clip, Some(&guard), Feature::Handle, &mut strokes);
         slivers += sl;
     }
-    let area: f64 = d.regions.iter().map(|p| p.area()).sum();
-    let pore = if area > 0.0 { (1.0 - length * line_width / area).clamp(0.0, 1.0) } else { 0.0 };
+    let pore = pores::pore_fraction(&d.regions, &strokes[..struts], line_width);
     Ok((strokes, struts, pore, slivers))
 }
 

@@ -7,13 +7,13 @@
 //! The paper is inconsistent about "long": equation 2's text calls a path long when it has
 //! n ≥ 5 nodes, while Figure 2's classes are long > 15, medium 5–15, short < 5 nodes. weft
 //! uses **n ≥ 5 nodes** ([`LTS_LONG_MIN_NODES`]) for LTS and OE, as the equations define, and
-//! the classes long ≥ 15, medium 5–14, short < 5 nodes ([`CLASS_LONG_MIN_NODES`]) for the
-//! histogram counts.
+//! the paper's classes — long **more than** 15 nodes, medium 5–15, short fewer than 5
+//! ([`CLASS_LONG_ABOVE_NODES`], [`CLASS_MEDIUM_MIN_NODES`]) — for the histogram counts.
 
 /// A path ("long") counts in equations 2 and 3 from this many nodes.
 pub const LTS_LONG_MIN_NODES: usize = 5;
-/// Class "long" from this many nodes (medium: [`CLASS_MEDIUM_MIN_NODES`] up to this − 1).
-pub const CLASS_LONG_MIN_NODES: usize = 15;
+/// Class "long" above this many nodes (medium: [`CLASS_MEDIUM_MIN_NODES`] up to this).
+pub const CLASS_LONG_ABOVE_NODES: usize = 15;
 /// Class "medium" from this many nodes; fewer is "short".
 pub const CLASS_MEDIUM_MIN_NODES: usize = 5;
 
@@ -64,12 +64,12 @@ pub fn oe_percent(runs: &[Run]) -> f64 {
     }
 }
 
-/// (long, medium, short) path counts: ≥ 15, 5–14, < 5 nodes.
+/// (long, medium, short) path counts: > 15, 5–15, < 5 nodes.
 pub fn classes(runs: &[Run]) -> (usize, usize, usize) {
     let mut c = (0, 0, 0);
     for r in runs {
         let nodes = r.segments + 1;
-        if nodes >= CLASS_LONG_MIN_NODES {
+        if nodes > CLASS_LONG_ABOVE_NODES {
             c.0 += 1;
         } else if nodes >= CLASS_MEDIUM_MIN_NODES {
             c.1 += 1;
@@ -96,6 +96,9 @@ mod tests {
         // 6·4 / (8·6) = 0.5.
         assert!((oe_percent(&runs) - 50.0).abs() < 1e-12);
         assert_eq!(classes(&runs), (0, 1, 1));
-        assert_eq!(classes(&[Run { length: 1.0, segments: 14 }]), (1, 0, 0));
+        // Paths of 5, 15 and 16 nodes: medium, medium, long; 4 nodes: short.
+        let nodes = |n: usize| Run { length: 1.0, segments: n - 1 };
+        assert_eq!(classes(&[nodes(5), nodes(15), nodes(16)]), (1, 2, 0));
+        assert_eq!(classes(&[nodes(4), nodes(2)]), (0, 0, 2));
     }
 }

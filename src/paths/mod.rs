@@ -44,6 +44,8 @@ pub const DEFAULT_SHORT_PATH_SPEED_FACTOR: f64 = 0.6;
 /// it a layer's remaining components are paired by the heuristic with a certified gap. Decided
 /// from the work estimate (node counts × measured cost), never a clock: same bytes everywhere.
 pub const DEFAULT_EXACT_PAIRING_SECONDS: f64 = 1.0;
+/// Direction of the `direction` order, degrees from +X, counter-clockwise.
+pub const DEFAULT_DIRECTION_DEG: f64 = 0.0;
 
 /// Optimisation method.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -65,8 +67,18 @@ pub enum Method {
 pub enum Order {
     /// Longest to shortest (the paper's).
     LongestFirst,
-    /// Travel-minimising: nearest neighbour + 2-opt, each layer starting near the previous end.
+    /// Travel-minimising, never more travel than [`Order::Circuit`]: the circuit order
+    /// rotated to start near the previous layer's end, or a nearest-neighbour tour, improved
+    /// by 2-opt and or-opt, the shorter kept.
     MinTravel,
+    /// As the method emits the paths (for euler / continuous the walk order: each travel is
+    /// one pairing edge).
+    Circuit,
+    /// Along the direction `direction_deg` (the paper's future work: a user-chosen sorting
+    /// direction): paths sorted by where they start along it, each printed in that direction.
+    Direction,
+    /// From the centre of the layer out, each path printed from its end nearer the centre.
+    CentreOut,
 }
 
 /// Path optimiser options (the `lattice` job's `paths` settings).
@@ -87,6 +99,8 @@ pub struct Options {
     pub short_path_speed_factor: f64,
     /// Estimated seconds per layer of exact pairing (euler, continuous). Default 1.
     pub exact_pairing_seconds: f64,
+    /// Direction of the `direction` order, degrees from +X. Default 0.
+    pub direction_deg: f64,
 }
 
 impl Default for Options {
@@ -99,6 +113,7 @@ impl Default for Options {
             short_path_segments: DEFAULT_SHORT_PATH_SEGMENTS,
             short_path_speed_factor: DEFAULT_SHORT_PATH_SPEED_FACTOR,
             exact_pairing_seconds: DEFAULT_EXACT_PAIRING_SECONDS,
+            direction_deg: DEFAULT_DIRECTION_DEG,
         }
     }
 }
@@ -129,15 +144,23 @@ pub struct LayerPaths {
     pub lts_percent: f64,
     /// OE % (equation 3) of the chosen solution.
     pub oe_percent: f64,
-    /// Paths with ≥ 15 nodes.
+    /// Paths with more than 15 nodes (the paper's "long").
     pub long_paths: usize,
-    /// Paths with 5–14 nodes.
+    /// Paths with 5–15 nodes.
     pub medium_paths: usize,
     /// Paths with < 5 nodes.
     pub short_paths: usize,
-    /// Travel between paths, mm.
+    /// Travel of the layer, mm: from the previous layer's last point to the first path
+    /// (0 on the first layer), then between paths — straight for free travels, along the
+    /// struts for a continuous walk's travelled runs (what the G-code moves).
     pub travel_mm: f64,
-    /// Travels that need a retraction (free travels).
+    /// The same travel with the paths in circuit order (as the method emits them), mm:
+    /// `min_travel` is never above it.
+    pub circuit_travel_mm: f64,
+    /// Retractions the G-code makes in this layer: free travels (no strut route) at least the
+    /// printer's `min_travel_mm` long, 0 with retraction off or a pneumatic printer
+    /// ([`crate::gcode::retractions_per_pass`]; the `lattice` job counts them with the
+    /// design's printer, [`optimise`] alone with the default printer).
     pub retractions: usize,
     /// Duplicate edges collapsed while building the graph.
     pub duplicates_collapsed: usize,
@@ -268,17 +291,24 @@ pub fn optimise(
                 r.chains
             }
         };
+        let ends: Vec<[DVec2; 2]> = chains.iter().map(|c| order::printed_ends(c, &graph)).collect();
+        let circuit: Vec<(usize, bool)> = (0..chains.len()).map(|i| (i, false)).collect();
+        stats.circuit_travel_mm = order::travel_of(&circuit, &ends, last_end);
         chains = match options.order {
             Order::LongestFirst => {
                 order::sort_longest_first(&mut chains, &graph);
                 chains
             }
             Order::MinTravel => {
-                let from = last_end.unwrap_or_else(|| {
-                    graph.nodes.iter().fold(DVec2::splat(f64::INFINITY), |m, p| m.min(*p))
-                });
-                order::min_travel(chains, &graph, from)
+                let corner = graph.nodes.iter().fold(DVec2::splat(f64::INFINITY), |m, p| m.min(*p));
+                order::min_travel(chains, &graph, last_end, corner)
             }
+            Order::Circuit => chains,
+            Order::Direction => {
+                let a = options.direction_deg.to_radians();
+                order::sort_directional(chains, &graph, Some(DVec2::new(libm::cos(a), libm::sin(a))))
+            }
+            Order::CentreOut => order::sort_directional(chains, &graph, None),
         };
 
         let mut out = Pass::layer(layer.z, layer.height, Vec::new());
@@ -294,20 +324,36 @@ pub fn optimise(
         stats.long_paths = long;
         stats.medium_paths = medium;
         stats.short_paths = short;
-        for w in out.paths.windows(2) {
-            let a = w[0].points.last().expect("path has points");
-            let b = w[1].points[0];
-            stats.travel_mm += a.truncate().distance(b.truncate());
-            if w[1].approach.is_none() {
-                stats.retractions += 1;
+        let mut cur = last_end;
+        let mut walked = 0.0;
+        for p in &out.paths {
+            let b = p.points[0].truncate();
+            match (&p.approach, cur) {
+                (Some(route), Some(a)) => {
+                    // Along the struts: order-independent, also in the circuit travel.
+                    let mut q = a;
+                    for r in route.iter().map(|r| r.truncate()).chain(std::iter::once(b)) {
+                        walked += q.distance(r);
+                        q = r;
+                    }
+                }
+                (_, Some(a)) => stats.travel_mm += a.distance(b),
+                (_, None) => {}
             }
+            cur = Some(p.points.last().expect("path has points").truncate());
         }
+        stats.travel_mm += walked;
+        stats.circuit_travel_mm += walked;
         if let Some(p) = out.paths.last() {
             last_end = Some(p.points.last().expect("path has points").truncate());
         }
         toolpath.passes.push(out);
         report.layers.push(stats);
         progress((li + 1) as f32 / layers.len() as f32);
+    }
+    let counts = crate::gcode::retractions_per_pass(&toolpath, &crate::gcode::Printer::default());
+    for (l, n) in report.layers.iter_mut().zip(counts) {
+        l.retractions = n;
     }
     Ok(Optimised { toolpath, report })
 }
@@ -341,9 +387,16 @@ pub const FIELDS: &[Field] = &[
     ),
     int("iterations", "Paths", "GIPPO iterations", 1.0, 100000.0, "How many randomised tries GIPPO makes; it keeps the best (the paper uses 500)."),
     choice_docs(
-        other("order", "Paths", "Path order", Kind::Choice, &["longest_first", "min_travel"], "The order the paths are printed in."),
-        &["Longest paths first, as the paper prints them.", "Each next path starts near where the last ended: less travel between paths."],
+        other("order", "Paths", "Path order", Kind::Choice, &["longest_first", "min_travel", "circuit", "direction", "centre_out"], "The order the paths are printed in."),
+        &[
+            "Longest paths first, as the paper prints them.",
+            "Each next path starts near where the last ended, and each layer near where the one below ended: the least travel (never more than the circuit order).",
+            "In the order the optimiser walks them (euler and continuous: one pairing edge between paths).",
+            "Swept along a direction you choose (the angle below): every path printed that way.",
+            "From the centre of each layer outwards.",
+        ],
     ),
+    num("direction_deg", "Paths", "Print direction", "°", -360.0, 360.0, 1.0, "For the 'direction' order: the way paths are swept, as an angle from +X (90 = towards +Y)."),
     num("merge_tolerance_mm", "Paths", "Node merge tolerance", "mm", 0.0001, 1.0, 0.001, "Strut ends closer than this are one node."),
     int("short_path_segments", "Paths", "Short path below", 0.0, 1000.0, "Paths with fewer struts than this are printed slower, so they stick (the paper: 4)."),
     num("short_path_speed_factor", "Paths", "Short path speed", "×", 0.01, 1.0, 0.05, "Speed of those short paths, as a fraction of the lattice speed (the paper: 0.6)."),

@@ -3,20 +3,30 @@
 //!
 //! * [`sort_longest_first`]: the paper's order — by printed segments, then printed length,
 //!   both descending (stable).
-//! * [`min_travel`]: nearest neighbour from the given start point over both ends of every
-//!   chain (a chain may be printed reversed), then windowed 2-opt (segment reversal with
-//!   chain flips) on the straight travel distances, until no improvement.
+//! * circuit order: the chains as the method emits them (for euler / continuous the walk
+//!   order, where every travel between two paths is one pairing edge).
+//! * [`min_travel`]: never worse than the circuit order. Two candidates — the circuit order
+//!   rotated (either direction) to start nearest the previous layer's end, and a nearest
+//!   neighbour tour over both ends of every chain — are each improved by windowed 2-opt
+//!   (segment reversal with chain flips) and or-opt (one chain moved, maybe flipped), moves
+//!   accepted only when they shorten the travel; the shorter wins (ties: the circuit one).
+//!   The travel measured is the straight distance from the previous layer's end to the first
+//!   path plus the straight distances between chains, exactly what the G-code travels.
+//! * [`sort_directional`]: the user's direction — along a chosen angle, or from the centre
+//!   out.
 
 use super::graph::Graph;
 use super::Chain;
 use crate::geom::DVec2;
 
-/// 2-opt window (chains).
+/// 2-opt / or-opt window (chains).
 const WINDOW: usize = 48;
-/// 2-opt passes at most.
+/// Local-search passes at most.
 const MAX_PASSES: usize = 16;
 /// Below this many chains left, nearest neighbour scans them all.
 const BRUTE_BELOW: usize = 96;
+/// Smallest improvement a local-search move must make, mm.
+const GAIN_MM: f64 = 1e-9;
 
 /// The paper's order: most segments first, then longest printed length first; stable.
 pub(crate) fn sort_longest_first(chains: &mut [Chain], graph: &Graph) {
@@ -42,20 +52,15 @@ pub(crate) fn sort_longest_first(chains: &mut [Chain], graph: &Graph) {
     }
 }
 
-/// Travel-minimising order starting near `from`.
-pub(crate) fn min_travel(chains: Vec<Chain>, graph: &Graph, from: DVec2) -> Vec<Chain> {
-    let m = chains.len();
-    if m == 0 {
-        return chains;
-    }
-    let start_of = |c: &Chain| graph.nodes[c.nodes[0]];
-    let end_of = |c: &Chain| graph.nodes[*c.nodes.last().expect("chain has nodes")];
-    let ends: Vec<[DVec2; 2]> = chains.iter().map(|c| [start_of(c), end_of(c)]).collect();
+/// Nearest neighbour from `from` over both ends of every chain (a chain may be printed
+/// reversed), on a grid.
+fn nearest_neighbour(ends: &[[DVec2; 2]], from: DVec2) -> Vec<(usize, bool)> {
+    let m = ends.len();
 
     // Nearest neighbour over chain ends, on a grid.
     let mut min = DVec2::splat(f64::INFINITY);
     let mut max = DVec2::splat(f64::NEG_INFINITY);
-    for e in &ends {
+    for e in ends {
         for p in e {
             min = min.min(*p);
             max = max.max(*p);
@@ -148,19 +153,81 @@ pub(crate) fn min_travel(chains: Vec<Chain>, graph: &Graph, from: DVec2) -> Vec<
             }
         }
     }
+    order
+}
 
-    // Windowed 2-opt on (start, end) points of the oriented sequence.
+/// The first and last printed node of a chain (where its free travels arrive and leave; a
+/// chain without printed steps: its end nodes).
+pub(crate) fn printed_ends(c: &Chain, graph: &Graph) -> [DVec2; 2] {
+    let first = c.travel.iter().position(|t| !t);
+    let last = c.travel.iter().rposition(|t| !t);
+    match (first, last) {
+        (Some(f), Some(l)) => [graph.nodes[c.nodes[f]], graph.nodes[c.nodes[l + 1]]],
+        _ => [graph.nodes[c.nodes[0]], graph.nodes[*c.nodes.last().expect("chain has nodes")]],
+    }
+}
+
+fn link(a: Option<DVec2>, b: Option<DVec2>) -> f64 {
+    match (a, b) {
+        (Some(a), Some(b)) => a.distance(b),
+        _ => 0.0,
+    }
+}
+
+/// Travel of chains printed in `order` (chain, reversed): from `from` (when given) to the
+/// first, then between chains, straight, mm.
+pub(crate) fn travel_of(order: &[(usize, bool)], ends: &[[DVec2; 2]], from: Option<DVec2>) -> f64 {
+    let mut cur = from;
+    let mut t = 0.0;
+    for &(i, r) in order {
+        t += link(cur, Some(ends[i][r as usize]));
+        cur = Some(ends[i][1 - r as usize]);
+    }
+    t
+}
+
+/// The circuit order rotated to start where the travel is least: forwards from chain k, or
+/// backwards (every chain reversed) from chain k. Rotation 0 forwards is the circuit order
+/// itself, so the result is never longer.
+fn best_rotation(ends: &[[DVec2; 2]], from: Option<DVec2>) -> Vec<(usize, bool)> {
+    let m = ends.len();
+    // l[k]: end of k → start of k + 1 (cyclic).
+    let l: Vec<f64> = (0..m).map(|k| ends[k][1].distance(ends[(k + 1) % m][0])).collect();
+    let total: f64 = l.iter().sum();
+    let mut best = (travel_of(&(0..m).map(|i| (i, false)).collect::<Vec<_>>(), ends, from), 0usize, false);
+    for k in 0..m {
+        let fwd = link(from, Some(ends[k][0])) + total - l[(k + m - 1) % m];
+        if fwd < best.0 - GAIN_MM {
+            best = (fwd, k, false);
+        }
+        let bwd = link(from, Some(ends[k][1])) + total - l[k];
+        if bwd < best.0 - GAIN_MM {
+            best = (bwd, k, true);
+        }
+    }
+    let (_, k, back) = best;
+    if back {
+        (0..m).map(|j| ((k + m - j) % m, true)).collect()
+    } else {
+        (0..m).map(|j| ((k + j) % m, false)).collect()
+    }
+}
+
+/// Windowed 2-opt and or-opt, accepting only moves that shorten the travel.
+fn improve(order: &mut Vec<(usize, bool)>, ends: &[[DVec2; 2]], from: Option<DVec2>) {
+    let m = order.len();
     let mut s: Vec<DVec2> = order.iter().map(|&(i, r)| ends[i][r as usize]).collect();
     let mut e: Vec<DVec2> = order.iter().map(|&(i, r)| ends[i][1 - r as usize]).collect();
     for _ in 0..MAX_PASSES {
         let mut improved = false;
+        // 2-opt: reverse the run i..=j (each chain flipped).
         for i in 0..m {
-            let prev = if i == 0 { from } else { e[i - 1] };
             for j in i..m.min(i + WINDOW) {
+                let prev = if i == 0 { from } else { Some(e[i - 1]) };
                 let next = if j + 1 < m { Some(s[j + 1]) } else { None };
-                let before = prev.distance(s[i]) + next.map_or(0.0, |n| e[j].distance(n));
-                let after = prev.distance(e[j]) + next.map_or(0.0, |n| s[i].distance(n));
-                if after < before - 1e-9 {
+                let before = link(prev, Some(s[i])) + link(Some(e[j]), next);
+                let after = link(prev, Some(e[j])) + link(Some(s[i]), next);
+                if after < before - GAIN_MM {
                     order[i..=j].reverse();
                     s[i..=j].reverse();
                     e[i..=j].reverse();
@@ -172,11 +239,75 @@ pub(crate) fn min_travel(chains: Vec<Chain>, graph: &Graph, from: DVec2) -> Vec<
                 }
             }
         }
+        // Or-opt: move chain i before position q (q = m: to the end), either way round.
+        let mut i = 0;
+        while i < m {
+            let prev = if i == 0 { from } else { Some(e[i - 1]) };
+            let next = if i + 1 < m { Some(s[i + 1]) } else { None };
+            let removal = link(prev, Some(s[i])) + link(Some(e[i]), next) - link(prev, next);
+            let mut best: Option<(f64, usize, bool)> = None;
+            for q in i.saturating_sub(WINDOW)..=m.min(i + WINDOW) {
+                if q == i || q == i + 1 {
+                    continue;
+                }
+                let p = if q == 0 { from } else { Some(e[q - 1]) };
+                let n = if q < m { Some(s[q]) } else { None };
+                for flip in [false, true] {
+                    let (a, b) = if flip { (e[i], s[i]) } else { (s[i], e[i]) };
+                    let delta = link(p, Some(a)) + link(Some(b), n) - link(p, n) - removal;
+                    if delta < -GAIN_MM && best.is_none_or(|(d, _, _)| delta < d) {
+                        best = Some((delta, q, flip));
+                    }
+                }
+            }
+            if let Some((_, q, flip)) = best {
+                let (mut c, mut a, mut b) = (order.remove(i), s.remove(i), e.remove(i));
+                if flip {
+                    c.1 = !c.1;
+                    std::mem::swap(&mut a, &mut b);
+                }
+                let at = if q > i { q - 1 } else { q };
+                order.insert(at, c);
+                s.insert(at, a);
+                e.insert(at, b);
+                improved = true;
+            }
+            i += 1;
+        }
         if !improved {
             break;
         }
     }
+}
 
+/// Travel-minimising order, never longer than the circuit order (the order of `chains`);
+/// starts near `from` (the previous layer's end) when given; without it (the first layer),
+/// the tour is walked whichever way starts nearer `hint` (the same travel either way).
+pub(crate) fn min_travel(chains: Vec<Chain>, graph: &Graph, from: Option<DVec2>, hint: DVec2) -> Vec<Chain> {
+    let m = chains.len();
+    if m == 0 {
+        return chains;
+    }
+    let ends: Vec<[DVec2; 2]> = chains.iter().map(|c| printed_ends(c, graph)).collect();
+    let mut circuit = best_rotation(&ends, from);
+    improve(&mut circuit, &ends, from);
+    let mut nn = nearest_neighbour(&ends, from.unwrap_or(ends[0][0]));
+    improve(&mut nn, &ends, from);
+    let mut order = if travel_of(&nn, &ends, from) < travel_of(&circuit, &ends, from) - GAIN_MM { nn } else { circuit };
+    if from.is_none() {
+        let (first, last) = (order[0], order[m - 1]);
+        if hint.distance(ends[last.0][last.1 as usize ^ 1]) < hint.distance(ends[first.0][first.1 as usize]) {
+            order.reverse();
+            for o in &mut order {
+                o.1 = !o.1;
+            }
+        }
+    }
+    apply(chains, order)
+}
+
+/// The chains in `order`, reversed where asked.
+fn apply(chains: Vec<Chain>, order: Vec<(usize, bool)>) -> Vec<Chain> {
     let mut slots: Vec<Option<Chain>> = chains.into_iter().map(Some).collect();
     order
         .into_iter()
@@ -188,4 +319,32 @@ pub(crate) fn min_travel(chains: Vec<Chain>, graph: &Graph, from: DVec2) -> Vec<
             c
         })
         .collect()
+}
+
+/// The user's direction: chains sorted by where they start along `dir` (unit vector; each
+/// chain printed from its end lower along `dir`), or, with `dir` none, from the centre of the
+/// layer out (each chain printed from its end nearer the centre). Ties by index.
+pub(crate) fn sort_directional(chains: Vec<Chain>, graph: &Graph, dir: Option<DVec2>) -> Vec<Chain> {
+    let ends: Vec<[DVec2; 2]> = chains.iter().map(|c| printed_ends(c, graph)).collect();
+    let mut lo = DVec2::splat(f64::INFINITY);
+    let mut hi = DVec2::splat(f64::NEG_INFINITY);
+    for p in ends.iter().flatten() {
+        lo = lo.min(*p);
+        hi = hi.max(*p);
+    }
+    let centre = (lo + hi) * 0.5;
+    let key = |p: DVec2| match dir {
+        Some(d) => p.dot(d),
+        None => p.distance(centre),
+    };
+    let mut keyed: Vec<(f64, usize, bool)> = ends
+        .iter()
+        .enumerate()
+        .map(|(i, e)| {
+            let (a, b) = (key(e[0]), key(e[1]));
+            if b < a { (b, i, true) } else { (a, i, false) }
+        })
+        .collect();
+    keyed.sort_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
+    apply(chains, keyed.into_iter().map(|(_, i, r)| (i, r)).collect())
 }

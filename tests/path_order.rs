@@ -1,0 +1,113 @@
+//! Issue 9: path order and the per-layer travel / retraction numbers, on the shipped lattice
+//! examples. `min_travel` never travels more than the circuit order on any layer; the report's
+//! retractions are the G-code's, layer by layer.
+
+use weft::design::Job;
+use weft::jobs::lattice::{lattice_strokes, LatticeJob};
+use weft::paths::{optimise, Method, Options, Order, PathsReport};
+use weft::pipeline::{self, Files, RunOptions};
+use weft::Design;
+
+fn example(name: &str) -> Design {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples").join(format!("{name}.json"));
+    Design::from_json(name, &std::fs::read_to_string(path).unwrap()).unwrap()
+}
+
+const PLANAR: &[&str] = &[
+    "honeycomb-10mm",
+    "voronoi-10mm",
+    "penrose-10mm",
+    "snub-square-10mm",
+    "arrowhead-10mm",
+    "reentrant-honeycomb-10mm",
+    "tensile-honeycomb",
+    "ball-burst-disc-48mm",
+    "concave-cylinder-honeycomb",
+];
+
+#[test]
+fn min_travel_never_travels_more_than_the_circuit_order() {
+    for name in PLANAR {
+        let d = example(name);
+        let strokes = lattice_strokes(&d, &Files::new()).unwrap();
+        for method in [Method::Euler, Method::Continuous, Method::GippoMax] {
+            let run = |order| {
+                let o = Options { method, order, iterations: 5, ..Options::default() };
+                optimise(&strokes, &o, 0.4, 1, &mut |_| {}).unwrap().report
+            };
+            // The circuit order's own travel is what the report calls circuit travel.
+            for (li, l) in run(Order::Circuit).layers.iter().enumerate() {
+                assert!((l.travel_mm - l.circuit_travel_mm).abs() < 1e-6, "{name} {method:?} layer {li}: {} vs {}", l.travel_mm, l.circuit_travel_mm);
+            }
+            let min = run(Order::MinTravel);
+            for (li, l) in min.layers.iter().enumerate() {
+                assert!(l.travel_mm <= l.circuit_travel_mm + 1e-6, "{name} {method:?} layer {li}: min_travel {} > circuit {}", l.travel_mm, l.circuit_travel_mm);
+            }
+            // Every order prints the same paths.
+            for order in [Order::LongestFirst, Order::Direction, Order::CentreOut] {
+                let r = run(order);
+                for (a, b) in r.layers.iter().zip(&min.layers) {
+                    assert_eq!(a.paths, b.paths, "{name} {method:?} {order:?}");
+                }
+            }
+        }
+    }
+}
+
+/// Retractions per `;LAYER_CHANGE` section of Marlin G-code with absolute E: `G1 E…` lines
+/// without a move that lower E. The final retraction (after the last path) is dropped.
+fn gcode_retractions(gcode: &str) -> Vec<usize> {
+    let mut per = Vec::new();
+    let mut e = 0.0f64;
+    let mut last: Option<usize> = None;
+    for line in gcode.lines() {
+        if line.starts_with(";LAYER_CHANGE") {
+            per.push(0);
+            continue;
+        }
+        let code = line.split(';').next().unwrap();
+        let mut words = code.split_whitespace();
+        if words.next() != Some("G1") && !code.starts_with("G0") {
+            continue;
+        }
+        let mut moved = false;
+        let mut new_e = None;
+        for w in code.split_whitespace().skip(1) {
+            match w.as_bytes()[0] {
+                b'X' | b'Y' | b'Z' => moved = true,
+                b'E' => new_e = Some(w[1..].parse::<f64>().unwrap()),
+                _ => {}
+            }
+        }
+        if let Some(v) = new_e {
+            if !moved && v < e - 1e-9 && !per.is_empty() {
+                *per.last_mut().unwrap() += 1;
+                last = Some(per.len() - 1);
+            }
+            e = v;
+        }
+    }
+    // The epilogue's retraction.
+    if let Some(k) = last {
+        per[k] -= 1;
+    }
+    per
+}
+
+#[test]
+fn reported_retractions_are_the_gcodes() {
+    for name in ["honeycomb-10mm", "voronoi-10mm", "ball-burst-disc-48mm", "tensile-honeycomb"] {
+        for (method, order) in [(Method::GippoMax, Order::LongestFirst), (Method::Euler, Order::MinTravel), (Method::Continuous, Order::MinTravel)] {
+            let mut d = example(name);
+            let mut j: LatticeJob = d.job.settings().unwrap();
+            j.paths.method = method;
+            j.paths.order = order;
+            j.paths.iterations = 20;
+            d.job = Job::new("lattice", &j);
+            let out = pipeline::run(&d, &Files::new(), &RunOptions::default(), &mut |_, _| {}).unwrap();
+            let report = out.report.stage::<PathsReport>("paths").unwrap();
+            let reported: Vec<usize> = report.layers.iter().map(|l| l.retractions).collect();
+            assert_eq!(reported, gcode_retractions(&out.gcode), "{name} {method:?} {order:?}");
+        }
+    }
+}

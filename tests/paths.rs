@@ -10,7 +10,7 @@ const TOL: f64 = 0.005;
 const METHODS: [Method; 4] = [Method::GippoMax, Method::GippoMin, Method::Euler, Method::Continuous];
 
 fn stroke(points: &[(f64, f64)]) -> Stroke {
-    Stroke { points: points.iter().map(|&(x, y)| DVec2::new(x, y)).collect(), feature: Feature::Lattice }
+    Stroke { points: points.iter().map(|&(x, y)| DVec2::new(x, y)).collect(), feature: Feature::Lattice, curved: false }
 }
 
 fn layer(strokes: Vec<Stroke>) -> StrokeLayer {
@@ -438,7 +438,7 @@ fn short_paths_are_slowed() {
 fn majority_feature_and_min_travel_order() {
     let mut l = layer(vec![
         stroke(&[(0.0, 0.0), (5.0, 0.0)]),
-        Stroke { points: vec![DVec2::new(5.0, 0.0), DVec2::new(5.0, 1.0)], feature: Feature::Contour },
+        Stroke { points: vec![DVec2::new(5.0, 0.0), DVec2::new(5.0, 1.0)], feature: Feature::Contour, curved: false },
     ]);
     let out = run(&l, Method::Euler, 0);
     assert_eq!(out.toolpath.passes[0].paths.len(), 1);

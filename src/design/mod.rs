@@ -515,7 +515,7 @@ mod tests {
             ("job.paths.iterations=many", "job.paths.iterations: GIPPO iterations must be a whole number from 1 to 100000 (got \"many\")"),
             ("job.paths.method=eulr", "job.paths.method: 'eulr' is not a choice for Optimiser; use one of: gippo_max, gippo_min, euler, continuous"),
             ("job.lattice.layers=99999999999", "job.lattice.layers: Layers must be a whole number from 1 to 10000 (got 99999999999)"),
-            ("job.lattice.pattern.kind=hex", "job.lattice.pattern.kind: 'hex' is not a choice for Pattern; use one of: honeycomb, voronoi, penrose, snub_square, arrowhead, reentrant_honeycomb, rectilinear, square_grid, triangle_grid"),
+            ("job.lattice.pattern.kind=hex", "job.lattice.pattern.kind: 'hex' is not a choice for Pattern; use one of: honeycomb, voronoi, penrose, snub_square, arrowhead, reentrant_honeycomb, rectilinear, square_grid, triangle_grid, wavy_honeycomb, wavy_square_grid"),
             ("job.lattice.pattern.hexagon_radius_mm=big", "job.lattice.pattern.hexagon_radius_mm: Hexagon radius must be a number from 0.05 to 1000 mm (got \"big\")"),
             ("job.domain={\"width_mm\":3}", "job.domain.kind: Domain is missing: add it (one of: rectangle, disc, tensile_specimen, solid)"),
             ("job.kind=weave", "job.kind: 'weave' is not a choice for the job kind; use one of: slice, lattice"),

@@ -251,6 +251,36 @@ pub struct Material {
     pub k: f64,
     /// Pre-flow and post-flow (default: none).
     pub flow: Flow,
+    /// Expected die swell ratio B = D_extrudate / D_nozzle: the strand leaving the nozzle
+    /// swells by elastic recovery of the melt (GIPPO, Discussion), so a strut prints about
+    /// B × the nominal width. A user-entered number, [`MIN_SWELL_RATIO`]–[`MAX_SWELL_RATIO`];
+    /// default [`DEFAULT_SWELL_RATIO`] (no swell). Typical values: 1.13 for a Newtonian
+    /// liquid leaving a long capillary (Tanner 1970, GIPPO ref. 30); viscoelastic melts swell
+    /// more, elastic ones (TPU) more than stiff ones, growing with shear rate (Colon et al.
+    /// 2023, GIPPO ref. 31, estimate it from printing parameters and rheology). Shown as the
+    /// lattice report's predicted strut width; changes the G-code only with `compensate_swell`.
+    pub swell_ratio: f64,
+    /// Use the predicted width in equation 4: with it on, every extruding segment without
+    /// per-point flow gets `E = k·4·L·LT·EM·(B·w) / (π f_d²)`, i.e. B × the nominal E (w is
+    /// the path's width, the nozzle diameter for lattices); travel, retraction, pre/post-flow,
+    /// per-point flow and the `;WIDTH` comments do not change. Default false.
+    pub compensate_swell: bool,
+}
+
+/// Default die swell ratio (none).
+pub const DEFAULT_SWELL_RATIO: f64 = 1.0;
+/// Smallest die swell ratio (a strand narrower than the nozzle is not swell).
+pub const MIN_SWELL_RATIO: f64 = 1.0;
+/// Largest die swell ratio (polymer melts rarely exceed 2–3).
+pub const MAX_SWELL_RATIO: f64 = 3.0;
+/// Default for [`Material::compensate_swell`].
+pub const DEFAULT_COMPENSATE_SWELL: bool = false;
+
+impl Material {
+    /// The printed strand width predicted from a nominal width `w` mm: B × w.
+    pub fn swollen_width(&self, w: f64) -> f64 {
+        self.swell_ratio * w
+    }
 }
 
 impl Default for Material {
@@ -265,6 +295,8 @@ impl Default for Material {
             extrusion_multiplier: 1.0,
             k: 1.0,
             flow: Flow::default(),
+            swell_ratio: DEFAULT_SWELL_RATIO,
+            compensate_swell: DEFAULT_COMPENSATE_SWELL,
         }
     }
 }
@@ -623,6 +655,8 @@ pub const MATERIAL_FIELDS: &[Field] = &[
     int("fan_start_layer", "Material", "Fan from layer", 0.0, 1000.0, "0-based layer index."),
     num("extrusion_multiplier", "Material", "Extrusion multiplier EM", "", 0.1, 3.0, 0.01, "EM in GIPPO equation 4."),
     num("k", "Material", "Cross-section correction k", "", 0.1, 3.0, 0.01, "k in GIPPO equation 4 (elliptical rather than rectangular strands)."),
+    num("swell_ratio", "Material", "Die swell ratio", "×", MIN_SWELL_RATIO, MAX_SWELL_RATIO, 0.01, "How much wider than the nozzle the strand comes out (1 = none; elastic TPU swells more than PLA)."),
+    other("compensate_swell", "Material", "Extrude for the swollen width", Kind::Bool, &[], "Feed filament for the predicted (swollen) width instead of the nozzle width."),
     when(num("flow.pre_flow_mm", "Material", "Pre-flow", "mm", 0.0, 50.0, 0.01, "Filament pushed at each path start (Marlin)."), "/printer.flavor", "marlin"),
     when(num("flow.post_flow_mm", "Material", "Post-flow", "mm", 0.0, 50.0, 0.01, "Filament pushed at each path end (Marlin)."), "/printer.flavor", "marlin"),
     when(num("flow.pre_flow_s", "Material", "Pre-flow time", "s", 0.0, 60.0, 0.01, "Valve open before moving (pneumatic)."), "/printer.flavor", "pneumatic"),

@@ -31,11 +31,13 @@ pub fn equation4_e(length_mm: f64, layer_height_mm: f64, width_mm: f64, em: f64,
 }
 
 /// Filament for a segment of `len` mm: the path's per-point flow at its end point `j`, or
-/// equation 4 (exactly as before for paths without per-point flow).
+/// equation 4 (exactly as before for paths without per-point flow; with
+/// `material.compensate_swell`, its width is the predicted swollen width B·w).
 pub(crate) fn segment_e(options: &Options, path: &Path, height: f64, j: usize, len: f64) -> f64 {
     let m = &options.material;
     let fd = options.printer.filament_diameter_mm;
     match path.data.as_deref().and_then(|d| d.flow.as_ref()) {
+        None if m.compensate_swell => equation4_e(len, height, m.swollen_width(path.width), m.extrusion_multiplier, m.k, fd),
         None => equation4_e(len, height, path.width, m.extrusion_multiplier, m.k, fd),
         Some(PointFlow::AreaMm2(a)) => m.k * m.extrusion_multiplier * len * a[j] / (std::f64::consts::PI * fd * fd / 4.0),
         Some(PointFlow::FilamentPerMm(f)) => f[j] * len,

@@ -9,6 +9,10 @@ pub struct Stroke {
     pub points: Vec<DVec2>,
     /// What it is.
     pub feature: Feature,
+    /// One curved strut: the whole polyline is one graph edge (its inner points are bends,
+    /// printed in order but not nodes of the path graph). False for chains of straight struts,
+    /// contours and handle lines (every segment an edge).
+    pub curved: bool,
 }
 
 /// The strokes of one layer: the lattice stage's output and the path optimiser's input.

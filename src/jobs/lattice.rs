@@ -270,7 +270,7 @@ fn strokes(j: &LatticeJob, ctx: &mut Ctx) -> Result<Out<Vec<StrokeLayer>>, Error
             })?
         }
     };
-    let parts = (&j.lattice, line_width(design), design.seed);
+    let parts = (&j.lattice, line_width(design), design.seed, design.material.swell_ratio);
     ctx.stage("lattice", "lattice", &parts, &[domains.key], |progress| {
         let g = lattice::generate(&domains, &j.lattice, line_width(design), design.seed, progress).map_err(|e| Error::stage("lattice", e))?;
         let r = &g.report;
@@ -278,8 +278,10 @@ fn strokes(j: &LatticeJob, ctx: &mut Ctx) -> Result<Out<Vec<StrokeLayer>>, Error
         let mean_pore = if r.pore_fraction_per_layer.is_empty() { 0.0 } else { r.pore_fraction_per_layer.iter().sum::<f64>() / r.pore_fraction_per_layer.len() as f64 };
         let report = StageReport::new("lattice", "Generating the lattice", r)
             .metric("layers", "Layers", r.layers as f64, "", "Lattice layers generated.")
-            .metric("struts", "Struts", struts as f64, "", "Straight strut pieces over all layers, before path optimisation.")
-            .metric("pore_fraction", "Pores", 100.0 * mean_pore, "%", "Open area of a layer: the part of the domain no strut covers (mean over layers).");
+            .metric("struts", "Struts", struts as f64, "", "Strut pieces over all layers (a curved strut counts once), before path optimisation.")
+            .metric("pore_fraction", "Pores", 100.0 * mean_pore, "%", "Open area of a layer: the part of the domain no strut covers (mean over layers).")
+            .metric("strut_width", "Strut width", line_width(design), "mm", "Nominal strut width: the nozzle diameter, what the paths are planned for.")
+            .metric("printed_width", "Predicted printed width", design.material.swollen_width(line_width(design)), "mm", "Nominal width × the material's die swell ratio: how wide the struts are expected to come out.");
         Ok((g.layers, Some(report)))
     })
 }

@@ -21,6 +21,9 @@ use crate::geom::{DVec2, Mesh};
 fn seconds_per_strut(p: &Pattern) -> f64 {
     match p {
         Pattern::Honeycomb { .. } => 0.5e-6,
+        // The straight pattern's cost, plus `SECONDS_PER_CURVE_SEGMENT` per segment.
+        Pattern::WavyHoneycomb { .. } => 0.5e-6 + p.segments_per_strut() as f64 * SECONDS_PER_CURVE_SEGMENT,
+        Pattern::WavySquareGrid { .. } => 0.3e-6 + p.segments_per_strut() as f64 * SECONDS_PER_CURVE_SEGMENT,
         Pattern::Voronoi { .. } => 1.4e-6,
         Pattern::Penrose { .. } | Pattern::SnubSquare { .. } => 0.4e-6,
         Pattern::Arrowhead { .. } | Pattern::ReentrantHoneycomb { .. } => 0.4e-6,
@@ -29,6 +32,9 @@ fn seconds_per_strut(p: &Pattern) -> f64 {
         Pattern::Rectilinear { .. } => 2.0e-6,
     }
 }
+
+/// Time per segment of a curved strut (a sine, the segment's crop and trim, its point), s.
+const SECONDS_PER_CURVE_SEGMENT: f64 = 0.15e-6;
 
 /// Extra time per generated strut when printed loops (contours, handle outlines) guard the
 /// layer (trimming struts out of their beads), s: measured as the difference between disc
@@ -249,7 +255,7 @@ impl PatternStats {
             degree[e[1] as usize] += 1;
             if inside((a + b) * 0.5) {
                 struts += 1.0;
-                length += a.distance(b);
+                length += g.curve.map_or_else(|| a.distance(b), |c| c.length(a, b));
             }
         }
         let odd = (0..g.pts.len()).filter(|&v| degree[v] % 2 == 1 && inside(g.pts[v])).count() as f64;
@@ -297,12 +303,12 @@ pub(crate) fn denser_fix(p: &Pattern, struts: f64, limit: f64) -> String {
         crate::settings::fmt(libm::ceil(v / e) * e)
     };
     match *p {
-        Pattern::Honeycomb { hexagon_radius_mm } => format!("use a hexagon radius ≥ {} mm or a smaller domain", up(hexagon_radius_mm * k)),
+        Pattern::Honeycomb { hexagon_radius_mm } | Pattern::WavyHoneycomb { hexagon_radius_mm, .. } => format!("use a hexagon radius ≥ {} mm or a smaller domain", up(hexagon_radius_mm * k)),
         Pattern::Voronoi { density_per_mm2 } => {
             let e = libm::pow(10.0, libm::floor(libm::log10(density_per_mm2 / (k * k))) - 1.0);
             format!("use at most {} seed points per mm² or a smaller domain", crate::settings::fmt(libm::floor(density_per_mm2 / (k * k) / e) * e))
         }
-        Pattern::Penrose { cell_size_mm } | Pattern::SnubSquare { cell_size_mm } | Pattern::SquareGrid { cell_size_mm } | Pattern::TriangleGrid { cell_size_mm } => {
+        Pattern::Penrose { cell_size_mm } | Pattern::SnubSquare { cell_size_mm } | Pattern::SquareGrid { cell_size_mm } | Pattern::TriangleGrid { cell_size_mm } | Pattern::WavySquareGrid { cell_size_mm, .. } => {
             format!("use cells ≥ {} mm or a smaller domain", up(cell_size_mm * k))
         }
         Pattern::Arrowhead { cell_width_mm, cell_height_mm } | Pattern::ReentrantHoneycomb { cell_width_mm, cell_height_mm } => {
@@ -319,7 +325,8 @@ pub(crate) fn denser_fix(p: &Pattern, struts: f64, limit: f64) -> String {
 /// `struts_total` (all layers); `strut_mm` (mean strut length); `generated_struts` (struts
 /// generated on the densest layer before cropping: the limited count); `length_mm` (printed
 /// length of all layers: struts, contours, handles); `edges` and `edges_max_layer` (stroke
-/// segments, all layers and the largest layer: the path optimiser's input);
+/// segments, all layers and the largest layer: the path optimiser's input; a curved strut
+/// counts its `samples_per_strut` segments);
 /// `odd_nodes` (odd-degree nodes of all layers' graphs, struts cut at the outline included).
 pub fn estimate(size: &DomainSize, options: &Options, line_width_mm: f64) -> Estimate {
     let n = size.layers;
@@ -331,7 +338,10 @@ pub fn estimate(size: &DomainSize, options: &Options, line_width_mm: f64) -> Est
     let mut cached: Vec<(&Pattern, f64)> = Vec::new();
     let (mut densest, mut densest_struts, mut densest_pattern) = (0.0f64, 0.0f64, &options.pattern);
     let (mut struts_total, mut length, mut odd, mut seconds, mut copied) = (0.0, 0.0, 0.0, 0.0, 0.0);
-    let (mut strokes_max_layer, mut gen_max) = (0.0f64, 0.0f64);
+    let mut gen_max = 0.0f64;
+    // Stroke segments (points beyond each stroke's first) of the lattice struts: one per
+    // straight strut, `samples_per_strut` per curved one.
+    let (mut strut_segments, mut segments_max_layer) = (0.0f64, 0.0f64);
     for i in 0..n {
         let p = layer_pattern(options, i);
         let angle = (options.rotation_deg * i as f64).rem_euclid(360.0);
@@ -358,6 +368,9 @@ pub fn estimate(size: &DomainSize, options: &Options, line_width_mm: f64) -> Est
             densest_struts = peak_struts;
         }
         struts_total += struts;
+        let per = p.segments_per_strut() as f64;
+        strut_segments += struts * per;
+        segments_max_layer = segments_max_layer.max(peak_struts * per);
         length += len;
         odd += odd_here;
         let generated = estimate_struts(p, fill);
@@ -378,7 +391,6 @@ pub fn estimate(size: &DomainSize, options: &Options, line_width_mm: f64) -> Est
             }
             gen_max = gen_max.max(generated);
         }
-        strokes_max_layer = strokes_max_layer.max(peak_struts);
     }
     // Contours (when asked for) and handles: outline points, and handle fill lines one line
     // width apart (a stroke each).
@@ -391,13 +403,14 @@ pub fn estimate(size: &DomainSize, options: &Options, line_width_mm: f64) -> Est
         length += size.outline_mm;
     }
     length += handle_lines;
-    let edges = struts_total + extra_edges;
+    let edges = strut_segments + extra_edges;
     let per_layer_extra = if n > 0 { extra_edges / n as f64 } else { 0.0 };
     let strokes = struts_total + handle_strokes + if options.contour { n as f64 } else { 0.0 };
     seconds += copied * SECONDS_PER_COPIED_STROKE + (contour_points + size.handle_points) * SECONDS_PER_OUTLINE_POINT + handle_strokes * seconds_per_strut(&Pattern::Rectilinear { strand_distance_mm: 1.0 });
     // The output strokes, the contour strokes' points, the domains' polygons and the graph of
     // the largest generated layer.
-    let bytes = strokes * BYTES_PER_STROKE + (contour_points + size.handle_points) * 16.0 + (size.outline_points + size.handle_points) * 16.0 + gen_max * BYTES_PER_GENERATED_STRUT;
+    // Curved struts hold `samples_per_strut + 1` points instead of two.
+    let bytes = strokes * BYTES_PER_STROKE + (strut_segments - struts_total).max(0.0) * 16.0 + (contour_points + size.handle_points) * 16.0 + (size.outline_points + size.handle_points) * 16.0 + gen_max * BYTES_PER_GENERATED_STRUT;
     Estimate::new("lattice")
         .quantity("layers", "Layers", n as f64, "")
         .quantity("struts", "Struts on the densest layer", densest_struts, "")
@@ -406,7 +419,7 @@ pub fn estimate(size: &DomainSize, options: &Options, line_width_mm: f64) -> Est
         .quantity("generated_struts", "Struts generated on the densest layer (before cropping)", densest, "")
         .quantity("length_mm", "Printed length (all layers)", length, "mm")
         .quantity("edges", "Stroke segments (all layers)", edges, "")
-        .quantity("edges_max_layer", "Stroke segments on the largest layer", strokes_max_layer + per_layer_extra, "")
+        .quantity("edges_max_layer", "Stroke segments on the largest layer", segments_max_layer + per_layer_extra, "")
         .quantity("odd_nodes", "Odd-degree nodes (all layers)", odd, "")
         .cost(bytes, seconds)
         .limit("struts on one layer", densest, MAX_STRUTS_PER_LAYER as f64, "", denser_fix(densest_pattern, densest, MAX_STRUTS_PER_LAYER as f64))

@@ -54,6 +54,9 @@ impl Rect {
 pub(crate) struct Graph {
     pub pts: Vec<DVec2>,
     pub edges: Vec<[u32; 2]>,
+    /// Set for curved patterns: every edge is printed as this sampled curve
+    /// ([`super::curved`]).
+    pub curve: Option<super::curved::Curve>,
     index: IntMap<(i64, i64), u32>,
     seen: IntSet<(u32, u32)>,
 }

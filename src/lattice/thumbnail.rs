@@ -19,5 +19,5 @@ pub fn thumbnail(pattern: &Pattern, size_mm: f64, seed: u64) -> Vec<[f64; 4]> {
     let clip = Clipper::new(&[rect_polygon(-h, -h, h, h)]);
     let mut strokes = Vec::new();
     crop_graph(&g, (1.0, 0.0), &clip, None, Feature::Lattice, &mut strokes);
-    strokes.iter().map(|s| [s.points[0].x, s.points[0].y, s.points[1].x, s.points[1].y]).collect()
+    strokes.iter().flat_map(|s| s.points.windows(2).map(|w| [w[0].x, w[0].y, w[1].x, w[1].y])).collect()
 }

@@ -390,15 +390,15 @@ mod tests {
             for j in 0..n {
                 let (x, y) = (i as f64, j as f64 * 0.9);
                 let dy = if (i * 7 + j) % 3 == 0 { 0.0 } else { 0.3 * rnd() };
-                strokes.push(Stroke { points: vec![DVec2::new(x, y), DVec2::new(x + 1.0, y + dy)], feature: Feature::Lattice });
+                strokes.push(Stroke { points: vec![DVec2::new(x, y), DVec2::new(x + 1.0, y + dy)], feature: Feature::Lattice, curved: false });
                 if (i + j) % 2 == 0 {
-                    strokes.push(Stroke { points: vec![DVec2::new(x, y), DVec2::new(x, y + 0.9)], feature: Feature::Lattice });
+                    strokes.push(Stroke { points: vec![DVec2::new(x, y), DVec2::new(x, y + 0.9)], feature: Feature::Lattice, curved: false });
                 }
             }
         }
         for _ in 0..n {
             let (a, b) = (DVec2::new(rnd(), rnd()) * n as f64, DVec2::new(rnd(), rnd()) * n as f64);
-            strokes.push(Stroke { points: vec![a, b], feature: Feature::Contour });
+            strokes.push(Stroke { points: vec![a, b], feature: Feature::Contour, curved: false });
         }
         StrokeLayer { z: 0.2, height: 0.2, strokes }
     }

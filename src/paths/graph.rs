@@ -1,6 +1,10 @@
 //! Strokes → planar graph: every stroke segment becomes an edge, edges are split where they
 //! cross or touch other edges, nodes closer than the tolerance merge, degenerate and
-//! duplicate edges go.
+//! duplicate edges go. A curved stroke ([`crate::geom::Stroke::curved`]: one curved strut) is
+//! split and merged the same way, then each run of its pieces through nodes nothing else
+//! touches becomes one edge whose inner points are kept as bends ([`Graph::bends`]): path
+//! optimisation, counts and the lower bound see one strut, and the printed path walks its
+//! sampled polyline.
 //!
 //! Deterministic by construction: nodes are numbered in order of first use while walking the
 //! strokes in input order, adjacency lists are sorted by edge index, and no hash-map
@@ -10,14 +14,15 @@ use crate::geom::{DVec2, Feature, StrokeLayer};
 use std::collections::HashMap;
 use std::hash::{BuildHasherDefault, Hasher};
 
-/// One strut: a straight edge between two nodes.
+/// One strut: a straight edge between two nodes, or a curved one through its bends.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Edge {
     /// First node (index into [`Graph::nodes`]).
     pub a: usize,
     /// Second node.
     pub b: usize,
-    /// Euclidean length between the two (merged) nodes, mm: the edge weight.
+    /// Euclidean length between the two (merged) nodes (through the bends for a curved
+    /// strut), mm: the edge weight.
     pub length: f64,
     /// Feature of the stroke the edge came from.
     pub feature: Feature,
@@ -28,8 +33,14 @@ pub struct Edge {
 pub struct Graph {
     /// Node positions, mm.
     pub nodes: Vec<DVec2>,
-    /// Edges; between two nodes there is at most one edge and no edge is a loop.
+    /// Edges; no edge is a loop, and between two nodes there is at most one straight edge
+    /// (curved struts of different shapes may share their two nodes).
     pub edges: Vec<Edge>,
+    /// Bend points of the curved edges: edge `e`'s are `bends[bend_start[e]..bend_start[e + 1]]`,
+    /// in order from node `a` to node `b`. Both empty when no edge is curved.
+    pub bends: Vec<DVec2>,
+    /// See `bends`.
+    pub bend_start: Vec<usize>,
     /// Edges dropped because they were shorter than the merge tolerance (raw stroke segments
     /// and pieces whose ends merged).
     pub degenerate_dropped: usize,
@@ -44,6 +55,32 @@ pub struct Graph {
 }
 
 impl Graph {
+    /// Bend points of edge `e`, from `a` to `b` (empty for a straight edge).
+    pub fn edge_bends(&self, e: usize) -> &[DVec2] {
+        if self.bend_start.is_empty() {
+            &[]
+        } else {
+            &self.bends[self.bend_start[e]..self.bend_start[e + 1]]
+        }
+    }
+
+    /// The printed polyline of edge `e` from `a` to `b`: its nodes and bends.
+    pub fn edge_points(&self, e: usize) -> Vec<DVec2> {
+        let edge = &self.edges[e];
+        let mut v = Vec::with_capacity(self.edge_bends(e).len() + 2);
+        v.push(self.nodes[edge.a]);
+        v.extend_from_slice(self.edge_bends(e));
+        v.push(self.nodes[edge.b]);
+        v
+    }
+
+    /// The bends of edge `e` in the order they are met walking it from node `from`.
+    pub fn bends_from(&self, e: usize, from: usize) -> impl Iterator<Item = DVec2> + '_ {
+        let b = self.edge_bends(e);
+        let fwd = self.edges[e].a == from;
+        (0..b.len()).map(move |i| if fwd { b[i] } else { b[b.len() - 1 - i] })
+    }
+
     /// Edges incident to node `n`, by increasing edge index.
     pub fn incident(&self, n: usize) -> &[usize] {
         &self.adj[self.adj_start[n]..self.adj_start[n + 1]]
@@ -127,6 +164,98 @@ struct Seg {
     p: DVec2,
     q: DVec2,
     feature: Feature,
+    /// Index of the curved stroke the segment belongs to, or [`NOT_CURVED`].
+    curve: u32,
+}
+
+const NOT_CURVED: u32 = u32::MAX;
+
+/// Joins the pieces of each curved stroke through its bends (nodes of degree 2 whose two
+/// edges belong to the same curved stroke) into one edge; nodes renumbered in order of first
+/// use, edges in the order of their first piece. A run that would close on itself (a loop)
+/// is left as it was. Returns (nodes, edges, bends, bend_start).
+fn join_curves(nodes: Vec<DVec2>, edges: Vec<Edge>, curve: &[u32]) -> (Vec<DVec2>, Vec<Edge>, Vec<DVec2>, Vec<usize>) {
+    let (start, adj) = incidence(nodes.len(), edges.iter().map(|e| (e.a, e.b)));
+    let inc = |v: usize| &adj[start[v]..start[v + 1]];
+    let bend = |v: usize, c: u32| {
+        let i = inc(v);
+        c != NOT_CURVED && i.len() == 2 && curve[i[0]] == c && curve[i[1]] == c
+    };
+    let other = |e: usize, v: usize| if edges[e].a == v { edges[e].b } else { edges[e].a };
+    let mut done = vec![false; edges.len()];
+    let mut remap = vec![usize::MAX; nodes.len()];
+    let (mut out_nodes, mut out_edges, mut bends, mut bend_start) = (Vec::new(), Vec::new(), Vec::new(), vec![0usize]);
+    let mut chain: Vec<usize> = Vec::new();
+    let mut walk: Vec<usize> = Vec::new();
+    for e0 in 0..edges.len() {
+        if done[e0] {
+            continue;
+        }
+        let c = curve[e0];
+        // The run through e0: back from a, then forward from b (node sequence in `chain`).
+        chain.clear();
+        walk.clear();
+        done[e0] = true;
+        walk.push(e0);
+        let mut closed = false;
+        let (mut v, mut e) = (edges[e0].a, e0);
+        let mut back = vec![v];
+        while bend(v, c) {
+            let i = inc(v);
+            let next = if i[0] == e { i[1] } else { i[0] };
+            if done[next] {
+                closed = true;
+                break;
+            }
+            done[next] = true;
+            walk.push(next);
+            v = other(next, v);
+            e = next;
+            back.push(v);
+        }
+        back.reverse();
+        chain.extend_from_slice(&back);
+        let (mut v, mut e) = (edges[e0].b, e0);
+        chain.push(v);
+        while !closed && bend(v, c) {
+            let i = inc(v);
+            let next = if i[0] == e { i[1] } else { i[0] };
+            if done[next] {
+                closed = true;
+                break;
+            }
+            done[next] = true;
+            walk.push(next);
+            v = other(next, v);
+            e = next;
+            chain.push(v);
+        }
+        let mut node = |n: usize, out_nodes: &mut Vec<DVec2>| {
+            if remap[n] == usize::MAX {
+                remap[n] = out_nodes.len();
+                out_nodes.push(nodes[n]);
+            }
+            remap[n]
+        };
+        if closed || chain.len() == 2 || chain[0] == chain[chain.len() - 1] {
+            // As it was: every piece its own edge (walked order: e0 first).
+            let mut ws = walk.clone();
+            ws.sort_unstable();
+            for &w in &ws {
+                let (a, b) = (node(edges[w].a, &mut out_nodes), node(edges[w].b, &mut out_nodes));
+                out_edges.push(Edge { a, b, ..edges[w] });
+                bend_start.push(bends.len());
+            }
+            continue;
+        }
+        let a = node(chain[0], &mut out_nodes);
+        let b = node(chain[chain.len() - 1], &mut out_nodes);
+        let length = chain.windows(2).map(|w| nodes[w[0]].distance(nodes[w[1]])).sum();
+        bends.extend(chain[1..chain.len() - 1].iter().map(|&n| nodes[n]));
+        bend_start.push(bends.len());
+        out_edges.push(Edge { a, b, length, feature: edges[e0].feature });
+    }
+    (out_nodes, out_edges, bends, bend_start)
 }
 
 /// A split point on segment `seg` at parameter `t`.
@@ -153,7 +282,36 @@ pub fn build_graph(layer: &StrokeLayer, merge_tolerance_mm: f64) -> Graph {
 
     // 1. Raw segments.
     let mut segs: Vec<Seg> = Vec::new();
-    for stroke in &layer.strokes {
+    let mut any_curved = false;
+    for (si, stroke) in layer.strokes.iter().enumerate() {
+        if stroke.curved && stroke.points.len() > 2 && stroke.points.iter().all(|p| p.is_finite()) {
+            // One strut: inner points closer than the tolerance to the previous kept one go
+            // (the last point stays; it replaces an inner point too close to it).
+            let pts = &stroke.points;
+            let mut kept = vec![pts[0]];
+            for &p in &pts[1..pts.len() - 1] {
+                if kept.last().unwrap().distance(p) >= tol {
+                    kept.push(p);
+                }
+            }
+            let last = pts[pts.len() - 1];
+            if kept.len() > 1 && kept.last().unwrap().distance(last) < tol {
+                kept.pop();
+            }
+            kept.push(last);
+            if kept.len() > 2 {
+                any_curved = true;
+            }
+            let curve = if kept.len() > 2 { si as u32 } else { NOT_CURVED };
+            for w in kept.windows(2) {
+                if w[0].distance(w[1]) < tol {
+                    degenerate += 1;
+                    continue;
+                }
+                segs.push(Seg { p: w[0], q: w[1], feature: stroke.feature, curve });
+            }
+            continue;
+        }
         for w in stroke.points.windows(2) {
             let (p, q) = (w[0], w[1]);
             if !(p.is_finite() && q.is_finite()) {
@@ -164,7 +322,7 @@ pub fn build_graph(layer: &StrokeLayer, merge_tolerance_mm: f64) -> Graph {
                 degenerate += 1;
                 continue;
             }
-            segs.push(Seg { p, q, feature: stroke.feature });
+            segs.push(Seg { p, q, feature: stroke.feature, curve: NOT_CURVED });
         }
     }
     if segs.is_empty() {
@@ -182,14 +340,18 @@ pub fn build_graph(layer: &StrokeLayer, merge_tolerance_mm: f64) -> Graph {
     // 3. Pieces, 4. node merging.
     let mut merger = Merger::new(tol);
     let mut raw_edges: Vec<(usize, usize, Feature)> = Vec::with_capacity(segs.len() + splits.len());
+    let mut raw_curve: Vec<u32> = Vec::new();
     let mut k = 0usize;
-    let mut add_piece = |a: DVec2, b: DVec2, f: Feature, merger: &mut Merger, degenerate: &mut usize| {
+    let mut add_piece = |a: DVec2, b: DVec2, s: &Seg, merger: &mut Merger, degenerate: &mut usize| {
         let na = merger.node(a);
         let nb = merger.node(b);
         if na == nb {
             *degenerate += 1;
         } else {
-            raw_edges.push((na, nb, f));
+            raw_edges.push((na, nb, s.feature));
+            if any_curved {
+                raw_curve.push(s.curve);
+            }
         }
     };
     for (si, s) in segs.iter().enumerate() {
@@ -203,11 +365,11 @@ pub fn build_graph(layer: &StrokeLayer, merge_tolerance_mm: f64) -> Graph {
             if along - last_t_len <= tol || len - along <= tol || sp.at.distance(last_point) <= tol {
                 continue;
             }
-            add_piece(last_point, sp.at, s.feature, &mut merger, &mut degenerate);
+            add_piece(last_point, sp.at, s, &mut merger, &mut degenerate);
             last_point = sp.at;
             last_t_len = along;
         }
-        add_piece(last_point, s.q, s.feature, &mut merger, &mut degenerate);
+        add_piece(last_point, s.q, s, &mut merger, &mut degenerate);
     }
     let positions = merger.nodes;
 
@@ -225,7 +387,9 @@ pub fn build_graph(layer: &StrokeLayer, merge_tolerance_mm: f64) -> Graph {
     keyed.sort_unstable();
     let mut duplicates = 0usize;
     for w in keyed.windows(2) {
-        if w[0].0 == w[1].0 && w[0].1 == w[1].1 {
+        // Pieces of two different curved struts between the same nodes are different struts.
+        let curved = any_curved && (raw_curve[w[0].2] != NOT_CURVED || raw_curve[w[1].2] != NOT_CURVED);
+        if w[0].0 == w[1].0 && w[0].1 == w[1].1 && !(curved && raw_curve[w[0].2] != raw_curve[w[1].2]) {
             keep[w[1].2] = false;
             duplicates += 1;
         }
@@ -235,6 +399,7 @@ pub fn build_graph(layer: &StrokeLayer, merge_tolerance_mm: f64) -> Graph {
     let mut remap = vec![usize::MAX; positions.len()];
     let mut nodes = Vec::new();
     let mut edges = Vec::new();
+    let mut edge_curve = Vec::new();
     for (i, &(a, b, feature)) in raw_edges.iter().enumerate() {
         if !keep[i] {
             continue;
@@ -247,6 +412,13 @@ pub fn build_graph(layer: &StrokeLayer, merge_tolerance_mm: f64) -> Graph {
         }
         let (a, b) = (remap[a], remap[b]);
         edges.push(Edge { a, b, length: nodes[a].distance(nodes[b]), feature });
+        if any_curved {
+            edge_curve.push(raw_curve[i]);
+        }
+    }
+    let (mut bends, mut bend_start) = (Vec::new(), Vec::new());
+    if any_curved {
+        (nodes, edges, bends, bend_start) = join_curves(nodes, edges, &edge_curve);
     }
 
     // 7. Adjacency (CSR), lists sorted by edge index.
@@ -285,6 +457,8 @@ pub fn build_graph(layer: &StrokeLayer, merge_tolerance_mm: f64) -> Graph {
     Graph {
         nodes,
         edges,
+        bends,
+        bend_start,
         degenerate_dropped: degenerate,
         duplicates_collapsed: duplicates,
         component,
@@ -508,7 +682,7 @@ mod tests {
             height: 0.2,
             strokes: strokes
                 .iter()
-                .map(|s| Stroke { points: s.iter().map(|&(x, y)| DVec2::new(x, y)).collect(), feature: Feature::Lattice })
+                .map(|s| Stroke { points: s.iter().map(|&(x, y)| DVec2::new(x, y)).collect(), feature: Feature::Lattice, curved: false })
                 .collect(),
         }
     }

@@ -452,7 +452,14 @@ fn emit_chain(
             None
         } else {
             // Intermediate nodes strictly between the previous end and this start.
-            Some((t0 + 1..k).map(|i| at(chain.nodes[i])).collect())
+            let mut pts = Vec::new();
+            for i in t0..k {
+                if i > t0 {
+                    pts.push(at(chain.nodes[i]));
+                }
+                pts.extend(graph.bends_from(chain.edges[i], chain.nodes[i]).map(|p| DVec3::new(p.x, p.y, z)));
+            }
+            Some(pts)
         };
         let p0 = k;
         let mut by_feature = [0.0f64; Feature::ALL.len()];
@@ -470,7 +477,13 @@ fn emit_chain(
             }
         }
         let segments = k - p0;
-        let points: Vec<DVec3> = (p0..=k).map(|i| at(chain.nodes[i])).collect();
+        // Nodes, and the bends of curved struts between them (walked in the chain's direction).
+        let mut points: Vec<DVec3> = Vec::with_capacity(k - p0 + 1);
+        for i in p0..k {
+            points.push(at(chain.nodes[i]));
+            points.extend(graph.bends_from(chain.edges[i], chain.nodes[i]).map(|p| DVec3::new(p.x, p.y, z)));
+        }
+        points.push(at(chain.nodes[k]));
         let speed_factor =
             if (segments as u64) < options.short_path_segments as u64 { options.short_path_speed_factor } else { 1.0 };
         paths.push(Path { points, feature: Feature::ALL[feature], width, speed_factor, approach, data: None });

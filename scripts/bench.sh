@@ -7,8 +7,10 @@
 #        BENCH_LATTICE_ONLY=1 scripts/bench.sh   (only the lattice path-optimisation benchmarks)
 #        BENCH_SCALING_ONLY=1 scripts/bench.sh   (only the growth benchmark: every `weft bench
 #            --scaling` case at 1×, 4×, 16× in a fresh worker each, then natively; one table)
+#        BENCH_PAIRING_ONLY=1 scripts/bench.sh   (only exact vs heuristic odd-node pairing:
+#            `weft bench --pairing` cases in the worker, then natively; one table)
 # The wasm is built with the cargo feature `bench` (the benchmark exports the worker calls:
-# benchMeshStl, benchDesign, benchAnalyze, BenchLattice, benchScalingCases, BenchScaling) into its own directory, default
+# benchMeshStl, benchDesign, benchAnalyze, BenchLattice, benchPairingCases, BenchPairing, benchScalingCases, BenchScaling) into its own directory, default
 # <target dir>/pkg-bench (WEFT_PKG_DIR overrides), which tests/e2e/bench.mjs serves as /pkg/;
 # the production ./pkg (scripts/build-www.sh without features) is left as it is.
 set -euo pipefail

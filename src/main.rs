@@ -96,6 +96,10 @@ enum Command {
         /// Run only the stage-cache benchmark (full run, then a re-run after a temperature edit).
         #[arg(long)]
         cache: bool,
+        /// Run only the odd-node pairing benchmark: exact vs heuristic on the 48 mm disc and on
+        /// 10k- and 100k-edge layers (euler and continuous), time, cost and certified gap.
+        #[arg(long)]
+        pairing: bool,
         /// Run only the scaling benchmark: every parser and stage at 1×, 4× and 16× its input,
         /// time and peak memory, with the growth exponent of each.
         #[arg(long)]
@@ -465,6 +469,7 @@ fn main() -> ExitCode {
             outln!("{size} {seconds} {}", peak_kib().unwrap_or(0));
         }),
         Command::Bench { scaling: true, .. } => scaling_bench(),
+        Command::Bench { pairing: true, .. } => weft::bench::pairing::run_all().map(|t| outln!("{t}")),
         Command::Bench { triangles, gcode_mb, lattice, cache, .. } => {
             if cache {
                 return match weft::bench::run_cache(triangles) {

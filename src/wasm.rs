@@ -407,6 +407,31 @@ mod bench_exports {
         }
     }
 
+    /// The pairing benchmark's cases (`weft bench --pairing`, `src/bench/pairing.rs`), in order.
+    #[wasm_bindgen(js_name = benchPairingCases)]
+    pub fn bench_pairing_cases() -> Vec<String> {
+        crate::bench::pairing::CASES.iter().map(|c| c.name.to_string()).collect()
+    }
+
+    /// Benchmark workload: one pairing case, heuristic only or with the exact budget, prepared
+    /// by [`BenchPairing::new`] (not timed); [`BenchPairing::run`] is timed in the worker.
+    #[wasm_bindgen]
+    pub struct BenchPairing(crate::bench::pairing::PairingBench);
+
+    #[wasm_bindgen]
+    impl BenchPairing {
+        /// Prepares case `name` (see `benchPairingCases`); `exact`: with the exact budget.
+        #[wasm_bindgen(constructor)]
+        pub fn new(name: &str, exact: bool) -> Result<BenchPairing, JsError> {
+            crate::bench::pairing::PairingBench::prepare(name, exact).map(BenchPairing).map_err(js_err)
+        }
+
+        /// Runs `paths::optimise` once; returns the pairing's numbers as JSON.
+        pub fn run(&self) -> Result<String, JsError> {
+            self.0.run().map(|s| s.to_json()).map_err(js_err)
+        }
+    }
+
     /// The scaling cases' names (`weft bench --scaling`, `src/bench/scaling.rs`), in order.
     #[wasm_bindgen(js_name = benchScalingCases)]
     pub fn bench_scaling_cases() -> Vec<String> {

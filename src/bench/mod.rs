@@ -32,6 +32,7 @@ pub fn repeat_to(seed: &str, bytes: usize) -> String {
     s
 }
 
+pub mod pairing;
 pub mod scaling;
 
 /// CPU time of the calling thread, seconds (Linux: the scheduler's count in nanoseconds, so

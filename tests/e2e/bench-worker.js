@@ -25,6 +25,9 @@
 //       (Session.addFile, then Session.run(benchDesign())); after each it posts
 //       { type: "phase", phase } and waits for { cmd: "continue", measured }: the page's
 //       performance.measureUserAgentSpecificMemory() (bytes, or why not), kept as uaMemory.
+//   { cmd: "pairing" }              → { type: "pairing", rows: [{ name, exact, prepareMs, ms,
+//       stats }] }: every case of `weft bench --pairing` (src/bench/pairing.rs), heuristic then
+//       exact, one timed BenchPairing.run() each; `stats` is its JSON answer.
 //   { cmd: "scaling-cases" }        → { type: "scaling-cases", names }: benchScalingCases().
 //   { cmd: "scaling", name, scale, repeats } → { type: "scaling", name, scale, unit, size,
 //       prepareMs, ms: [...], memory: { init, prepared, run } }: one case of `weft bench
@@ -34,7 +37,7 @@
 //       case×scale and reports run − init as the case's peak memory.
 // Run the job in a fresh worker (the page does) so the STL generation does not count in the
 // job's linear memory.
-import init, { BenchLattice, BenchScaling, Session, benchAnalyze, benchDesign, benchMeshStl, benchScalingCases } from "../../pkg/weft.js";
+import init, { BenchLattice, BenchPairing, BenchScaling, benchPairingCases, Session, benchAnalyze, benchDesign, benchMeshStl, benchScalingCases } from "../../pkg/weft.js";
 import { plain } from "../../www/protocol.js"; // reports as objects (JSON text before wasm API v2)
 
 const ready = init();
@@ -78,6 +81,23 @@ self.onmessage = async ({ data }) => {
       const unit = b.unit();
       b.free();
       self.postMessage({ type: "scaling", name: data.name, scale: data.scale, unit, size, prepareMs, ms, memory: { init, prepared, run } });
+      return;
+    }
+    if (data.cmd === "pairing") {
+      const rows = [];
+      for (const name of benchPairingCases()) {
+        for (const exact of [false, true]) {
+          let t = performance.now();
+          const b = new BenchPairing(name, exact);
+          const prepareMs = performance.now() - t;
+          t = performance.now();
+          const stats = JSON.parse(b.run());
+          const ms = performance.now() - t;
+          b.free();
+          rows.push({ name, exact, prepareMs, ms, stats });
+        }
+      }
+      self.postMessage({ type: "pairing", rows, memory: mem() });
       return;
     }
     if (data.cmd === "lattice") {

@@ -14,6 +14,8 @@
 //   BENCH_TIMEOUT_S timeout of the browser job, s (default 900)
 //   BENCH_LATTICE_ONLY=1  only the lattice path-optimisation benchmarks (`weft bench --lattice`)
 //   BENCH_REPEATS   timed passes per lattice workload in the worker (default 3)
+//   BENCH_PAIRING_ONLY=1  only the odd-node pairing benchmark (`weft bench --pairing`,
+//                   src/bench/pairing.rs): heuristic vs exact per case, worker and native
 //   BENCH_SCALING_ONLY=1  only the growth benchmark: every case of `weft bench --scaling`
 //                   (src/bench/scaling.rs) at 1×, 4×, 16× in the worker (a fresh worker per
 //                   case × scale; BENCH_REPEATS passes, best counts) and natively
@@ -38,6 +40,7 @@ const LATTICE_ONLY = process.env.BENCH_LATTICE_ONLY === "1";
 const REPEATS = Number(process.env.BENCH_REPEATS ?? 3);
 const CACHE_ONLY = process.env.BENCH_CACHE_ONLY === "1";
 const SCALING_ONLY = process.env.BENCH_SCALING_ONLY === "1";
+const PAIRING_ONLY = process.env.BENCH_PAIRING_ONLY === "1";
 const SCALING_CASES = process.env.BENCH_SCALING_CASES ? process.env.BENCH_SCALING_CASES.split(",") : null;
 const SCALES = [1, 4, 16]; // src/bench/scaling.rs SCALES
 const CACHE = CACHE_ONLY || process.env.BENCH_CACHE !== "0";
@@ -249,6 +252,7 @@ async function runBrowser() {
 
     if (CACHE_ONLY) return { version, ...(await cacheSteps(page, renderers)) };
     if (SCALING_ONLY) return { version, scaling: await scalingSteps(page) };
+    if (PAIRING_ONLY) return { version, pairing: await workerStep(page, { cmd: "pairing" }, "pairing") };
 
     // 0. Lattice path optimisation, in its own fresh worker.
     log(`browser ${version}: lattice path-optimisation workloads in a worker (${REPEATS} passes each)`);
@@ -449,6 +453,53 @@ function cacheReport(browserRun, nativeCache) {
   return out.join("\n");
 }
 
+/** Runs one command in a fresh bench worker and resolves with its `type` answer. */
+async function workerStep(page, message, type) {
+  return page.evaluate(async ({ message, type, timeout }) => {
+    const w = new Worker("/tests/e2e/bench-worker.js", { type: "module" });
+    try {
+      return await new Promise((ok, fail) => {
+        const timer = setTimeout(() => fail(new Error(`no ${type} result within ${timeout / 1000} s`)), timeout);
+        w.onmessage = ({ data }) => {
+          clearTimeout(timer);
+          if (data.type === type) ok(data);
+          else fail(new Error(data.message ?? JSON.stringify(data)));
+        };
+        w.onerror = (e) => { clearTimeout(timer); fail(new Error(e.message || "worker failed to start")); };
+        w.postMessage(message);
+      });
+    } finally {
+      w.terminate();
+    }
+  }, { message, type, timeout: TIMEOUT });
+}
+
+/** The pairing benchmark: worker rows beside the native table of `weft bench --pairing`. */
+function pairingReport(browserRun, nativeText) {
+  const native = {};
+  for (const m of nativeText.matchAll(/^\| ([\w/-]+) \| (\d+) \| (\d+) \| ([\d.]+) \| ([\d.]+) \| ([^|]+) \| ([\d.]+) \| ([\d.]+) \| ([^|]+) \|/gm)) {
+    native[m[1]] = { heuristicMs: Number(m[4]), heuristicMm: Number(m[5]), exactMs: Number(m[7]), exactMm: Number(m[8]) };
+  }
+  const out = [];
+  out.push(`## odd-node pairing: heuristic vs exact, one layer (\`paths::optimise\`, circuit order, one pass each)`);
+  out.push("");
+  out.push(`Browser: Chromium ${browserRun.version}, module Web Worker, wasm (\`BenchPairing.run\`). Native: \`weft bench --pairing\`. Exact = \`exact_pairing_seconds\` at its maximum (60 s); where the exact solve is estimated over it, the heuristic runs and the row says "within x %".`);
+  out.push("");
+  out.push("| case | edges | odd nodes | heuristic: worker ms | native ms | mm | status | exact: worker ms | native ms | mm | status | cost exact ÷ heuristic | time exact ÷ heuristic (worker) | worker ÷ native (exact) |");
+  out.push("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
+  const rows = browserRun.pairing.rows;
+  for (let i = 0; i + 1 < rows.length; i += 2) {
+    const [h, e] = [rows[i], rows[i + 1]];
+    const n = native[h.name];
+    const same = !n || (Math.abs(n.heuristicMm - h.stats.pairingMm) < 0.01 && Math.abs(n.exactMm - e.stats.pairingMm) < 0.01) ? "" : " (native differs!)";
+    out.push(`| ${h.name}${same} | ${h.stats.edges} | ${h.stats.oddNodes} | ${f(h.ms, 1)} | ${f(n?.heuristicMs, 1)} | ${f(h.stats.pairingMm, 2)} | ${h.stats.status} | ${f(e.ms, 1)} | ${f(n?.exactMs, 1)} | ${f(e.stats.pairingMm, 2)} | ${e.stats.status} | ${f(e.stats.pairingMm / h.stats.pairingMm, 4)} | ${f(e.ms / h.ms, 1)}× | ${n ? `${f(e.ms / n.exactMs, 2)}×` : "?"} |`);
+  }
+  out.push("");
+  out.push(`Wasm linear memory after all cases: ${f(browserRun.pairing.memory / MiB, 0)} MiB.`);
+  if (nativeText) out.push("\n<details><summary>weft bench --pairing output</summary>\n\n" + nativeText.trim() + "\n\n</details>");
+  return out.join("\n");
+}
+
 // ---------------------------------------------------------------------------------------
 // Report
 // ---------------------------------------------------------------------------------------
@@ -461,6 +512,14 @@ if (SCALING_ONLY) {
   console.log(scalingReport(browserRun, native));
   console.log(`Load average (1, 5, 15 min): ${loadBefore} at the start, ${loadBrowser} after the worker runs, ${loadNative} after the native run.`);
   if (native) console.log("\n<details><summary>weft bench --scaling output</summary>\n\n```text\n" + native.text.trim() + "\n```\n\n</details>");
+  process.exit(0);
+}
+if (PAIRING_ONLY) {
+  const loadBrowser = readFileSync("/proc/loadavg", "utf8").split(" ").slice(0, 3).join(" ");
+  const native = WEFT_BIN ? execFileSync(WEFT_BIN, ["bench", "--pairing"], { encoding: "utf8", maxBuffer: 1 << 24 }) : "";
+  const loadNative = readFileSync("/proc/loadavg", "utf8").split(" ").slice(0, 3).join(" ");
+  console.log(pairingReport(browserRun, native));
+  console.log(`Load average (1, 5, 15 min): ${loadBefore} at the start, ${loadBrowser} after the worker runs, ${loadNative} after the native run.`);
   process.exit(0);
 }
 const nativeCache = runNativeCache();

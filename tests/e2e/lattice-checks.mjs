@@ -169,7 +169,7 @@ export async function latticeChecks({ browser, baseUrl, weftBin = process.env.WE
       return `sha256 ${sha256(cli).slice(0, 12)}…, ${url.length}-character URL`;
     });
 
-    await check(n++, "lattice: the pattern picker shows 9 drawn thumbnails", async () => {
+    await check(n++, `lattice: the pattern picker shows a drawn thumbnail of every pattern in the schema`, async () => {
       await waitReady(page);
       await page.waitForSelector("#pattern-picker canvas", { timeout: 10000 });
       await page.waitForFunction(() => window.weft.thumbnails.length >= document.querySelectorAll("#pattern-picker canvas").length,
@@ -182,7 +182,9 @@ export async function latticeChecks({ browser, baseUrl, weftBin = process.env.WE
         }
         return [c.dataset.pattern, n];
       }), BACKGROUND);
-      if (counts.length !== 9) throw new Error(`${counts.length} thumbnails, expected 9`);
+      // Every pattern of the schema (11 since the wavy ones of issue 9), and at least those 11.
+      const expected = await page.evaluate(() => window.weft.schema.patterns.length);
+      if (expected < 11 || counts.length !== expected) throw new Error(`${counts.length} thumbnails, expected ${expected} (schema) and at least 11`);
       const blank = counts.filter(([, k]) => k < 20).map(([name]) => name);
       if (blank.length) throw new Error(`blank thumbnails: ${blank.join(", ")}`);
       // A click picks the pattern.

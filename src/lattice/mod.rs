@@ -21,14 +21,13 @@
 //!   `samples_per_strut` segments and output as one curved polyline stroke per strut (one
 //!   graph edge each; the printed path is the sampled polyline).
 //!
-//! Pore fractions with 0.2 mm struts on a 10 × 10 mm layer (the paper's Table 1 targets in
-//! brackets): honeycomb radius 0.95 → 75 % (75), Voronoi 0.6 /mm² → 69 % (69, mean of 8
-//! seeds; ±3 % from seed to seed), Penrose 1.23 → 59 % (59), snub square 1.17 → 56 % (55),
-//! arrowhead 1.65 × 1.65 → 55 % (55), re-entrant 1.85 × 1.85 → 63 % (63). The defaults give
-//! 78, ~72, 50, 48, 65 and 64 %; rectilinear 1 mm 78 %, square grid 1 mm 56 %, triangle grid
-//! 1 mm 32 %. The wavy patterns' defaults (radius / cell 1 mm, amplitude 0.15 mm, 12 segments
-//! per strut) lengthen every strut by 15 % (sine arc length over chord), which closes the
-//! pores accordingly: wavy honeycomb 75 %, wavy square grid 54 %.
+//! Pore fraction = 1 − area of the union of the struts ÷ domain area (each strut a band one
+//! strut wide, round joints, a joint counted once). The paper's six patterns default to the
+//! sizes that give its Table 1 pore fractions with 0.2 mm struts on a 10 × 10 mm layer
+//! (`DEFAULT_*` below; honeycomb 75 %, Voronoi 69 %, Penrose 59 %, snub square 55 %,
+//! arrowhead 55 %, re-entrant 63 %); with the default 0.4 mm nozzle the struts are twice as
+//! wide and the pores smaller. The grids and the wavy patterns (not in the table) default to
+//! 1 mm cells; the wavy struts (amplitude 0.15 mm) are 15 % longer than their chords.
 
 use crate::geom::{DVec2, Feature, Polygon, Stroke, StrokeLayer};
 use serde::{Deserialize, Serialize};
@@ -120,44 +119,44 @@ pub const PATTERNS: &[&str] = &[
 pub enum Pattern {
     /// Regular hexagons of circumradius `hexagon_radius_mm`.
     Honeycomb {
-        /// Hexagon circumradius, mm. Default 1.
-        #[serde(default = "d_hex")]
+        /// Hexagon circumradius, mm. Default 0.92 (Table 1's 75 % pores with 0.2 mm struts).
+        #[serde(default = "d_honeycomb")]
         hexagon_radius_mm: f64,
     },
     /// Voronoi cells of random seed points (seeded by the design seed).
     Voronoi {
-        /// Seed points per mm². Default 0.5.
-        #[serde(default = "d_vor")]
+        /// Seed points per mm². Default 0.84 (Table 1's 69 % pores with 0.2 mm struts).
+        #[serde(default = "d_voronoi")]
         density_per_mm2: f64,
     },
     /// Penrose rhombus (P3) tiling.
     Penrose {
-        /// Rhombus edge length, mm. Default 1.
-        #[serde(default = "d_cell")]
+        /// Rhombus edge length, mm. Default 1.05 (Table 1's 59 % pores with 0.2 mm struts).
+        #[serde(default = "d_penrose")]
         cell_size_mm: f64,
     },
     /// Snub-square tiling (3.3.4.3.4).
     SnubSquare {
-        /// Edge length, mm. Default 1.
-        #[serde(default = "d_cell")]
+        /// Edge length, mm. Default 1.01 (Table 1's 55 % pores with 0.2 mm struts).
+        #[serde(default = "d_snub")]
         cell_size_mm: f64,
     },
     /// Arrowhead auxetic unit cells.
     Arrowhead {
-        /// Unit-cell width, mm. Default 2.
-        #[serde(default = "d_cell_w")]
+        /// Unit-cell width, mm. Default 1.24 (Table 1's 55 % pores with 0.2 mm struts).
+        #[serde(default = "d_arrowhead")]
         cell_width_mm: f64,
-        /// Unit-cell height, mm. Default 2.
-        #[serde(default = "d_cell_h")]
+        /// Unit-cell height, mm. Default 1.24 (Table 1's 55 % pores with 0.2 mm struts).
+        #[serde(default = "d_arrowhead")]
         cell_height_mm: f64,
     },
     /// Re-entrant (auxetic) honeycomb.
     ReentrantHoneycomb {
-        /// Unit-cell width, mm. Default 2.
-        #[serde(default = "d_cell_w")]
+        /// Unit-cell width, mm. Default 1.73 (Table 1's 63 % pores with 0.2 mm struts).
+        #[serde(default = "d_reentrant")]
         cell_width_mm: f64,
-        /// Unit-cell height, mm. Default 2.
-        #[serde(default = "d_cell_h")]
+        /// Unit-cell height, mm. Default 1.73 (Table 1's 63 % pores with 0.2 mm struts).
+        #[serde(default = "d_reentrant")]
         cell_height_mm: f64,
     },
     /// Parallel lines (woodpile when rotated 90° per layer).
@@ -228,25 +227,52 @@ impl Pattern {
     }
 }
 
-fn d_hex() -> f64 {
-    1.0
+/// Default sizes of the paper's six patterns: the parameters that give the pore fractions of
+/// the paper's Table 1 with its 0.2 mm struts on a 10 × 10 mm layer (pores measured as the
+/// union of the struts, [`LatticeReport::pore_fraction_per_layer`]; `tests/pore_fraction.rs`).
+/// Honeycomb circumradius, mm: 75 % pores.
+pub const DEFAULT_HONEYCOMB_RADIUS_MM: f64 = 0.92;
+/// Voronoi seed points per mm²: 69 % pores (seed 1; about ±3 points from seed to seed).
+pub const DEFAULT_VORONOI_DENSITY_PER_MM2: f64 = 0.84;
+/// Penrose rhombus edge, mm: 59 % pores.
+pub const DEFAULT_PENROSE_EDGE_MM: f64 = 1.05;
+/// Snub-square edge, mm: 55 % pores.
+pub const DEFAULT_SNUB_SQUARE_EDGE_MM: f64 = 1.01;
+/// Arrowhead unit cell (width = height), mm: 55 % pores.
+pub const DEFAULT_ARROWHEAD_CELL_MM: f64 = 1.24;
+/// Re-entrant honeycomb unit cell (width = height), mm: 63 % pores.
+pub const DEFAULT_REENTRANT_CELL_MM: f64 = 1.73;
+/// Cell of the grids and the wavy patterns (not in the paper's table), mm.
+pub const DEFAULT_GRID_CELL_MM: f64 = 1.0;
+
+fn d_honeycomb() -> f64 {
+    DEFAULT_HONEYCOMB_RADIUS_MM
 }
-fn d_vor() -> f64 {
-    0.5
+fn d_voronoi() -> f64 {
+    DEFAULT_VORONOI_DENSITY_PER_MM2
+}
+fn d_penrose() -> f64 {
+    DEFAULT_PENROSE_EDGE_MM
+}
+fn d_snub() -> f64 {
+    DEFAULT_SNUB_SQUARE_EDGE_MM
+}
+fn d_arrowhead() -> f64 {
+    DEFAULT_ARROWHEAD_CELL_MM
+}
+fn d_reentrant() -> f64 {
+    DEFAULT_REENTRANT_CELL_MM
 }
 fn d_cell() -> f64 {
-    1.0
+    DEFAULT_GRID_CELL_MM
 }
-fn d_cell_w() -> f64 {
-    2.0
-}
-fn d_cell_h() -> f64 {
-    2.0
+fn d_hex() -> f64 {
+    DEFAULT_GRID_CELL_MM
 }
 
 impl Default for Pattern {
     fn default() -> Self {
-        Pattern::Honeycomb { hexagon_radius_mm: d_hex() }
+        Pattern::Honeycomb { hexagon_radius_mm: d_honeycomb() }
     }
 }
 

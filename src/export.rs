@@ -3,16 +3,20 @@
 //! slicers").
 //!
 //! Each graph edge of each layer (what weft prints: strokes merged and split at crossings, as
-//! `paths::optimise` sees them) becomes a box: as wide as the nozzle, as tall as the layer,
+//! `paths::optimise` sees them) becomes a prism: as wide as the nozzle, as tall as the layer,
 //! from `z - height` to `z`. An end where the strut meets another strut at a shared node
-//! (degree ≥ 2) is extended by half the width so struts meeting at an angle overlap instead of
-//! leaving a notch; a free end (degree 1: a strut cut by the domain's edge) is not, so two
-//! cropped struts whose ends lie a fraction of a width apart do not touch in the STL when they
-//! do not touch in the lattice (extended, honeycomb-10mm's boundary ends 0.208 mm apart
-//! overlapped and PrusaSlicer joined them with beads the design does not have). Boxes of
-//! struts that share no node never intersect on the shipped examples (`tests/export_stl.rs`).
-//! A curved strut (one graph edge with bend points) is one box per sampled segment.
-//! Boxes are not unioned (slicers union the overlapping volumes themselves).
+//! (degree ≥ 2) gets a round cap of half the width (a half octagon inscribed in the bead's
+//! round end) so struts meeting at an angle overlap instead of leaving a notch; a free end
+//! (degree 1: a strut cut by the domain's edge) gets none, so two cropped struts whose ends
+//! lie a fraction of a width apart do not touch in the STL when they do not touch in the
+//! lattice (extended, honeycomb-10mm's boundary ends 0.208 mm apart overlapped and
+//! PrusaSlicer joined them with beads the design does not have). The cap is round rather than
+//! a square extension because a square one reaches 0.141 mm from the node at its corners: on
+//! voronoi-10mm, whose joints crowd, it made 23 pairs of struts 0.208–0.279 mm apart (beads
+//! that do not touch) touch in the STL. So two prisms of struts sharing no node touch only where
+//! the struts' centrelines are within one width, i.e. where weft's own beads touch too
+//! (`tests/export_stl.rs`). A curved strut (one graph edge with bend points) is one prism per
+//! sampled segment. Prisms are not unioned (slicers union the overlapping volumes themselves).
 
 use crate::design::Design;
 use crate::jobs::lattice::LatticeJob;
@@ -53,19 +57,23 @@ pub fn lattice_stl(design: &Design) -> Result<Exported, Error> {
     for layer in &layers {
         let g = crate::paths::build_graph(layer, job.paths.merge_tolerance_mm);
         let (z0, z1) = (layer.z - layer.height, layer.z);
-        for (e, c) in strut_boxes(&g, w) {
-            let _ = e;
+        for (_, c) in strut_boxes(&g, w) {
             let base = mesh.vertices.len() as u32;
+            let k = c.len() as u32;
             for z in [z0, z1] {
-                for v in c {
+                for v in &c {
                     mesh.vertices.push([v.x as f32, v.y as f32, z as f32]);
                 }
             }
-            // Bottom 0..4 (counter-clockwise from above), top 4..8; outward normals.
-            let quads = [[0, 3, 2, 1], [4, 5, 6, 7], [0, 1, 5, 4], [1, 2, 6, 5], [2, 3, 7, 6], [3, 0, 4, 7]];
-            for [i, j, k, l] in quads {
-                mesh.triangles.push([base + i, base + j, base + k]);
-                mesh.triangles.push([base + i, base + k, base + l]);
+            // Bottom 0..k (counter-clockwise from above), top k..2k; outward normals.
+            for j in 1..k - 1 {
+                mesh.triangles.push([base, base + j + 1, base + j]);
+                mesh.triangles.push([base + k, base + k + j, base + k + j + 1]);
+            }
+            for i in 0..k {
+                let i1 = (i + 1) % k;
+                mesh.triangles.push([base + i, base + i1, base + k + i1]);
+                mesh.triangles.push([base + i, base + k + i1, base + k + i]);
             }
         }
         struts += g.edges.iter().filter(|e| e.length > 0.0).count();
@@ -75,11 +83,13 @@ pub fn lattice_stl(design: &Design) -> Result<Exported, Error> {
     Ok(Exported { stl: mesh.to_stl_binary(), struts, triangles, strut_mm })
 }
 
-/// The footprint of every strut of `g` as counter-clockwise rectangles `width_mm` wide, with
-/// the edge each belongs to: one per straight piece of the edge's printed polyline. A piece's
-/// end is extended by half the width where it meets more of the lattice (a node of degree ≥ 2,
-/// or a bend inside a curved strut) and not at a free end (degree 1).
-pub fn strut_boxes(g: &crate::paths::Graph, width_mm: f64) -> Vec<(usize, [DVec2; 4])> {
+/// The footprint of every strut of `g` as a counter-clockwise convex polygon `width_mm` wide,
+/// with the edge each belongs to: one per straight piece of the edge's printed polyline. A
+/// piece's end gets a round cap (half an octagon inscribed in the circle of radius
+/// `width_mm / 2` about the end, 3 more vertices) where it meets more of the lattice (a node
+/// of degree ≥ 2, or a bend inside a curved strut) and is cut square at a free end (degree
+/// 1). Polygons have 4, 7 or 10 vertices.
+pub fn strut_boxes(g: &crate::paths::Graph, width_mm: f64) -> Vec<(usize, Vec<DVec2>)> {
     let mut out = Vec::new();
     for (ei, e) in g.edges.iter().enumerate() {
         let pts = g.edge_points(ei);
@@ -95,9 +105,17 @@ pub fn strut_boxes(g: &crate::paths::Graph, width_mm: f64) -> Vec<(usize, [DVec2
             let n = DVec2::new(-u.y, u.x);
             let ext_a = i > 0 || g.degree(e.a) >= 2;
             let ext_b = i + 1 < last || g.degree(e.b) >= 2;
-            let p = if ext_a { a - u } else { a };
-            let q = if ext_b { b + u } else { b };
-            out.push((ei, [p - n, q - n, q + n, p + n]));
+            // Cap points at angles θ from the strut's direction: c + u cos θ + n sin θ.
+            let cap = |c: DVec2, degs: [f64; 3]| degs.map(|d: f64| c + u * d.to_radians().cos() + n * d.to_radians().sin());
+            let mut poly = vec![a - n, b - n];
+            if ext_b {
+                poly.extend(cap(b, [-45.0, 0.0, 45.0]));
+            }
+            poly.extend([b + n, a + n]);
+            if ext_a {
+                poly.extend(cap(a, [135.0, 180.0, 225.0]));
+            }
+            out.push((ei, poly));
         }
     }
     out

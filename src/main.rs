@@ -111,7 +111,7 @@ enum Command {
         #[arg(long, hide = true, default_value_t = 1)]
         scale: usize,
     },
-    /// Write a lattice design's printed struts as an STL (a box per strut) for other slicers.
+    /// Write a lattice design's printed struts as an STL (a nozzle-wide prism per strut, round-capped at joints) for other slicers.
     ExportStl {
         /// The design (JSON, a lattice job).
         design: String,

@@ -1,0 +1,958 @@
+//! Minimum-cost perfect matching on a **sparse** graph (edge list, integer costs) by Edmonds'
+//! primal–dual blossom algorithm (Edmonds 1965; the O(n·m·…) "all free vertices grow trees
+//! at once, one augmentation per stage" form of Galil's 1986 survey), with its **dual
+//! solution**, so a caller can prove that pairs left out of the graph could not lower the
+//! cost ([`certified_pairing`]).
+//!
+//! Written here rather than taken from a crate: `integer-blossom` is dense-only and returns
+//! no duals, `mwmatching` keeps i32 duals private, `fusion-blossom` pulls a CLI's worth of
+//! dependencies.
+//!
+//! Duals (LP with odd-set cuts): maximise Σ y_v + Σ z_S subject to
+//! y_u + y_v + Σ_{S: uv ∈ δ(S)} z_S ≤ c_uv on every edge, z_S ≥ 0. Internally every cost is
+//! multiplied by [`DUAL_SCALE`] = 4 and every dual stays an integer: starting potentials are
+//! half the cheapest incident edge (even after scaling), so all free vertices share a parity,
+//! every tree vertex has its root's parity (tight edges join equal parities) and the halving of
+//! an S–S slack is exact. The solver keeps per vertex the *total* potential
+//! Y_v = y_v + Σ_{S ∋ v} z_S: an edge between different outer blossoms has slack
+//! c − Y_u − Y_v, and a dual step changes Y of a whole tree blossom at once.
+//!
+//! Speed on geometric instances: a jump start (potentials, then a greedy matching of tight
+//! edges), best-edge tracking per vertex (to S vertices) and per S-blossom (to other
+//! S-blossoms, merged when blossoms form) so a dual step never rescans edges, and per-stage
+//! lists of the labelled blossoms so a dual step costs the size of the forest, not n.
+//! Everything is deterministic (index order, first minimum wins).
+
+const NONE: usize = usize::MAX;
+const NO_EDGE: (usize, usize) = (NONE, NONE);
+/// Costs are multiplied by this inside the solver; duals are reported in these units.
+pub const DUAL_SCALE: i64 = 4;
+
+const FREE: u8 = 0;
+const S: u8 = 1;
+const T: u8 = 2;
+
+/// The candidate graph has no perfect matching.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct NoPerfectMatching;
+
+impl std::fmt::Display for NoPerfectMatching {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("no perfect matching on these candidates")
+    }
+}
+
+/// A dual solution, in units of 1/[`DUAL_SCALE`] of a cost: total potentials and the laminar
+/// family of odd sets (as a forest: each set's parent set, its z, its size).
+#[derive(Clone, Debug, Default)]
+pub struct Duals {
+    /// Y_v = y_v + Σ_{S ∋ v} z_S. A pair through v is charged at most this (scaled).
+    pub total: Vec<i64>,
+    /// Smallest odd set containing each vertex, or `usize::MAX`.
+    pub vertex_set: Vec<usize>,
+    /// Enclosing set of each set, or `usize::MAX`.
+    pub set_parent: Vec<usize>,
+    /// z_S ≥ 0.
+    pub set_z: Vec<i64>,
+    /// |S| (odd).
+    pub set_size: Vec<usize>,
+    /// Σ z over the set and its ancestors.
+    set_z_up: Vec<i64>,
+    set_depth: Vec<usize>,
+}
+
+impl Duals {
+    /// y_v (scaled).
+    pub fn y(&self, v: usize) -> i64 {
+        let s = self.vertex_set[v];
+        self.total[v] - if s == NONE { 0 } else { self.set_z_up[s] }
+    }
+
+    /// Σ y + Σ z (scaled): a lower bound on DUAL_SCALE × the cost of every perfect matching
+    /// whose pairs all satisfy the constraints.
+    pub fn objective(&self) -> i64 {
+        let y: i64 = self.total.iter().sum();
+        let z: i64 = self.set_z.iter().zip(&self.set_size).map(|(&z, &s)| z * (s as i64 - 1)).sum();
+        y - z
+    }
+
+    /// Σ z over the sets containing both u and v.
+    fn common_z(&self, u: usize, v: usize) -> i64 {
+        let (mut a, mut b) = (self.vertex_set[u], self.vertex_set[v]);
+        if a == NONE || b == NONE {
+            return 0;
+        }
+        while self.set_depth[a] > self.set_depth[b] {
+            a = self.set_parent[a];
+        }
+        while self.set_depth[b] > self.set_depth[a] {
+            b = self.set_parent[b];
+        }
+        while a != b {
+            a = self.set_parent[a];
+            b = self.set_parent[b];
+            if a == NONE || b == NONE {
+                return 0;
+            }
+        }
+        self.set_z_up[a]
+    }
+
+    /// Reduced cost (scaled) of the pair (u, v) at cost `c` (unscaled): DUAL_SCALE·c − y_u − y_v
+    /// − Σ_{S crossing} z_S. Negative: the pair violates the dual (it might lower the cost).
+    pub fn reduced_cost(&self, u: usize, v: usize, c: i64) -> i64 {
+        DUAL_SCALE * c - self.total[u] - self.total[v] + 2 * self.common_z(u, v)
+    }
+
+    /// max Y_v.
+    pub fn max_total(&self) -> i64 {
+        self.total.iter().copied().max().unwrap_or(0)
+    }
+}
+
+/// A minimum-cost perfect matching and the dual solution certifying it.
+#[derive(Clone, Debug)]
+pub struct Matching {
+    /// Every vertex's partner.
+    pub mates: Vec<usize>,
+    /// Σ cost of the matched edges (unscaled).
+    pub cost: i64,
+    /// The dual solution that proves it minimal on the edges given.
+    pub duals: Duals,
+}
+
+/// Minimum-cost perfect matching of `n` vertices on `edges` (u, v, cost ≥ 0); parallel edges
+/// keep the cheapest, loops are ignored. O(n) stages, each O(m + forest · dual steps).
+pub fn min_cost_perfect_matching(n: usize, edges: &[(usize, usize, i64)]) -> Result<Matching, NoPerfectMatching> {
+    if n % 2 == 1 {
+        return Err(NoPerfectMatching);
+    }
+    if n == 0 {
+        return Ok(Matching { mates: Vec::new(), cost: 0, duals: Duals::default() });
+    }
+    let mut list: Vec<(usize, usize, i64)> =
+        edges.iter().filter(|e| e.0 != e.1).map(|&(u, v, c)| (u.min(v), u.max(v), c)).collect();
+    list.sort_unstable();
+    list.dedup_by_key(|e| (e.0, e.1));
+    let mut s = Solver::new(n, list);
+    s.solve()?;
+    Ok(s.result())
+}
+
+/// Why [`certified_pairing`] gave no certified matching.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CertifyError {
+    /// The candidates have no perfect matching.
+    NoPerfectMatching,
+    /// The violator search hit its work bound, or the rounds ran out.
+    GaveUp,
+}
+
+/// A matching proven minimal on the *complete* graph: every pair left out has a
+/// non-negative reduced cost under `duals`.
+#[derive(Clone, Debug)]
+pub struct Certified {
+    /// The matching and the duals of its last solve.
+    pub matching: Matching,
+    /// Solves done (1 + rounds that added violating pairs).
+    pub solves: usize,
+    /// Pairs added by the violator search.
+    pub added: usize,
+}
+
+/// Minimum-cost perfect matching of `n` items on the complete graph, solved on a sparse
+/// candidate set: solve on `candidates`, ask `find_violators(duals, out)` for pairs with a
+/// negative reduced cost (`duals.reduced_cost(u, v, c) < 0`; it returns false when it hit its
+/// own work bound), add them and re-solve, at most `max_solves` solves. When none is left the
+/// duals are feasible for every pair, so Σy + Σz = cost proves the optimum (weak duality).
+pub fn certified_pairing(
+    n: usize,
+    mut candidates: Vec<(usize, usize, i64)>,
+    find_violators: &mut dyn FnMut(&Duals, &mut Vec<(usize, usize, i64)>) -> bool,
+    max_solves: usize,
+) -> Result<Certified, CertifyError> {
+    let mut added = 0;
+    let mut found = Vec::new();
+    for solves in 1..=max_solves {
+        let m = min_cost_perfect_matching(n, &candidates).map_err(|_| CertifyError::NoPerfectMatching)?;
+        found.clear();
+        if !find_violators(&m.duals, &mut found) {
+            return Err(CertifyError::GaveUp);
+        }
+        found.retain(|&(u, v, c)| u != v && m.duals.reduced_cost(u, v, c) < 0);
+        if found.is_empty() {
+            return Ok(Certified { matching: m, solves, added });
+        }
+        added += found.len();
+        candidates.extend_from_slice(&found);
+    }
+    Err(CertifyError::GaveUp)
+}
+
+struct Solver {
+    n: usize,
+    /// (u, v, DUAL_SCALE · cost).
+    edges: Vec<(usize, usize, i64)>,
+    adj_start: Vec<usize>,
+    adj: Vec<usize>,
+    mate: Vec<usize>,
+    /// Outermost blossom of each vertex.
+    inblossom: Vec<usize>,
+    /// Ids n..2n are blossoms; ids < n are the trivial blossoms (vertices).
+    parent: Vec<usize>,
+    /// Children around the cycle, the base's child first.
+    childs: Vec<Vec<usize>>,
+    /// `ends[b][i]` = (x in childs[i], y in childs[i+1 mod k]): the edge joining them.
+    ends: Vec<Vec<(usize, usize)>>,
+    base: Vec<usize>,
+    /// Per blossom (top-level label) and per vertex (reached-by-a-tight-edge label).
+    label: Vec<u8>,
+    /// (outside vertex, inside vertex) of the edge that gave the label; none for roots.
+    labeledge: Vec<(usize, usize)>,
+    /// Vertex (not in an S-blossom): least-slack edge to an S vertex; S-blossom: least-slack
+    /// edge to another S-blossom.
+    bestedge: Vec<usize>,
+    /// S-blossom: least-slack edge to each neighbouring S-blossom (None: scan its vertices).
+    bestlist: Vec<Option<Vec<usize>>>,
+    /// Vertices: Y_v; blossoms: z_b. Scaled.
+    dual: Vec<i64>,
+    free_ids: Vec<usize>,
+    queue: Vec<usize>,
+    // Per-stage bookkeeping (reset through these lists, never by an O(n) sweep of 2n ids).
+    touched: Vec<usize>,
+    best_vertices: Vec<usize>,
+    bestlist_set: Vec<usize>,
+    s_list: Vec<usize>,
+    t_list: Vec<usize>,
+    s_stamp: Vec<u32>,
+    t_stamp: Vec<u32>,
+    stage: u32,
+    mark: Vec<u32>,
+    mark_stamp: u32,
+    bestto: Vec<usize>,
+    buf: Vec<usize>,
+}
+
+impl Solver {
+    fn new(n: usize, list: Vec<(usize, usize, i64)>) -> Solver {
+        let edges: Vec<(usize, usize, i64)> = list.into_iter().map(|(u, v, c)| (u, v, c * DUAL_SCALE)).collect();
+        let mut adj_start = vec![0usize; n + 1];
+        for &(u, v, _) in &edges {
+            adj_start[u + 1] += 1;
+            adj_start[v + 1] += 1;
+        }
+        for i in 0..n {
+            adj_start[i + 1] += adj_start[i];
+        }
+        let mut fill = adj_start.clone();
+        let mut adj = vec![0usize; adj_start[n]];
+        for (k, &(u, v, _)) in edges.iter().enumerate() {
+            adj[fill[u]] = k;
+            fill[u] += 1;
+            adj[fill[v]] = k;
+            fill[v] += 1;
+        }
+        let nb = 2 * n;
+        Solver {
+            n,
+            edges,
+            adj_start,
+            adj,
+            mate: vec![NONE; n],
+            inblossom: (0..n).collect(),
+            parent: vec![NONE; nb],
+            childs: vec![Vec::new(); nb],
+            ends: vec![Vec::new(); nb],
+            base: (0..n).chain(std::iter::repeat_n(NONE, n)).collect(),
+            label: vec![FREE; nb],
+            labeledge: vec![NO_EDGE; nb],
+            bestedge: vec![NONE; nb],
+            bestlist: vec![None; nb],
+            dual: vec![0; nb],
+            free_ids: (n..nb).rev().collect(),
+            queue: Vec::new(),
+            touched: Vec::new(),
+            best_vertices: Vec::new(),
+            bestlist_set: Vec::new(),
+            s_list: Vec::new(),
+            t_list: Vec::new(),
+            s_stamp: vec![0; nb],
+            t_stamp: vec![0; nb],
+            stage: 0,
+            mark: vec![0; nb],
+            mark_stamp: 0,
+            bestto: vec![NONE; nb],
+            buf: Vec::new(),
+        }
+    }
+
+    fn slack(&self, k: usize) -> i64 {
+        let (u, v, c) = self.edges[k];
+        c - self.dual[u] - self.dual[v]
+    }
+
+    fn other(&self, k: usize, v: usize) -> usize {
+        let (a, b, _) = self.edges[k];
+        if a == v {
+            b
+        } else {
+            a
+        }
+    }
+
+    /// Appends the vertices of blossom `b` to `out`.
+    fn leaves(&self, b: usize, out: &mut Vec<usize>) {
+        if b < self.n {
+            out.push(b);
+            return;
+        }
+        let mut stack = vec![b];
+        while let Some(x) = stack.pop() {
+            for &c in self.childs[x].iter().rev() {
+                if c < self.n {
+                    out.push(c);
+                } else {
+                    stack.push(c);
+                }
+            }
+        }
+    }
+
+    /// Jump start: Y_v = half the cheapest incident edge, then (vertex order) raise each free
+    /// vertex to its tightest edge (by an even amount, keeping free vertices' parity) and match
+    /// it when the other end is free.
+    fn jump_start(&mut self) -> Result<(), NoPerfectMatching> {
+        for v in 0..self.n {
+            let mut m = i64::MAX;
+            for &k in &self.adj[self.adj_start[v]..self.adj_start[v + 1]] {
+                m = m.min(self.edges[k].2);
+            }
+            if m == i64::MAX {
+                return Err(NoPerfectMatching);
+            }
+            self.dual[v] = m / 2;
+        }
+        for v in 0..self.n {
+            if self.mate[v] != NONE {
+                continue;
+            }
+            // Tightest edge, a free partner first among equals, then index order.
+            let mut best = (i64::MAX, 1u8, NONE);
+            for &k in &self.adj[self.adj_start[v]..self.adj_start[v + 1]] {
+                let w = self.other(k, v);
+                let key = (self.slack(k), u8::from(self.mate[w] != NONE), w);
+                if key < best {
+                    best = key;
+                }
+            }
+            let (s, _, w) = best;
+            self.dual[v] += s & !1;
+            if s & 1 == 0 && self.mate[w] == NONE {
+                self.mate[v] = w;
+                self.mate[w] = v;
+            }
+        }
+        Ok(())
+    }
+
+    fn solve(&mut self) -> Result<(), NoPerfectMatching> {
+        self.jump_start()?;
+        let mut free = self.mate.iter().filter(|&&m| m == NONE).count();
+        while free > 0 {
+            self.start_stage();
+            if !self.run_stage()? {
+                return Err(NoPerfectMatching);
+            }
+            free -= 2;
+            self.end_stage();
+        }
+        Ok(())
+    }
+
+    fn touch(&mut self, i: usize) {
+        self.touched.push(i);
+    }
+
+    fn start_stage(&mut self) {
+        self.stage += 1;
+        for i in std::mem::take(&mut self.touched) {
+            self.label[i] = FREE;
+            self.labeledge[i] = NO_EDGE;
+            self.bestedge[i] = NONE;
+        }
+        for b in std::mem::take(&mut self.bestlist_set) {
+            self.bestlist[b] = None;
+        }
+        self.best_vertices.clear();
+        self.s_list.clear();
+        self.t_list.clear();
+        self.queue.clear();
+        for v in 0..self.n {
+            if self.mate[v] == NONE && self.label[self.inblossom[v]] == FREE {
+                self.assign_label(v, S, NO_EDGE);
+            }
+        }
+    }
+
+    fn assign_label(&mut self, w: usize, t: u8, e: (usize, usize)) {
+        let b = self.inblossom[w];
+        self.label[w] = t;
+        self.label[b] = t;
+        self.labeledge[w] = e;
+        self.labeledge[b] = e;
+        self.bestedge[w] = NONE;
+        self.bestedge[b] = NONE;
+        self.touch(w);
+        self.touch(b);
+        if t == S {
+            if self.s_stamp[b] != self.stage {
+                self.s_stamp[b] = self.stage;
+                self.s_list.push(b);
+            }
+            let mut buf = std::mem::take(&mut self.buf);
+            buf.clear();
+            self.leaves(b, &mut buf);
+            self.queue.extend_from_slice(&buf);
+            self.buf = buf;
+        } else {
+            if self.t_stamp[b] != self.stage {
+                self.t_stamp[b] = self.stage;
+                self.t_list.push(b);
+            }
+            let base = self.base[b];
+            let m = self.mate[base];
+            self.assign_label(m, S, (base, m));
+        }
+    }
+
+    /// Returns Ok(true) after an augmentation, Err when no dual step is possible.
+    fn run_stage(&mut self) -> Result<bool, NoPerfectMatching> {
+        loop {
+            while let Some(v) = self.queue.pop() {
+                for idx in self.adj_start[v]..self.adj_start[v + 1] {
+                    let k = self.adj[idx];
+                    let w = self.other(k, v);
+                    let (bv, bw) = (self.inblossom[v], self.inblossom[w]);
+                    if bv == bw {
+                        continue;
+                    }
+                    let ks = self.slack(k);
+                    if ks <= 0 {
+                        if self.label[bw] == FREE {
+                            self.assign_label(w, T, (v, w));
+                        } else if self.label[bw] == S {
+                            match self.scan_blossom(v, w) {
+                                Some(base) => self.add_blossom(base, v, w),
+                                None => {
+                                    self.augment(v, w);
+                                    return Ok(true);
+                                }
+                            }
+                        } else if self.label[w] == FREE {
+                            self.label[w] = T;
+                            self.labeledge[w] = (v, w);
+                            self.touch(w);
+                        }
+                    } else if self.label[bw] == S {
+                        let b = self.inblossom[v];
+                        if self.bestedge[b] == NONE || ks < self.slack(self.bestedge[b]) {
+                            self.bestedge[b] = k;
+                        }
+                    } else if self.label[w] == FREE
+                        && (self.bestedge[w] == NONE || ks < self.slack(self.bestedge[w]))
+                    {
+                        self.bestedge[w] = k;
+                        self.best_vertices.push(w);
+                        self.touch(w);
+                    }
+                }
+            }
+            // Dual step: the smallest of (2) S–free slack, (3) half an S–S slack, (4) a T
+            // blossom's z.
+            let mut best = (i64::MAX, 0u8, NONE);
+            for &w in &self.best_vertices {
+                let k = self.bestedge[w];
+                if k != NONE && self.label[self.inblossom[w]] == FREE {
+                    let s = self.slack(k);
+                    if s < best.0 {
+                        best = (s, 2, k);
+                    }
+                }
+            }
+            for &b in &self.s_list {
+                if self.parent[b] == NONE && self.label[b] == S && self.base[b] != NONE && self.bestedge[b] != NONE {
+                    let s = self.slack(self.bestedge[b]);
+                    debug_assert!(s % 2 == 0, "odd S–S slack {s}");
+                    if s / 2 < best.0 {
+                        best = (s / 2, 3, self.bestedge[b]);
+                    }
+                }
+            }
+            for &b in &self.t_list {
+                if b >= self.n && self.parent[b] == NONE && self.label[b] == T && self.base[b] != NONE && self.dual[b] < best.0 {
+                    best = (self.dual[b], 4, b);
+                }
+            }
+            let (delta, kind, arg) = best;
+            if kind == 0 {
+                return Err(NoPerfectMatching);
+            }
+            let mut buf = std::mem::take(&mut self.buf);
+            for (list, sign) in [(&self.s_list, 1i64), (&self.t_list, -1i64)] {
+                let want = if sign > 0 { S } else { T };
+                for &b in list {
+                    if self.parent[b] != NONE || self.label[b] != want || self.base[b] == NONE {
+                        continue;
+                    }
+                    buf.clear();
+                    self.leaves(b, &mut buf);
+                    for &v in &buf {
+                        self.dual[v] += sign * delta;
+                    }
+                    if b >= self.n {
+                        self.dual[b] += sign * delta;
+                    }
+                }
+            }
+            self.buf = buf;
+            match kind {
+                2 | 3 => {
+                    let (u, v, _) = self.edges[arg];
+                    self.queue.push(if self.label[self.inblossom[u]] == S { u } else { v });
+                }
+                _ => self.expand_blossom(arg, false),
+            }
+        }
+    }
+
+    /// Traces from v and w to their roots; the first blossom both reach is the new base's,
+    /// none when the trees differ (an augmenting path).
+    fn scan_blossom(&mut self, v: usize, w: usize) -> Option<usize> {
+        self.mark_stamp += 1;
+        let (mut v, mut w) = (v, w);
+        while v != NONE {
+            let b = self.inblossom[v];
+            if self.mark[b] == self.mark_stamp {
+                return Some(self.base[b]);
+            }
+            self.mark[b] = self.mark_stamp;
+            if self.labeledge[b].0 == NONE {
+                v = NONE;
+            } else {
+                let bt = self.inblossom[self.labeledge[b].0];
+                v = self.labeledge[bt].0;
+            }
+            if w != NONE {
+                std::mem::swap(&mut v, &mut w);
+            }
+        }
+        None
+    }
+
+    fn add_blossom(&mut self, base: usize, v: usize, w: usize) {
+        let bb = self.inblossom[base];
+        let (bv, bw) = (self.inblossom[v], self.inblossom[w]);
+        let b = self.free_ids.pop().expect("blossom ids");
+        self.base[b] = base;
+        self.parent[b] = NONE;
+        self.parent[bb] = b;
+        let mut childs = vec![bb];
+        let mut ends = Vec::new();
+        let (mut side, mut side_ends) = (Vec::new(), Vec::new());
+        let mut c = bv;
+        while c != bb {
+            self.parent[c] = b;
+            side.push(c);
+            side_ends.push(self.labeledge[c]);
+            c = self.inblossom[self.labeledge[c].0];
+        }
+        childs.extend(side.iter().rev());
+        ends.extend(side_ends.iter().rev());
+        ends.push((v, w));
+        let mut c = bw;
+        while c != bb {
+            self.parent[c] = b;
+            childs.push(c);
+            let (x, y) = self.labeledge[c];
+            ends.push((y, x));
+            c = self.inblossom[x];
+        }
+        self.label[b] = S;
+        self.labeledge[b] = self.labeledge[bb];
+        self.dual[b] = 0;
+        self.touch(b);
+        if self.s_stamp[b] != self.stage {
+            self.s_stamp[b] = self.stage;
+            self.s_list.push(b);
+        }
+        let mut buf = std::mem::take(&mut self.buf);
+        buf.clear();
+        self.leaves_of(&childs, &mut buf);
+        for &x in &buf {
+            if self.label[self.inblossom[x]] == T {
+                self.queue.push(x);
+            }
+            self.inblossom[x] = b;
+        }
+        // Least-slack edges to the other S-blossoms, merged from the children's.
+        let mut found = Vec::new();
+        for &ch in &childs {
+            let list = match self.bestlist[ch].take() {
+                Some(l) => l,
+                None => {
+                    let mut l = Vec::new();
+                    let mut lv = Vec::new();
+                    self.leaves(ch, &mut lv);
+                    for &x in &lv {
+                        l.extend_from_slice(&self.adj[self.adj_start[x]..self.adj_start[x + 1]]);
+                    }
+                    l
+                }
+            };
+            for k in list {
+                let (i, j, _) = self.edges[k];
+                let o = if self.inblossom[i] == b { j } else { i };
+                let bj = self.inblossom[o];
+                if bj != b && self.label[bj] == S && (self.bestto[bj] == NONE || self.slack(k) < self.slack(self.bestto[bj])) {
+                    if self.bestto[bj] == NONE {
+                        found.push(bj);
+                    }
+                    self.bestto[bj] = k;
+                }
+            }
+            self.bestedge[ch] = NONE;
+        }
+        let mut list = Vec::with_capacity(found.len());
+        let mut best = NONE;
+        for bj in found {
+            let k = self.bestto[bj];
+            self.bestto[bj] = NONE;
+            if best == NONE || self.slack(k) < self.slack(best) {
+                best = k;
+            }
+            list.push(k);
+        }
+        self.bestlist[b] = Some(list);
+        self.bestlist_set.push(b);
+        self.bestedge[b] = best;
+        self.buf = buf;
+        self.childs[b] = childs;
+        self.ends[b] = ends;
+    }
+
+    fn leaves_of(&self, childs: &[usize], out: &mut Vec<usize>) {
+        for &c in childs {
+            self.leaves(c, out);
+        }
+    }
+
+    fn free_blossom(&mut self, b: usize) {
+        self.childs[b].clear();
+        self.ends[b].clear();
+        self.label[b] = FREE;
+        self.labeledge[b] = NO_EDGE;
+        self.bestedge[b] = NONE;
+        self.bestlist[b] = None;
+        self.base[b] = NONE;
+        self.parent[b] = NONE;
+        self.dual[b] = 0;
+        self.free_ids.push(b);
+    }
+
+    fn expand_blossom(&mut self, b: usize, endstage: bool) {
+        let childs = std::mem::take(&mut self.childs[b]);
+        let ends = std::mem::take(&mut self.ends[b]);
+        let mut buf = Vec::new();
+        for &s in &childs {
+            self.parent[s] = NONE;
+            if s < self.n {
+                self.inblossom[s] = s;
+            } else if endstage && self.dual[s] == 0 {
+                self.expand_blossom(s, true);
+            } else {
+                buf.clear();
+                self.leaves(s, &mut buf);
+                for &x in &buf {
+                    self.inblossom[x] = s;
+                }
+            }
+        }
+        if !endstage && self.label[b] == T {
+            let k = childs.len();
+            let (x, w) = self.labeledge[b];
+            let entry = self.inblossom[w];
+            let mut j = childs.iter().position(|&c| c == entry).expect("entry child");
+            let mut on_path = vec![false; k];
+            let forward = j % 2 == 1;
+            let mut edge = (x, w);
+            // T children along the even path to the base child; each cascades to the S child
+            // matched to it; the base child's mate is outside (already S): no cascade.
+            while j != 0 {
+                let (next_s, into_t) = if forward {
+                    let s = (j + 1) % k;
+                    let (a, bb) = ends[s];
+                    (s, (a, bb))
+                } else {
+                    let s = j - 1;
+                    let (a, bb) = ends[s - 1];
+                    (s, (bb, a))
+                };
+                on_path[j] = true;
+                on_path[next_s] = true;
+                self.label[edge.1] = FREE;
+                self.assign_label(edge.1, T, edge);
+                edge = into_t;
+                j = if forward { (next_s + 1) % k } else { next_s - 1 };
+            }
+            on_path[0] = true;
+            let c0 = childs[0];
+            self.label[c0] = T;
+            self.label[edge.1] = T;
+            self.labeledge[c0] = edge;
+            self.labeledge[edge.1] = edge;
+            self.bestedge[c0] = NONE;
+            self.touch(c0);
+            self.touch(edge.1);
+            if self.t_stamp[c0] != self.stage {
+                self.t_stamp[c0] = self.stage;
+                self.t_list.push(c0);
+            }
+            // Off-path children reached by a tight edge from an S vertex become T.
+            for (i, &c) in childs.iter().enumerate() {
+                if on_path[i] || self.label[c] == S {
+                    continue;
+                }
+                buf.clear();
+                self.leaves(c, &mut buf);
+                if let Some(&v) = buf.iter().find(|&&v| self.label[v] != FREE) {
+                    let e = self.labeledge[v];
+                    self.label[v] = FREE;
+                    self.assign_label(v, T, e);
+                }
+            }
+        }
+        self.free_blossom(b);
+    }
+
+    /// Rematches inside blossom b so that its vertex v becomes the base.
+    fn augment_blossom(&mut self, b: usize, v: usize) {
+        let mut t = v;
+        while self.parent[t] != b {
+            t = self.parent[t];
+        }
+        if t >= self.n {
+            self.augment_blossom(t, v);
+        }
+        let k = self.childs[b].len();
+        let i = self.childs[b].iter().position(|&c| c == t).expect("child");
+        if i != 0 {
+            let mut flips = Vec::new();
+            if i % 2 == 1 {
+                let mut j = i + 1;
+                while j < k {
+                    flips.push(j);
+                    j += 2;
+                }
+            } else {
+                let mut j = i as isize - 2;
+                while j >= 0 {
+                    flips.push(j as usize);
+                    j -= 2;
+                }
+            }
+            for j in flips {
+                let (a, bb) = self.ends[b][j];
+                let (ca, cb) = (self.childs[b][j], self.childs[b][(j + 1) % k]);
+                if ca >= self.n {
+                    self.augment_blossom(ca, a);
+                }
+                if cb >= self.n {
+                    self.augment_blossom(cb, bb);
+                }
+                self.mate[a] = bb;
+                self.mate[bb] = a;
+            }
+            self.childs[b].rotate_left(i);
+            self.ends[b].rotate_left(i);
+        }
+        self.base[b] = v;
+    }
+
+    fn augment(&mut self, v: usize, w: usize) {
+        for (s0, j0) in [(v, w), (w, v)] {
+            let (mut s, mut j) = (s0, j0);
+            loop {
+                let bs = self.inblossom[s];
+                if bs >= self.n {
+                    self.augment_blossom(bs, s);
+                }
+                self.mate[s] = j;
+                let t = self.labeledge[bs].0;
+                if t == NONE {
+                    break;
+                }
+                let bt = self.inblossom[t];
+                let (x, y) = self.labeledge[bt];
+                if bt >= self.n {
+                    self.augment_blossom(bt, y);
+                }
+                self.mate[y] = x;
+                s = x;
+                j = y;
+            }
+        }
+    }
+
+    fn end_stage(&mut self) {
+        let list = std::mem::take(&mut self.s_list);
+        for &b in &list {
+            if b >= self.n && self.parent[b] == NONE && self.base[b] != NONE && self.label[b] == S && self.dual[b] == 0 {
+                self.expand_blossom(b, true);
+            }
+        }
+        self.s_list = list;
+    }
+
+    fn result(&self) -> Matching {
+        let n = self.n;
+        let mut cost = 0;
+        for &(u, v, c) in &self.edges {
+            if self.mate[u] == v {
+                cost += c / DUAL_SCALE;
+            }
+        }
+        // Odd sets: every live blossom, numbered in id order.
+        let mut index = vec![NONE; 2 * n];
+        let mut ids = Vec::new();
+        for b in n..2 * n {
+            if self.base[b] != NONE {
+                index[b] = ids.len();
+                ids.push(b);
+            }
+        }
+        let mut d = Duals {
+            total: self.dual[..n].to_vec(),
+            vertex_set: vec![NONE; n],
+            set_parent: ids.iter().map(|&b| if self.parent[b] == NONE { NONE } else { index[self.parent[b]] }).collect(),
+            set_z: ids.iter().map(|&b| self.dual[b]).collect(),
+            set_size: vec![0; ids.len()],
+            set_z_up: vec![0; ids.len()],
+            set_depth: vec![0; ids.len()],
+        };
+        for v in 0..n {
+            if self.parent[v] != NONE {
+                d.vertex_set[v] = index[self.parent[v]];
+            }
+        }
+        // Parents before children: walk each top-level blossom downwards.
+        let mut stack: Vec<usize> = ids.iter().copied().filter(|&b| self.parent[b] == NONE).collect();
+        while let Some(b) = stack.pop() {
+            let i = index[b];
+            let p = d.set_parent[i];
+            d.set_z_up[i] = d.set_z[i] + if p == NONE { 0 } else { d.set_z_up[p] };
+            d.set_depth[i] = if p == NONE { 0 } else { d.set_depth[p] + 1 };
+            let mut lv = Vec::new();
+            self.leaves(b, &mut lv);
+            d.set_size[i] = lv.len();
+            stack.extend(self.childs[b].iter().copied().filter(|&c| c >= n));
+        }
+        Matching { mates: self.mate.clone(), cost, duals: d }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn rng(seed: u64) -> impl FnMut() -> u64 {
+        let mut s = seed;
+        move || {
+            s ^= s << 13;
+            s ^= s >> 7;
+            s ^= s << 17;
+            s
+        }
+    }
+
+    fn brute(n: usize, edges: &[(usize, usize, i64)]) -> Option<i64> {
+        let mut c = vec![None; n * n];
+        for &(u, v, w) in edges {
+            if u != v {
+                let old: Option<i64> = c[u * n + v];
+                let w = old.map_or(w, |o| o.min(w));
+                c[u * n + v] = Some(w);
+                c[v * n + u] = Some(w);
+            }
+        }
+        fn rec(n: usize, c: &[Option<i64>], used: &mut Vec<bool>) -> Option<i64> {
+            let Some(a) = (0..n).find(|&i| !used[i]) else { return Some(0) };
+            used[a] = true;
+            let mut best: Option<i64> = None;
+            for b in a + 1..n {
+                if !used[b] {
+                    if let Some(w) = c[a * n + b] {
+                        used[b] = true;
+                        if let Some(r) = rec(n, c, used) {
+                            best = Some(best.map_or(w + r, |x: i64| x.min(w + r)));
+                        }
+                        used[b] = false;
+                    }
+                }
+            }
+            used[a] = false;
+            best
+        }
+        rec(n, &c, &mut vec![false; n])
+    }
+
+    /// Mates form a perfect matching on the edges, duals feasible, matched edges tight, and
+    /// Σy + Σz = cost.
+    pub(crate) fn check(n: usize, edges: &[(usize, usize, i64)], m: &Matching) {
+        for v in 0..n {
+            assert_eq!(m.mates[m.mates[v]], v);
+            assert_ne!(m.mates[v], v);
+        }
+        let mut cost = 0;
+        let mut seen = vec![false; n];
+        for &(u, v, c) in edges {
+            let r = m.duals.reduced_cost(u, v, c);
+            assert!(r >= 0, "edge {u}-{v} reduced {r}");
+            if m.mates[u] == v && !seen[u] {
+                assert_eq!(r, 0, "matched {u}-{v} not tight");
+                seen[u] = true;
+                seen[v] = true;
+                cost += c;
+            }
+        }
+        assert_eq!(cost, m.cost);
+        assert!(m.duals.set_z.iter().all(|&z| z >= 0));
+        assert!(m.duals.set_size.iter().all(|&s| s % 2 == 1));
+        assert_eq!(m.duals.objective(), DUAL_SCALE * m.cost, "strong duality");
+    }
+
+    #[test]
+    fn equals_brute_force_on_small_graphs() {
+        let mut r = rng(77);
+        for round in 0..3000 {
+            let n = 2 + (r() % 11) as usize;
+            let density = 1 + r() % 4; // out of 4
+            let maxc = [3, 10, 1000][round % 3];
+            let mut edges = Vec::new();
+            for u in 0..n {
+                for v in u + 1..n {
+                    if r() % 4 < density {
+                        edges.push((u, v, (r() % maxc) as i64));
+                    }
+                }
+            }
+            let want = brute(n, &edges);
+            match min_cost_perfect_matching(n, &edges) {
+                Ok(m) => {
+                    assert_eq!(Some(m.cost), want, "round {round} n {n} {edges:?}");
+                    check(n, &edges, &m);
+                }
+                Err(_) => assert_eq!(want, None, "round {round} n {n} {edges:?}"),
+            }
+        }
+    }
+}

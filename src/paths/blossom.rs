@@ -205,12 +205,16 @@ struct Solver {
     /// `ends[b][i]` = (x in childs[i], y in childs[i+1 mod k]): the edge joining them.
     ends: Vec<Vec<(usize, usize)>>,
     base: Vec<usize>,
-    /// Per blossom (top-level label) and per vertex (reached-by-a-tight-edge label).
+    /// Label of each outer blossom (and of the vertex a label arrived at).
     label: Vec<u8>,
     /// (outside vertex, inside vertex) of the edge that gave the label; none for roots.
     labeledge: Vec<(usize, usize)>,
+    /// Root vertex of the alternating tree of each labelled outer blossom.
+    tree_of: Vec<usize>,
+    /// Blossoms labelled in each root's tree (stale entries filtered when read).
+    tree_members: Vec<Vec<usize>>,
     /// Vertex (not in an S-blossom): least-slack edge to an S vertex; S-blossom: least-slack
-    /// edge to another S-blossom.
+    /// edge to another S-blossom. Checked when read: an end may have left its tree.
     bestedge: Vec<usize>,
     /// S-blossom: least-slack edge to each neighbouring S-blossom (None: scan its vertices).
     bestlist: Vec<Option<Vec<usize>>>,
@@ -218,15 +222,12 @@ struct Solver {
     dual: Vec<i64>,
     free_ids: Vec<usize>,
     queue: Vec<usize>,
-    // Per-stage bookkeeping (reset through these lists, never by an O(n) sweep of 2n ids).
-    touched: Vec<usize>,
+    /// Vertices with a best edge, S-blossoms, T-blossoms: what a dual step reads and changes
+    /// (the forest, not all n), compacted as it goes; `listed` keeps each in once.
     best_vertices: Vec<usize>,
-    bestlist_set: Vec<usize>,
     s_list: Vec<usize>,
     t_list: Vec<usize>,
-    s_stamp: Vec<u32>,
-    t_stamp: Vec<u32>,
-    stage: u32,
+    listed: Vec<[bool; 3]>,
     mark: Vec<u32>,
     mark_stamp: u32,
     bestto: Vec<usize>,
@@ -266,19 +267,17 @@ impl Solver {
             base: (0..n).chain(std::iter::repeat_n(NONE, n)).collect(),
             label: vec![FREE; nb],
             labeledge: vec![NO_EDGE; nb],
+            tree_of: vec![NONE; nb],
+            tree_members: vec![Vec::new(); n],
             bestedge: vec![NONE; nb],
             bestlist: vec![None; nb],
             dual: vec![0; nb],
             free_ids: (n..nb).rev().collect(),
             queue: Vec::new(),
-            touched: Vec::new(),
             best_vertices: Vec::new(),
-            bestlist_set: Vec::new(),
             s_list: Vec::new(),
             t_list: Vec::new(),
-            s_stamp: vec![0; nb],
-            t_stamp: vec![0; nb],
-            stage: 0,
+            listed: vec![[false; 3]; nb],
             mark: vec![0; nb],
             mark_stamp: 0,
             bestto: vec![NONE; nb],
@@ -298,6 +297,10 @@ impl Solver {
         } else {
             a
         }
+    }
+
+    fn is_outer(&self, b: usize) -> bool {
+        self.parent[b] == NONE && self.base[b] != NONE
     }
 
     /// Appends the vertices of blossom `b` to `out`.
@@ -355,46 +358,40 @@ impl Solver {
         Ok(())
     }
 
+    /// All free vertices grow alternating trees at once; an augmentation dissolves only the two
+    /// trees it joins, the others keep growing (no stage restarts).
     fn solve(&mut self) -> Result<(), NoPerfectMatching> {
         self.jump_start()?;
-        let mut free = self.mate.iter().filter(|&&m| m == NONE).count();
-        while free > 0 {
-            self.start_stage();
-            if !self.run_stage()? {
-                return Err(NoPerfectMatching);
+        let mut free = 0;
+        for v in 0..self.n {
+            if self.mate[v] == NONE {
+                free += 1;
+                self.assign_label(v, S, NO_EDGE, v);
             }
-            free -= 2;
-            self.end_stage();
+        }
+        while free > 0 {
+            if let Some((v, w)) = self.grow()? {
+                let roots = [self.tree_of[self.inblossom[v]], self.tree_of[self.inblossom[w]]];
+                self.augment(v, w);
+                self.dissolve(roots);
+                free -= 2;
+            }
         }
         Ok(())
     }
 
-    fn touch(&mut self, i: usize) {
-        self.touched.push(i);
-    }
-
-    fn start_stage(&mut self) {
-        self.stage += 1;
-        for i in std::mem::take(&mut self.touched) {
-            self.label[i] = FREE;
-            self.labeledge[i] = NO_EDGE;
-            self.bestedge[i] = NONE;
-        }
-        for b in std::mem::take(&mut self.bestlist_set) {
-            self.bestlist[b] = None;
-        }
-        self.best_vertices.clear();
-        self.s_list.clear();
-        self.t_list.clear();
-        self.queue.clear();
-        for v in 0..self.n {
-            if self.mate[v] == NONE && self.label[self.inblossom[v]] == FREE {
-                self.assign_label(v, S, NO_EDGE);
+    fn list(&mut self, which: usize, b: usize) {
+        if !self.listed[b][which] {
+            self.listed[b][which] = true;
+            match which {
+                0 => self.best_vertices.push(b),
+                1 => self.s_list.push(b),
+                _ => self.t_list.push(b),
             }
         }
     }
 
-    fn assign_label(&mut self, w: usize, t: u8, e: (usize, usize)) {
+    fn assign_label(&mut self, w: usize, t: u8, e: (usize, usize), root: usize) {
         let b = self.inblossom[w];
         self.label[w] = t;
         self.label[b] = t;
@@ -402,126 +399,220 @@ impl Solver {
         self.labeledge[b] = e;
         self.bestedge[w] = NONE;
         self.bestedge[b] = NONE;
-        self.touch(w);
-        self.touch(b);
+        self.tree_of[b] = root;
+        self.tree_members[root].push(b);
         if t == S {
-            if self.s_stamp[b] != self.stage {
-                self.s_stamp[b] = self.stage;
-                self.s_list.push(b);
-            }
+            self.list(1, b);
             let mut buf = std::mem::take(&mut self.buf);
             buf.clear();
             self.leaves(b, &mut buf);
             self.queue.extend_from_slice(&buf);
             self.buf = buf;
         } else {
-            if self.t_stamp[b] != self.stage {
-                self.t_stamp[b] = self.stage;
-                self.t_list.push(b);
-            }
+            self.list(2, b);
             let base = self.base[b];
             let m = self.mate[base];
-            self.assign_label(m, S, (base, m));
+            self.assign_label(m, S, (base, m), root);
         }
     }
 
-    /// Returns Ok(true) after an augmentation, Err when no dual step is possible.
-    fn run_stage(&mut self) -> Result<bool, NoPerfectMatching> {
-        loop {
-            while let Some(v) = self.queue.pop() {
-                for idx in self.adj_start[v]..self.adj_start[v + 1] {
-                    let k = self.adj[idx];
-                    let w = self.other(k, v);
-                    let (bv, bw) = (self.inblossom[v], self.inblossom[w]);
-                    if bv == bw {
-                        continue;
+    /// Scans S vertices and makes dual steps until an augmenting edge (v, w) is tight.
+    fn grow(&mut self) -> Result<Option<(usize, usize)>, NoPerfectMatching> {
+        while let Some(v) = self.queue.pop() {
+            if self.label[self.inblossom[v]] != S {
+                continue; // Its tree was dissolved after it was queued.
+            }
+            for idx in self.adj_start[v]..self.adj_start[v + 1] {
+                let k = self.adj[idx];
+                let w = self.other(k, v);
+                let (bv, bw) = (self.inblossom[v], self.inblossom[w]);
+                if bv == bw {
+                    continue;
+                }
+                let ks = self.slack(k);
+                match self.label[bw] {
+                    FREE if ks <= 0 => {
+                        let root = self.tree_of[bv];
+                        self.assign_label(w, T, (v, w), root);
                     }
-                    let ks = self.slack(k);
-                    if ks <= 0 {
-                        if self.label[bw] == FREE {
-                            self.assign_label(w, T, (v, w));
-                        } else if self.label[bw] == S {
-                            match self.scan_blossom(v, w) {
-                                Some(base) => self.add_blossom(base, v, w),
-                                None => {
-                                    self.augment(v, w);
-                                    return Ok(true);
-                                }
-                            }
-                        } else if self.label[w] == FREE {
-                            self.label[w] = T;
-                            self.labeledge[w] = (v, w);
-                            self.touch(w);
+                    FREE => {
+                        if self.bestedge[w] == NONE || ks < self.slack(self.bestedge[w]) {
+                            self.bestedge[w] = k;
+                            self.list(0, w);
                         }
-                    } else if self.label[bw] == S {
+                    }
+                    S if ks <= 0 => match self.scan_blossom(v, w) {
+                        Some(base) => self.add_blossom(base, v, w),
+                        None => return Ok(Some((v, w))),
+                    },
+                    S => {
                         let b = self.inblossom[v];
                         if self.bestedge[b] == NONE || ks < self.slack(self.bestedge[b]) {
                             self.bestedge[b] = k;
                         }
-                    } else if self.label[w] == FREE
-                        && (self.bestedge[w] == NONE || ks < self.slack(self.bestedge[w]))
-                    {
-                        self.bestedge[w] = k;
-                        self.best_vertices.push(w);
-                        self.touch(w);
                     }
+                    _ => {} // T: found again when its blossom expands or its tree dissolves.
                 }
             }
-            // Dual step: the smallest of (2) S–free slack, (3) half an S–S slack, (4) a T
-            // blossom's z.
-            let mut best = (i64::MAX, 0u8, NONE);
-            for &w in &self.best_vertices {
-                let k = self.bestedge[w];
-                if k != NONE && self.label[self.inblossom[w]] == FREE {
-                    let s = self.slack(k);
-                    if s < best.0 {
-                        best = (s, 2, k);
-                    }
+        }
+        self.dual_step()?;
+        Ok(None)
+    }
+
+    /// The S-side outer blossom of edge k if both ends are in different S-blossoms.
+    fn s_s_edge(&self, k: usize) -> bool {
+        let (u, v, _) = self.edges[k];
+        let (bu, bv) = (self.inblossom[u], self.inblossom[v]);
+        bu != bv && self.label[bu] == S && self.label[bv] == S
+    }
+
+    /// Least-slack edge from vertex x (outside S-blossoms) to an S vertex.
+    fn rescan_vertex(&mut self, x: usize) {
+        let bx = self.inblossom[x];
+        let mut best = NONE;
+        for idx in self.adj_start[x]..self.adj_start[x + 1] {
+            let k = self.adj[idx];
+            let bw = self.inblossom[self.other(k, x)];
+            if bw != bx && self.label[bw] == S && (best == NONE || self.slack(k) < self.slack(best)) {
+                best = k;
+            }
+        }
+        self.bestedge[x] = best;
+        if best != NONE {
+            self.list(0, x);
+        }
+    }
+
+    /// Least-slack edge from S-blossom b to another S-blossom, from all its vertices.
+    fn rescan_blossom(&mut self, b: usize) {
+        let mut lv = Vec::new();
+        self.leaves(b, &mut lv);
+        let mut best = NONE;
+        for &x in &lv {
+            for idx in self.adj_start[x]..self.adj_start[x + 1] {
+                let k = self.adj[idx];
+                if self.s_s_edge(k) && (best == NONE || self.slack(k) < self.slack(best)) {
+                    best = k;
                 }
             }
-            for &b in &self.s_list {
-                if self.parent[b] == NONE && self.label[b] == S && self.base[b] != NONE && self.bestedge[b] != NONE {
-                    let s = self.slack(self.bestedge[b]);
-                    debug_assert!(s % 2 == 0, "odd S–S slack {s}");
-                    if s / 2 < best.0 {
-                        best = (s / 2, 3, self.bestedge[b]);
-                    }
+        }
+        self.bestedge[b] = best;
+        self.bestlist[b] = None;
+    }
+
+    /// The smallest of (2) S–free slack, (3) half an S–S slack, (4) a T-blossom's z; changes
+    /// the duals of the forest by it and acts.
+    fn dual_step(&mut self) -> Result<(), NoPerfectMatching> {
+        let mut best = (i64::MAX, 0u8, NONE);
+        let list = std::mem::take(&mut self.best_vertices);
+        let mut keep = Vec::with_capacity(list.len());
+        for w in list {
+            if self.label[self.inblossom[w]] != FREE || self.bestedge[w] == NONE {
+                self.listed[w][0] = false;
+                continue;
+            }
+            let k = self.bestedge[w];
+            if self.label[self.inblossom[self.other(k, w)]] != S {
+                self.rescan_vertex(w);
+                if self.bestedge[w] == NONE {
+                    self.listed[w][0] = false;
+                    continue;
                 }
             }
-            for &b in &self.t_list {
-                if b >= self.n && self.parent[b] == NONE && self.label[b] == T && self.base[b] != NONE && self.dual[b] < best.0 {
-                    best = (self.dual[b], 4, b);
+            let k = self.bestedge[w];
+            let s = self.slack(k);
+            if s < best.0 {
+                best = (s, 2, k);
+            }
+            keep.push(w);
+        }
+        self.best_vertices = keep;
+        let list = std::mem::take(&mut self.s_list);
+        let mut keep = Vec::with_capacity(list.len());
+        for b in list {
+            if !self.is_outer(b) || self.label[b] != S {
+                self.listed[b][1] = false;
+                continue;
+            }
+            if self.bestedge[b] != NONE && !self.s_s_edge(self.bestedge[b]) {
+                self.rescan_blossom(b);
+            }
+            if self.bestedge[b] != NONE {
+                let s = self.slack(self.bestedge[b]);
+                debug_assert!(s % 2 == 0, "odd S–S slack {s}");
+                if s / 2 < best.0 {
+                    best = (s / 2, 3, self.bestedge[b]);
                 }
             }
-            let (delta, kind, arg) = best;
-            if kind == 0 {
-                return Err(NoPerfectMatching);
+            keep.push(b);
+        }
+        self.s_list = keep;
+        let list = std::mem::take(&mut self.t_list);
+        let mut keep = Vec::with_capacity(list.len());
+        for b in list {
+            if !self.is_outer(b) || self.label[b] != T {
+                self.listed[b][2] = false;
+                continue;
             }
-            let mut buf = std::mem::take(&mut self.buf);
-            for (list, sign) in [(&self.s_list, 1i64), (&self.t_list, -1i64)] {
-                let want = if sign > 0 { S } else { T };
-                for &b in list {
-                    if self.parent[b] != NONE || self.label[b] != want || self.base[b] == NONE {
-                        continue;
-                    }
-                    buf.clear();
-                    self.leaves(b, &mut buf);
-                    for &v in &buf {
-                        self.dual[v] += sign * delta;
-                    }
-                    if b >= self.n {
-                        self.dual[b] += sign * delta;
-                    }
+            if b >= self.n && self.dual[b] < best.0 {
+                best = (self.dual[b], 4, b);
+            }
+            keep.push(b);
+        }
+        self.t_list = keep;
+        let (delta, kind, arg) = best;
+        if kind == 0 {
+            return Err(NoPerfectMatching);
+        }
+        let mut buf = std::mem::take(&mut self.buf);
+        for (which, sign) in [(1usize, 1i64), (2, -1)] {
+            let list = if which == 1 { &self.s_list } else { &self.t_list };
+            for &b in list {
+                buf.clear();
+                self.leaves(b, &mut buf);
+                for &v in &buf {
+                    self.dual[v] += sign * delta;
+                }
+                if b >= self.n {
+                    self.dual[b] += sign * delta;
                 }
             }
-            self.buf = buf;
-            match kind {
-                2 | 3 => {
-                    let (u, v, _) = self.edges[arg];
-                    self.queue.push(if self.label[self.inblossom[u]] == S { u } else { v });
-                }
-                _ => self.expand_blossom(arg, false),
+        }
+        self.buf = buf;
+        match kind {
+            2 | 3 => {
+                let (u, v, _) = self.edges[arg];
+                self.queue.push(if self.label[self.inblossom[u]] == S { u } else { v });
             }
+            _ => self.expand_blossom(arg),
+        }
+        Ok(())
+    }
+
+    /// After an augmentation: the two trees it joined lose their labels; their vertices look
+    /// again for edges to the S vertices of the other trees.
+    fn dissolve(&mut self, roots: [usize; 2]) {
+        let mut verts = Vec::new();
+        for r in roots {
+            for b in std::mem::take(&mut self.tree_members[r]) {
+                if !self.is_outer(b) || self.label[b] == FREE || self.tree_of[b] != r {
+                    continue;
+                }
+                self.label[b] = FREE;
+                self.labeledge[b] = NO_EDGE;
+                self.bestedge[b] = NONE;
+                self.bestlist[b] = None;
+                self.tree_of[b] = NONE;
+                self.leaves(b, &mut verts);
+            }
+        }
+        for &x in &verts {
+            self.label[x] = FREE;
+            self.labeledge[x] = NO_EDGE;
+            self.bestedge[x] = NONE;
+        }
+        for &x in &verts {
+            self.rescan_vertex(x);
         }
     }
 
@@ -577,23 +668,25 @@ impl Solver {
             ends.push((y, x));
             c = self.inblossom[x];
         }
+        let root = self.tree_of[bb];
         self.label[b] = S;
         self.labeledge[b] = self.labeledge[bb];
+        self.tree_of[b] = root;
+        self.tree_members[root].push(b);
         self.dual[b] = 0;
-        self.touch(b);
-        if self.s_stamp[b] != self.stage {
-            self.s_stamp[b] = self.stage;
-            self.s_list.push(b);
-        }
+        self.list(1, b);
         let mut buf = std::mem::take(&mut self.buf);
         buf.clear();
-        self.leaves_of(&childs, &mut buf);
+        for &c in &childs {
+            self.leaves(c, &mut buf);
+        }
         for &x in &buf {
             if self.label[self.inblossom[x]] == T {
                 self.queue.push(x);
             }
             self.inblossom[x] = b;
         }
+        self.buf = buf;
         // Least-slack edges to the other S-blossoms, merged from the children's.
         let mut found = Vec::new();
         for &ch in &childs {
@@ -633,17 +726,9 @@ impl Solver {
             list.push(k);
         }
         self.bestlist[b] = Some(list);
-        self.bestlist_set.push(b);
         self.bestedge[b] = best;
-        self.buf = buf;
         self.childs[b] = childs;
         self.ends[b] = ends;
-    }
-
-    fn leaves_of(&self, childs: &[usize], out: &mut Vec<usize>) {
-        for &c in childs {
-            self.leaves(c, out);
-        }
     }
 
     fn free_blossom(&mut self, b: usize) {
@@ -651,6 +736,7 @@ impl Solver {
         self.ends[b].clear();
         self.label[b] = FREE;
         self.labeledge[b] = NO_EDGE;
+        self.tree_of[b] = NONE;
         self.bestedge[b] = NONE;
         self.bestlist[b] = None;
         self.base[b] = NONE;
@@ -659,79 +745,72 @@ impl Solver {
         self.free_ids.push(b);
     }
 
-    fn expand_blossom(&mut self, b: usize, endstage: bool) {
+    /// Expands T-blossom b (its z reached 0): the children on the even path from where it was
+    /// entered to its base become T and S, the others unlabelled (and look for S neighbours).
+    fn expand_blossom(&mut self, b: usize) {
         let childs = std::mem::take(&mut self.childs[b]);
         let ends = std::mem::take(&mut self.ends[b]);
         let mut buf = Vec::new();
         for &s in &childs {
             self.parent[s] = NONE;
-            if s < self.n {
-                self.inblossom[s] = s;
-            } else if endstage && self.dual[s] == 0 {
-                self.expand_blossom(s, true);
+            buf.clear();
+            self.leaves(s, &mut buf);
+            for &x in &buf {
+                self.inblossom[x] = s;
+            }
+        }
+        let root = self.tree_of[b];
+        let k = childs.len();
+        let (x, w) = self.labeledge[b];
+        let entry = self.inblossom[w];
+        let mut j = childs.iter().position(|&c| c == entry).expect("entry child");
+        let mut on_path = vec![false; k];
+        let forward = j % 2 == 1;
+        let mut edge = (x, w);
+        // T children along the even path to the base child; each cascades to the S child
+        // matched to it; the base child's mate is outside (already S): no cascade.
+        while j != 0 {
+            let (next_s, into_t) = if forward {
+                let s = (j + 1) % k;
+                (s, ends[s])
             } else {
-                buf.clear();
-                self.leaves(s, &mut buf);
-                for &x in &buf {
-                    self.inblossom[x] = s;
-                }
-            }
+                let s = j - 1;
+                let (a, bb) = ends[s - 1];
+                (s, (bb, a))
+            };
+            on_path[j] = true;
+            on_path[next_s] = true;
+            self.assign_label(edge.1, T, edge, root);
+            edge = into_t;
+            j = if forward { (next_s + 1) % k } else { next_s - 1 };
         }
-        if !endstage && self.label[b] == T {
-            let k = childs.len();
-            let (x, w) = self.labeledge[b];
-            let entry = self.inblossom[w];
-            let mut j = childs.iter().position(|&c| c == entry).expect("entry child");
-            let mut on_path = vec![false; k];
-            let forward = j % 2 == 1;
-            let mut edge = (x, w);
-            // T children along the even path to the base child; each cascades to the S child
-            // matched to it; the base child's mate is outside (already S): no cascade.
-            while j != 0 {
-                let (next_s, into_t) = if forward {
-                    let s = (j + 1) % k;
-                    let (a, bb) = ends[s];
-                    (s, (a, bb))
-                } else {
-                    let s = j - 1;
-                    let (a, bb) = ends[s - 1];
-                    (s, (bb, a))
-                };
-                on_path[j] = true;
-                on_path[next_s] = true;
-                self.label[edge.1] = FREE;
-                self.assign_label(edge.1, T, edge);
-                edge = into_t;
-                j = if forward { (next_s + 1) % k } else { next_s - 1 };
-            }
-            on_path[0] = true;
-            let c0 = childs[0];
-            self.label[c0] = T;
-            self.label[edge.1] = T;
-            self.labeledge[c0] = edge;
-            self.labeledge[edge.1] = edge;
-            self.bestedge[c0] = NONE;
-            self.touch(c0);
-            self.touch(edge.1);
-            if self.t_stamp[c0] != self.stage {
-                self.t_stamp[c0] = self.stage;
-                self.t_list.push(c0);
-            }
-            // Off-path children reached by a tight edge from an S vertex become T.
-            for (i, &c) in childs.iter().enumerate() {
-                if on_path[i] || self.label[c] == S {
-                    continue;
-                }
-                buf.clear();
-                self.leaves(c, &mut buf);
-                if let Some(&v) = buf.iter().find(|&&v| self.label[v] != FREE) {
-                    let e = self.labeledge[v];
-                    self.label[v] = FREE;
-                    self.assign_label(v, T, e);
-                }
-            }
-        }
+        on_path[0] = true;
+        let c0 = childs[0];
+        self.label[c0] = T;
+        self.label[edge.1] = T;
+        self.labeledge[c0] = edge;
+        self.labeledge[edge.1] = edge;
+        self.bestedge[c0] = NONE;
+        self.tree_of[c0] = root;
+        self.tree_members[root].push(c0);
+        self.list(2, c0);
         self.free_blossom(b);
+        buf.clear();
+        for (i, &c) in childs.iter().enumerate() {
+            if !on_path[i] {
+                self.label[c] = FREE;
+                self.labeledge[c] = NO_EDGE;
+                self.tree_of[c] = NONE;
+                self.bestedge[c] = NONE;
+                self.leaves(c, &mut buf);
+            }
+        }
+        for &v in &buf {
+            self.label[v] = FREE;
+        }
+        for &v in &buf {
+            self.rescan_vertex(v);
+        }
     }
 
     /// Rematches inside blossom b so that its vertex v becomes the base.
@@ -801,16 +880,6 @@ impl Solver {
                 j = y;
             }
         }
-    }
-
-    fn end_stage(&mut self) {
-        let list = std::mem::take(&mut self.s_list);
-        for &b in &list {
-            if b >= self.n && self.parent[b] == NONE && self.base[b] != NONE && self.label[b] == S && self.dual[b] == 0 {
-                self.expand_blossom(b, true);
-            }
-        }
-        self.s_list = list;
     }
 
     fn result(&self) -> Matching {

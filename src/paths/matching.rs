@@ -733,9 +733,10 @@ mod tests {
     #[test]
     #[ignore]
     fn bench_sparse_vs_dense() {
-        for &n in &[400usize, 800, 1752, 5000, 20000] {
+        let sizes: Vec<usize> = std::env::var("WEFT_BENCH_N").map(|v| v.split(',').map(|x| x.parse().unwrap()).collect()).unwrap_or(vec![400, 800, 1752, 5000, 20000]);
+        for &n in &sizes {
             let pts = random_points(n, 5 + n as u64, 1000.0);
-            let dense = if n <= 1752 {
+            let dense = if n <= 1752 && std::env::var("WEFT_BENCH_NO_DENSE").is_err() {
                 let t = std::time::Instant::now();
                 let mut dist = vec![0.0; n * n];
                 for i in 0..n {

@@ -25,8 +25,8 @@ fn grid(n: usize, s: f64) -> StrokeLayer {
     for k in 0..=n {
         let t = k as f64 * s;
         let m = n as f64 * s;
-        strokes.push(Stroke { points: vec![DVec2::new(0.0, t), DVec2::new(m, t)], feature: Feature::Lattice });
-        strokes.push(Stroke { points: vec![DVec2::new(t, 0.0), DVec2::new(t, m)], feature: Feature::Lattice });
+        strokes.push(Stroke { points: vec![DVec2::new(0.0, t), DVec2::new(m, t)], feature: Feature::Lattice, curved: false });
+        strokes.push(Stroke { points: vec![DVec2::new(t, 0.0), DVec2::new(t, m)], feature: Feature::Lattice, curved: false });
     }
     StrokeLayer { z: 0.3, height: 0.2, strokes }
 }

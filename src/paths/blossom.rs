@@ -581,6 +581,7 @@ impl Solver {
             }
             debug_assert!(key >= self.ds);
             self.ds = key;
+            // Debug builds check dual feasibility after every step on small graphs.
             #[cfg(debug_assertions)]
             if self.n <= 16 {
                 for e in 0..self.edges.len() {
@@ -1077,9 +1078,6 @@ mod tests {
             match min_cost_perfect_matching(n, &edges) {
                 Ok(m) => {
                     assert_eq!(Some(m.cost), want, "round {round} n {n} {edges:?}");
-                    if std::env::var("WEFT_DEBUG").is_ok() {
-                        eprintln!("round {round} n {n} {edges:?}");
-                    }
                     check(n, &edges, &m);
                 }
                 Err(_) => assert_eq!(want, None, "round {round} n {n} {edges:?}"),

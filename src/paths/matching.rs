@@ -163,17 +163,22 @@ pub struct Pairing {
 /// with its certified lower bound.
 pub fn pair_points(points: &[DVec2], method: PairingMethod) -> Pairing {
     let n = points.len();
-    let exact = match method {
-        PairingMethod::Dense => {
-            let mut dist = vec![0.0; n * n];
-            for i in 0..n {
-                for j in i + 1..n {
-                    dist[i * n + j] = points[i].distance(points[j]);
-                }
+    let dense = || {
+        let mut dist = vec![0.0; n * n];
+        for i in 0..n {
+            for j in i + 1..n {
+                dist[i * n + j] = points[i].distance(points[j]);
             }
-            Some(exact_pairing(n, &dist))
         }
-        PairingMethod::Sparse => certified_points(points).ok().map(|c| c.matching.mates),
+        exact_pairing(n, &dist)
+    };
+    let exact = match method {
+        PairingMethod::Dense => Some(dense()),
+        PairingMethod::Sparse { dense_fallback } => match certified_points(points) {
+            Ok(c) => Some(c.matching.mates),
+            Err(_) if dense_fallback => Some(dense()),
+            Err(_) => None,
+        },
         PairingMethod::Heuristic => None,
     };
     let optimal = exact.is_some();
@@ -234,9 +239,14 @@ pub const SPARSE_MAX_SOLVES: usize = 4;
 /// Pair checks per node and round the violator search may make before it gives up.
 pub const VIOLATOR_CHECKS_PER_NODE: usize = 400;
 /// Seconds per n^1.5 (n odd nodes) of a certified sparse solve, all solves and violator
-/// searches included, on the reference machine (measured 0.6–1.2 µs · n^1.5 on random points
-/// and the disc; see BENCHMARKS.md). Conservative ×2.
-pub const SPARSE_SECONDS_PER_N15: f64 = 2.5e-6;
+/// searches included, on the reference machine: measured 0.16–0.4 µs · n^1.5 on random points
+/// (n = 1752…40 000; see BENCHMARKS.md), so about 2.5× conservative.
+pub const SPARSE_SECONDS_PER_N15: f64 = 1.0e-6;
+
+/// Peak bytes per node of the certified sparse solve: its edge list and adjacency (about
+/// 1.5 × [`SPARSE_CANDIDATES`] edges of 24 + 16 bytes after the violators), 2n blossom slots
+/// of about 150 bytes, the candidate list and the heap.
+pub const SPARSE_BYTES_PER_NODE: f64 = 1500.0;
 
 /// Estimated seconds of a certified sparse solve of `n` points.
 pub fn sparse_seconds(n: usize) -> f64 {
@@ -248,21 +258,27 @@ pub fn sparse_seconds(n: usize) -> f64 {
 pub enum PairingMethod {
     /// Dense exact blossom (`integer-blossom`).
     Dense,
-    /// Certified sparse blossom ([`super::blossom::certified_pairing`]).
-    Sparse,
+    /// Certified sparse blossom ([`super::blossom::certified_pairing`]); when it gives up (the
+    /// candidates have no perfect matching, or the violator search hit its bound), the dense
+    /// solve if `dense_fallback`, else the heuristic.
+    Sparse {
+        /// The dense solve fits the budget too.
+        dense_fallback: bool,
+    },
     /// Greedy + 2-opt with a dual lower bound.
     Heuristic,
 }
 
-/// The cheaper exact method whose estimate fits in `left` seconds (and its estimate), else
-/// the heuristic.
+/// The method for a component whose dense and sparse exact solves are estimated at `dense` and
+/// `sparse` seconds, with `left` seconds of the layer's budget left, and the seconds to charge.
+/// The sparse solve is faster at every size measured (n = 10…1752, BENCHMARKS.md), so it comes
+/// first; the dense one is its fallback when both fit (charged only the sparse estimate: the
+/// fallback runs only when the sparse solve gives up early), or used alone when only it fits.
 pub fn choose_method(dense: f64, sparse: f64, left: f64) -> (PairingMethod, f64) {
-    if sparse <= dense && sparse <= left {
-        (PairingMethod::Sparse, sparse)
+    if sparse <= left {
+        (PairingMethod::Sparse { dense_fallback: sparse + dense <= left }, sparse)
     } else if dense <= left {
         (PairingMethod::Dense, dense)
-    } else if sparse <= left {
-        (PairingMethod::Sparse, sparse)
     } else {
         (PairingMethod::Heuristic, 0.0)
     }
@@ -688,7 +704,7 @@ mod tests {
                 }
             }
             assert_eq!(m.duals.objective(), DUAL_SCALE * m.cost, "strong duality n {n}");
-            let p = pair_points(&pts, PairingMethod::Sparse);
+            let p = pair_points(&pts, PairingMethod::Sparse { dense_fallback: false });
             assert!(p.optimal);
             assert!((p.total - dense as f64 / EXACT_UNITS_PER_MM).abs() < 1e-3);
         }

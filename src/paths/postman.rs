@@ -271,10 +271,14 @@ pub(crate) fn run(graph: &Graph, exact_budget: f64) -> PostmanPaths {
         }
         let (method, cost) = choose_method(exact_seconds(m, comp_edges[c]), sparse_seconds(m, comp_edges[c]), left);
         left -= cost;
-        let sparse = if method == PairingMethod::Sparse { sparse_pairing(graph, nodes, &local, &mut dij) } else { None };
+        let (sparse, dense) = match method {
+            PairingMethod::Sparse { dense_fallback } => (sparse_pairing(graph, nodes, &local, &mut dij), dense_fallback),
+            PairingMethod::Dense => (None, true),
+            PairingMethod::Heuristic => (None, false),
+        };
         let partner = if let Some(p) = sparse {
             p
-        } else if method == PairingMethod::Dense {
+        } else if dense {
             let mut dist = vec![0.0; m * m];
             for i in 0..m.saturating_sub(1) {
                 let mut need = m - 1 - i;

@@ -108,3 +108,11 @@ fn continuous_travels_the_postman_optimum_on_the_paper_examples() {
 fn continuous_travels_the_postman_optimum_on_a_square_grid() {
     check("grid 1 mm", &[grid(20, 1.0)], 0.005);
 }
+
+/// 1752 odd nodes per layer: the certified sparse solve (candidates + violator Dijkstras) must
+/// land on the dense all-pairs optimum, within the default budget.
+#[test]
+fn continuous_travels_the_postman_optimum_on_the_48mm_disc() {
+    let (layers, tol) = example_layers("ball-burst-disc-48mm");
+    check("ball-burst-disc-48mm", &layers, tol);
+}

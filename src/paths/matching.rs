@@ -235,7 +235,7 @@ pub fn exact_pairing(n: usize, dist: &[f64]) -> Vec<usize> {
 /// Candidate partners per node of the certified sparse solve ([`certified_points`]).
 pub const SPARSE_CANDIDATES: usize = 10;
 /// Solves of the certified sparse solve at most (the first + re-solves with violators).
-pub const SPARSE_MAX_SOLVES: usize = 4;
+pub const SPARSE_MAX_SOLVES: usize = 6;
 /// Pair checks per node and round the violator search may make before it gives up.
 pub const VIOLATOR_CHECKS_PER_NODE: usize = 400;
 /// Seconds per n^1.5 (n odd nodes) of a certified sparse solve, all solves and violator

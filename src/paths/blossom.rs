@@ -1,8 +1,7 @@
 //! Minimum-cost perfect matching on a **sparse** graph (edge list, integer costs) by Edmonds'
-//! primal–dual blossom algorithm (Edmonds 1965; the O(n·m·…) "all free vertices grow trees
-//! at once, one augmentation per stage" form of Galil's 1986 survey), with its **dual
-//! solution**, so a caller can prove that pairs left out of the graph could not lower the
-//! cost ([`certified_pairing`]).
+//! primal–dual blossom algorithm (Edmonds 1965; the "all free vertices grow alternating trees
+//! at once" form of Galil's 1986 survey), with its **dual solution**, so a caller can prove
+//! that pairs left out of the graph could not lower the cost ([`certified_pairing`]).
 //!
 //! Written here rather than taken from a crate: `integer-blossom` is dense-only and returns
 //! no duals, `mwmatching` keeps i32 duals private, `fusion-blossom` pulls a CLI's worth of
@@ -18,10 +17,13 @@
 //! c − Y_u − Y_v, and a dual step changes Y of a whole tree blossom at once.
 //!
 //! Speed on geometric instances: a jump start (potentials, then a greedy matching of tight
-//! edges), best-edge tracking per vertex (to S vertices) and per S-blossom (to other
-//! S-blossoms, merged when blossoms form) so a dual step never rescans edges, and per-stage
-//! lists of the labelled blossoms so a dual step costs the size of the forest, not n.
-//! Everything is deterministic (index order, first minimum wins).
+//! edges); an augmentation dissolves only the two trees it joins (the others keep their
+//! labels, so there are no O(n) stage restarts); best-edge tracking per vertex (to S vertices)
+//! and per S-blossom (to other S-blossoms, merged when blossoms form) so a dual step never
+//! rescans edges; lazy duals (one running Σδ, written back when a blossom's label changes) and
+//! a heap of dual-step events, so a dual step is O(log m) rather than the size of the forest.
+//! Best edges into dissolved trees are looked up again (their slack stopped shrinking).
+//! Everything is deterministic (index order, first minimum wins, heap ties by id).
 
 use std::cmp::Reverse;
 use std::collections::BinaryHeap;
@@ -124,8 +126,8 @@ pub struct Matching {
     pub duals: Duals,
 }
 
-/// Minimum-cost perfect matching of `n` vertices on `edges` (u, v, cost ≥ 0); parallel edges
-/// keep the cheapest, loops are ignored. O(n) stages, each O(m + forest · dual steps).
+/// Minimum-cost perfect matching of `n` vertices on `edges` (u, v, cost ≥ 0; cost · 4 must fit
+/// i64 with room for sums); parallel edges keep the cheapest, loops are ignored. Memory O(n + m).
 pub fn min_cost_perfect_matching(n: usize, edges: &[(usize, usize, i64)]) -> Result<Matching, NoPerfectMatching> {
     if n % 2 == 1 {
         return Err(NoPerfectMatching);
@@ -163,6 +165,10 @@ pub struct Certified {
     pub added: usize,
 }
 
+/// Violator search: pushes pairs (u, v, cost) that may have a negative reduced cost under the
+/// duals; false when it hit its work bound.
+pub type ViolatorSearch<'a> = dyn FnMut(&Duals, &mut Vec<(usize, usize, i64)>) -> bool + 'a;
+
 /// Minimum-cost perfect matching of `n` items on the complete graph, solved on a sparse
 /// candidate set: solve on `candidates`, ask `find_violators(duals, out)` for pairs with a
 /// negative reduced cost (`duals.reduced_cost(u, v, c) < 0`; it returns false when it hit its
@@ -171,7 +177,7 @@ pub struct Certified {
 pub fn certified_pairing(
     n: usize,
     mut candidates: Vec<(usize, usize, i64)>,
-    find_violators: &mut dyn FnMut(&Duals, &mut Vec<(usize, usize, i64)>) -> bool,
+    find_violators: &mut ViolatorSearch<'_>,
     max_solves: usize,
 ) -> Result<Certified, CertifyError> {
     let mut added = 0;

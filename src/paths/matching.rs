@@ -747,10 +747,10 @@ mod tests {
 
     #[test]
     fn sparse_falls_back_when_candidates_have_no_perfect_matching() {
-        // Two far clusters of 11 points: every point's 10 nearest are in its own cluster, so the
-        // candidate graph (two K11) has no perfect matching.
-        let mut pts = random_points(11, 5, 1.0);
-        pts.extend(random_points(11, 6, 1.0).into_iter().map(|p| p + DVec2::new(100.0, 0.0)));
+        // Two far clusters of 25 points: every point's 10 nearest are in its own cluster, so the
+        // candidate graph (odd parts) has no perfect matching.
+        let mut pts = random_points(25, 5, 1.0);
+        pts.extend(random_points(25, 6, 1.0).into_iter().map(|p| p + DVec2::new(100.0, 0.0)));
         assert_eq!(certified_points(&pts).unwrap_err(), super::super::blossom::CertifyError::NoPerfectMatching);
         let dense = pair_points(&pts, PairingMethod::Dense);
         let fallback = pair_points(&pts, PairingMethod::Sparse { dense_fallback: true });

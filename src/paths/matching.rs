@@ -239,8 +239,8 @@ pub const SPARSE_MAX_SOLVES: usize = 6;
 /// Pair checks per node and round the violator search may make before it gives up.
 pub const VIOLATOR_CHECKS_PER_NODE: usize = 400;
 /// Seconds per n^1.5 (n odd nodes) of a certified sparse solve, all solves and violator
-/// searches included, on the reference machine: measured 0.16–0.4 µs · n^1.5 on random points
-/// (n = 1752…40 000; see BENCHMARKS.md), so about 2.5× conservative.
+/// searches included, on the reference machine: measured 0.16–0.45 µs · n^1.5 on random points
+/// (n = 1752…40 000; see BENCHMARKS.md), so at least 2.2× conservative.
 pub const SPARSE_SECONDS_PER_N15: f64 = 1.0e-6;
 
 /// Peak bytes per node of the certified sparse solve: its edge list and adjacency (about

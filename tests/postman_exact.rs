@@ -25,8 +25,8 @@ fn grid(n: usize, s: f64) -> StrokeLayer {
     for k in 0..=n {
         let t = k as f64 * s;
         let m = n as f64 * s;
-        strokes.push(Stroke { points: vec![DVec2::new(0.0, t), DVec2::new(m, t)], feature: Feature::Lattice });
-        strokes.push(Stroke { points: vec![DVec2::new(t, 0.0), DVec2::new(t, m)], feature: Feature::Lattice });
+        strokes.push(Stroke { points: vec![DVec2::new(0.0, t), DVec2::new(m, t)], feature: Feature::Lattice, curved: false });
+        strokes.push(Stroke { points: vec![DVec2::new(t, 0.0), DVec2::new(t, m)], feature: Feature::Lattice, curved: false });
     }
     StrokeLayer { z: 0.3, height: 0.2, strokes }
 }
@@ -107,4 +107,12 @@ fn continuous_travels_the_postman_optimum_on_the_paper_examples() {
 #[test]
 fn continuous_travels_the_postman_optimum_on_a_square_grid() {
     check("grid 1 mm", &[grid(20, 1.0)], 0.005);
+}
+
+/// 1752 odd nodes per layer: the certified sparse solve (candidates + violator Dijkstras) must
+/// land on the dense all-pairs optimum, within the default budget.
+#[test]
+fn continuous_travels_the_postman_optimum_on_the_48mm_disc() {
+    let (layers, tol) = example_layers("ball-burst-disc-48mm");
+    check("ball-burst-disc-48mm", &layers, tol);
 }

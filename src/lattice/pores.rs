@@ -103,8 +103,8 @@ mod tests {
         let mut struts = Vec::new();
         for k in 0..=n {
             let t = k as f64 * a;
-            struts.push(Stroke { points: vec![DVec2::new(-1.0, t), DVec2::new(side + 1.0, t)], feature: Feature::Lattice });
-            struts.push(Stroke { points: vec![DVec2::new(t, -1.0), DVec2::new(t, side + 1.0)], feature: Feature::Lattice });
+            struts.push(Stroke { points: vec![DVec2::new(-1.0, t), DVec2::new(side + 1.0, t)], feature: Feature::Lattice, curved: false });
+            struts.push(Stroke { points: vec![DVec2::new(t, -1.0), DVec2::new(t, side + 1.0)], feature: Feature::Lattice, curved: false });
         }
         // Interior of the domain: from a/2 to side − a/2 on both axes, whole cells around
         // crossings (n − 1 cells each way).
@@ -121,7 +121,7 @@ mod tests {
     fn a_hole_is_not_domain() {
         let mut d = square(0.0, 0.0, 10.0);
         d.holes.push(square(4.0, 4.0, 2.0).outer.into_iter().rev().collect());
-        let s = Stroke { points: vec![DVec2::new(0.0, 5.0), DVec2::new(10.0, 5.0)], feature: Feature::Lattice };
+        let s = Stroke { points: vec![DVec2::new(0.0, 5.0), DVec2::new(10.0, 5.0)], feature: Feature::Lattice, curved: false };
         // 10 × 0.2 strip minus the 2 mm inside the hole.
         assert!((covered_area(&[d], &[s], 0.2) - 8.0 * 0.2).abs() < 1e-6);
     }

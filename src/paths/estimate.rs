@@ -155,22 +155,33 @@ pub fn estimate(work: &Work, options: &Options) -> Estimate {
     if options.order == Order::MinTravel {
         seconds += paths * ORDER_PATH;
     }
-    // Exact pairing (euler, continuous): per layer at most `exact_pairing_seconds` of estimated
-    // solve (the same estimate that decides it), as if each layer's odd nodes were one
-    // component; its dense tables for the largest solve that fits.
+    // Exact pairing (euler, continuous): per layer the estimate of the method the solve will
+    // choose (`matching::choose_method`, as if each layer's odd nodes were one component), at
+    // most `exact_pairing_seconds`; its tables: the sparse solve's per node, the dense
+    // fallback's n² when it fits too.
     let mut exact_bytes = 0.0;
     if matches!(options.method, Method::Euler | Method::Continuous) && layers > 0.0 {
         let per_layer = (odd / layers).round() as usize;
         let layer_edges = mean_layer.round() as usize;
-        let one = if options.method == Method::Euler {
-            super::matching::exact_seconds(per_layer)
+        let (dense, sparse) = if options.method == Method::Euler {
+            (super::matching::exact_seconds(per_layer), super::matching::sparse_seconds(per_layer))
         } else {
-            super::postman::exact_seconds(per_layer, layer_edges)
+            (
+                super::postman::exact_seconds(per_layer, layer_edges),
+                super::postman::sparse_seconds(per_layer, layer_edges),
+            )
         };
+        let (method, one) = super::matching::choose_method(dense, sparse, options.exact_pairing_seconds);
         seconds += layers * one.min(options.exact_pairing_seconds);
-        let n_fit = (options.exact_pairing_seconds / super::matching::EXACT_SECONDS_PER_CUBE).cbrt();
-        let n = (per_layer as f64).min(n_fit);
-        exact_bytes = n * n * super::matching::EXACT_BYTES_PER_SQUARE;
+        let n = per_layer as f64;
+        exact_bytes = match method {
+            super::matching::PairingMethod::Sparse { dense_fallback } => {
+                n * super::matching::SPARSE_BYTES_PER_NODE
+                    + if dense_fallback { n * n * super::matching::EXACT_BYTES_PER_SQUARE } else { 0.0 }
+            }
+            super::matching::PairingMethod::Dense => n * n * super::matching::EXACT_BYTES_PER_SQUARE,
+            super::matching::PairingMethod::Heuristic => 0.0,
+        };
     }
     let segments = edges + paths + approach;
     let bytes = work.edges_max_layer.min(edges) * BYTES_PER_EDGE_WORKING

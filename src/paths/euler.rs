@@ -8,7 +8,7 @@
 //! Also home of the Hierholzer walk shared with [`super::postman`].
 
 use super::graph::Graph;
-use super::matching::pair_points;
+use super::matching::{choose_method, pair_points};
 use super::Chain;
 use crate::geom::DVec2;
 
@@ -140,8 +140,9 @@ pub(crate) struct EulerPaths {
 }
 
 /// Minimum-path decomposition of every component. Components are paired exactly, in order,
-/// while the estimated exact solves ([`super::matching::exact_seconds`]) fit in
-/// `exact_seconds` (for the layer); the rest by the heuristic.
+/// while the estimated exact solves (the cheaper of [`super::matching::sparse_seconds`] and
+/// [`super::matching::exact_seconds`]) fit in `exact_seconds` (for the layer); the rest by the
+/// heuristic.
 pub(crate) fn run(graph: &Graph, exact_seconds: f64) -> EulerPaths {
     let mut aug: Vec<AugEdge> =
         graph.edges.iter().enumerate().map(|(i, e)| AugEdge { a: e.a, b: e.b, base: i, real: true }).collect();
@@ -155,12 +156,11 @@ pub(crate) fn run(graph: &Graph, exact_seconds: f64) -> EulerPaths {
             continue;
         }
         let pts: Vec<DVec2> = nodes.iter().map(|&v| graph.nodes[v]).collect();
-        let cost = super::matching::exact_seconds(pts.len());
-        let exact = cost <= left;
-        if exact {
-            left -= cost;
-        }
-        let p = pair_points(&pts, exact);
+        let n = pts.len();
+        let (method, cost) =
+            choose_method(super::matching::exact_seconds(n), super::matching::sparse_seconds(n), left);
+        left -= cost;
+        let p = pair_points(&pts, method);
         pairing_mm += p.total;
         lower_bound_mm += p.lower_bound;
         optimal &= p.optimal;

@@ -158,11 +158,12 @@ pub struct Pairing {
     pub optimal: bool,
 }
 
-/// Euclidean perfect matching of `points` (even count): exact when `exact`, else the heuristic
+/// Euclidean perfect matching of `points` (even count) by `method`: exact (dense, or sparse
+/// certified — falling back to the heuristic when its search gives up), else the heuristic
 /// with its certified lower bound.
-pub fn pair_points(points: &[DVec2], exact: bool) -> Pairing {
+pub fn pair_points(points: &[DVec2], method: PairingMethod) -> Pairing {
     let n = points.len();
-    let partner = if exact {
+    let dense = || {
         let mut dist = vec![0.0; n * n];
         for i in 0..n {
             for j in i + 1..n {
@@ -170,14 +171,25 @@ pub fn pair_points(points: &[DVec2], exact: bool) -> Pairing {
             }
         }
         exact_pairing(n, &dist)
-    } else {
+    };
+    let exact = match method {
+        PairingMethod::Dense => Some(dense()),
+        PairingMethod::Sparse { dense_fallback } => match certified_points(points) {
+            Ok(c) => Some(c.matching.mates),
+            Err(_) if dense_fallback => Some(dense()),
+            Err(_) => None,
+        },
+        PairingMethod::Heuristic => None,
+    };
+    let optimal = exact.is_some();
+    let partner = exact.unwrap_or_else(|| {
         min_pairing(
             n,
             &mut |active| knn_candidates(points, active, CANDIDATES_PER_NODE),
             &mut |i, j, _| Some(points[i].distance(points[j])),
         )
         .0
-    };
+    });
     let mut pairs = Vec::with_capacity(n / 2);
     let mut total = 0.0;
     for (i, &j) in partner.iter().enumerate() {
@@ -186,7 +198,7 @@ pub fn pair_points(points: &[DVec2], exact: bool) -> Pairing {
             total += points[i].distance(points[j]);
         }
     }
-    if exact {
+    if optimal {
         return Pairing { pairs, total, lower_bound: total, optimal: true };
     }
     let all: Vec<usize> = (0..n).collect();
@@ -218,6 +230,179 @@ pub fn exact_seconds(n: usize) -> f64 {
 pub fn exact_pairing(n: usize, dist: &[f64]) -> Vec<usize> {
     let cost: Vec<i64> = dist.iter().map(|&d| (d * EXACT_UNITS_PER_MM).round() as i64).collect();
     integer_blossom::min_weight_perfect_matching(&cost, n)
+}
+
+/// Candidate partners per node of the certified sparse solve ([`certified_points`]).
+pub const SPARSE_CANDIDATES: usize = 10;
+/// Solves of the certified sparse solve at most (the first + re-solves with violators).
+pub const SPARSE_MAX_SOLVES: usize = 6;
+/// Pair checks per node and round the violator search may make before it gives up.
+pub const VIOLATOR_CHECKS_PER_NODE: usize = 400;
+/// Seconds per n^1.5 (n odd nodes) of a certified sparse solve, all solves and violator
+/// searches included, on the reference machine: measured 0.16–0.45 µs · n^1.5 on random points
+/// (n = 1752…40 000; see BENCHMARKS.md), so at least 2.2× conservative.
+pub const SPARSE_SECONDS_PER_N15: f64 = 1.0e-6;
+
+/// Peak bytes per node of the certified sparse solve: its edge list and adjacency (about
+/// 1.5 × [`SPARSE_CANDIDATES`] edges of 24 + 16 bytes after the violators), 2n blossom slots
+/// of about 150 bytes, the candidate list and the heap.
+pub const SPARSE_BYTES_PER_NODE: f64 = 1500.0;
+
+/// Estimated seconds of a certified sparse solve of `n` points.
+pub fn sparse_seconds(n: usize) -> f64 {
+    (n as f64).powf(1.5) * SPARSE_SECONDS_PER_N15
+}
+
+/// How a component's odd nodes are paired.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PairingMethod {
+    /// Dense exact blossom (`integer-blossom`).
+    Dense,
+    /// Certified sparse blossom ([`super::blossom::certified_pairing`]); when it gives up (the
+    /// candidates have no perfect matching, or the violator search hit its bound), the dense
+    /// solve if `dense_fallback`, else the heuristic.
+    Sparse {
+        /// The dense solve fits the budget too.
+        dense_fallback: bool,
+    },
+    /// Greedy + 2-opt with a dual lower bound.
+    Heuristic,
+}
+
+/// The method for a component whose dense and sparse exact solves are estimated at `dense` and
+/// `sparse` seconds, with `left` seconds of the layer's budget left, and the seconds to charge.
+/// The sparse solve is faster at every size measured (n = 10…1752, BENCHMARKS.md), so it comes
+/// first; the dense one is its fallback when both fit (charged only the sparse estimate: the
+/// fallback runs only when the sparse solve gives up early), or used alone when only it fits.
+pub fn choose_method(dense: f64, sparse: f64, left: f64) -> (PairingMethod, f64) {
+    if sparse <= left {
+        (PairingMethod::Sparse { dense_fallback: sparse + dense <= left }, sparse)
+    } else if dense <= left {
+        (PairingMethod::Dense, dense)
+    } else {
+        (PairingMethod::Heuristic, 0.0)
+    }
+}
+
+/// Integer cost (nm) of a length in mm.
+pub fn exact_units(mm: f64) -> i64 {
+    (mm * EXACT_UNITS_PER_MM).round() as i64
+}
+
+/// Euclidean minimum-weight perfect matching of `points`, proven optimal for the complete graph:
+/// the sparse blossom on the [`SPARSE_CANDIDATES`] nearest neighbours, then pairs whose
+/// reduced cost is negative are searched (a grid, within the radius the duals allow), added and
+/// re-solved. Lengths rounded to [`EXACT_UNITS_PER_MM`].
+pub fn certified_points(points: &[DVec2]) -> Result<super::blossom::Certified, super::blossom::CertifyError> {
+    let n = points.len();
+    let all: Vec<usize> = (0..n).collect();
+    let cands: Vec<(usize, usize, i64)> = knn_candidates(points, &all, SPARSE_CANDIDATES)
+        .into_iter()
+        .map(|(d, i, j)| (i, j, exact_units(d)))
+        .collect();
+    let grid = Grid::new(points);
+    let mut find = |duals: &super::blossom::Duals, out: &mut Vec<(usize, usize, i64)>| -> bool {
+        grid.violators(points, duals, VIOLATOR_CHECKS_PER_NODE * n, out)
+    };
+    super::blossom::certified_pairing(n, cands, &mut find, SPARSE_MAX_SOLVES)
+}
+
+/// Uniform grid of points (CSR by cell) for radius searches.
+struct Grid {
+    min: DVec2,
+    cell: f64,
+    nx: usize,
+    ny: usize,
+    start: Vec<usize>,
+    items: Vec<usize>,
+}
+
+impl Grid {
+    fn new(points: &[DVec2]) -> Grid {
+        let m = points.len().max(1);
+        let mut min = DVec2::splat(f64::INFINITY);
+        let mut max = DVec2::splat(f64::NEG_INFINITY);
+        for &p in points {
+            min = min.min(p);
+            max = max.max(p);
+        }
+        if points.is_empty() {
+            min = DVec2::ZERO;
+            max = DVec2::ZERO;
+        }
+        let size = (max - min).max(DVec2::splat(1e-9));
+        let mut cell = (size.x * size.y / m as f64).sqrt().max(size.x.max(size.y) / m as f64).max(1e-9);
+        while (size.x / cell + 1.0) * (size.y / cell + 1.0) > 4.0 * m as f64 + 16.0 {
+            cell *= 1.5;
+        }
+        let nx = (size.x / cell).floor() as usize + 1;
+        let ny = (size.y / cell).floor() as usize + 1;
+        let mut g = Grid { min, cell, nx, ny, start: vec![0; nx * ny + 1], items: vec![0; points.len()] };
+        for &p in points {
+            let c = g.cell_of(p);
+            g.start[c + 1] += 1;
+        }
+        for c in 0..nx * ny {
+            g.start[c + 1] += g.start[c];
+        }
+        let mut fill = g.start.clone();
+        for (i, &p) in points.iter().enumerate() {
+            let c = g.cell_of(p);
+            g.items[fill[c]] = i;
+            fill[c] += 1;
+        }
+        g
+    }
+
+    fn coord(&self, v: f64, lo: f64, count: usize) -> usize {
+        (((v - lo) / self.cell).floor().max(0.0) as usize).min(count - 1)
+    }
+
+    fn cell_of(&self, p: DVec2) -> usize {
+        self.coord(p.y, self.min.y, self.ny) * self.nx + self.coord(p.x, self.min.x, self.nx)
+    }
+
+    /// Pairs (u, v) with a negative reduced cost. Such a pair has 4c < Y_u + Y_v ≤ 2 max(Y), so
+    /// each u looks only for partners v ranked below it by (Y, index), within c < Y_u / 2.
+    /// False when more than `max_checks` pairs would be checked.
+    fn violators(&self, points: &[DVec2], duals: &super::blossom::Duals, max_checks: usize, out: &mut Vec<(usize, usize, i64)>) -> bool {
+        let scale = super::blossom::DUAL_SCALE as f64;
+        let mut checks = 0usize;
+        for u in 0..points.len() {
+            let yu = duals.total[u];
+            if yu <= 0 {
+                continue;
+            }
+            // c < Y_u·4/(2·4) in nm; one nm of rounding slack.
+            let r = (yu as f64 * 2.0 / scale + 1.0) / EXACT_UNITS_PER_MM;
+            let p = points[u];
+            let (x0, x1) = (self.coord(p.x - r, self.min.x, self.nx), self.coord(p.x + r, self.min.x, self.nx));
+            let (y0, y1) = (self.coord(p.y - r, self.min.y, self.ny), self.coord(p.y + r, self.min.y, self.ny));
+            checks += (x1 - x0 + 1) * (y1 - y0 + 1);
+            if checks > max_checks {
+                return false;
+            }
+            for cy in y0..=y1 {
+                for cx in x0..=x1 {
+                    let c = cy * self.nx + cx;
+                    for &v in &self.items[self.start[c]..self.start[c + 1]] {
+                        if (duals.total[v], v) >= (yu, u) {
+                            continue;
+                        }
+                        checks += 1;
+                        let cost = exact_units(p.distance(points[v]));
+                        if duals.reduced_cost(u, v, cost) < 0 {
+                            out.push((u.min(v), u.max(v), cost));
+                        }
+                    }
+                }
+            }
+            if checks > max_checks {
+                return false;
+            }
+        }
+        true
+    }
 }
 
 /// A lower bound on the minimum-weight perfect matching of `n` items from candidate pairs
@@ -410,7 +595,7 @@ mod tests {
         let mut worst: f64 = 1.0;
         for _ in 0..40 {
             let pts: Vec<DVec2> = (0..10).map(|_| DVec2::new(rnd(), rnd())).collect();
-            let p = pair_points(&pts, false);
+            let p = pair_points(&pts, PairingMethod::Heuristic);
             let (pairs, total) = (p.pairs, p.total);
             assert_eq!(pairs.len(), 5);
             let mut seen = [false; 10];
@@ -427,7 +612,7 @@ mod tests {
     #[test]
     fn many_points_all_paired() {
         let pts: Vec<DVec2> = (0..2000).map(|i| DVec2::new((i % 50) as f64, (i / 50) as f64 * 1.3)).collect();
-        let p = pair_points(&pts, false);
+        let p = pair_points(&pts, PairingMethod::Heuristic);
         let (pairs, total) = (p.pairs, p.total);
         assert_eq!(pairs.len(), 1000);
         // Optimum pairs horizontal neighbours: 1000 · 1.0.
@@ -447,11 +632,11 @@ mod tests {
             let n = 2 + 2 * (round % 6);
             let pts: Vec<DVec2> = (0..n).map(|_| DVec2::new(rnd(), rnd())).collect();
             let best = optimum(&pts);
-            let exact = pair_points(&pts, true);
+            let exact = pair_points(&pts, PairingMethod::Dense);
             assert!(exact.optimal);
             assert_eq!(exact.pairs.len(), n / 2);
             assert!((exact.total - best).abs() <= 1e-6 * n as f64, "n {n}: {} vs {best}", exact.total);
-            let heur = pair_points(&pts, false);
+            let heur = pair_points(&pts, PairingMethod::Heuristic);
             let gap = heur.total / heur.lower_bound;
             assert!(gap >= 1.0, "gap {gap}");
             assert!(heur.total / gap <= best * (1.0 + 1e-12), "bound {} over optimum {best}", heur.total / gap);
@@ -470,10 +655,138 @@ mod tests {
             (s % 100_000) as f64 / 1000.0
         };
         let pts: Vec<DVec2> = (0..300).map(|_| DVec2::new(rnd(), rnd())).collect();
-        let exact = pair_points(&pts, true);
-        let heur = pair_points(&pts, false);
+        let exact = pair_points(&pts, PairingMethod::Dense);
+        let heur = pair_points(&pts, PairingMethod::Heuristic);
         assert!(heur.lower_bound <= exact.total * (1.0 + 1e-12), "{} > {}", heur.lower_bound, exact.total);
         assert!(heur.total >= exact.total * (1.0 - 1e-12));
         assert!(heur.lower_bound > 0.5 * exact.total, "weak bound {} of {}", heur.lower_bound, exact.total);
+    }
+
+    fn random_points(n: usize, seed: u64, side: f64) -> Vec<DVec2> {
+        let mut s = seed;
+        let mut rnd = move || {
+            s ^= s << 13;
+            s ^= s >> 7;
+            s ^= s << 17;
+            (s % 1_000_000) as f64 / 1_000_000.0 * side
+        };
+        (0..n).map(|_| DVec2::new(rnd(), rnd())).collect()
+    }
+
+    fn nm_cost(points: &[DVec2], mates: &[usize]) -> i64 {
+        (0..points.len()).filter(|&i| i < mates[i]).map(|i| exact_units(points[i].distance(points[mates[i]]))).sum()
+    }
+
+    #[test]
+    fn sparse_certified_equals_dense_and_duals_certify_every_pair() {
+        use super::super::blossom::DUAL_SCALE;
+        for (round, &n) in [50usize, 100, 200, 400, 600].iter().enumerate() {
+            let pts = random_points(n, 1000 + round as u64, 100.0);
+            let mut dist = vec![0.0; n * n];
+            for i in 0..n {
+                for j in i + 1..n {
+                    dist[i * n + j] = pts[i].distance(pts[j]);
+                }
+            }
+            let dense = nm_cost(&pts, &exact_pairing(n, &dist));
+            let c = certified_points(&pts).expect("certified");
+            let m = &c.matching;
+            assert_eq!(m.cost, nm_cost(&pts, &m.mates));
+            assert_eq!(m.cost, dense, "n {n}");
+            // Duals feasible on every pair of the complete graph, tight on matched pairs.
+            for u in 0..n {
+                for v in u + 1..n {
+                    let r = m.duals.reduced_cost(u, v, exact_units(pts[u].distance(pts[v])));
+                    assert!(r >= 0, "n {n}: pair {u}-{v} reduced {r}");
+                    if m.mates[u] == v {
+                        assert_eq!(r, 0);
+                    }
+                }
+            }
+            assert_eq!(m.duals.objective(), DUAL_SCALE * m.cost, "strong duality n {n}");
+            let p = pair_points(&pts, PairingMethod::Sparse { dense_fallback: false });
+            assert!(p.optimal);
+            assert!((p.total - dense as f64 / EXACT_UNITS_PER_MM).abs() < 1e-3);
+        }
+    }
+
+    #[test]
+    fn violator_loop_adds_missing_optimal_pairs() {
+        use super::super::blossom::{certified_pairing, DUAL_SCALE};
+        // Few candidates (3 nearest): the first solve misses optimal pairs, the grid search
+        // finds the violating pairs, and the re-solves reach the dense optimum.
+        let mut hit = 0;
+        for seed in 0..20u64 {
+            let n = 300;
+            let pts = random_points(n, 77 + seed, 100.0);
+            let all: Vec<usize> = (0..n).collect();
+            let cands: Vec<(usize, usize, i64)> =
+                knn_candidates(&pts, &all, 3).into_iter().map(|(d, i, j)| (i, j, exact_units(d))).collect();
+            let Ok(first) = super::super::blossom::min_cost_perfect_matching(n, &cands) else { continue };
+            let grid = Grid::new(&pts);
+            let mut find = |d: &super::super::blossom::Duals, out: &mut Vec<(usize, usize, i64)>| {
+                grid.violators(&pts, d, usize::MAX, out)
+            };
+            let c = certified_pairing(n, cands, &mut find, 50).expect("certified");
+            let mut dist = vec![0.0; n * n];
+            for i in 0..n {
+                for j in i + 1..n {
+                    dist[i * n + j] = pts[i].distance(pts[j]);
+                }
+            }
+            let dense = nm_cost(&pts, &exact_pairing(n, &dist));
+            assert_eq!(c.matching.cost, dense);
+            assert_eq!(c.matching.duals.objective(), DUAL_SCALE * dense);
+            if first.cost > dense {
+                assert!(c.added > 0 && c.solves > 1);
+                hit += 1;
+            }
+        }
+        assert!(hit > 0, "no instance needed the violator loop");
+    }
+
+    #[test]
+    fn sparse_falls_back_when_candidates_have_no_perfect_matching() {
+        // Two far clusters of 25 points: every point's 10 nearest are in its own cluster, so the
+        // candidate graph (odd parts) has no perfect matching.
+        let mut pts = random_points(25, 5, 1.0);
+        pts.extend(random_points(25, 6, 1.0).into_iter().map(|p| p + DVec2::new(100.0, 0.0)));
+        assert_eq!(certified_points(&pts).unwrap_err(), super::super::blossom::CertifyError::NoPerfectMatching);
+        let dense = pair_points(&pts, PairingMethod::Dense);
+        let fallback = pair_points(&pts, PairingMethod::Sparse { dense_fallback: true });
+        assert!(fallback.optimal);
+        assert_eq!(fallback.pairs, dense.pairs);
+        let heur = pair_points(&pts, PairingMethod::Sparse { dense_fallback: false });
+        assert!(heur.total >= dense.total - 1e-9);
+    }
+
+    /// Timing table for BENCHMARKS.md: `cargo test --release --lib bench_sparse_vs_dense -- --ignored --nocapture`.
+    #[test]
+    #[ignore]
+    fn bench_sparse_vs_dense() {
+        let sizes: Vec<usize> = std::env::var("WEFT_BENCH_N").map(|v| v.split(',').map(|x| x.parse().unwrap()).collect()).unwrap_or(vec![400, 800, 1752, 5000, 20000]);
+        for &n in &sizes {
+            let pts = random_points(n, 5 + n as u64, 1000.0);
+            let dense = if n <= 1752 && std::env::var("WEFT_BENCH_NO_DENSE").is_err() {
+                let t = std::time::Instant::now();
+                let mut dist = vec![0.0; n * n];
+                for i in 0..n {
+                    for j in i + 1..n {
+                        dist[i * n + j] = pts[i].distance(pts[j]);
+                    }
+                }
+                let c = nm_cost(&pts, &exact_pairing(n, &dist));
+                Some((t.elapsed().as_secs_f64(), c))
+            } else {
+                None
+            };
+            let t = std::time::Instant::now();
+            let c = certified_points(&pts).expect("certified");
+            let ts = t.elapsed().as_secs_f64();
+            println!(
+                "n {n}: dense {:?} sparse {ts:.4} s cost {} solves {} added {} est {:.4} s",
+                dense, c.matching.cost, c.solves, c.added, sparse_seconds(n)
+            );
+        }
     }
 }

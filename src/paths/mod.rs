@@ -13,6 +13,7 @@
 //! GIPPO's RNG is `rand_pcg::Pcg64` seeded per layer.
 
 pub mod graph;
+pub mod blossom;
 pub mod matching;
 pub mod metrics;
 

@@ -12,7 +12,7 @@
 
 use super::euler::{circuits, component_starts, odd_by_component, walk_nodes, AugEdge};
 use super::graph::Graph;
-use super::matching::{min_pairing, CANDIDATES_PER_NODE};
+use super::matching::{choose_method, exact_units, min_pairing, PairingMethod, CANDIDATES_PER_NODE};
 use super::Chain;
 use std::cell::RefCell;
 use std::cmp::Ordering;
@@ -164,10 +164,83 @@ pub(crate) fn exact_seconds(odd: usize, edges: usize) -> f64 {
     super::matching::exact_seconds(odd) + odd as f64 * edges as f64 * DIJKSTRA_EDGE_SECONDS
 }
 
-/// Chinese-postman walks of every component. Components are paired exactly (graph distances
-/// between all their odd nodes, blossom), in order, while the estimated solves
-/// ([`exact_seconds`]) fit in `exact_budget` seconds (for the layer); the rest by the
-/// heuristic with a dual lower bound.
+/// Estimated seconds of a certified sparse pairing of `odd` odd nodes of a component of `edges`
+/// edges: the solves, and per solve a candidate or violator Dijkstra from every odd node that
+/// settles about [`super::matching::SPARSE_CANDIDATES`] odd nodes' share of the component.
+pub(crate) fn sparse_seconds(odd: usize, edges: usize) -> f64 {
+    super::matching::sparse_seconds(odd)
+        + (super::matching::SPARSE_MAX_SOLVES * 2 * super::matching::SPARSE_CANDIDATES) as f64
+            * edges as f64
+            * DIJKSTRA_EDGE_SECONDS
+}
+
+/// Settled nodes per odd node and round the violator searches may use before giving up.
+const VIOLATOR_SETTLED_PER_ODD: usize = 2000;
+
+/// Certified minimum pairing of a component's odd `nodes` by graph distance (nm), proven for
+/// every pair: candidates are the [`super::matching::SPARSE_CANDIDATES`] nearest odd nodes
+/// along the struts; a pair (u, v) can violate the duals only if 4·d < Y_u + Y_v ≤ 2·max, so
+/// each u runs a Dijkstra bounded by Y_u / 2 to the odd nodes ranked below it by (Y, index).
+/// None when the searches hit their bound or the candidates have no perfect matching.
+fn sparse_pairing(graph: &Graph, nodes: &[usize], local: &[usize], dij: &mut Dijkstra) -> Option<Vec<usize>> {
+    const NONE: usize = usize::MAX;
+    let m = nodes.len();
+    let k = super::matching::SPARSE_CANDIDATES.min(m - 1);
+    let mut cands = Vec::with_capacity(m * k);
+    for (i, &src) in nodes.iter().enumerate() {
+        let mut found = 0;
+        dij.run(graph, src, &mut |v, d| {
+            let j = local[v];
+            if v != src && j != NONE {
+                cands.push((i.min(j), i.max(j), exact_units(d)));
+                found += 1;
+            }
+            found < k
+        });
+    }
+    let scale = super::blossom::DUAL_SCALE as f64;
+    let mut find = |duals: &super::blossom::Duals, out: &mut Vec<(usize, usize, i64)>| -> bool {
+        let mut budget = VIOLATOR_SETTLED_PER_ODD * m;
+        for (u, &src) in nodes.iter().enumerate() {
+            let yu = duals.total[u];
+            if yu <= 0 {
+                continue;
+            }
+            let r = (yu as f64 * 2.0 / scale + 1.0) / super::matching::EXACT_UNITS_PER_MM;
+            let mut over = false;
+            dij.run(graph, src, &mut |v, d| {
+                if d > r {
+                    return false;
+                }
+                if budget == 0 {
+                    over = true;
+                    return false;
+                }
+                budget -= 1;
+                let j = local[v];
+                if j != NONE && (duals.total[j], j) < (yu, u) {
+                    let c = exact_units(d);
+                    if duals.reduced_cost(u, j, c) < 0 {
+                        out.push((u.min(j), u.max(j), c));
+                    }
+                }
+                true
+            });
+            if over {
+                return false;
+            }
+        }
+        true
+    };
+    super::blossom::certified_pairing(m, cands, &mut find, super::matching::SPARSE_MAX_SOLVES)
+        .ok()
+        .map(|c| c.matching.mates)
+}
+
+/// Chinese-postman walks of every component. Components are paired exactly (graph distances,
+/// blossom: certified sparse or dense, whichever is estimated cheaper), in order, while the
+/// estimated solves ([`sparse_seconds`], [`exact_seconds`]) fit in `exact_budget` seconds (for
+/// the layer); the rest by the heuristic with a dual lower bound.
 pub(crate) fn run(graph: &Graph, exact_budget: f64) -> PostmanPaths {
     const NONE: usize = usize::MAX;
     let n = graph.nodes.len();
@@ -196,9 +269,16 @@ pub(crate) fn run(graph: &Graph, exact_budget: f64) -> PostmanPaths {
         for (i, &v) in nodes.iter().enumerate() {
             local[v] = i;
         }
-        let cost = exact_seconds(m, comp_edges[c]);
-        let partner = if cost <= left {
-            left -= cost;
+        let (method, cost) = choose_method(exact_seconds(m, comp_edges[c]), sparse_seconds(m, comp_edges[c]), left);
+        left -= cost;
+        let (sparse, dense) = match method {
+            PairingMethod::Sparse { dense_fallback } => (sparse_pairing(graph, nodes, &local, &mut dij), dense_fallback),
+            PairingMethod::Dense => (None, true),
+            PairingMethod::Heuristic => (None, false),
+        };
+        let partner = if let Some(p) = sparse {
+            p
+        } else if dense {
             let mut dist = vec![0.0; m * m];
             for i in 0..m.saturating_sub(1) {
                 let mut need = m - 1 - i;

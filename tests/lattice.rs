@@ -326,7 +326,9 @@ fn bad_parameters_and_dense_lattices_are_refused() {
 #[test]
 fn patterns_parse_with_defaults() {
     let p: Pattern = serde_json::from_str(r#"{"kind":"reentrant_honeycomb"}"#).unwrap();
-    assert_eq!(p, Pattern::ReentrantHoneycomb { cell_width_mm: 2.0, cell_height_mm: 2.0 });
+    let c = weft::lattice::DEFAULT_REENTRANT_CELL_MM;
+    assert_eq!(c, 1.73, "Table 1: 63 % pores with 0.2 mm struts");
+    assert_eq!(p, Pattern::ReentrantHoneycomb { cell_width_mm: c, cell_height_mm: c });
     let p: Pattern = serde_json::from_str(r#"{"kind":"snub_square","cell_size_mm":1.5}"#).unwrap();
     assert_eq!(p, Pattern::SnubSquare { cell_size_mm: 1.5 });
 }

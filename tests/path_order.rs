@@ -111,3 +111,47 @@ fn reported_retractions_are_the_gcodes() {
         }
     }
 }
+
+/// `direction` prints paths in order along the chosen direction, each from its end lower along
+/// it; `centre_out` from the layer's centre outwards, each from its end nearer the centre.
+/// Read back from the optimised toolpath (euler and gippo_max: one printed path per chain).
+#[test]
+fn directional_orders_sweep_as_asked() {
+    for name in ["voronoi-10mm", "ball-burst-disc-48mm"] {
+        let d = example(name);
+        let strokes = lattice_strokes(&d, &Files::new()).unwrap();
+        for method in [Method::Euler, Method::GippoMax] {
+            for deg in [0.0, 30.0, 135.0, -90.0] {
+                let o = Options { method, order: Order::Direction, direction_deg: deg, iterations: 5, ..Options::default() };
+                let t = optimise(&strokes, &o, 0.4, 1, &mut |_| {}).unwrap().toolpath;
+                let a = f64::to_radians(deg);
+                let key = |p: &weft::geom::DVec3| p.x * a.cos() + p.y * a.sin();
+                for pass in &t.passes {
+                    let starts: Vec<f64> = pass.paths.iter().map(|p| key(&p.points[0])).collect();
+                    assert!(starts.windows(2).all(|w| w[0] <= w[1] + 1e-9), "{name} {method:?} {deg}°: starts not swept in order");
+                    for p in &pass.paths {
+                        assert!(key(&p.points[0]) <= key(p.points.last().unwrap()) + 1e-9, "{name} {method:?} {deg}°: a path printed against the direction");
+                    }
+                }
+            }
+            let o = Options { method, order: Order::CentreOut, iterations: 5, ..Options::default() };
+            let t = optimise(&strokes, &o, 0.4, 1, &mut |_| {}).unwrap().toolpath;
+            for pass in &t.passes {
+                let (mut lo, mut hi) = (weft::geom::DVec3::splat(f64::INFINITY), weft::geom::DVec3::splat(f64::NEG_INFINITY));
+                for p in &pass.paths {
+                    for q in [p.points[0], *p.points.last().unwrap()] {
+                        lo = lo.min(q);
+                        hi = hi.max(q);
+                    }
+                }
+                let c = ((lo + hi) * 0.5).truncate();
+                let r = |p: &weft::geom::DVec3| p.truncate().distance(c);
+                let starts: Vec<f64> = pass.paths.iter().map(|p| r(&p.points[0])).collect();
+                assert!(starts.windows(2).all(|w| w[0] <= w[1] + 1e-9), "{name} {method:?}: centre_out starts not outwards");
+                for p in &pass.paths {
+                    assert!(r(&p.points[0]) <= r(p.points.last().unwrap()) + 1e-9, "{name} {method:?}: a path printed inwards");
+                }
+            }
+        }
+    }
+}

@@ -197,39 +197,29 @@ fn join_curves(nodes: Vec<DVec2>, edges: Vec<Edge>, curve: &[u32]) -> (Vec<DVec2
         walk.clear();
         done[e0] = true;
         walk.push(e0);
-        let mut closed = false;
-        let (mut v, mut e) = (edges[e0].a, e0);
-        let mut back = vec![v];
-        while bend(v, c) {
-            let i = inc(v);
-            let next = if i[0] == e { i[1] } else { i[0] };
-            if done[next] {
-                closed = true;
-                break;
+        // Walks from node `v` away from edge `e` through bends of curve `c`, pushing the nodes
+        // reached to `out` and the edges to `walk`; true when it comes back to a walked edge.
+        let mut extend = |mut v: usize, mut e: usize, out: &mut Vec<usize>, walk: &mut Vec<usize>| {
+            while bend(v, c) {
+                let i = inc(v);
+                let next = if i[0] == e { i[1] } else { i[0] };
+                if done[next] {
+                    return true;
+                }
+                done[next] = true;
+                walk.push(next);
+                v = other(next, v);
+                e = next;
+                out.push(v);
             }
-            done[next] = true;
-            walk.push(next);
-            v = other(next, v);
-            e = next;
-            back.push(v);
-        }
+            false
+        };
+        let mut back = vec![edges[e0].a];
+        let closed = extend(edges[e0].a, e0, &mut back, &mut walk);
         back.reverse();
         chain.extend_from_slice(&back);
-        let (mut v, mut e) = (edges[e0].b, e0);
-        chain.push(v);
-        while !closed && bend(v, c) {
-            let i = inc(v);
-            let next = if i[0] == e { i[1] } else { i[0] };
-            if done[next] {
-                closed = true;
-                break;
-            }
-            done[next] = true;
-            walk.push(next);
-            v = other(next, v);
-            e = next;
-            chain.push(v);
-        }
+        chain.push(edges[e0].b);
+        let closed = closed || extend(edges[e0].b, e0, &mut chain, &mut walk);
         let mut node = |n: usize, out_nodes: &mut Vec<DVec2>| {
             if remap[n] == usize::MAX {
                 remap[n] = out_nodes.len();

@@ -583,15 +583,19 @@ mod tests {
         rec(points, &mut (0..points.len()).collect())
     }
 
-    #[test]
-    fn perfect_and_near_optimal() {
-        let mut s = 12345u64;
-        let mut rnd = || {
+    /// A xorshift stream of numbers in [0, modulus / 1000), for repeatable random points.
+    fn xorshift(mut s: u64, modulus: u64) -> impl FnMut() -> f64 {
+        move || {
             s ^= s << 13;
             s ^= s >> 7;
             s ^= s << 17;
-            (s % 10_000) as f64 / 1000.0
-        };
+            (s % modulus) as f64 / 1000.0
+        }
+    }
+
+    #[test]
+    fn perfect_and_near_optimal() {
+        let mut rnd = xorshift(12345, 10_000);
         let mut worst: f64 = 1.0;
         for _ in 0..40 {
             let pts: Vec<DVec2> = (0..10).map(|_| DVec2::new(rnd(), rnd())).collect();
@@ -621,13 +625,7 @@ mod tests {
 
     #[test]
     fn exact_equals_brute_force_and_bound_is_valid() {
-        let mut s = 987654321u64;
-        let mut rnd = || {
-            s ^= s << 13;
-            s ^= s >> 7;
-            s ^= s << 17;
-            (s % 10_000) as f64 / 1000.0
-        };
+        let mut rnd = xorshift(987654321, 10_000);
         for round in 0..60 {
             let n = 2 + 2 * (round % 6);
             let pts: Vec<DVec2> = (0..n).map(|_| DVec2::new(rnd(), rnd())).collect();
@@ -647,13 +645,7 @@ mod tests {
     #[test]
     fn bound_is_valid_beyond_the_candidates() {
         // 300 random points: candidates are the 6 nearest, the exact optimum is known.
-        let mut s = 4242u64;
-        let mut rnd = || {
-            s ^= s << 13;
-            s ^= s >> 7;
-            s ^= s << 17;
-            (s % 100_000) as f64 / 1000.0
-        };
+        let mut rnd = xorshift(4242, 100_000);
         let pts: Vec<DVec2> = (0..300).map(|_| DVec2::new(rnd(), rnd())).collect();
         let exact = pair_points(&pts, PairingMethod::Dense);
         let heur = pair_points(&pts, PairingMethod::Heuristic);

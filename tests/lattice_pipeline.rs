@@ -2,6 +2,8 @@
 //! every strut printed exactly once for every optimiser, `euler` at the proven bound,
 //! extruded length equal to nominal, no overlap, same seed → same bytes.
 
+mod common;
+
 use std::collections::BTreeMap;
 use weft::design::Job;
 use weft::jobs::lattice::{lattice_strokes, LatticeJob};
@@ -23,17 +25,7 @@ fn with_method(mut d: Design, method: Method, iterations: u32) -> Design {
     d
 }
 
-const PLANAR: &[&str] = &[
-    "honeycomb-10mm",
-    "voronoi-10mm",
-    "penrose-10mm",
-    "snub-square-10mm",
-    "arrowhead-10mm",
-    "reentrant-honeycomb-10mm",
-    "tensile-honeycomb",
-    "ball-burst-disc-48mm",
-    "concave-cylinder-honeycomb",
-];
+use common::PLANAR_LATTICES as PLANAR;
 
 /// Snaps a printed point (printer coordinates, f32) to the id of the graph node within 2 µm.
 /// Grid cell → (node id, x, y) of the nodes in it.

@@ -2,6 +2,8 @@
 //! examples. `min_travel` never travels more than the circuit order on any layer; the report's
 //! retractions are the G-code's, layer by layer.
 
+mod common;
+
 use weft::design::Job;
 use weft::jobs::lattice::{lattice_strokes, LatticeJob};
 use weft::paths::{optimise, Method, Options, Order, PathsReport};
@@ -13,17 +15,7 @@ fn example(name: &str) -> Design {
     Design::from_json(name, &std::fs::read_to_string(path).unwrap()).unwrap()
 }
 
-const PLANAR: &[&str] = &[
-    "honeycomb-10mm",
-    "voronoi-10mm",
-    "penrose-10mm",
-    "snub-square-10mm",
-    "arrowhead-10mm",
-    "reentrant-honeycomb-10mm",
-    "tensile-honeycomb",
-    "ball-burst-disc-48mm",
-    "concave-cylinder-honeycomb",
-];
+use common::PLANAR_LATTICES as PLANAR;
 
 #[test]
 fn min_travel_never_travels_more_than_the_circuit_order() {

@@ -319,14 +319,19 @@ struct Grid {
 
 impl Grid {
     fn new(points: &[DVec2]) -> Grid {
-        let m = points.len().max(1);
+        Grid::over(points, 0..points.len())
+    }
+
+    /// The grid of `points[i]` for the `i` of `items` (each once); cells hold them in that order.
+    fn over(points: &[DVec2], items: impl Iterator<Item = usize> + Clone) -> Grid {
+        let m = items.clone().count().max(1);
         let mut min = DVec2::splat(f64::INFINITY);
         let mut max = DVec2::splat(f64::NEG_INFINITY);
-        for &p in points {
-            min = min.min(p);
-            max = max.max(p);
+        for i in items.clone() {
+            min = min.min(points[i]);
+            max = max.max(points[i]);
         }
-        if points.is_empty() {
+        if min.x > max.x {
             min = DVec2::ZERO;
             max = DVec2::ZERO;
         }
@@ -337,17 +342,18 @@ impl Grid {
         }
         let nx = (size.x / cell).floor() as usize + 1;
         let ny = (size.y / cell).floor() as usize + 1;
-        let mut g = Grid { min, cell, nx, ny, start: vec![0; nx * ny + 1], items: vec![0; points.len()] };
-        for &p in points {
-            let c = g.cell_of(p);
+        let mut g = Grid { min, cell, nx, ny, start: vec![0; nx * ny + 1], items: Vec::new() };
+        for i in items.clone() {
+            let c = g.cell_of(points[i]);
             g.start[c + 1] += 1;
         }
         for c in 0..nx * ny {
             g.start[c + 1] += g.start[c];
         }
         let mut fill = g.start.clone();
-        for (i, &p) in points.iter().enumerate() {
-            let c = g.cell_of(p);
+        g.items = vec![0; g.start[nx * ny]];
+        for i in items {
+            let c = g.cell_of(points[i]);
             g.items[fill[c]] = i;
             fill[c] += 1;
         }
@@ -479,40 +485,10 @@ pub fn knn_candidates(points: &[DVec2], active: &[usize], k: usize) -> Vec<(f64,
         }
         return out;
     }
-    let mut min = DVec2::splat(f64::INFINITY);
-    let mut max = DVec2::splat(f64::NEG_INFINITY);
-    for &i in active {
-        min = min.min(points[i]);
-        max = max.max(points[i]);
-    }
-    let size = (max - min).max(DVec2::splat(1e-9));
-    let mut cell = (size.x * size.y / m as f64).sqrt().max(size.x.max(size.y) / m as f64).max(1e-9);
-    while (size.x / cell + 1.0) * (size.y / cell + 1.0) > 4.0 * m as f64 + 16.0 {
-        cell *= 1.5;
-    }
-    let nx = (size.x / cell).floor() as usize + 1;
-    let ny = (size.y / cell).floor() as usize + 1;
-    let cell_of = |p: DVec2| -> (usize, usize) {
-        (
-            (((p.x - min.x) / cell).floor() as usize).min(nx - 1),
-            (((p.y - min.y) / cell).floor() as usize).min(ny - 1),
-        )
-    };
-    let mut start = vec![0usize; nx * ny + 1];
-    for &i in active {
-        let (cx, cy) = cell_of(points[i]);
-        start[cy * nx + cx + 1] += 1;
-    }
-    for c in 0..nx * ny {
-        start[c + 1] += start[c];
-    }
-    let mut fill = start.clone();
-    let mut items = vec![0usize; m];
-    for &i in active {
-        let (cx, cy) = cell_of(points[i]);
-        items[fill[cy * nx + cx]] = i;
-        fill[cy * nx + cx] += 1;
-    }
+    let g = Grid::over(points, active.iter().copied());
+    let (nx, ny, cell) = (g.nx, g.ny, g.cell);
+    let cell_of = |p: DVec2| (g.coord(p.x, g.min.x, nx), g.coord(p.y, g.min.y, ny));
+    let (start, items) = (&g.start, &g.items);
     let mut best: Vec<(f64, usize)> = Vec::with_capacity(k + 1);
     let max_r = nx.max(ny);
     for &i in active {

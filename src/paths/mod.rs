@@ -160,8 +160,8 @@ pub struct LayerPaths {
     pub circuit_travel_mm: f64,
     /// Retractions the G-code makes in this layer: free travels (no strut route) at least the
     /// printer's `min_travel_mm` long, 0 with retraction off or a pneumatic printer
-    /// ([`crate::gcode::retractions_per_pass`]; the `lattice` job counts them with the
-    /// design's printer, [`optimise`] alone with the default printer).
+    /// ([`crate::gcode::retractions_per_pass`]). They depend on the printer, which [`optimise`]
+    /// does not know: it leaves 0, and the `lattice` job counts them with the design's printer.
     pub retractions: usize,
     /// Duplicate edges collapsed while building the graph.
     pub duplicates_collapsed: usize,
@@ -351,10 +351,6 @@ pub fn optimise(
         toolpath.passes.push(out);
         report.layers.push(stats);
         progress((li + 1) as f32 / layers.len() as f32);
-    }
-    let counts = crate::gcode::retractions_per_pass(&toolpath, &crate::gcode::Printer::default());
-    for (l, n) in report.layers.iter_mut().zip(counts) {
-        l.retractions = n;
     }
     Ok(Optimised { toolpath, report })
 }

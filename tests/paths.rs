@@ -241,8 +241,10 @@ fn euler_reaches_the_lower_bound() {
         assert_eq!(printed_segments(&out.toolpath, 0), graph_segments(&build_graph(&l, TOL)), "{name}");
         // Every path after the first is a free travel; the G-code retracts for those at least
         // the default printer's 1 mm long.
-        assert!(r.retractions <= r.paths.saturating_sub(1), "{name}");
-        assert_eq!(r.retractions, weft::gcode::retractions_per_pass(&out.toolpath, &weft::gcode::Printer::default())[0], "{name}");
+        let retractions = weft::gcode::retractions_per_pass(&out.toolpath, &weft::gcode::Printer::default())[0];
+        assert!(retractions <= r.paths.saturating_sub(1), "{name}");
+        // `optimise` does not know the printer; the lattice job fills the report's count.
+        assert_eq!(r.retractions, 0, "{name}");
         if r.odd_nodes > 0 {
             assert!(r.pairing_mm > 0.0, "{name}");
         }
@@ -282,7 +284,8 @@ fn continuous_is_one_chain_per_component_along_struts() {
             let free = paths.iter().filter(|p| p.approach.is_none()).count();
             assert_eq!(free, g.components, "{name}");
             assert!(paths[0].approach.is_none());
-            assert_eq!(out.report.layers[0].retractions, g.components - 1, "{name}");
+            let retractions = weft::gcode::retractions_per_pass(&out.toolpath, &weft::gcode::Printer::default())[0];
+            assert_eq!(retractions, g.components - 1, "{name}");
             for w in paths.windows(2) {
                 if let Some(route) = &w[1].approach {
                     routed += 1;

@@ -20,6 +20,7 @@
 #![warn(missing_docs)]
 
 pub mod analyze;
+pub mod axisym;
 pub mod budget;
 pub mod gcode;
 pub mod geom;

@@ -1,0 +1,105 @@
+//! Axisymmetric build platforms (groundwork for issue 10, job kind `axisymmetric`).
+//!
+//! Not wired into the pipeline yet: this module only holds the platform geometry and the
+//! geodesics the later stages (uniform points, paths, validation metrics) will use.
+//!
+//! - [`platform`]: the generatrix, a composition of degree-6 Bézier segments in the (x = radius,
+//!   z = height) half-plane, revolved about z into the embedded map r(u, θ); its metric,
+//!   Christoffel symbols, curvature, normal and validation (C³ at knots, cusps,
+//!   self-intersections, radius > 0, pole clearance).
+//! - [`geodesic`]: shortest paths between two (u, θ) points on any [`platform::Profile`]:
+//!   Clairaut shooting first, Runge–Kutta shooting as the fallback.
+//!
+//! Units: millimetres, radians. Deterministic: transcendentals through `libm`, no hash maps.
+
+pub mod geodesic;
+pub mod platform;
+
+pub use geodesic::{geodesic, Geodesic, Method};
+pub use platform::{Platform, Problem, Profile};
+
+/// Why a platform or geodesic could not be built.
+#[derive(Debug, thiserror::Error, Clone, PartialEq)]
+pub enum Error {
+    /// The control polygon is not 6·k + 1 points.
+    #[error("the control polygon has {points} points but needs 6·k + 1 (k ≥ 1 degree-6 segments, each next one starting at the previous one's last point): add or remove points")]
+    BadPolygonLength {
+        /// Points given.
+        points: usize,
+    },
+    /// A control point is NaN or infinite.
+    #[error("control point {index} of segment {segment} is not a finite number; enter x and z in mm")]
+    NotFinite {
+        /// Segment index (0-based).
+        segment: usize,
+        /// Point index in the segment (0..=6).
+        index: usize,
+    },
+    /// Validation found problems (all of them listed).
+    #[error("the generatrix is not a usable build platform:\n{}", describe(problems))]
+    Invalid {
+        /// Every problem found.
+        problems: Vec<Problem>,
+    },
+    /// A point or domain comes closer to the axis than the metric can be trusted.
+    #[error("u = {u:.6} lies {radius_mm:.4} mm from the axis, closer than the {min_radius_mm} mm a domain must keep from the pole (the Christoffel symbol Γ^θ_uθ = x′/x grows without bound there); keep u within [{u_allowed_min:.6}, {u_allowed_max:.6}] on this platform")]
+    TooNearPole {
+        /// Offending u.
+        u: f64,
+        /// Radius there, mm.
+        radius_mm: f64,
+        /// Minimum radius required, mm.
+        min_radius_mm: f64,
+        /// Smallest u keeping the minimum radius.
+        u_allowed_min: f64,
+        /// Largest u keeping the minimum radius.
+        u_allowed_max: f64,
+    },
+    /// A point lies outside the generatrix parameter range.
+    #[error("u = {u} is outside the generatrix parameter range [{u_min}, {u_max}]; pick u inside it")]
+    OutOfRange {
+        /// Offending u.
+        u: f64,
+        /// Range start.
+        u_min: f64,
+        /// Range end.
+        u_max: f64,
+    },
+    /// Clairaut shooting cannot join the points without a turning point in u (only when
+    /// [`Method::Clairaut`] is forced; `Auto` falls back to the ODE shooter).
+    #[error("the geodesic from u = {u0} to u = {u1} turns back in u, which Clairaut shooting does not follow; use Method::Auto or Method::Ode")]
+    TurningPoint {
+        /// Start u.
+        u0: f64,
+        /// End u.
+        u1: f64,
+    },
+    /// The shooting did not converge.
+    #[error("the geodesic shooting from (u, θ) = ({u0}, {t0}) to ({u1}, {t1}) did not converge (residual {residual_mm:.3e} mm): the points may be too far apart or the path runs near a pole; split the segment or raise max_iterations")]
+    NoConvergence {
+        /// Start u.
+        u0: f64,
+        /// Start θ.
+        t0: f64,
+        /// End u.
+        u1: f64,
+        /// End θ.
+        t1: f64,
+        /// Remaining miss, mm.
+        residual_mm: f64,
+    },
+    /// Options out of range.
+    #[error("option {name} = {value} is out of range: {hint}")]
+    BadOption {
+        /// Option name.
+        name: &'static str,
+        /// Value given.
+        value: f64,
+        /// Allowed range.
+        hint: &'static str,
+    },
+}
+
+fn describe(problems: &[Problem]) -> String {
+    problems.iter().map(|p| format!("- {p}")).collect::<Vec<_>>().join("\n")
+}

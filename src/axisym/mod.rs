@@ -14,6 +14,10 @@
 
 pub mod geodesic;
 pub mod platform;
+pub mod surface;
+pub mod domain;
+pub mod metrics;
+pub mod uniform;
 
 pub use geodesic::{geodesic, Geodesic, Method};
 pub use platform::{Platform, Problem, Profile};

@@ -1,0 +1,457 @@
+//! The domain Ω in the embedded map (u, θ): a rectangle or a simple (possibly non-convex)
+//! polygon, its validation, membership, projection and true surface area.
+
+use super::platform::{pole_clearance, Profile, DEFAULT_MIN_POLE_RADIUS_MM};
+use super::surface::Surface;
+use std::f64::consts::PI;
+
+/// Most polygon vertices accepted (the self-intersection check is quadratic).
+pub const MAX_POLYGON_POINTS: usize = 4096;
+/// Relative tolerance of the area quadrature.
+pub const AREA_REL_TOL: f64 = 1e-10;
+
+/// Ω in (u, θ); θ in radians.
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+pub enum Domain {
+    /// u ∈ [u₀, u₁], θ ∈ [θ₀, θ₁].
+    Rectangle {
+        /// u range.
+        u: [f64; 2],
+        /// θ range, rad.
+        theta: [f64; 2],
+    },
+    /// A simple polygon of (u, θ) points (a closing point equal to the first is allowed).
+    Polygon {
+        /// Vertices (u, θ).
+        points: Vec<[f64; 2]>,
+    },
+}
+
+/// One thing wrong with a domain.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum DomainProblem {
+    /// Too few vertices.
+    #[error("the polygon has {0} distinct points; give at least 3 (u, θ) points")]
+    TooFewPoints(usize),
+    /// Too many vertices.
+    #[error("the polygon has {0} points, more than {MAX_POLYGON_POINTS}; simplify it")]
+    TooManyPoints(usize),
+    /// NaN or infinite coordinate.
+    #[error("point {0} is not a finite number; enter u and θ (rad) as numbers")]
+    NotFinite(usize),
+    /// Edges cross.
+    #[error("edges {0} and {1} of the polygon cross; reorder the points so the outline does not cross itself")]
+    SelfIntersecting(usize, usize),
+    /// Zero area.
+    #[error("the domain has zero area; give a u range and a θ range of positive width (or a polygon that encloses an area)")]
+    ZeroArea,
+    /// u outside the platform's range.
+    #[error("u = {u} lies outside the platform's range [{lo}, {hi}]; keep u inside it")]
+    OutsideRange {
+        /// Offending u.
+        u: f64,
+        /// Range start.
+        lo: f64,
+        /// Range end.
+        hi: f64,
+    },
+    /// Too close to the pole.
+    #[error("the domain reaches u = {u:.6}, where the radius is {radius_mm:.3} mm, closer to the axis than {min_mm} mm; keep u within [{allowed_lo:.6}, {allowed_hi:.6}]")]
+    NearPole {
+        /// Offending u.
+        u: f64,
+        /// Radius there.
+        radius_mm: f64,
+        /// Required minimum.
+        min_mm: f64,
+        /// Allowed u interval start.
+        allowed_lo: f64,
+        /// Allowed u interval end.
+        allowed_hi: f64,
+    },
+    /// θ span over a full turn.
+    #[error("the domain spans {0:.4} rad in θ, more than a full turn (2π); narrow the θ range")]
+    ThetaSpan(f64),
+}
+
+impl Domain {
+    /// The outline as a closed ring (no repeated closing point).
+    pub fn ring(&self) -> Vec<[f64; 2]> {
+        match self {
+            Domain::Rectangle { u, theta } => vec![[u[0], theta[0]], [u[1], theta[0]], [u[1], theta[1]], [u[0], theta[1]]],
+            Domain::Polygon { points } => {
+                let mut v = points.clone();
+                if v.len() > 1 && v.first() == v.last() {
+                    v.pop();
+                }
+                v
+            }
+        }
+    }
+
+    /// Bounding box [[u_min, θ_min], [u_max, θ_max]].
+    pub fn bounds(&self) -> [[f64; 2]; 2] {
+        let mut b = [[f64::INFINITY; 2], [f64::NEG_INFINITY; 2]];
+        for p in self.ring() {
+            for k in 0..2 {
+                b[0][k] = b[0][k].min(p[k]);
+                b[1][k] = b[1][k].max(p[k]);
+            }
+        }
+        b
+    }
+
+    /// Every problem with this domain on `p` (empty when usable).
+    pub fn problems(&self, p: &dyn Profile) -> Vec<DomainProblem> {
+        let mut out = Vec::new();
+        let ring = match self {
+            Domain::Rectangle { u, theta } => {
+                for (i, v) in [u[0], u[1], theta[0], theta[1]].iter().enumerate() {
+                    if !v.is_finite() {
+                        out.push(DomainProblem::NotFinite(i / 2));
+                    }
+                }
+                if !out.is_empty() {
+                    return out;
+                }
+                if !(u[1] > u[0] && theta[1] > theta[0]) {
+                    out.push(DomainProblem::ZeroArea);
+                }
+                self.ring()
+            }
+            Domain::Polygon { points } => {
+                if points.len() > MAX_POLYGON_POINTS {
+                    return vec![DomainProblem::TooManyPoints(points.len())];
+                }
+                for (i, q) in points.iter().enumerate() {
+                    if !q[0].is_finite() || !q[1].is_finite() {
+                        out.push(DomainProblem::NotFinite(i));
+                    }
+                }
+                if !out.is_empty() {
+                    return out;
+                }
+                let ring = self.ring();
+                if ring.len() < 3 {
+                    out.push(DomainProblem::TooFewPoints(ring.len()));
+                    return out;
+                }
+                let n = ring.len();
+                for i in 0..n {
+                    for j in i + 1..n {
+                        // Neighbouring edges share a vertex; only a real crossing or overlap counts.
+                        let adjacent = j == i + 1 || (i == 0 && j == n - 1);
+                        if segments_touch(ring[i], ring[(i + 1) % n], ring[j], ring[(j + 1) % n], adjacent) {
+                            out.push(DomainProblem::SelfIntersecting(i, j));
+                        }
+                    }
+                }
+                if signed_area(&ring).abs() <= 1e-14 * (1.0 + ring.iter().map(|q| q[0].abs() + q[1].abs()).fold(0.0, f64::max)).powi(2) {
+                    out.push(DomainProblem::ZeroArea);
+                }
+                ring
+            }
+        };
+        let b = bounds_of(&ring);
+        if b[1][1] - b[0][1] > 2.0 * PI {
+            out.push(DomainProblem::ThetaSpan(b[1][1] - b[0][1]));
+        }
+        let (lo, hi) = p.u_range();
+        let mut in_range = true;
+        for u in [b[0][0], b[1][0]] {
+            if !(lo..=hi).contains(&u) {
+                out.push(DomainProblem::OutsideRange { u, lo, hi });
+                in_range = false;
+            }
+        }
+        if in_range {
+            // The radius over the u span, sampled finely (the same as platform::check_domain).
+            let (u0, u1) = (b[0][0], b[1][0]);
+            let (mut wu, mut wx) = (u0, f64::INFINITY);
+            for i in 0..=1024 {
+                let u = u0 + (u1 - u0) * i as f64 / 1024.0;
+                let x = p.jet(u).x[0];
+                if x < wx {
+                    wu = u;
+                    wx = x;
+                }
+            }
+            if !(wx >= DEFAULT_MIN_POLE_RADIUS_MM) {
+                let (a, c) = pole_clearance(p, DEFAULT_MIN_POLE_RADIUS_MM).unwrap_or((f64::NAN, f64::NAN));
+                out.push(DomainProblem::NearPole { u: wu, radius_mm: wx, min_mm: DEFAULT_MIN_POLE_RADIUS_MM, allowed_lo: a, allowed_hi: c });
+            }
+        }
+        out
+    }
+
+    /// Whether q lies in Ω (boundary included for rectangles; even–odd rule for polygons).
+    pub fn contains(&self, q: [f64; 2]) -> bool {
+        match self {
+            Domain::Rectangle { u, theta } => q[0] >= u[0] && q[0] <= u[1] && q[1] >= theta[0] && q[1] <= theta[1],
+            Domain::Polygon { .. } => point_in_ring(&self.ring(), q),
+        }
+    }
+
+    /// The nearest point of Ω to q, distances measured with the metric at q (so it is the
+    /// nearest on the surface to first order); q itself when inside. Polygon results are
+    /// nudged just inside so [`Domain::contains`] holds for them.
+    pub fn project_inside(&self, s: &Surface, q: [f64; 2]) -> [f64; 2] {
+        match self {
+            Domain::Rectangle { u, theta } => [q[0].clamp(u[0], u[1]), q[1].clamp(theta[0], theta[1])],
+            Domain::Polygon { .. } => {
+                let ring = self.ring();
+                if point_in_ring(&ring, q) {
+                    return q;
+                }
+                project_ring(&ring, s, q)
+            }
+        }
+    }
+
+    /// θ intervals of Ω on the line u (sorted, disjoint).
+    pub fn theta_intervals(&self, u: f64) -> Vec<[f64; 2]> {
+        match self {
+            Domain::Rectangle { u: ur, theta } => {
+                if u >= ur[0] && u <= ur[1] { vec![*theta] } else { Vec::new() }
+            }
+            Domain::Polygon { .. } => {
+                let ring = self.ring();
+                let n = ring.len();
+                let mut xs = Vec::new();
+                for i in 0..n {
+                    let (a, b) = (ring[i], ring[(i + 1) % n]);
+                    // Half-open rule so a vertex on the line counts once.
+                    if (a[0] <= u) != (b[0] <= u) {
+                        xs.push(a[1] + (u - a[0]) / (b[0] - a[0]) * (b[1] - a[1]));
+                    }
+                }
+                xs.sort_by(f64::total_cmp);
+                xs.chunks_exact(2).map(|c| [c[0], c[1]]).collect()
+            }
+        }
+    }
+
+    /// True surface area ∫∫_Ω x(u)·√g_uu du dθ, mm² (adaptive Simpson between the vertices'
+    /// u values, where the θ width is linear and the integrand smooth).
+    pub fn area_mm2(&self, s: &Surface) -> f64 {
+        let p = s.profile();
+        let f = |u: f64| {
+            let j = p.jet(u);
+            let w: f64 = self.theta_intervals(u).iter().map(|i| i[1] - i[0]).sum();
+            j.x[0] * j.x[1].hypot(j.z[1]) * w
+        };
+        let mut us: Vec<f64> = self.ring().iter().map(|q| q[0]).collect();
+        us.sort_by(f64::total_cmp);
+        us.dedup();
+        let mut total = 0.0;
+        for w in us.windows(2) {
+            // Evaluate just inside each interval: the width is discontinuous at vertices
+            // where edges start or end horizontally.
+            let (a, b) = (w[0], w[1]);
+            let e = (b - a) * 1e-12;
+            total += simpson(&f, a + e, b - e, AREA_REL_TOL);
+        }
+        total
+    }
+}
+
+fn bounds_of(ring: &[[f64; 2]]) -> [[f64; 2]; 2] {
+    let mut b = [[f64::INFINITY; 2], [f64::NEG_INFINITY; 2]];
+    for p in ring {
+        for k in 0..2 {
+            b[0][k] = b[0][k].min(p[k]);
+            b[1][k] = b[1][k].max(p[k]);
+        }
+    }
+    b
+}
+
+fn signed_area(r: &[[f64; 2]]) -> f64 {
+    let n = r.len();
+    (0..n).map(|i| r[i][0] * r[(i + 1) % n][1] - r[(i + 1) % n][0] * r[i][1]).sum::<f64>() * 0.5
+}
+
+fn orient(a: [f64; 2], b: [f64; 2], c: [f64; 2]) -> f64 {
+    (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
+}
+
+/// Whether segments ab and cd cross or overlap (for adjacent edges: only overlap back along
+/// the shared vertex counts).
+fn segments_touch(a: [f64; 2], b: [f64; 2], c: [f64; 2], d: [f64; 2], adjacent: bool) -> bool {
+    let (d1, d2, d3, d4) = (orient(c, d, a), orient(c, d, b), orient(a, b, c), orient(a, b, d));
+    if adjacent {
+        // Collinear and folding back onto each other.
+        let shared = if b == c { b } else { a };
+        let (p, q) = if b == c { (a, d) } else { (b, c) };
+        let v1 = [p[0] - shared[0], p[1] - shared[1]];
+        let v2 = [q[0] - shared[0], q[1] - shared[1]];
+        return orient(shared, p, q) == 0.0 && v1[0] * v2[0] + v1[1] * v2[1] > 0.0;
+    }
+    if ((d1 > 0.0 && d2 < 0.0) || (d1 < 0.0 && d2 > 0.0)) && ((d3 > 0.0 && d4 < 0.0) || (d3 < 0.0 && d4 > 0.0)) {
+        return true;
+    }
+    let on = |p: [f64; 2], q: [f64; 2], r: [f64; 2]| r[0] >= p[0].min(q[0]) && r[0] <= p[0].max(q[0]) && r[1] >= p[1].min(q[1]) && r[1] <= p[1].max(q[1]);
+    (d1 == 0.0 && on(c, d, a)) || (d2 == 0.0 && on(c, d, b)) || (d3 == 0.0 && on(a, b, c)) || (d4 == 0.0 && on(a, b, d))
+}
+
+fn point_in_ring(r: &[[f64; 2]], q: [f64; 2]) -> bool {
+    let n = r.len();
+    let mut inside = false;
+    for i in 0..n {
+        let (a, b) = (r[i], r[(i + 1) % n]);
+        if (a[1] > q[1]) != (b[1] > q[1]) {
+            let x = a[0] + (q[1] - a[1]) / (b[1] - a[1]) * (b[0] - a[0]);
+            if q[0] < x {
+                inside = !inside;
+            }
+        }
+    }
+    inside
+}
+
+fn project_ring(ring: &[[f64; 2]], s: &Surface, q: [f64; 2]) -> [f64; 2] {
+    // Metric at q: scale (u, θ) to mm so the nearest point is nearest on the surface.
+    let j = s.profile().jet(q[0]);
+    let (su, st) = (j.x[1].hypot(j.z[1]), j.x[0].abs().max(1e-9));
+    let n = ring.len();
+    let (mut best, mut best_d, mut best_e) = (ring[0], f64::INFINITY, 0);
+    for i in 0..n {
+        let (a, b) = (ring[i], ring[(i + 1) % n]);
+        let ab = [(b[0] - a[0]) * su, (b[1] - a[1]) * st];
+        let aq = [(q[0] - a[0]) * su, (q[1] - a[1]) * st];
+        let l2 = ab[0] * ab[0] + ab[1] * ab[1];
+        let t = if l2 > 0.0 { ((aq[0] * ab[0] + aq[1] * ab[1]) / l2).clamp(0.0, 1.0) } else { 0.0 };
+        let c = [a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])];
+        let d = ((q[0] - c[0]) * su).powi(2) + ((q[1] - c[1]) * st).powi(2);
+        if d < best_d {
+            best_d = d;
+            best = c;
+            best_e = i;
+        }
+    }
+    // Nudge inside: towards the inward side of the nearest edge, then towards the ring's
+    // centroid, with growing steps, until inside.
+    let scale = bounds_of(ring);
+    let size = (scale[1][0] - scale[0][0]).max(scale[1][1] - scale[0][1]).max(1e-12);
+    let (a, b) = (ring[best_e], ring[(best_e + 1) % n]);
+    let sign = if signed_area(ring) > 0.0 { 1.0 } else { -1.0 };
+    let e = [b[0] - a[0], b[1] - a[1]];
+    let el = (e[0] * e[0] + e[1] * e[1]).sqrt().max(1e-300);
+    let inward = [-sign * e[1] / el, sign * e[0] / el];
+    let centroid = {
+        let m = ring.iter().fold([0.0, 0.0], |s, p| [s[0] + p[0], s[1] + p[1]]);
+        [m[0] / n as f64, m[1] / n as f64]
+    };
+    let mut eps = 1e-12 * size;
+    for _ in 0..40 {
+        let c = [best[0] + eps * inward[0], best[1] + eps * inward[1]];
+        if point_in_ring(ring, c) {
+            return c;
+        }
+        let to = [centroid[0] - best[0], centroid[1] - best[1]];
+        let tl = (to[0] * to[0] + to[1] * to[1]).sqrt().max(1e-300);
+        let c = [best[0] + eps * to[0] / tl, best[1] + eps * to[1] / tl];
+        if point_in_ring(ring, c) {
+            return c;
+        }
+        eps *= 4.0;
+    }
+    best
+}
+
+/// Adaptive Simpson on [a, b] to relative tolerance `tol` (depth-capped, deterministic).
+pub(crate) fn simpson(f: &dyn Fn(f64) -> f64, a: f64, b: f64, tol: f64) -> f64 {
+    fn rec(f: &dyn Fn(f64) -> f64, a: f64, b: f64, fa: f64, fm: f64, fb: f64, whole: f64, eps: f64, depth: u32) -> f64 {
+        let m = 0.5 * (a + b);
+        let (lm, rm) = (0.5 * (a + m), 0.5 * (m + b));
+        let (flm, frm) = (f(lm), f(rm));
+        let left = (m - a) / 6.0 * (fa + 4.0 * flm + fm);
+        let right = (b - m) / 6.0 * (fm + 4.0 * frm + fb);
+        if depth == 0 || (left + right - whole).abs() <= 15.0 * eps {
+            return left + right + (left + right - whole) / 15.0;
+        }
+        rec(f, a, m, fa, flm, fm, left, 0.5 * eps, depth - 1) + rec(f, m, b, fm, frm, fb, right, 0.5 * eps, depth - 1)
+    }
+    if !(b > a) {
+        return 0.0;
+    }
+    let (fa, fm, fb) = (f(a), f(0.5 * (a + b)), f(b));
+    let whole = (b - a) / 6.0 * (fa + 4.0 * fm + fb);
+    let eps = tol * whole.abs().max(1e-300);
+    // Eight panels first so a narrow feature is not missed by the first estimate.
+    let mut sum = 0.0;
+    for i in 0..8 {
+        let (s0, s1) = (a + (b - a) * i as f64 / 8.0, a + (b - a) * (i + 1) as f64 / 8.0);
+        let (f0, f1, f2) = (f(s0), f(0.5 * (s0 + s1)), f(s1));
+        sum += rec(f, s0, s1, f0, f1, f2, (s1 - s0) / 6.0 * (f0 + 4.0 * f1 + f2), eps / 8.0, 30);
+    }
+    sum
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::axisym::platform::Platform;
+
+    /// Cylinder of radius 20 mm, z = 60 − 30u, u ∈ [0, 2].
+    pub(crate) fn cylinder() -> Platform {
+        let pts: Vec<[f64; 2]> = (0..13).map(|i| [20.0, 60.0 - 5.0 * i as f64]).collect();
+        Platform::from_polygon(&pts).unwrap()
+    }
+
+    #[test]
+    fn cylinder_patch_area_by_hand() {
+        let p = cylinder();
+        let s = Surface::new(&p);
+        // u ∈ [0.5, 1.5] is 30 mm of height; θ ∈ [0, 1] is 20 mm of arc: 600 mm².
+        let d = Domain::Rectangle { u: [0.5, 1.5], theta: [0.0, 1.0] };
+        assert!(d.problems(&p).is_empty());
+        assert!((d.area_mm2(&s) - 600.0).abs() < 1e-6, "{}", d.area_mm2(&s));
+        // An L-shaped polygon: the rectangle minus its upper-right quarter: 450 mm².
+        let l = Domain::Polygon { points: vec![[0.5, 0.0], [1.5, 0.0], [1.5, 0.5], [1.0, 0.5], [1.0, 1.0], [0.5, 1.0], [0.5, 0.0]] };
+        assert!(l.problems(&p).is_empty(), "{:?}", l.problems(&p));
+        assert!((l.area_mm2(&s) - 450.0).abs() < 1e-6, "{}", l.area_mm2(&s));
+        // A triangle: half of the rectangle.
+        let t = Domain::Polygon { points: vec![[0.5, 0.0], [1.5, 0.0], [0.5, 1.0]] };
+        assert!((t.area_mm2(&s) - 300.0).abs() < 1e-6, "{}", t.area_mm2(&s));
+        assert!(l.contains([0.7, 0.7]) && !l.contains([1.2, 0.7]));
+        let q = l.project_inside(&s, [1.2, 0.7]);
+        assert!(l.contains(q), "{q:?}");
+    }
+
+    #[test]
+    fn barrel_rectangle_area_matches_a_fine_sum() {
+        let p = Platform::barrel();
+        let s = Surface::new(&p);
+        let d = Domain::Rectangle { u: [0.8, 1.2], theta: [0.0, 1.0] };
+        let n = 200_000;
+        let h = 0.4 / n as f64;
+        let sum: f64 = (0..n)
+            .map(|i| {
+                let j = p.jet(0.8 + (i as f64 + 0.5) * h);
+                j.x[0] * j.x[1].hypot(j.z[1]) * h
+            })
+            .sum();
+        assert!((d.area_mm2(&s) - sum).abs() < 1e-6 * sum, "{} vs {sum}", d.area_mm2(&s));
+    }
+
+    #[test]
+    fn bad_domains_list_every_problem() {
+        let p = Platform::barrel();
+        let bow = Domain::Polygon { points: vec![[0.8, 0.0], [1.2, 1.0], [1.2, 0.0], [0.8, 1.0]] };
+        assert!(bow.problems(&p).iter().any(|e| matches!(e, DomainProblem::SelfIntersecting(..))));
+        let pole = Domain::Rectangle { u: [0.0, 0.5], theta: [0.0, 1.0] };
+        assert!(pole.problems(&p).iter().any(|e| matches!(e, DomainProblem::NearPole { .. })), "{:?}", pole.problems(&p));
+        let nan = Domain::Rectangle { u: [f64::NAN, 0.5], theta: [0.0, 1.0] };
+        assert!(matches!(nan.problems(&p)[0], DomainProblem::NotFinite(_)));
+        let many = Domain::Rectangle { u: [0.8, 2.5], theta: [0.0, 7.0] };
+        let pr = many.problems(&p);
+        assert!(pr.iter().any(|e| matches!(e, DomainProblem::ThetaSpan(_))) && pr.iter().any(|e| matches!(e, DomainProblem::OutsideRange { .. })), "{pr:?}");
+        let two = Domain::Polygon { points: vec![[0.8, 0.0], [1.0, 0.0], [0.8, 0.0]] };
+        assert!(matches!(two.problems(&p)[0], DomainProblem::TooFewPoints(2)));
+        let json = r#"{"kind":"rectangle","u":[0.8,1.2],"theta":[0,1]}"#;
+        let d: Domain = serde_json::from_str(json).unwrap();
+        assert_eq!(d, Domain::Rectangle { u: [0.8, 1.2], theta: [0.0, 1.0] });
+    }
+}

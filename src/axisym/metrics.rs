@@ -1,0 +1,109 @@
+//! Uniformity metrics of a point set (the paper's section 2.5): the kernel density function
+//! per point and the distances to each point's 2n nearest neighbours, all geodesic.
+
+use super::surface::{Node, Surface};
+use super::uniform::Grid;
+use std::f64::consts::PI;
+
+/// Uniformity metrics.
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
+pub struct Metrics {
+    /// KDF ρ_i = Σ_{j≠i} W_ij per point (equation (6)), 1/mm².
+    pub kdf: Vec<f64>,
+    /// The same, ascending.
+    pub kdf_sorted: Vec<f64>,
+    /// Kernel radius h = 4·n·e/ρ_c, mm.
+    pub kernel_radius_mm: f64,
+    /// Per point, its distances to its 2n nearest neighbours (row-major, 2n per point), mm.
+    pub nn_distances_mm: Vec<f64>,
+    /// Mean of those distances, mm.
+    pub nn_mean_mm: f64,
+    /// Their standard deviation, mm.
+    pub nn_std_mm: f64,
+    /// e / mean (the paper's density check: close to ρ_c when uniform).
+    pub ratio: f64,
+}
+
+/// A histogram: `counts[k]` values fall in [lo + k·w, lo + (k + 1)·w), w = (hi − lo)/bins.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct Histogram {
+    /// Lowest value.
+    pub lo: f64,
+    /// Highest value.
+    pub hi: f64,
+    /// Counts per bin.
+    pub counts: Vec<usize>,
+}
+
+/// Histogram of the finite `values` in `bins` bins (at least 1).
+pub fn histogram(values: &[f64], bins: usize) -> Histogram {
+    let bins = bins.max(1);
+    let v: Vec<f64> = values.iter().copied().filter(|x| x.is_finite()).collect();
+    let lo = v.iter().copied().fold(f64::INFINITY, f64::min);
+    let hi = v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let mut counts = vec![0; bins];
+    if v.is_empty() {
+        return Histogram { lo: 0.0, hi: 0.0, counts };
+    }
+    let w = (hi - lo) / bins as f64;
+    for x in v {
+        let k = if w > 0.0 { (((x - lo) / w) as usize).min(bins - 1) } else { 0 };
+        counts[k] += 1;
+    }
+    Histogram { lo, hi, counts }
+}
+
+/// Metrics of `points` for n = `rasters`, ρ_c = `density`, e = `line_width_mm`.
+pub fn metrics(s: &Surface, points: &[[f64; 2]], rasters: u32, density: f64, line_width_mm: f64) -> Metrics {
+    let k = 2 * rasters.max(1) as usize;
+    let spacing = rasters.max(1) as f64 * line_width_mm / density;
+    let h = 4.0 * spacing;
+    let nodes: Vec<Node> = points.iter().map(|&q| s.node(q)).collect();
+    let n = nodes.len();
+    let mut kdf = vec![0.0; n];
+    let mut nn = Vec::with_capacity(n * k);
+    if !(h > 0.0 && h.is_finite()) || n == 0 {
+        return Metrics { kernel_radius_mm: h, ..Default::default() };
+    }
+    let grid = Grid::new(nodes.iter().map(|n| n.p), h);
+    let norm = 15.0 / (PI * h.powi(6));
+    let mut cand = Vec::new();
+    let mut d: Vec<f64> = Vec::new();
+    for i in 0..n {
+        cand.clear();
+        grid.near(nodes[i].p, h, &mut cand);
+        d.clear();
+        for &j in &cand {
+            if j as usize != i {
+                let dij = s.pair(&nodes[i], &nodes[j as usize]).0;
+                d.push(dij);
+                if dij <= h {
+                    kdf[i] += norm * (h - dij).powi(3);
+                }
+            }
+        }
+        if d.iter().filter(|&&x| x <= h).count() < k {
+            // Sparse neighbourhood: every other point (the chord query only saw radius h).
+            d = (0..n).filter(|&j| j != i).map(|j| s.pair(&nodes[i], &nodes[j]).0).collect();
+        }
+        d.sort_by(f64::total_cmp);
+        nn.extend(d.iter().take(k));
+    }
+    let mean = if nn.is_empty() { 0.0 } else { nn.iter().sum::<f64>() / nn.len() as f64 };
+    let var = if nn.is_empty() { 0.0 } else { nn.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>() / nn.len() as f64 };
+    let mut kdf_sorted = kdf.clone();
+    kdf_sorted.sort_by(f64::total_cmp);
+    Metrics { kdf, kdf_sorted, kernel_radius_mm: h, nn_distances_mm: nn, nn_mean_mm: mean, nn_std_mm: var.sqrt(), ratio: if mean > 0.0 { line_width_mm / mean } else { 0.0 } }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn histogram_counts_every_value() {
+        let h = histogram(&[0.0, 0.5, 1.0, 1.0, f64::NAN], 2);
+        assert_eq!(h.counts, vec![1, 3]);
+        assert_eq!((h.lo, h.hi), (0.0, 1.0));
+    }
+}

@@ -1,0 +1,638 @@
+//! Quasi-uniform points on a domain of an axisymmetric platform (the paper's sections 2.2,
+//! 2.3): N from equation (4), a seed (EBNS, GBNS or ERE), then geodesic repulsion energy
+//! (GRE) minimisation with normalised energy and forces and a step accepted only when the
+//! energy does not rise.
+
+use super::domain::{Domain, DomainProblem};
+use super::metrics::{metrics, Metrics};
+use super::platform::Platform;
+use super::surface::{Node, PairEval, Surface};
+use crate::budget::{Estimate, OverBudget};
+use rand_core::{Rng, SeedableRng};
+use rand_pcg::Pcg64;
+use std::collections::BTreeMap;
+
+/// Default command density ρ_c (fraction).
+pub const DEFAULT_DENSITY: f64 = 0.5;
+/// Default rasters through each point n.
+pub const DEFAULT_RASTERS: u32 = 1;
+/// Default repulsion exponent m (the paper's 5: close pairs are penalised hard).
+pub const DEFAULT_EXPONENT: f64 = 5.0;
+/// Default GRE iteration cap (the paper's 50).
+pub const DEFAULT_ITERATIONS: usize = 50;
+/// Default energy tolerance: stop when the normalised energy changes by less than this
+/// (relative) in an iteration; also the rise a step may make and still be accepted.
+pub const DEFAULT_ENERGY_TOLERANCE: f64 = 1e-6;
+/// Default displacement tolerance: stop when no point moves more than this fraction of the
+/// target spacing s = n·e/ρ_c.
+pub const DEFAULT_DISPLACEMENT_TOLERANCE: f64 = 1e-4;
+/// Default cutoff, in target spacings: pairs farther apart are left out of energy and forces
+/// (0 = all pairs, as the paper). With m = 5 a pair at 3 s weighs 3⁻⁵ ≈ 0.4 % of a nearest
+/// pair; measured on barrel-omega1 and hourglass-omega3, 3 s against all pairs changes the
+/// final 2n-NN standard deviation by a few percent of itself (see the test
+/// `cutoff_barely_changes_the_result`) and runs several times faster.
+pub const DEFAULT_CUTOFF_SPACINGS: f64 = 3.0;
+/// Most points a run may place.
+pub const MAX_POINTS: usize = 20_000;
+/// Most iterations accepted in options.
+pub const MAX_ITERATIONS: usize = 10_000;
+/// Step halvings tried before an iteration gives up.
+pub const MAX_RETRIES: usize = 12;
+/// ERE seed iterations (Euclidean repulsion from a random start).
+pub const ERE_ITERATIONS: usize = 30;
+/// Measured cost of one pair evaluation (s, native release, hourglass-omega3); the time
+/// estimate's unit.
+pub const SECONDS_PER_PAIR: f64 = 2e-6;
+
+/// The barrel's Ω₂: a non-convex slice polygon (concave notch near u = 0.5, convex elsewhere)
+/// on the upper shoulder, true area ≈ 443 mm² (N = 173 at ρ_c = 0.25, n = 1, e = 0.4 mm).
+pub const OMEGA2_POLYGON: &[[f64; 2]] = &[
+    [0.5, 0.1],
+    [0.7, 0.0],
+    [0.9, 0.02],
+    [1.05, 0.12],
+    [1.1, 0.3],
+    [1.05, 0.5],
+    [0.9, 0.62],
+    [0.7, 0.65],
+    [0.5, 0.55],
+    [0.62, 0.33],
+];
+
+/// Initial seed method.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SeedMethod {
+    /// Euclidean blue-noise sampling: dart throwing with a minimum chord distance.
+    Ebns,
+    /// Euclidean repulsion energy from a random start.
+    Ere,
+    /// Geodesic blue-noise sampling: dart throwing with a minimum geodesic distance.
+    Gbns,
+}
+
+/// Options of the stage.
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct Options {
+    /// Command density ρ_c, fraction in (0, 1] ([`DEFAULT_DENSITY`]).
+    pub density: f64,
+    /// Rasters through each point n ([`DEFAULT_RASTERS`]).
+    pub rasters: u32,
+    /// Seed method ([`SeedMethod::Ebns`]).
+    pub seed_method: SeedMethod,
+    /// Repulsion exponent m > 1 ([`DEFAULT_EXPONENT`]).
+    pub exponent: f64,
+    /// GRE iteration cap ([`DEFAULT_ITERATIONS`]).
+    pub iterations: usize,
+    /// See [`DEFAULT_ENERGY_TOLERANCE`].
+    pub energy_tolerance: f64,
+    /// See [`DEFAULT_DISPLACEMENT_TOLERANCE`].
+    pub displacement_tolerance: f64,
+    /// See [`DEFAULT_CUTOFF_SPACINGS`].
+    pub cutoff_spacings: f64,
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Options {
+            density: DEFAULT_DENSITY,
+            rasters: DEFAULT_RASTERS,
+            seed_method: SeedMethod::Ebns,
+            exponent: DEFAULT_EXPONENT,
+            iterations: DEFAULT_ITERATIONS,
+            energy_tolerance: DEFAULT_ENERGY_TOLERANCE,
+            displacement_tolerance: DEFAULT_DISPLACEMENT_TOLERANCE,
+            cutoff_spacings: DEFAULT_CUTOFF_SPACINGS,
+        }
+    }
+}
+
+/// Why the stage refused.
+#[derive(Debug, thiserror::Error, Clone, PartialEq)]
+pub enum Error {
+    /// The platform or a geodesic failed.
+    #[error(transparent)]
+    Axisym(#[from] super::Error),
+    /// The domain is unusable (every problem listed).
+    #[error("the domain is not usable:\n{}", .0.iter().map(|p| format!("- {p}")).collect::<Vec<_>>().join("\n"))]
+    Domain(Vec<DomainProblem>),
+    /// An option is out of range.
+    #[error("option {name} = {value} is out of range: {hint}")]
+    BadOption {
+        /// Option name.
+        name: &'static str,
+        /// Value given.
+        value: f64,
+        /// Allowed range.
+        hint: &'static str,
+    },
+    /// Over a count limit or budget.
+    #[error(transparent)]
+    TooBig(OverBudget),
+    /// Dart throwing could not place the points.
+    #[error("could not place {wanted} seed points (placed {placed}); the domain may be too thin for the spacing: lower the density or use seed_method \"ere\"")]
+    SeedFailed {
+        /// Points wanted.
+        wanted: usize,
+        /// Points placed.
+        placed: usize,
+    },
+}
+
+/// Why GRE stopped.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum StopReason {
+    /// The iteration cap.
+    Iterations,
+    /// The energy changed less than the tolerance.
+    Energy,
+    /// No point moved more than the displacement tolerance.
+    Displacement,
+    /// No step size lowered the energy (a local minimum within rounding).
+    Stalled,
+    /// Nothing to optimise (one point).
+    Trivial,
+}
+
+/// One GRE iteration.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct Iteration {
+    /// Energy E/E₀ after the step.
+    pub energy: f64,
+    /// Largest point displacement, mm.
+    pub max_step_mm: f64,
+    /// Accepted step size (target spacings per unit normalised force).
+    pub step: f64,
+}
+
+/// The stage's result.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct Distribution {
+    /// True surface area of Ω, mm².
+    pub area_mm2: f64,
+    /// N from equation (4).
+    pub target_points: usize,
+    /// The seed, (u, θ).
+    pub seed_points: Vec<[f64; 2]>,
+    /// The optimised points, (u, θ).
+    pub points: Vec<[f64; 2]>,
+    /// Per GRE iteration.
+    pub iterations: Vec<Iteration>,
+    /// Why GRE stopped.
+    pub stop: StopReason,
+    /// Metrics of the seed.
+    pub seed_metrics: Metrics,
+    /// Metrics of the result.
+    pub metrics: Metrics,
+}
+
+fn check_options(o: &Options, line_width_mm: f64) -> Result<(), Error> {
+    let bad = |name, value: f64, hint| Err(Error::BadOption { name, value, hint });
+    if !(o.density > 0.0 && o.density <= 1.0) {
+        return bad("density", o.density, "a fraction in (0, 1]: 0.5 is 50 %");
+    }
+    if o.rasters == 0 || o.rasters > 16 {
+        return bad("rasters", o.rasters as f64, "1 to 16 rasters through each point");
+    }
+    if !(o.exponent > 1.0 && o.exponent <= 32.0) {
+        return bad("exponent", o.exponent, "m in (1, 32]; the paper uses 5");
+    }
+    if o.iterations > MAX_ITERATIONS {
+        return bad("iterations", o.iterations as f64, "at most 10000");
+    }
+    if !(o.energy_tolerance >= 0.0 && o.energy_tolerance < 1.0) {
+        return bad("energy_tolerance", o.energy_tolerance, "in [0, 1); 1e-6 is the default");
+    }
+    if !(o.displacement_tolerance >= 0.0 && o.displacement_tolerance < 1.0) {
+        return bad("displacement_tolerance", o.displacement_tolerance, "in [0, 1) target spacings");
+    }
+    if !(o.cutoff_spacings == 0.0 || (o.cutoff_spacings >= 1.5 && o.cutoff_spacings.is_finite())) {
+        return bad("cutoff_spacings", o.cutoff_spacings, "0 (all pairs) or at least 1.5 target spacings");
+    }
+    if !(line_width_mm > 0.0 && line_width_mm.is_finite()) {
+        return bad("line_width_mm", line_width_mm, "a positive width in mm, e.g. 0.4");
+    }
+    Ok(())
+}
+
+/// Target spacing s = n·e/ρ_c, mm.
+pub fn spacing(o: &Options, line_width_mm: f64) -> f64 {
+    o.rasters as f64 * line_width_mm / o.density
+}
+
+/// N = A·ρ_c²/(n²·e²) (equation (4)), rounded, at least 1.
+pub fn target_points(area_mm2: f64, o: &Options, line_width_mm: f64) -> f64 {
+    let s = spacing(o, line_width_mm);
+    (area_mm2 / (s * s)).round().max(1.0)
+}
+
+fn pairs_per_eval(n: f64, o: &Options) -> f64 {
+    if o.cutoff_spacings > 0.0 { (n * std::f64::consts::PI * o.cutoff_spacings * o.cutoff_spacings / 2.0).min(n * (n - 1.0) / 2.0) } else { n * (n - 1.0) / 2.0 }
+}
+
+/// The stage's work before running it.
+pub fn estimate(p: &Platform, domain: &Domain, o: &Options, line_width_mm: f64) -> Estimate {
+    let ok = check_options(o, line_width_mm).is_ok() && domain.problems(p).is_empty();
+    let area = if ok { domain.area_mm2(&Surface::new(p)) } else { 0.0 };
+    let n = if ok { target_points(area, o, line_width_mm) } else { 0.0 };
+    let pairs = pairs_per_eval(n, o);
+    // About 1.5 energy evaluations per iteration, two metric passes, the seed.
+    let evals = 1.5 * o.iterations as f64 + 4.0 + if o.seed_method == SeedMethod::Ere { 1.5 * ERE_ITERATIONS as f64 } else { 0.0 };
+    let seconds = pairs * evals * SECONDS_PER_PAIR;
+    let bytes = n * (std::mem::size_of::<Node>() as f64 + 256.0) + 64.0 * 1024.0;
+    Estimate::new("axisym_uniform")
+        .quantity("points", "points on the domain", n, "")
+        .quantity("pairs", "pairs per energy evaluation", pairs, "")
+        .cost(bytes, seconds)
+        .limit("points", n, MAX_POINTS as f64, "", "lower the density or the line width, or use a smaller domain")
+        .budgets("lower the density, the iterations or cutoff_spacings")
+}
+
+/// A 3-D uniform grid over points, cells in a `BTreeMap` (deterministic order).
+pub(crate) struct Grid {
+    cell: f64,
+    map: BTreeMap<[i64; 3], Vec<u32>>,
+}
+
+impl Grid {
+    pub(crate) fn new(points: impl Iterator<Item = [f64; 3]>, cell: f64) -> Grid {
+        let mut g = Grid { cell, map: BTreeMap::new() };
+        for (i, p) in points.enumerate() {
+            g.insert(p, i as u32);
+        }
+        g
+    }
+    fn key(&self, p: [f64; 3]) -> [i64; 3] {
+        [(p[0] / self.cell).floor() as i64, (p[1] / self.cell).floor() as i64, (p[2] / self.cell).floor() as i64]
+    }
+    pub(crate) fn insert(&mut self, p: [f64; 3], i: u32) {
+        let k = self.key(p);
+        self.map.entry(k).or_default().push(i);
+    }
+    /// Indices of points in the cells within `r` of p (a superset of the ball).
+    pub(crate) fn near(&self, p: [f64; 3], r: f64, out: &mut Vec<u32>) {
+        let lo = self.key([p[0] - r, p[1] - r, p[2] - r]);
+        let hi = self.key([p[0] + r, p[1] + r, p[2] + r]);
+        for x in lo[0]..=hi[0] {
+            for y in lo[1]..=hi[1] {
+                for z in lo[2]..=hi[2] {
+                    if let Some(v) = self.map.get(&[x, y, z]) {
+                        out.extend_from_slice(v);
+                    }
+                }
+            }
+        }
+    }
+}
+
+fn unit(rng: &mut Pcg64) -> f64 {
+    (rng.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
+}
+
+/// Area-uniform candidates: u by the inverse CDF of x·√g_uu over Ω's u range (a table),
+/// θ uniform over Ω's θ range, rejected outside Ω.
+struct Sampler {
+    u0: f64,
+    du: f64,
+    cdf: Vec<f64>,
+    theta: [f64; 2],
+}
+
+impl Sampler {
+    fn new(s: &Surface, d: &Domain) -> Sampler {
+        let b = d.bounds();
+        let cells = 4096;
+        let du = (b[1][0] - b[0][0]) / cells as f64;
+        let mut cdf = vec![0.0];
+        for i in 0..cells {
+            let j = s.profile().jet(b[0][0] + (i as f64 + 0.5) * du);
+            let w = j.x[0] * j.x[1].hypot(j.z[1]);
+            cdf.push(cdf[i] + w);
+        }
+        Sampler { u0: b[0][0], du, cdf, theta: [b[0][1], b[1][1]] }
+    }
+    fn draw(&self, rng: &mut Pcg64, d: &Domain) -> Option<[f64; 2]> {
+        for _ in 0..1000 {
+            let t = unit(rng) * self.cdf[self.cdf.len() - 1];
+            let i = self.cdf.partition_point(|&c| c <= t).clamp(1, self.cdf.len() - 1) - 1;
+            let f = (t - self.cdf[i]) / (self.cdf[i + 1] - self.cdf[i]).max(1e-300);
+            let q = [self.u0 + (i as f64 + f.clamp(0.0, 1.0)) * self.du, self.theta[0] + unit(rng) * (self.theta[1] - self.theta[0])];
+            if d.contains(q) {
+                return Some(q);
+            }
+        }
+        None
+    }
+}
+
+/// Dart throwing with a minimum distance (chord, or geodesic when `geodesic`), the radius
+/// shrinking by 5 % after 100 + N consecutive misses until N points are in.
+fn dart_throw(s: &Surface, d: &Domain, n: usize, spacing: f64, geodesic: bool, rng: &mut Pcg64) -> Result<Vec<[f64; 2]>, Error> {
+    let sampler = Sampler::new(s, d);
+    let mut r = spacing;
+    let mut pts: Vec<[f64; 2]> = Vec::with_capacity(n);
+    let mut nodes: Vec<Node> = Vec::with_capacity(n);
+    let mut grid = Grid { cell: spacing, map: BTreeMap::new() };
+    let mut misses = 0;
+    let mut cand = Vec::new();
+    while pts.len() < n {
+        let Some(q) = sampler.draw(rng, d) else {
+            return Err(Error::SeedFailed { wanted: n, placed: pts.len() });
+        };
+        let node = s.node(q);
+        cand.clear();
+        grid.near(node.p, r, &mut cand);
+        let ok = cand.iter().all(|&j| {
+            let o = &nodes[j as usize];
+            let c = ((o.p[0] - node.p[0]).powi(2) + (o.p[1] - node.p[1]).powi(2) + (o.p[2] - node.p[2]).powi(2)).sqrt();
+            // The geodesic is never shorter than the chord: only chords under r need it.
+            c >= r || (geodesic && s.pair(&node, o).0 >= r)
+        });
+        if ok {
+            grid.insert(node.p, pts.len() as u32);
+            pts.push(q);
+            nodes.push(node);
+            misses = 0;
+        } else {
+            misses += 1;
+            if misses > 100 + n {
+                r *= 0.95;
+                misses = 0;
+                if r < 1e-3 * spacing {
+                    return Err(Error::SeedFailed { wanted: n, placed: pts.len() });
+                }
+            }
+        }
+    }
+    Ok(pts)
+}
+
+/// Energy and forces of a configuration.
+struct Engine<'a, 'b> {
+    s: &'a Surface<'b>,
+    m: f64,
+    /// Cutoff distance, mm (∞ = all pairs).
+    rc: f64,
+    /// Geodesic (GRE) or chord (ERE) distances.
+    geodesic: bool,
+}
+
+impl Engine<'_, '_> {
+    /// (E, force covectors F_i = −∇_i E, nodes). The pair energy is shifted by rc^−m so it
+    /// is continuous at the cutoff (a truncated, unshifted energy jumps as pairs cross it).
+    fn eval(&self, pts: &[[f64; 2]]) -> (f64, Vec<[f64; 2]>, Vec<Node>) {
+        let nodes: Vec<Node> = pts.iter().map(|&q| self.s.node(q)).collect();
+        let mut f = vec![[0.0; 2]; pts.len()];
+        let mut e = 0.0;
+        let shift = if self.rc.is_finite() { self.rc.powf(-self.m) } else { 0.0 };
+        let visit = |i: usize, j: usize, e: &mut f64, f: &mut Vec<[f64; 2]>| {
+            let pe: PairEval = if self.geodesic { self.s.pair_both(&nodes[i], &nodes[j]) } else { self.s.chord_pair(&nodes[i], &nodes[j]) };
+            if !(pe.d < self.rc) {
+                return;
+            }
+            let d = pe.d.max(1e-9);
+            *e += d.powf(-self.m) - shift;
+            let w = self.m * d.powf(-self.m - 1.0);
+            f[i][0] += w * pe.ga[0];
+            f[i][1] += w * pe.ga[1];
+            f[j][0] += w * pe.gb[0];
+            f[j][1] += w * pe.gb[1];
+        };
+        if self.rc.is_finite() {
+            let grid = Grid::new(nodes.iter().map(|n| n.p), self.rc);
+            let mut cand = Vec::new();
+            for i in 0..nodes.len() {
+                cand.clear();
+                grid.near(nodes[i].p, self.rc, &mut cand);
+                for &j in &cand {
+                    let j = j as usize;
+                    if j > i {
+                        let (a, b) = (nodes[i].p, nodes[j].p);
+                        let c2 = (a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2);
+                        if c2 < self.rc * self.rc {
+                            visit(i, j, &mut e, &mut f);
+                        }
+                    }
+                }
+            }
+        } else {
+            for i in 0..nodes.len() {
+                for j in i + 1..nodes.len() {
+                    visit(i, j, &mut e, &mut f);
+                }
+            }
+        }
+        (e, f, nodes)
+    }
+}
+
+/// Metric length of a covector F at a node, mm per unit.
+fn cov_norm(n: &Node, f: [f64; 2]) -> f64 {
+    (f[0] * f[0] / n.g[0] + if n.g[1] > 0.0 { f[1] * f[1] / n.g[1] } else { 0.0 }).sqrt()
+}
+
+/// Repulsion descent: returns (points, iterations, stop).
+#[allow(clippy::too_many_arguments)]
+fn descend(eng: &Engine, d: &Domain, start: Vec<[f64; 2]>, iterations: usize, e_tol: f64, disp_tol_mm: f64, spacing: f64, progress: &mut dyn FnMut(f32)) -> (Vec<[f64; 2]>, Vec<Iteration>, StopReason) {
+    let mut pts = start;
+    if pts.len() < 2 {
+        return (pts, Vec::new(), StopReason::Trivial);
+    }
+    let (e0, mut forces, mut nodes) = eng.eval(&pts);
+    let f0 = nodes.iter().zip(&forces).map(|(n, f)| cov_norm(n, *f)).fold(0.0, f64::max);
+    if !(e0 > 0.0 && f0 > 0.0) {
+        return (pts, Vec::new(), StopReason::Trivial);
+    }
+    let mut e_prev = 1.0;
+    let mut alpha = 0.2;
+    let mut log = Vec::new();
+    let mut stop = StopReason::Iterations;
+    for it in 0..iterations {
+        let mut accepted = None;
+        for _ in 0..=MAX_RETRIES {
+            let mut max_step: f64 = 0.0;
+            let trial: Vec<[f64; 2]> = pts
+                .iter()
+                .zip(&nodes)
+                .zip(&forces)
+                .map(|((q, n), f)| {
+                    // Raise the index (vector = g⁻¹·F), scale by α·s/F₀, cap at half a spacing.
+                    let len = cov_norm(n, *f) / f0 * alpha * spacing;
+                    let cap = if len > 0.5 * spacing { 0.5 * spacing / len } else { 1.0 };
+                    let k = alpha * spacing / f0 * cap;
+                    let v = [k * f[0] / n.g[0], if n.g[1] > 0.0 { k * f[1] / n.g[1] } else { 0.0 }];
+                    let t = d.project_inside(eng.s, [q[0] + v[0], q[1] + v[1]]);
+                    let moved = (n.g[0] * (t[0] - q[0]).powi(2) + n.g[1] * (t[1] - q[1]).powi(2)).sqrt();
+                    max_step = max_step.max(moved);
+                    t
+                })
+                .collect();
+            let (e, f, nd) = eng.eval(&trial);
+            let en = e / e0;
+            if en <= e_prev + e_tol {
+                accepted = Some((trial, f, nd, en, max_step));
+                break;
+            }
+            alpha *= 0.5;
+        }
+        let Some((trial, f, nd, en, max_step)) = accepted else {
+            stop = StopReason::Stalled;
+            break;
+        };
+        log.push(Iteration { energy: en, max_step_mm: max_step, step: alpha });
+        progress((it + 1) as f32 / iterations as f32);
+        let rel = (e_prev - en).abs() / e_prev;
+        pts = trial;
+        forces = f;
+        nodes = nd;
+        e_prev = en;
+        if max_step < disp_tol_mm {
+            stop = StopReason::Displacement;
+            break;
+        }
+        if rel < e_tol {
+            stop = StopReason::Energy;
+            break;
+        }
+        alpha = (alpha * 1.5).min(1.0);
+    }
+    (pts, log, stop)
+}
+
+/// Places N = A·ρ_c²/(n²e²) quasi-uniform points on Ω and reports the seed, the result and
+/// their metrics. `seed` drives every random choice; `progress` gets the GRE fraction done.
+pub fn distribute(p: &Platform, domain: &Domain, o: &Options, line_width_mm: f64, seed: u64, progress: &mut dyn FnMut(f32)) -> Result<Distribution, Error> {
+    check_options(o, line_width_mm)?;
+    let problems = domain.problems(p);
+    if !problems.is_empty() {
+        return Err(Error::Domain(problems));
+    }
+    estimate(p, domain, o, line_width_mm).check().map_err(Error::TooBig)?;
+    let s = Surface::new(p);
+    let area = domain.area_mm2(&s);
+    let n = target_points(area, o, line_width_mm) as usize;
+    let sp = spacing(o, line_width_mm);
+    let rc = if o.cutoff_spacings > 0.0 { o.cutoff_spacings * sp } else { f64::INFINITY };
+    let mut rng = Pcg64::seed_from_u64(seed);
+    let seed_points = match o.seed_method {
+        SeedMethod::Ebns => dart_throw(&s, domain, n, sp, false, &mut rng)?,
+        SeedMethod::Gbns => dart_throw(&s, domain, n, sp, true, &mut rng)?,
+        SeedMethod::Ere => {
+            let sampler = Sampler::new(&s, domain);
+            let mut start = Vec::with_capacity(n);
+            for _ in 0..n {
+                start.push(sampler.draw(&mut rng, domain).ok_or(Error::SeedFailed { wanted: n, placed: start.len() })?);
+            }
+            let eng = Engine { s: &s, m: o.exponent, rc, geodesic: false };
+            descend(&eng, domain, start, ERE_ITERATIONS, o.energy_tolerance, o.displacement_tolerance * sp, sp, &mut |_| {}).0
+        }
+    };
+    let eng = Engine { s: &s, m: o.exponent, rc, geodesic: true };
+    let (points, iterations, stop) = descend(&eng, domain, seed_points.clone(), o.iterations, o.energy_tolerance, o.displacement_tolerance * sp, sp, progress);
+    let seed_metrics = metrics(&s, &seed_points, o.rasters, o.density, line_width_mm);
+    let m = metrics(&s, &points, o.rasters, o.density, line_width_mm);
+    Ok(Distribution { area_mm2: area, target_points: n, seed_points, points, iterations, stop, seed_metrics, metrics: m })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::axisym::platform::Platform;
+
+    fn omega(name: &str) -> (Platform, Domain, Options) {
+        let base = Options::default();
+        match name {
+            "barrel-omega1" => (Platform::barrel(), Domain::Rectangle { u: [0.8, 1.2], theta: [0.0, 1.0] }, Options { density: 0.5, seed_method: SeedMethod::Ebns, ..base }),
+            "barrel-omega2" => (Platform::barrel(), Domain::Polygon { points: OMEGA2_POLYGON.to_vec() }, Options { density: 0.25, seed_method: SeedMethod::Ere, ..base }),
+            _ => (Platform::hourglass(), Domain::Rectangle { u: [1.0, 3.0], theta: [0.0, 1.0] }, Options { density: 0.1, seed_method: SeedMethod::Gbns, ..base }),
+        }
+    }
+
+    #[test]
+    fn n_matches_equation_4() {
+        // Cylinder R = 20 mm, z = 60 − 30u: u ∈ [0.5, 1.5] × θ ∈ [0, 1] is 30 × 20 = 600 mm²;
+        // at ρ_c = 0.5, n = 1, e = 0.4: N = 600·0.25/0.16 = 937.5 → 938.
+        let pts: Vec<[f64; 2]> = (0..13).map(|i| [20.0, 60.0 - 5.0 * i as f64]).collect();
+        let cyl = Platform::from_polygon(&pts).unwrap();
+        let e = estimate(&cyl, &Domain::Rectangle { u: [0.5, 1.5], theta: [0.0, 1.0] }, &Options::default(), 0.4);
+        assert_eq!(e.get("points"), 938.0);
+        for (name, paper) in [("barrel-omega1", 538.0), ("barrel-omega2", 173.0), ("hourglass-omega3", 204.0)] {
+            let (p, d, o) = omega(name);
+            let n = estimate(&p, &d, &o, 0.4).get("points");
+            println!("{name}: N = {n} (paper {paper}), area {:.1} mm²", d.area_mm2(&Surface::new(&p)));
+            assert!((n - paper).abs() <= 0.04 * paper, "{name}: N = {n}, paper {paper}");
+        }
+    }
+
+    #[test]
+    fn examples_improve_uniformity() {
+        for name in ["barrel-omega1", "barrel-omega2", "hourglass-omega3"] {
+            let (p, d, o) = omega(name);
+            let t = std::time::Instant::now();
+            let mut calls = 0;
+            let r = distribute(&p, &d, &o, 0.4, 1, &mut |_| calls += 1).unwrap();
+            let secs = t.elapsed().as_secs_f64();
+            let red = 1.0 - r.metrics.nn_std_mm / r.seed_metrics.nn_std_mm;
+            println!(
+                "{name}: N = {}, {:.3} s, {} iterations ({:?}); 2n-NN mean {:.3} → {:.3} mm, std {:.3} → {:.3} mm ({:.1} % lower); e/mean {:.1} % → {:.1} %",
+                r.points.len(),
+                secs,
+                r.iterations.len(),
+                r.stop,
+                r.seed_metrics.nn_mean_mm,
+                r.metrics.nn_mean_mm,
+                r.seed_metrics.nn_std_mm,
+                r.metrics.nn_std_mm,
+                100.0 * red,
+                100.0 * r.seed_metrics.ratio,
+                100.0 * r.metrics.ratio
+            );
+            assert_eq!(calls, r.iterations.len());
+            assert!(r.metrics.nn_std_mm < r.seed_metrics.nn_std_mm, "{name}: no improvement");
+            let mut prev = 1.0;
+            for it in &r.iterations {
+                assert!(it.energy <= prev + o.energy_tolerance, "{name}: energy rose {prev} → {}", it.energy);
+                prev = it.energy;
+            }
+            assert!(r.points.iter().all(|&q| d.contains(q)), "{name}: a point left Ω");
+            assert_eq!(r.points.len(), r.target_points);
+        }
+    }
+
+    #[test]
+    fn same_seed_same_points() {
+        let (p, d, mut o) = omega("barrel-omega2");
+        o.iterations = 5;
+        let a = distribute(&p, &d, &o, 0.4, 3, &mut |_| {}).unwrap();
+        let b = distribute(&p, &d, &o, 0.4, 3, &mut |_| {}).unwrap();
+        let c = distribute(&p, &d, &o, 0.4, 4, &mut |_| {}).unwrap();
+        let bits = |v: &[[f64; 2]]| v.iter().flat_map(|q| [q[0].to_bits(), q[1].to_bits()]).collect::<Vec<_>>();
+        assert_eq!(bits(&a.points), bits(&b.points));
+        assert_ne!(bits(&a.points), bits(&c.points));
+    }
+
+    #[test]
+    fn bad_input_is_refused_with_typed_errors() {
+        let p = Platform::barrel();
+        let d = Domain::Rectangle { u: [0.8, 1.2], theta: [0.0, 1.0] };
+        for density in [0.0, 1.5, f64::NAN] {
+            let o = Options { density, ..Options::default() };
+            assert!(matches!(distribute(&p, &d, &o, 0.4, 1, &mut |_| {}), Err(Error::BadOption { name: "density", .. })));
+        }
+        assert!(matches!(distribute(&p, &d, &Options::default(), f64::NAN, 1, &mut |_| {}), Err(Error::BadOption { .. })));
+        let bow = Domain::Polygon { points: vec![[0.8, 0.0], [1.2, 1.0], [1.2, 0.0], [0.8, 1.0]] };
+        assert!(matches!(distribute(&p, &bow, &Options::default(), 0.4, 1, &mut |_| {}), Err(Error::Domain(_))));
+        let pole = Domain::Rectangle { u: [0.0, 0.3], theta: [0.0, 1.0] };
+        let e = distribute(&p, &pole, &Options::default(), 0.4, 1, &mut |_| {}).unwrap_err();
+        assert!(matches!(&e, Error::Domain(v) if v.iter().any(|x| matches!(x, DomainProblem::NearPole { .. }))), "{e}");
+        let nan = Domain::Polygon { points: vec![[0.8, 0.0], [f64::NAN, 1.0], [1.2, 0.0]] };
+        assert!(matches!(distribute(&p, &nan, &Options::default(), 0.4, 1, &mut |_| {}), Err(Error::Domain(_))));
+        // Too many points: refused before allocating.
+        let big = Domain::Rectangle { u: [0.3, 1.7], theta: [0.0, 6.0] };
+        let e = distribute(&p, &big, &Options { density: 1.0, ..Options::default() }, 0.1, 1, &mut |_| {}).unwrap_err();
+        assert!(matches!(e, Error::TooBig(_)), "{e}");
+        println!("{e}");
+    }
+}

@@ -17,16 +17,19 @@
 //! O((cK/64)²). Both are normalised to unit length in the metric, as the true gradient is.
 
 use super::geodesic::{self, geodesic};
-use super::platform::Profile;
+use super::platform::{Jet, Profile};
+
+/// Jet-table cells per unit of u: Hermite error ≤ h⁴/384·|f⁗| ≈ 3e-11 of the presets' values.
+const JET_CELLS_PER_U: f64 = 1024.0;
 
 /// Default largest relative error of the chord approximation; pairs whose bound is above it
 /// get an exact geodesic.
 pub const DEFAULT_CHORD_REL_TOL: f64 = 1e-6;
 /// C in the bound |d_chord − d_geo|/d_geo ≤ C·(c·K)⁴. A circle arc gives 3/640 ≈ 0.0047 (the
 /// next term of 2/κ·asin(κc/2)); the test `chord_bound_holds_on_presets` measures at most
-/// 0.11 on the barrel and the hourglass (the ends' average stands in for the middle's κ_n, which
-/// adds a κ·κ″ term), so 0.5 keeps a safety factor of four.
-pub const CHORD_ERROR_CONSTANT: f64 = 0.5;
+/// 0.11 on the barrel and 0.97 on the hourglass (the ends' average stands in for the middle's
+/// κ_n, which adds a κ·κ″ term), so 4 keeps a safety factor of four.
+pub const CHORD_ERROR_CONSTANT: f64 = 4.0;
 /// Cells of the curvature-scale table over the u range.
 const CELLS: usize = 2048;
 
@@ -70,6 +73,10 @@ pub struct Surface<'a> {
     pub geodesic: geodesic::Options,
     u_lo: f64,
     u_hi: f64,
+    /// Jets at both ends of each table cell (cubic Hermite in between: every jet the hot
+    /// loops need comes from here, about ten times cheaper than a Bézier evaluation).
+    jets: Vec<[Jet; 2]>,
+    jet_h: f64,
     /// Sparse table: `scale[k][i]` = max curvature scale over cells i .. i + 2^k.
     scale: Vec<Vec<f64>>,
 }
@@ -127,7 +134,30 @@ impl<'a> Surface<'a> {
             scale.push(next);
             w *= 2;
         }
-        Surface { profile, chord_rel_tol: DEFAULT_CHORD_REL_TOL, geodesic: geodesic::Options::default(), u_lo, u_hi, scale }
+        let cells = (((u_hi - u_lo) * JET_CELLS_PER_U).ceil() as usize).clamp(1, 1 << 20);
+        let jet_h = (u_hi - u_lo) / cells as f64;
+        let jets = (0..cells).map(|i| [profile.jet(u_lo + i as f64 * jet_h), profile.jet(u_lo + (i + 1) as f64 * jet_h)]).collect();
+        Surface { profile, chord_rel_tol: DEFAULT_CHORD_REL_TOL, geodesic: geodesic::Options::default(), u_lo, u_hi, jets, jet_h, scale }
+    }
+
+    /// x, z and derivatives at u from the table (the profile itself outside its range).
+    pub fn jet(&self, u: f64) -> Jet {
+        let f = (u - self.u_lo) / self.jet_h;
+        if !(f >= 0.0 && f <= self.jets.len() as f64) {
+            return self.profile.jet(u);
+        }
+        let i = (f as usize).min(self.jets.len() - 1);
+        let t = f - i as f64;
+        let [a, b] = &self.jets[i];
+        let h = self.jet_h;
+        // Cubic Hermite of each order k from values k and slopes k + 1; the third
+        // derivative linearly.
+        let (t2, t3) = (t * t, t * t * t);
+        let (h00, h10, h01, h11) = (2.0 * t3 - 3.0 * t2 + 1.0, t3 - 2.0 * t2 + t, -2.0 * t3 + 3.0 * t2, t3 - t2);
+        let herm = |fa: &[f64; 4], fb: &[f64; 4], k: usize| h00 * fa[k] + h10 * h * fa[k + 1] + h01 * fb[k] + h11 * h * fb[k + 1];
+        let x = [herm(&a.x, &b.x, 0), herm(&a.x, &b.x, 1), herm(&a.x, &b.x, 2), a.x[3] + t * (b.x[3] - a.x[3])];
+        let z = [herm(&a.z, &b.z, 0), herm(&a.z, &b.z, 1), herm(&a.z, &b.z, 2), a.z[3] + t * (b.z[3] - a.z[3])];
+        Jet { x, z }
     }
 
     /// The profile.
@@ -137,7 +167,7 @@ impl<'a> Surface<'a> {
 
     /// Per-point data for the pair queries.
     pub fn node(&self, q: [f64; 2]) -> Node {
-        let j = self.profile.jet(q[0]);
+        let j = self.jet(q[0]);
         let (s, c) = (libm::sin(q[1]), libm::cos(q[1]));
         let g_uu = j.x[1] * j.x[1] + j.z[1] * j.z[1];
         let sp = g_uu.sqrt();
@@ -246,7 +276,7 @@ impl<'a> Surface<'a> {
     /// enough steps for the pair's c·K (the RK4 error is ∝ (cK/steps)⁴), the initial velocity
     /// from the second-order expansion v = Δ + ½Γ(Δ, Δ) and corrected by Newton with one
     /// finite-difference Jacobian. The length is the (conserved) speed |v|_g. `None` when it
-    /// does not converge to 1e-11 of the distance; the caller then asks [`geodesic`].
+    /// does not converge to 1e-10 of the distance; the caller then asks [`geodesic`].
     fn shoot(&self, a: &Node, b: &Node, bound: f64) -> Option<PairEval> {
         let mut dt = libm::remainder(b.q[1] - a.q[1], 2.0 * std::f64::consts::PI);
         if dt <= -std::f64::consts::PI {
@@ -254,7 +284,7 @@ impl<'a> Surface<'a> {
         }
         let target = [b.q[0], a.q[1] + dt];
         let delta = [b.q[0] - a.q[0], dt];
-        let ja = self.profile.jet(a.q[0]);
+        let ja = self.jet(a.q[0]);
         let ch = super::platform::christoffel_of(&ja);
         let mut v = [
             delta[0] + 0.5 * (ch.u_uu * delta[0] * delta[0] + ch.u_tt * delta[1] * delta[1]),
@@ -262,15 +292,15 @@ impl<'a> Surface<'a> {
         ];
         // (cK)⁴·C = bound; steps so that (cK/steps)⁴ is ~1e-14.
         let ck = libm::sqrt(libm::sqrt(bound / CHORD_ERROR_CONSTANT));
-        let steps = ((ck * 3000.0).sqrt().ceil() as usize).clamp(4, 64);
+        // RK4's error is ∝ (cK/steps)⁴ with a small constant; the test checks 1e-6 holds.
+        let steps = ((ck * 40.0).ceil() as usize).clamp(4, 64);
         let (lo, hi) = (self.u_lo, self.u_hi);
-        let profile = self.profile;
         let shoot = |v: [f64; 2]| -> Option<[f64; 4]> {
             let rhs = |y: &[f64; 4]| -> Option<[f64; 4]> {
                 if !(lo..=hi).contains(&y[0]) {
                     return None;
                 }
-                let j = profile.jet(y[0]);
+                let j = self.jet(y[0]);
                 if !(j.x[0] > 0.0) {
                     return None;
                 }
@@ -309,7 +339,7 @@ impl<'a> Surface<'a> {
             return None;
         }
         for _ in 0..12 {
-            if m <= 1e-11 * c {
+            if m <= 1e-10 * c {
                 break;
             }
             v[0] += (jm[1][1] * e[0] - jm[0][1] * e[1]) / det;
@@ -317,7 +347,7 @@ impl<'a> Surface<'a> {
             y = shoot(v)?;
             (e, m) = miss_mm(&y);
         }
-        if !(m <= 1e-11 * c) {
+        if !(m <= 1e-10 * c) {
             return None;
         }
         let speed = (a.g[0] * v[0] * v[0] + a.g[1] * v[1] * v[1]).sqrt();
@@ -379,7 +409,7 @@ mod tests {
             let (mut worst_ratio, mut worst_used, mut used, mut total) = (0.0f64, 0.0f64, 0, 0);
             let t0 = std::time::Instant::now();
             let (mut exact_time, mut fast_time) = (0.0, 0.0);
-            for _ in 0..400 {
+            for _ in 0..150 {
                 let a = [u_lo + (u_hi - u_lo) * unit(&mut rng), 6.0 * unit(&mut rng)];
                 // Near pairs: up to ~8 mm apart.
                 let len = 8.0 * unit(&mut rng);

@@ -7,11 +7,14 @@
 //!   z = height) half-plane, revolved about z into the embedded map r(u, θ); its metric,
 //!   Christoffel symbols, curvature, normal and validation (C³ at knots, cusps,
 //!   self-intersections, radius > 0, pole clearance).
+//! - [`contour`]: where a part meets the (offset) platform, as closed (u, θ) polygons: the
+//!   paper's domain Ω₂ (marching triangles on the signed distance to the surface).
 //! - [`geodesic`]: shortest paths between two (u, θ) points on any [`platform::Profile`]:
 //!   Clairaut shooting first, Runge–Kutta shooting as the fallback.
 //!
 //! Units: millimetres, radians. Deterministic: transcendentals through `libm`, no hash maps.
 
+pub mod contour;
 pub mod geodesic;
 pub mod platform;
 pub mod surface;

@@ -1,7 +1,7 @@
 //! Axisymmetric build platforms (groundwork for issue 10, job kind `axisymmetric`).
 //!
-//! Not wired into the pipeline yet: this module only holds the platform geometry and the
-//! geodesics the later stages (uniform points, paths, validation metrics) will use.
+//! Not wired into the pipeline yet: this module holds the platform geometry, the geodesics and
+//! the tour stage; uniform points and validation metrics are still to come.
 //!
 //! - [`platform`]: the generatrix, a composition of degree-6 Bézier segments in the (x = radius,
 //!   z = height) half-plane, revolved about z into the embedded map r(u, θ); its metric,
@@ -9,11 +9,14 @@
 //!   self-intersections, radius > 0, pole clearance).
 //! - [`geodesic`]: shortest paths between two (u, θ) points on any [`platform::Profile`]:
 //!   Clairaut shooting first, Runge–Kutta shooting as the fallback.
+//! - [`tour`]: the infill path through given (u, θ) points (nearest neighbour + 2-opt, no
+//!   crossings in the map), sampled along geodesics into tool poses.
 //!
 //! Units: millimetres, radians. Deterministic: transcendentals through `libm`, no hash maps.
 
 pub mod geodesic;
 pub mod platform;
+pub mod tour;
 
 pub use geodesic::{geodesic, Geodesic, Method};
 pub use platform::{Platform, Problem, Profile};

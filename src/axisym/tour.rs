@@ -55,9 +55,9 @@ pub const MAX_POINTS: usize = 20_000;
 /// samples.
 pub const MAX_SAMPLES: f64 = 2e6;
 /// Time per point on the reference machine with a chord-fast `dist`, s: one geodesic per
-/// segment dominates (about 10–45 ms each from geodesic.rs at its 1e-11 tolerance; 500 points
-/// took 23 s), NN and 2-opt are negligible beside it.
-const SECONDS_PER_POINT: f64 = 0.03;
+/// segment dominates (geodesic.rs at its 1e-11 tolerance: 5 000 points took 65 s on the
+/// hourglass, 301 s on the barrel's short segments), NN and 2-opt are negligible beside it.
+const SECONDS_PER_POINT: f64 = 0.06;
 
 /// Where the path starts.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize, Default)]

@@ -1,7 +1,7 @@
 //! Axisymmetric build platforms (groundwork for issue 10, job kind `axisymmetric`).
 //!
-//! Not wired into the pipeline yet: this module only holds the platform geometry and the
-//! geodesics the later stages (uniform points, paths, validation metrics) will use.
+//! The geometry behind job kind `axisymmetric` ([`crate::jobs::axisymmetric`]); each stage is a
+//! pure function of its inputs.
 //!
 //! - [`platform`]: the generatrix, a composition of degree-6 Bézier segments in the (x = radius,
 //!   z = height) half-plane, revolved about z into the embedded map r(u, θ); its metric,
@@ -11,15 +11,18 @@
 //!   paper's domain Ω₂ (marching triangles on the signed distance to the surface).
 //! - [`geodesic`]: shortest paths between two (u, θ) points on any [`platform::Profile`]:
 //!   Clairaut shooting first, Runge–Kutta shooting as the fallback.
+//! - [`tour`]: the infill path through given (u, θ) points (nearest neighbour + 2-opt, no
+//!   crossings in the map), sampled along geodesics into tool poses.
 //!
 //! Units: millimetres, radians. Deterministic: transcendentals through `libm`, no hash maps.
 
 pub mod contour;
 pub mod geodesic;
 pub mod platform;
-pub mod surface;
 pub mod domain;
 pub mod metrics;
+pub mod surface;
+pub mod tour;
 pub mod uniform;
 
 pub use geodesic::{geodesic, Geodesic, Method};

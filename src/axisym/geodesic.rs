@@ -1,11 +1,9 @@
 //! Geodesic distance and path between two (u, θ) points on a surface of revolution.
 //!
-//! Primary: Clairaut's relation. Along a geodesic x·sin ψ = c (ψ: angle to the meridian), so
-//! while u moves monotonically dθ/du = c·√g_uu / (x·√(x² − c²)) and
-//! ds/du = x·√g_uu / √(x² − c²). Δθ(c) is increasing in c on [0, min x), so hitting the
-//! target Δθ is a one-dimensional root find (Illinois regula falsi, bracketed, deterministic).
-//! When the target is beyond Δθ(min x) the geodesic turns back in u (or the points share u):
-//! Clairaut gives up and the general shooter takes over.
+//! Primary: Clairaut's relation x·sin ψ = c (ψ: angle to the meridian) turns the boundary
+//! value problem into a one-dimensional root find in c, solved with fixed Gauss–Kronrod
+//! quadrature by [`super::clairaut`], for geodesics monotone in u and for those that turn
+//! back once; the path is then one RK4 shot from the solved start direction.
 //!
 //! Fallback: the geodesic equation (the paper's equation (1), with Γ^θ_uθ in the θ row) for
 //! (u, θ)(τ), τ ∈ [0, 1], integrated by classical RK4 with a fixed number of steps, and
@@ -33,7 +31,8 @@ pub const DEFAULT_PATH_SAMPLES: usize = 65;
 /// Which solver.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Method {
-    /// Clairaut first, the ODE shooter when it cannot (same u, turning points).
+    /// Clairaut first, the ODE shooter when it cannot (a pair on a parallel where x′ = 0,
+    /// two critical points of the radius between the ends).
     Auto,
     /// Clairaut only ([`Error::TurningPoint`] when it cannot).
     Clairaut,
@@ -109,9 +108,9 @@ pub fn geodesic<P: Profile + ?Sized>(p: &P, a: [f64; 2], b: [f64; 2], o: &Option
     }
     match o.method {
         Method::Clairaut => clairaut(p, a, b, o),
-        Method::Ode => ode(p, a, b, o),
+        Method::Ode => ode(p, a, b, o, [b[0] - a[0], b[1] - a[1]]),
         Method::Auto => match clairaut(p, a, b, o) {
-            Err(Error::TurningPoint { .. }) => ode(p, a, b, o),
+            Err(Error::TurningPoint { .. }) => ode(p, a, b, o, [b[0] - a[0], b[1] - a[1]]),
             r => r,
         },
     }
@@ -136,130 +135,41 @@ fn check_point<P: Profile + ?Sized>(p: &P, u: f64, min_r: f64) -> Result<(), Err
     Ok(())
 }
 
-/// Adaptive Simpson on [a, b] after u = a + (b − a)(1 − cos πs)/2, which removes the
-/// 1/√ endpoint singularities of the Clairaut integrands (they sit where x = c).
-fn integrate(f: &dyn Fn(f64) -> f64, a: f64, b: f64, eps: f64) -> f64 {
-    let g = |s: f64| {
-        let u = a + (b - a) * 0.5 * (1.0 - libm::cos(PI * s));
-        f(u) * (b - a) * 0.5 * PI * libm::sin(PI * s)
-    };
-    fn rec(g: &dyn Fn(f64) -> f64, a: f64, b: f64, fa: f64, fm: f64, fb: f64, whole: f64, eps: f64, depth: u32) -> f64 {
-        let m = 0.5 * (a + b);
-        let (lm, rm) = (0.5 * (a + m), 0.5 * (m + b));
-        let (flm, frm) = (g(lm), g(rm));
-        let left = (m - a) / 6.0 * (fa + 4.0 * flm + fm);
-        let right = (b - m) / 6.0 * (fm + 4.0 * frm + fb);
-        if depth == 0 || (left + right - whole).abs() <= 15.0 * eps {
-            return left + right + (left + right - whole) / 15.0;
-        }
-        rec(g, a, m, fa, flm, fm, left, 0.5 * eps, depth - 1) + rec(g, m, b, fm, frm, fb, right, 0.5 * eps, depth - 1)
-    }
-    // Start from 8 panels so a narrow peak is not missed by the first estimate.
-    let mut sum = 0.0;
-    for i in 0..8 {
-        let (s0, s1) = (i as f64 / 8.0, (i + 1) as f64 / 8.0);
-        let (f0, fm, f1) = (g(s0), g(0.5 * (s0 + s1)), g(s1));
-        sum += rec(&g, s0, s1, f0, fm, f1, (s1 - s0) / 6.0 * (f0 + 4.0 * fm + f1), eps / 8.0, 18);
-    }
-    sum
-}
-
+/// Clairaut's relation through [`super::clairaut::solve`], then the path by one RK4 shot
+/// from the solved start direction (its end miss, far below the samples' spacing, is spread
+/// linearly along the path; a larger miss hands over to the ODE shooter from that start).
 fn clairaut<P: Profile + ?Sized>(p: &P, a: [f64; 2], b: [f64; 2], o: &Options) -> Result<Geodesic, Error> {
-    let (u0, u1) = (a[0], b[0]);
-    let dt = b[1] - a[1];
-    if (u1 - u0).abs() <= 1e-12 * (1.0 + u0.abs()) {
-        return Err(Error::TurningPoint { u0, u1 });
-    }
-    let (lo, hi) = (u0.min(u1), u0.max(u1));
-    // Minimum radius over [lo, hi]: samples, then golden-section refinement.
-    let xr = |u: f64| p.jet(u).x[0];
-    let n = 256;
-    let (mut im, mut xm) = (0, f64::INFINITY);
-    for i in 0..=n {
-        let x = xr(lo + (hi - lo) * i as f64 / n as f64);
-        if x < xm {
-            im = i;
-            xm = x;
-        }
-    }
-    let h = (hi - lo) / n as f64;
-    let (mut ga, mut gb) = ((lo + (im as f64 - 1.0) * h).max(lo), (lo + (im as f64 + 1.0) * h).min(hi));
-    let gr = 0.5 * (5f64.sqrt() - 1.0);
-    for _ in 0..80 {
-        let (c, d) = (gb - gr * (gb - ga), ga + gr * (gb - ga));
-        if xr(c) < xr(d) { gb = d } else { ga = c }
-    }
-    let um = 0.5 * (ga + gb);
-    xm = xm.min(xr(um));
-    if xm < o.min_pole_radius_mm {
-        // The meridian between the ends passes near the axis.
-        let (a, b) = super::platform::pole_clearance(p, o.min_pole_radius_mm).unwrap_or((f64::NAN, f64::NAN));
-        return Err(Error::TooNearPole { u: um, radius_mm: xm, min_radius_mm: o.min_pole_radius_mm, u_allowed_min: a, u_allowed_max: b });
-    }
-    let eps_t = 1e-11;
-    let theta = |c: f64, from: f64, to: f64| {
-        let f = |u: f64| {
-            let j = p.jet(u);
-            let x = j.x[0];
-            c * j.x[1].hypot(j.z[1]) / (x * (x * x - c * c).max(0.0).sqrt())
-        };
-        integrate(&f, from, to, eps_t)
+    let Some(sol) = super::clairaut::solve(p, a, b, o.min_pole_radius_mm) else {
+        return Err(Error::TurningPoint { u0: a[0], u1: b[0] });
     };
-    let target = dt.abs();
-    let c = if target == 0.0 {
-        0.0
-    } else {
-        let c_max = xm * (1.0 - 1e-9);
-        let f_max = theta(c_max, lo, hi) - target;
-        if !(f_max >= 0.0) {
-            return Err(Error::TurningPoint { u0, u1 });
-        }
-        // Illinois regula falsi on Δθ(c) − target over [0, c_max].
-        let (mut ca, mut fa, mut cb, mut fb) = (0.0, -target, c_max, f_max);
-        let mut side = 0;
-        let mut c = cb;
-        for _ in 0..200 {
-            c = (ca * fb - cb * fa) / (fb - fa);
-            let fc = theta(c, lo, hi) - target;
-            if fc.abs() <= 1e-14 * (1.0 + target) || (cb - ca) <= 1e-15 * xm {
-                break;
+    if sol.min_radius_mm < o.min_pole_radius_mm {
+        let (lo, hi) = super::platform::pole_clearance(p, o.min_pole_radius_mm).unwrap_or((f64::NAN, f64::NAN));
+        return Err(Error::TooNearPole { u: sol.turn.unwrap_or(a[0]), radius_mm: sol.min_radius_mm, min_radius_mm: o.min_pole_radius_mm, u_allowed_min: lo, u_allowed_max: hi });
+    }
+    let v = [sol.length_mm * sol.start[0], sol.length_mm * sol.start[1]];
+    let per = (64 + o.path_samples - 2) / (o.path_samples - 1);
+    let steps = per * (o.path_samples - 1);
+    let path = shoot(p, a, v, steps, o.min_pole_radius_mm, true).map(|(_, path)| path);
+    let jb = p.jet(b[0]);
+    match path {
+        Some(path) => {
+            let end = path[steps];
+            let miss = [b[0] - end[0], b[1] - end[1]];
+            let miss_mm = (miss[0] * jb.x[1].hypot(jb.z[1])).hypot(miss[1] * jb.x[0]);
+            if miss_mm <= 1e-6 * sol.length_mm.max(1e-3) {
+                let out = (0..o.path_samples)
+                    .map(|i| {
+                        let q = path[i * per];
+                        let f = i as f64 / (o.path_samples - 1) as f64;
+                        if i + 1 == o.path_samples { b } else { [q[0] + f * miss[0], q[1] + f * miss[1]] }
+                    })
+                    .collect();
+                return Ok(Geodesic { length_mm: sol.length_mm, path: out, method: Method::Clairaut });
             }
-            if fc > 0.0 {
-                cb = c;
-                fb = fc;
-                if side == 1 { fa *= 0.5 }
-                side = 1;
-            } else {
-                ca = c;
-                fa = fc;
-                if side == -1 { fb *= 0.5 }
-                side = -1;
-            }
+            ode(p, a, b, o, v).map(|g| Geodesic { length_mm: sol.length_mm, method: Method::Clairaut, ..g })
         }
-        c
-    };
-    let len_f = |u: f64| {
-        let j = p.jet(u);
-        let x = j.x[0];
-        x * j.x[1].hypot(j.z[1]) / (x * x - c * c).max(0.0).sqrt()
-    };
-    let length = integrate(&len_f, lo, hi, 1e-10);
-    // Path: uniform in u, θ accumulated piece by piece.
-    let m = o.path_samples;
-    let sign = if dt < 0.0 { -1.0 } else { 1.0 };
-    let mut path = Vec::with_capacity(m);
-    let mut acc = 0.0;
-    let mut prev = u0;
-    for i in 0..m {
-        let u = u0 + (u1 - u0) * i as f64 / (m - 1) as f64;
-        if i > 0 {
-            acc += theta(c, prev.min(u), prev.max(u));
-        }
-        prev = u;
-        path.push([u, a[1] + sign * acc]);
+        None => ode(p, a, b, o, v).map(|g| Geodesic { length_mm: sol.length_mm, method: Method::Clairaut, ..g }),
     }
-    *path.last_mut().unwrap() = b;
-    Ok(Geodesic { length_mm: length, path, method: Method::Clairaut })
 }
 
 /// RK4 over τ ∈ [0, 1] of (u, θ, u̇, θ̇, s). `None` if it leaves the range or nears a pole.
@@ -304,7 +214,9 @@ fn shoot<P: Profile + ?Sized>(p: &P, a: [f64; 2], v: [f64; 2], steps: usize, min
     Some((y, path))
 }
 
-fn ode<P: Profile + ?Sized>(p: &P, a: [f64; 2], b: [f64; 2], o: &Options) -> Result<Geodesic, Error> {
+/// Newton shooting on the initial velocity, from `v` (the straight line in (u, θ) when no
+/// better guess is known).
+fn ode<P: Profile + ?Sized>(p: &P, a: [f64; 2], b: [f64; 2], o: &Options, v: [f64; 2]) -> Result<Geodesic, Error> {
     // Residual in mm: the miss in u and θ scaled by the metric at the target.
     let jb = p.jet(b[0]);
     let (su, st) = (jb.x[1].hypot(jb.z[1]), jb.x[0]);
@@ -312,7 +224,7 @@ fn ode<P: Profile + ?Sized>(p: &P, a: [f64; 2], b: [f64; 2], o: &Options) -> Res
     let norm = |r: [f64; 2]| r[0].hypot(r[1]);
     let run = |v: [f64; 2]| shoot(p, a, v, o.ode_steps, o.min_pole_radius_mm, false).map(|(y, _)| y);
     let fail = |r: f64| Error::NoConvergence { u0: a[0], t0: a[1], u1: b[0], t1: b[1], residual_mm: r };
-    let mut v = [b[0] - a[0], b[1] - a[1]];
+    let mut v = v;
     let mut y = run(v).ok_or_else(|| fail(f64::INFINITY))?;
     let mut r = res(&y);
     for _ in 0..o.max_iterations {
@@ -432,7 +344,8 @@ mod tests {
                 assert!(end[0] == b[0] && (end[1] - (a[1] + dt)).abs() < 1e-12, "{end:?}");
             }
         }
-        // Same u: Clairaut cannot (turning point), Auto falls back to the ODE: a circle arc.
+        // Same u on a cylinder (x′ = 0 everywhere): the parallel; Clairaut hands over and
+        // Auto falls back to the ODE: a circle arc.
         let (a, b) = ([0.7, 0.2], [0.7, 1.4]);
         assert!(matches!(geodesic(&p, a, b, &opts(Method::Clairaut)), Err(Error::TurningPoint { .. })));
         let g = geodesic(&p, a, b, &Options::default()).unwrap();
@@ -451,12 +364,12 @@ mod tests {
                 assert!(close(g.length_mm, exact), "{m:?} {a:?}→{b:?}: {} vs {exact}", g.length_mm);
             }
         }
-        // Turning points (same latitude, or bulging past an end): Auto → ODE.
-        for (a, b) in [([1.2, 0.0], [1.2, 1.0]), ([0.9, 0.0], [1.0, 1.5]), ([2.3, 0.2], [2.1, 1.9])] {
+        // Turning points (same latitude, or bulging past an end): both methods.
+        for (a, b, m) in [([1.2, 0.0], [1.2, 1.0]), ([0.9, 0.0], [1.0, 1.5]), ([2.3, 0.2], [2.1, 1.9])].into_iter().flat_map(|(a, b)| [(a, b, Method::Clairaut), (a, b, Method::Ode)]) {
             let exact = great_circle(10.0, a, b);
-            let g = geodesic(&s, a, b, &Options::default()).unwrap();
-            assert_eq!(g.method, Method::Ode, "{a:?}→{b:?}");
-            assert!(close(g.length_mm, exact), "{a:?}→{b:?}: {} vs {exact}", g.length_mm);
+            let g = geodesic(&s, a, b, &opts(m)).unwrap();
+            assert_eq!(g.method, m, "{a:?}→{b:?}");
+            assert!(close(g.length_mm, exact), "{m:?} {a:?}→{b:?}: {} vs {exact}", g.length_mm);
             // Every path point on the great circle: its plane through the centre.
             let pa = crate::axisym::platform::position(&s, a[0], a[1]);
             let pb = crate::axisym::platform::position(&s, b[0], b[1]);

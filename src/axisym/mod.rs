@@ -16,6 +16,7 @@
 //!
 //! Units: millimetres, radians. Deterministic: transcendentals through `libm`, no hash maps.
 
+pub mod clairaut;
 pub mod contour;
 pub mod geodesic;
 pub mod platform;
@@ -75,9 +76,9 @@ pub enum Error {
         /// Range end.
         u_max: f64,
     },
-    /// Clairaut shooting cannot join the points without a turning point in u (only when
-    /// [`Method::Clairaut`] is forced; `Auto` falls back to the ODE shooter).
-    #[error("the geodesic from u = {u0} to u = {u1} turns back in u, which Clairaut shooting does not follow; use Method::Auto or Method::Ode")]
+    /// The Clairaut solver does not handle this pair (only when [`Method::Clairaut`] is
+    /// forced; `Auto` falls back to the ODE shooter).
+    #[error("the Clairaut solver does not handle the geodesic from u = {u0} to u = {u1} (both ends on a parallel where x′ = 0, or more than one critical point of the radius between them); use Method::Auto or Method::Ode")]
     TurningPoint {
         /// Start u.
         u0: f64,

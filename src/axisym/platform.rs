@@ -69,6 +69,39 @@ pub trait Profile {
     fn u_range(&self) -> (f64, f64);
     /// Values and derivatives at u.
     fn jet(&self, u: f64) -> Jet;
+    /// Parameters strictly inside (lo, hi) where the profile is only finitely smooth (knots
+    /// between polynomial pieces), ascending: quadrature splits there to keep its accuracy.
+    fn knots_between(&self, _lo: f64, _hi: f64, _out: &mut Vec<f64>) {}
+    /// Appends the critical points of the radius (x′ = 0) strictly inside (lo, hi),
+    /// ascending. The default samples x′ at 33 points and bisects each sign change; a table
+    /// can answer from precomputed roots.
+    fn radius_turns(&self, lo: f64, hi: f64, out: &mut Vec<f64>) {
+        let n = 32;
+        let mut prev = (lo, self.radius_speed(lo)[1]);
+        for i in 1..=n {
+            let u = if i == n { hi } else { lo + (hi - lo) * i as f64 / n as f64 };
+            let d = self.radius_speed(u)[1];
+            if (prev.1 > 0.0) != (d > 0.0) {
+                let (mut l, mut h) = (prev.0, u);
+                let rising = d > 0.0;
+                for _ in 0..60 {
+                    let m = 0.5 * (l + h);
+                    if (self.radius_speed(m)[1] > 0.0) == rising { h = m } else { l = m }
+                }
+                let r = 0.5 * (l + h);
+                if r > lo && r < hi {
+                    out.push(r);
+                }
+            }
+            prev = (u, d);
+        }
+    }
+    /// [x, x′, √g_uu] at u: what quadrature along a meridian needs (a table can give it
+    /// cheaper than a full jet).
+    fn radius_speed(&self, u: f64) -> [f64; 3] {
+        let j = self.jet(u);
+        [j.x[0], j.x[1], (j.x[1] * j.x[1] + j.z[1] * j.z[1]).sqrt()]
+    }
 }
 
 /// Nonzero metric components at u (g_uθ = 0 on a surface of revolution).
@@ -250,7 +283,7 @@ impl std::fmt::Display for Problem {
 }
 
 /// C³ continuity at the knots.
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
 pub struct Continuity {
     /// Per interior knot: (u, absolute jump of derivative order 0..=3).
     pub knots: Vec<(f64, [f64; 4])>,
@@ -472,6 +505,12 @@ impl Profile for Platform {
         let last = self.segments.len() - 1;
         let k = if u <= 0.0 { 0 } else { (libm::floor(u) as usize).min(last) };
         self.segment_jet(k, u - k as f64)
+    }
+
+    fn knots_between(&self, lo: f64, hi: f64, out: &mut Vec<f64>) {
+        // Segment k covers [k, k + 1]: the knots are the integers inside the range.
+        let first = libm::floor(lo).max(0.0) as usize + 1;
+        out.extend((first..self.segments.len()).map(|k| k as f64).filter(|&k| k > lo && k < hi));
     }
 }
 

@@ -76,6 +76,11 @@ pub struct Surface<'a> {
     /// Jets at both ends of each table cell (cubic Hermite in between: every jet the hot
     /// loops need comes from here, about ten times cheaper than a Bézier evaluation).
     jets: Vec<[Jet; 2]>,
+    /// The same Hermite cubics of x, x′ and z′ per cell in the power basis of t ∈ [0, 1]
+    /// (12 numbers, Horner in [`Profile::radius_speed`], the quadrature's hot call).
+    rs: Vec<[f64; 12]>,
+    /// Every critical point of the radius over the range, ascending.
+    turns: Vec<f64>,
     jet_h: f64,
     /// Sparse table: `scale[k][i]` = max curvature scale over cells i .. i + 2^k.
     scale: Vec<Vec<f64>>,
@@ -136,8 +141,34 @@ impl<'a> Surface<'a> {
         }
         let cells = (((u_hi - u_lo) * JET_CELLS_PER_U).ceil() as usize).clamp(1, 1 << 20);
         let jet_h = (u_hi - u_lo) / cells as f64;
-        let jets = (0..cells).map(|i| [profile.jet(u_lo + i as f64 * jet_h), profile.jet(u_lo + (i + 1) as f64 * jet_h)]).collect();
-        Surface { profile, chord_rel_tol: DEFAULT_CHORD_REL_TOL, geodesic: geodesic::Options::default(), u_lo, u_hi, jets, jet_h, scale }
+        let jets: Vec<[Jet; 2]> = (0..cells).map(|i| [profile.jet(u_lo + i as f64 * jet_h), profile.jet(u_lo + (i + 1) as f64 * jet_h)]).collect();
+        // Hermite (f0, h·f0′, f1, h·f1′) → power basis: f0 + m0·t + (3Δ − 2m0 − m1)·t² + (m0 + m1 − 2Δ)·t³.
+        let power = |f0: f64, d0: f64, f1: f64, d1: f64| {
+            let (m0, m1, d) = (jet_h * d0, jet_h * d1, f1 - f0);
+            [f0, m0, 3.0 * d - 2.0 * m0 - m1, m0 + m1 - 2.0 * d]
+        };
+        let rs = jets
+            .iter()
+            .map(|[a, b]| {
+                let (x, x1, z1) = (power(a.x[0], a.x[1], b.x[0], b.x[1]), power(a.x[1], a.x[2], b.x[1], b.x[2]), power(a.z[1], a.z[2], b.z[1], b.z[2]));
+                [x[0], x[1], x[2], x[3], x1[0], x1[1], x1[2], x1[3], z1[0], z1[1], z1[2], z1[3]]
+            })
+            .collect();
+        let mut s = Surface { profile, chord_rel_tol: DEFAULT_CHORD_REL_TOL, geodesic: geodesic::Options::default(), u_lo, u_hi, jets, rs, turns: Vec::new(), jet_h, scale };
+        // x′ changes sign within a cell: bisect on the cell's cubic.
+        for i in 0..s.jets.len() {
+            let (d0, d1) = (s.jets[i][0].x[1], s.jets[i][1].x[1]);
+            if (d0 > 0.0) != (d1 > 0.0) {
+                let (mut l, mut h) = (u_lo + i as f64 * jet_h, u_lo + (i + 1) as f64 * jet_h);
+                let rising = d1 > 0.0;
+                for _ in 0..60 {
+                    let m = 0.5 * (l + h);
+                    if (s.radius_speed(m)[1] > 0.0) == rising { h = m } else { l = m }
+                }
+                s.turns.push(0.5 * (l + h));
+            }
+        }
+        s
     }
 
     /// x, z and derivatives at u from the table (the profile itself outside its range).
@@ -253,6 +284,9 @@ impl<'a> Surface<'a> {
         if bound <= self.chord_rel_tol {
             return PairEval { d: est, ga: Self::chord_gradient(a, d), gb: Self::chord_gradient(b, sub(a.p, b.p)), exact: false };
         }
+        if let Some(e) = self.clairaut(a, b) {
+            return e;
+        }
         if let Some(e) = self.shoot(a, b, bound) {
             return e;
         }
@@ -270,6 +304,27 @@ impl<'a> Surface<'a> {
             // distance ≥ the chord, and the caller's domain checks keep this rare.
             _ => PairEval { d: est, ga: Self::chord_gradient(a, d), gb: Self::chord_gradient(b, sub(a.p, b.p)), exact: false },
         }
+    }
+
+    /// The exact geodesic by Clairaut's relation ([`super::clairaut`]): length and both end
+    /// directions in closed form from c. `None` for the shapes it leaves to the shooter.
+    fn clairaut(&self, a: &Node, b: &Node) -> Option<PairEval> {
+        let mut dt = libm::remainder(b.q[1] - a.q[1], 2.0 * std::f64::consts::PI);
+        if dt <= -std::f64::consts::PI {
+            dt += 2.0 * std::f64::consts::PI;
+        }
+        let sol = super::clairaut::solve(self, a.q, [b.q[0], a.q[1] + dt], self.geodesic.min_pole_radius_mm)?;
+        if !(sol.length_mm > 0.0 && sol.min_radius_mm >= self.geodesic.min_pole_radius_mm) {
+            return None;
+        }
+        // ∂d/∂a = −(unit tangent leaving a), ∂d/∂b = +(unit tangent arriving at b), lowered
+        // by the metric.
+        Some(PairEval {
+            d: sol.length_mm,
+            ga: [-a.g[0] * sol.start[0], -a.g[1] * sol.start[1]],
+            gb: [b.g[0] * sol.end[0], b.g[1] * sol.end[1]],
+            exact: true,
+        })
     }
 
     /// Geodesic by shooting: the geodesic equation integrated by RK4 over τ ∈ [0, 1] with
@@ -387,6 +442,37 @@ impl<'a> Surface<'a> {
         } else {
             [0.0, 0.0]
         }
+    }
+}
+
+/// The tabulated profile: the fast Clairaut solver's quadrature nodes read their jets here.
+impl Profile for Surface<'_> {
+    fn u_range(&self) -> (f64, f64) {
+        (self.u_lo, self.u_hi)
+    }
+    fn jet(&self, u: f64) -> Jet {
+        Surface::jet(self, u)
+    }
+    fn knots_between(&self, lo: f64, hi: f64, out: &mut Vec<f64>) {
+        self.profile.knots_between(lo, hi, out)
+    }
+    fn radius_turns(&self, lo: f64, hi: f64, out: &mut Vec<f64>) {
+        let from = self.turns.partition_point(|&t| t <= lo);
+        out.extend(self.turns[from..].iter().take_while(|&&t| t < hi));
+    }
+    fn radius_speed(&self, u: f64) -> [f64; 3] {
+        let f = (u - self.u_lo) / self.jet_h;
+        if !(f >= 0.0 && f <= self.jets.len() as f64) {
+            let j = self.profile.jet(u);
+            return [j.x[0], j.x[1], (j.x[1] * j.x[1] + j.z[1] * j.z[1]).sqrt()];
+        }
+        let i = (f as usize).min(self.rs.len() - 1);
+        let t = f - i as f64;
+        let c = &self.rs[i];
+        let x = c[0] + t * (c[1] + t * (c[2] + t * c[3]));
+        let x1 = c[4] + t * (c[5] + t * (c[6] + t * c[7]));
+        let z1 = c[8] + t * (c[9] + t * (c[10] + t * c[11]));
+        [x, x1, (x1 * x1 + z1 * z1).sqrt()]
     }
 }
 

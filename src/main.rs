@@ -104,6 +104,10 @@ enum Command {
         /// time and peak memory, with the growth exponent of each.
         #[arg(long)]
         scaling: bool,
+        /// Run only these designs, each timed stage by stage (best of 3 runs, no cache): e.g.
+        /// the axisymmetric examples.
+        #[arg(long, num_args = 1..)]
+        design: Vec<String>,
         /// One scaling case in this process (used by --scaling, one child per measurement).
         #[arg(long, hide = true)]
         scaling_case: Option<String>,
@@ -282,7 +286,7 @@ fn cmd_run(
     if !quiet {
         if let Ok(plan) = pipeline::estimate(&registry, &mut cache, &design, &files) {
             if let Some(ask) = plan.ask.as_deref().filter(|_| plan.refused.is_none()) {
-                eprintln!("weft: a big job: {ask} (weft run --dry-run states every stage)");
+                eprintln!("weft: {ask} (weft run --dry-run states every stage)");
             }
         }
     }
@@ -319,6 +323,16 @@ fn cmd_run(
             hms(a.estimated_time_s)
         );
     }
+    Ok(())
+}
+
+/// `weft bench --design FILE…`: each design timed stage by stage.
+fn design_bench(paths: &[String]) -> Result<(), String> {
+    let mut rows = Vec::new();
+    for p in paths {
+        rows.push(load_design(p).and_then(|d| weft::bench::designs::time_design(&d, 3))?);
+    }
+    outln!("{}", weft::bench::designs::table(&rows));
     Ok(())
 }
 
@@ -469,6 +483,7 @@ fn main() -> ExitCode {
             outln!("{size} {seconds} {}", peak_kib().unwrap_or(0));
         }),
         Command::Bench { scaling: true, .. } => scaling_bench(),
+        Command::Bench { design, .. } if !design.is_empty() => design_bench(&design),
         Command::Bench { pairing: true, .. } => weft::bench::pairing::run_all().map(|t| outln!("{t}")),
         Command::Bench { triangles, gcode_mb, lattice, cache, .. } => {
             if cache {

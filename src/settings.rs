@@ -24,6 +24,9 @@ pub enum Kind {
     Choice,
     /// Three numbers (X, Y, Z).
     Vec3,
+    /// A list of 2-D points `[[a, b], …]` (a control polygon, a domain outline); `min`/`max`
+    /// bound every number, `max_len` the number of points. The page edits it as lines `a b`.
+    Points,
     /// An optional block, present or absent (a checkbox); `default` is its JSON when switched on.
     Section,
 }
@@ -82,7 +85,8 @@ pub struct Field {
     /// A special editor the page offers for this field (`pattern_picker`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub widget: Option<&'static str>,
-    /// Longest text of a [`Kind::Text`] field, bytes (UTF-8); absent: [`MAX_TEXT_BYTES`].
+    /// Longest text of a [`Kind::Text`] field, bytes (UTF-8); absent: [`MAX_TEXT_BYTES`]. For a
+    /// [`Kind::Points`] field: the most points (absent: [`MAX_POINTS`]).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub max_len: Option<usize>,
 }
@@ -91,6 +95,9 @@ pub struct Field {
 /// its own `max_len`, a job kind, a choice), bytes. Every string of a design travels in share
 /// links and is copied into messages and forms; 256 bytes is a long sentence.
 pub const MAX_TEXT_BYTES: usize = 256;
+
+/// Most points a [`Kind::Points`] field may hold where its row states no other limit.
+pub const MAX_POINTS: usize = 1000;
 
 /// A real number in `min..=max` with a form `step`.
 #[allow(clippy::too_many_arguments)] // a table row constructor: one argument per column
@@ -109,6 +116,11 @@ pub const fn other(path: &'static str, section: &'static str, label: &'static st
 #[allow(clippy::too_many_arguments)] // a table row constructor: one argument per column
 pub const fn vec3(path: &'static str, section: &'static str, label: &'static str, unit: &'static str, min: f64, max: f64, step: f64, doc: &'static str) -> Field {
     Field { path, section, label, unit, kind: Kind::Vec3, min: Some(min), max: Some(max), step: Some(step), choices: &[], choice_docs: &[], percent: false, doc, default: None, when: None, widget: None, max_len: None }
+}
+/// A list of 2-D points, each number in `min..=max`, at most `max_points` of them.
+#[allow(clippy::too_many_arguments)] // a table row constructor: one argument per column
+pub const fn points(path: &'static str, section: &'static str, label: &'static str, unit: &'static str, min: f64, max: f64, max_points: usize, doc: &'static str) -> Field {
+    Field { path, section, label, unit, kind: Kind::Points, min: Some(min), max: Some(max), step: None, choices: &[], choice_docs: &[], percent: false, doc, default: None, when: None, widget: None, max_len: Some(max_points) }
 }
 /// `f` with one line of plain words per choice.
 pub const fn choice_docs(mut f: Field, docs: &'static [&'static str]) -> Field {
@@ -216,6 +228,7 @@ impl Field {
             Kind::Text => "text in double quotes".into(),
             Kind::Choice => format!("one of: {}", self.choices.join(", ")),
             Kind::Vec3 => format!("three numbers [x, y, z], each from {lo} to {hi}{unit}"),
+            Kind::Points => format!("a list of points [[a, b], …] (at most {}), each number from {lo} to {hi}{unit}", self.max_len.unwrap_or(MAX_POINTS)),
             Kind::Section => "a group of settings { … }, or left out to switch it off".into(),
         }
     }
@@ -225,7 +238,7 @@ fn check_number(path: &str, v: f64, f: &Field, out: &mut Vec<Problem>) {
     let (lo, hi) = (f.min.unwrap_or(f64::MIN), f.max.unwrap_or(f64::MAX));
     if !v.is_finite() || v < lo || v > hi {
         // A Vec3 component is one number of the row's range.
-        let f = Field { kind: if f.kind == Kind::Vec3 { Kind::Number } else { f.kind }, min: Some(lo), max: Some(hi), ..*f };
+        let f = Field { kind: if matches!(f.kind, Kind::Vec3 | Kind::Points) { Kind::Number } else { f.kind }, min: Some(lo), max: Some(hi), ..*f };
         let message = format!("{} is out of range: {} must be {}", fmt(v), f.label, f.must_be());
         out.push(Problem { path: path.to_string(), message });
     } else if f.kind == Kind::Integer && v.fract() != 0.0 {
@@ -278,6 +291,27 @@ fn check_one(root: &Value, path: &str, f: &Field, out: &mut Vec<Problem>) {
                         None if x.is_null() => not_a_number(format!("{path}.{i}"), out),
                         None => {}
                     }
+                }
+            }
+        }
+        Kind::Points => {
+            let Some(points) = v.as_array() else { return };
+            let most = f.max_len.unwrap_or(MAX_POINTS);
+            if points.len() > most {
+                out.push(Problem { path: path.to_string(), message: format!("{} has {} points; at most {most} are allowed", f.label, points.len()) });
+                return;
+            }
+            for (i, p) in points.iter().enumerate() {
+                match p.as_array() {
+                    Some(xy) if xy.len() == 2 => {
+                        for (k, x) in xy.iter().enumerate() {
+                            match x.as_f64() {
+                                Some(x) => check_number(&format!("{path}.{i}.{k}"), x, f, out),
+                                None => not_a_number(format!("{path}.{i}.{k}"), out),
+                            }
+                        }
+                    }
+                    _ => out.push(Problem { path: format!("{path}.{i}"), message: format!("point {} of {} must be two numbers [a, b]", i + 1, f.label) }),
                 }
             }
         }

@@ -3,7 +3,7 @@
 use std::time::Instant;
 use weft::axisym::geodesic::{self, geodesic};
 use weft::axisym::platform::{normal, position, Platform, Profile};
-use weft::axisym::tour::{self, plan, poses_csv, rotary_dynamics, Error, Options, Pose, Start, Tour};
+use weft::axisym::tour::{self, plan, rotary_dynamics, Error, Options, Pose, Start, Tour};
 
 /// SplitMix64: a fixed, platform-independent stream for the test points.
 struct Rng(u64);
@@ -177,24 +177,6 @@ fn barrel_non_convex() {
     check(&p, &pts, &o, &tour, corner(&p, &pts));
 }
 
-/// Timing only (about a minute: each segment's geodesic costs ~10 ms):
-/// `cargo test --release --test axisym_tour -- --ignored --nocapture`.
-#[test]
-#[ignore]
-fn timings_5000() {
-    let p = Platform::barrel();
-    let pts = l_shape(5000, 4);
-    let o = Options { step_mm: 0.25, ..Options::default() };
-    let tour = run(&p, &pts, &o, &chord_dist(&p), "barrel L-shape 5000 (chord dist)");
-    assert_eq!(tour.crossings_left, 0);
-    let mut seen = vec![false; pts.len()];
-    tour.order.iter().for_each(|&i| seen[i] = true);
-    assert!(seen.iter().all(|&s| s));
-    let pts = rect(5000, [1.0, 3.0], [0.0, 1.0], 5);
-    let tour = run(&Platform::hourglass(), &pts, &Options::default(), &chord_dist(&Platform::hourglass()), "hourglass rect (chord dist)");
-    assert_eq!(tour.crossings_left, 0);
-}
-
 #[test]
 fn crossings_of_the_nn_path_are_removed() {
     // Without 2-opt the NN path crosses itself; the map check must find and undo every crossing.
@@ -219,10 +201,6 @@ fn deterministic() {
     let a = plan(&p, &pts, &Options::default(), &d, &mut |_| {}).unwrap();
     let b = plan(&p, &pts, &Options::default(), &d, &mut |_| {}).unwrap();
     assert_eq!(a, b);
-    assert_eq!(poses_csv(&a.poses), poses_csv(&b.poses));
-    let csv = poses_csv(&a.poses[..2]);
-    assert!(csv.starts_with("x_mm,y_mm,z_mm,nx,ny,nz\n"));
-    assert_eq!(csv.lines().nth(1).unwrap().split(',').map(|f| f.split('.').nth(1).unwrap().len()).collect::<Vec<_>>(), [4, 4, 4, 6, 6, 6]);
 }
 
 #[test]

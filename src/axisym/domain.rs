@@ -57,7 +57,7 @@ pub enum DomainProblem {
         hi: f64,
     },
     /// Too close to the pole.
-    #[error("the domain reaches u = {u:.6}, where the radius is {radius_mm:.3} mm, closer to the axis than {min_mm} mm; keep u within [{allowed_lo:.6}, {allowed_hi:.6}]")]
+    #[error("the domain reaches u = {u:.6}, where the radius is {radius_mm:.3} mm: too near the pole (the metric g_θθ = x² vanishes there); a domain must stay at least {min_mm} mm from the axis, so keep u within [{allowed_lo:.6}, {allowed_hi:.6}]")]
     NearPole {
         /// Offending u.
         u: f64,

@@ -53,6 +53,25 @@ pub fn histogram(values: &[f64], bins: usize) -> Histogram {
     Histogram { lo, hi, counts }
 }
 
+/// Two value sets counted on the same `bins` bins (so a seed and a result compare bar by bar):
+/// (bin centres, counts of `a`, counts of `b`).
+pub fn shared_histogram(a: &[f64], b: &[f64], bins: usize) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
+    let both: Vec<f64> = a.iter().chain(b).copied().collect();
+    let h = histogram(&both, bins);
+    let bins = h.counts.len();
+    let w = (h.hi - h.lo) / bins as f64;
+    let count = |v: &[f64]| {
+        let mut c = vec![0.0; bins];
+        for &x in v.iter().filter(|x| x.is_finite()) {
+            let k = if w > 0.0 { (((x - h.lo) / w) as usize).min(bins - 1) } else { 0 };
+            c[k] += 1.0;
+        }
+        c
+    };
+    let centres = (0..bins).map(|k| h.lo + (k as f64 + 0.5) * w).collect();
+    (centres, count(a), count(b))
+}
+
 /// Metrics of `points` for n = `rasters`, ρ_c = `density`, e = `line_width_mm`.
 pub fn metrics(s: &Surface, points: &[[f64; 2]], rasters: u32, density: f64, line_width_mm: f64) -> Metrics {
     let k = 2 * rasters.max(1) as usize;

@@ -16,6 +16,9 @@
 //!
 //! Units: millimetres, radians. Deterministic: transcendentals through `libm`, no hash maps.
 
+// `!(x > 0.0)` is deliberate throughout: a NaN must fail every check it reaches.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 pub mod clairaut;
 pub mod contour;
 pub mod geodesic;

@@ -499,7 +499,7 @@ mod tests {
                 let a = [u_lo + (u_hi - u_lo) * unit(&mut rng), 6.0 * unit(&mut rng)];
                 // Near pairs: up to ~8 mm apart.
                 let len = 8.0 * unit(&mut rng);
-                let ang = 6.283 * unit(&mut rng);
+                let ang = std::f64::consts::TAU * unit(&mut rng);
                 let m = crate::axisym::platform::metric(&p, a[0]);
                 let b = [(a[0] + len * libm::cos(ang) / m.g_uu.sqrt()).clamp(u_lo, u_hi), a[1] + len * libm::sin(ang) / m.g_tt.sqrt()];
                 let (na, nb) = (s.node(a), s.node(b));

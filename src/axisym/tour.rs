@@ -54,10 +54,26 @@ pub const MAX_POINTS: usize = 20_000;
 /// Most path samples (poses) one tour may make: 48 bytes each, 2 M ≈ 100 MB with the map
 /// samples.
 pub const MAX_SAMPLES: f64 = 2e6;
-/// Time per point on the reference machine with a chord-fast `dist`, s: one geodesic per
-/// segment dominates (geodesic.rs at its 1e-11 tolerance: 5 000 points took 65 s on the
-/// hourglass, 301 s on the barrel's short segments), NN and 2-opt are negligible beside it.
-const SECONDS_PER_POINT: f64 = 0.06;
+/// Time per point on the reference machine, s: one Clairaut geodesic per segment and its
+/// sampling dominate (200 hourglass points take 0.15 s); a safe upper value.
+const SECONDS_PER_POINT: f64 = 2e-3;
+
+/// The stage's form rows (paths relative to [`Options`]).
+pub const FIELDS: &[crate::settings::Field] = {
+    use crate::settings::{choice_docs, int, num, other, when, Kind};
+    &[
+        choice_docs(
+            other("start.kind", "Path", "Start", Kind::Choice, &["corner", "nearest"], "Where the path begins."),
+            &["At the point nearest the patch's (u to, θ from) corner, as the paper.", "At the point nearest a (u, θ) you give, e.g. where the walls ended."],
+        ),
+        when(num("start.u", "Path", "Start near u", "", 0.0, 64.0, 0.01, "Parameter along the profile of the wanted start."), "start.kind", "nearest"),
+        when(num("start.theta", "Path", "Start near θ", "rad", -7.0, 7.0, 0.01, "Angle around the axis of the wanted start."), "start.kind", "nearest"),
+        num("step_mm", "Path", "Sample step", "mm", MIN_STEP_MM, MAX_STEP_MM, 0.1, "Each segment follows the surface's shortest curve, written as points this far apart."),
+        int("two_opt_passes", "Path", "2-opt passes", 0.0, 10_000.0, "Most rounds of segment swaps that shorten the path (0 keeps the nearest-neighbour path)."),
+        int("neighbours", "Path", "Swap candidates", 1.0, MAX_NEIGHBOURS as f64, "How many nearest points each point tries to swap towards (8–10 finds nearly every gain)."),
+        int("uncross_rounds", "Path", "Uncrossing rounds", 0.0, 100_000.0, "Most moves spent removing places where the path crosses itself."),
+    ]
+};
 
 /// Where the path starts.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize, Default)]
@@ -194,16 +210,22 @@ pub struct Tour {
     pub poses: Vec<Pose>,
 }
 
-/// The work a tour of `n_points` points states before it runs (the point limit first).
-pub fn estimate(n_points: usize, o: &Options) -> Estimate {
+/// The work a tour of `n_points` points about `spacing_mm` apart states before it runs
+/// (the point limit first, then the samples: segments ≈ 1.5 spacings long, one sample per
+/// step).
+pub fn estimate(n_points: usize, o: &Options, spacing_mm: f64) -> Estimate {
     let n = n_points as f64;
     let k = o.neighbours.clamp(1, MAX_NEIGHBOURS) as f64;
-    // Candidates (index + distance), kd-tree, order and position arrays, per point.
-    let bytes = n * (k * 16.0 + 96.0);
+    let samples = n * (1.0 + (1.5 * spacing_mm / o.step_mm.max(MIN_STEP_MM)).ceil());
+    // Candidates (index + distance), kd-tree, order and position arrays per point; a pose
+    // and a map sample per sample.
+    let bytes = n * (k * 16.0 + 96.0) + samples * 64.0;
     Estimate::new("tour")
         .quantity("points", "points joined", n, "")
-        .cost(bytes, n * SECONDS_PER_POINT)
+        .quantity("samples", "path samples (tool poses)", samples, "")
+        .cost(bytes, n * SECONDS_PER_POINT + samples * 2e-7)
         .limit("points in one tour", n, MAX_POINTS as f64, "", "lower the infill density or split the domain")
+        .limit("path samples", samples, MAX_SAMPLES, "", "raise the sample step")
         .budgets("lower the infill density or split the domain")
 }
 
@@ -214,7 +236,8 @@ pub fn plan(p: &Platform, points: &[[f64; 2]], o: &Options, dist: &dyn Fn([f64; 
     if points.is_empty() {
         return Err(Error::NoPoints);
     }
-    estimate(points.len(), o).check()?;
+    // The samples are checked once the path length is known (below).
+    estimate(points.len(), o, 0.0).check()?;
     if let Some(index) = points.iter().position(|q| !q[0].is_finite() || !q[1].is_finite()) {
         return Err(Error::NotFinite { index });
     }
@@ -665,26 +688,6 @@ pub fn proper(a: [f64; 2], b: [f64; 2], c: [f64; 2], d: [f64; 2]) -> bool {
     let (o1, o2) = (orient(a, b, c), orient(a, b, d));
     let (o3, o4) = (orient(c, d, a), orient(c, d, b));
     ((o1 > 0.0 && o2 < 0.0) || (o1 < 0.0 && o2 > 0.0)) && ((o3 > 0.0 && o4 < 0.0) || (o3 < 0.0 && o4 > 0.0))
-}
-
-/// `x_mm,y_mm,z_mm,nx,ny,nz` lines, 4 decimals for mm and 6 for the normal (byte-stable).
-pub fn poses_csv(poses: &[Pose]) -> String {
-    let mut s = String::with_capacity(64 * (poses.len() + 1));
-    s.push_str("x_mm,y_mm,z_mm,nx,ny,nz\n");
-    // + 0.0 turns −0.0 into 0.0 so a sign of zero never changes the bytes.
-    for q in poses {
-        let (p, n) = (q.position, q.normal);
-        s.push_str(&format!(
-            "{:.4},{:.4},{:.4},{:.6},{:.6},{:.6}\n",
-            p[0] + 0.0,
-            p[1] + 0.0,
-            p[2] + 0.0,
-            n[0] + 0.0,
-            n[1] + 0.0,
-            n[2] + 0.0
-        ));
-    }
-    s
 }
 
 /// Tool-axis motion along a posed path at constant feed.

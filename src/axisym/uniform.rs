@@ -40,9 +40,9 @@ pub const MAX_ITERATIONS: usize = 10_000;
 pub const MAX_RETRIES: usize = 12;
 /// ERE seed iterations (Euclidean repulsion from a random start).
 pub const ERE_ITERATIONS: usize = 30;
-/// Cost of one pair evaluation (s, native release): about 1 µs for chord pairs, up to
-/// ~100 µs for shot ones (hourglass-omega3); a middle value, the time estimate's unit.
-pub const SECONDS_PER_PAIR: f64 = 2e-5;
+/// Cost of one pair evaluation (s, native release, with the fast Clairaut solver): the
+/// paper's three examples measure 2–4 µs per pair including the seed and the metrics.
+pub const SECONDS_PER_PAIR: f64 = 3e-6;
 
 /// The barrel's Ω₂: a non-convex slice polygon (concave notch near u = 0.5, convex elsewhere)
 /// on the upper shoulder, true area ≈ 443 mm² (N = 173 at ρ_c = 0.25, n = 1, e = 0.4 mm).
@@ -58,6 +58,28 @@ pub const OMEGA2_POLYGON: &[[f64; 2]] = &[
     [0.5, 0.87808],
     [0.62, 0.52685],
 ];
+
+/// The stage's form rows (paths relative to [`Options`]).
+pub const FIELDS: &[crate::settings::Field] = {
+    use crate::settings::{choice_docs, int, num, other, percent, Kind};
+    &[
+        percent(num("density", "Infill points", "Command density", "%", 0.01, 1.0, 0.01, "How much of the patch the infill covers: more density, more points closer together.")),
+        int("rasters", "Infill points", "Lines through each point", 1.0, 16.0, "n of the paper: how many equally angled rasters cross at each point (1 for a single path)."),
+        choice_docs(
+            other("seed_method", "Infill points", "Starting points", Kind::Choice, &["ebns", "ere", "gbns"], "How the points are scattered before the repulsion evens them out."),
+            &[
+                "Euclidean blue noise: random points kept a straight-line distance apart (fastest).",
+                "Euclidean repulsion: random points pushed apart with straight-line distances (suits odd outlines).",
+                "Geodesic blue noise: random points kept a distance along the surface apart (closest to the answer).",
+            ],
+        ),
+        num("exponent", "Infill points", "Repulsion exponent", "", 1.01, 32.0, 0.5, "m of the pair energy d⁻ᵐ: larger pushes hardest on the closest pairs (the paper uses 5)."),
+        int("iterations", "Infill points", "Repulsion iterations", 0.0, MAX_ITERATIONS as f64, "Most steps of the geodesic repulsion (the paper runs 50); it stops earlier once settled."),
+        num("energy_tolerance", "Infill points", "Energy tolerance", "", 0.0, 0.5, 1e-6, "Stop when the energy changes by less than this fraction in a step."),
+        num("displacement_tolerance", "Infill points", "Movement tolerance", "spacings", 0.0, 0.5, 1e-4, "Stop when no point moves more than this fraction of the target spacing."),
+        num("cutoff_spacings", "Infill points", "Interaction range", "spacings", 0.0, 100.0, 0.5, "Pairs farther apart than this many target spacings are ignored (0 = every pair, as the paper; slower)."),
+    ]
+};
 
 /// Initial seed method.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]

@@ -32,6 +32,7 @@ pub fn repeat_to(seed: &str, bytes: usize) -> String {
     s
 }
 
+pub mod designs;
 pub mod pairing;
 pub mod scaling;
 

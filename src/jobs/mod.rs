@@ -11,6 +11,7 @@
 //!                                       pipeline: gcode ─► analyze ─► RunReport
 //! ```
 
+pub mod axisymmetric;
 pub mod lattice;
 pub mod slice;
 
@@ -356,7 +357,7 @@ pub struct Registry {
 impl Registry {
     /// The kinds built into weft. **Register a new kind here** (one line).
     pub fn builtin() -> Registry {
-        Registry { kinds: vec![&slice::SliceKind, &lattice::LatticeKind] }
+        Registry { kinds: vec![&slice::SliceKind, &lattice::LatticeKind, &axisymmetric::AxisymKind] }
     }
 
     /// This registry plus `kind` (a kind defined outside the crate, e.g. in a test).

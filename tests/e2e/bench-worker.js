@@ -28,6 +28,10 @@
 //   { cmd: "pairing" }              → { type: "pairing", rows: [{ name, exact, prepareMs, ms,
 //       stats }] }: every case of `weft bench --pairing` (src/bench/pairing.rs), heuristic then
 //       exact, one timed BenchPairing.run() each; `stats` is its JSON answer.
+//   { cmd: "designs", designs: [{ name, json }], repeats } → { type: "designs", rows: [{ name,
+//       runs: [ms…], stages: [{ stage, ms }] (best run) }] }: whole designs through
+//       Session.run in a fresh Session each run (no cache), each stage timed from its first
+//       progress report to the next stage's (`weft bench --design`, src/bench/designs.rs).
 //   { cmd: "scaling-cases" }        → { type: "scaling-cases", names }: benchScalingCases().
 //   { cmd: "scaling", name, scale, repeats } → { type: "scaling", name, scale, unit, size,
 //       prepareMs, ms: [...], memory: { init, prepared, run } }: one case of `weft bench
@@ -98,6 +102,35 @@ self.onmessage = async ({ data }) => {
         }
       }
       self.postMessage({ type: "pairing", rows, memory: mem() });
+      return;
+    }
+    if (data.cmd === "designs") {
+      const rows = [];
+      for (const d of data.designs) {
+        let best = null;
+        const runs = [];
+        for (let i = 0; i < (data.repeats ?? 3); i++) {
+          const session = new Session();
+          const marks = [];
+          const t0 = performance.now();
+          session.run(d.json, (stage) => {
+            if (marks.length === 0 || marks[marks.length - 1].stage !== stage) marks.push({ stage, t: performance.now() - t0 });
+          });
+          const total = performance.now() - t0;
+          session.free();
+          runs.push(total);
+          const stages = [];
+          marks.forEach((m, k) => {
+            const ms = (k + 1 < marks.length ? marks[k + 1].t : total) - m.t;
+            const s = stages.find((x) => x.stage === m.stage);
+            if (s) s.ms += ms;
+            else stages.push({ stage: m.stage, ms });
+          });
+          if (!best || total < best.total) best = { total, stages };
+        }
+        rows.push({ name: d.name, runs, stages: best.stages });
+      }
+      self.postMessage({ type: "designs", rows, memory: mem() });
       return;
     }
     if (data.cmd === "lattice") {

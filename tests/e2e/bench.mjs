@@ -14,6 +14,9 @@
 //   BENCH_TIMEOUT_S timeout of the browser job, s (default 900)
 //   BENCH_LATTICE_ONLY=1  only the lattice path-optimisation benchmarks (`weft bench --lattice`)
 //   BENCH_REPEATS   timed passes per lattice workload in the worker (default 3)
+//   BENCH_DESIGNS   comma-separated design files: only time these designs stage by stage,
+//                   in the worker (Session.run, fresh session per run, BENCH_REPEATS runs)
+//                   and natively (`weft bench --design`), e.g. the axisymmetric examples
 //   BENCH_PAIRING_ONLY=1  only the odd-node pairing benchmark (`weft bench --pairing`,
 //                   src/bench/pairing.rs): heuristic vs exact per case, worker and native
 //   BENCH_SCALING_ONLY=1  only the growth benchmark: every case of `weft bench --scaling`
@@ -26,7 +29,7 @@
 //                   works (default 4000000,3000000,2000000,1000000; 4M ≈ 200 MB of STL)
 import { execFileSync } from "node:child_process";
 import { existsSync, readFileSync, writeFileSync } from "node:fs";
-import { join, resolve } from "node:path";
+import { basename, join, resolve } from "node:path";
 import { chromium } from "playwright-core";
 import { ROOT, serve } from "./server.mjs";
 
@@ -41,6 +44,7 @@ const REPEATS = Number(process.env.BENCH_REPEATS ?? 3);
 const CACHE_ONLY = process.env.BENCH_CACHE_ONLY === "1";
 const SCALING_ONLY = process.env.BENCH_SCALING_ONLY === "1";
 const PAIRING_ONLY = process.env.BENCH_PAIRING_ONLY === "1";
+const DESIGNS = (process.env.BENCH_DESIGNS ?? "").split(",").map((s) => s.trim()).filter((s) => s !== "");
 const SCALING_CASES = process.env.BENCH_SCALING_CASES ? process.env.BENCH_SCALING_CASES.split(",") : null;
 const SCALES = [1, 4, 16]; // src/bench/scaling.rs SCALES
 const CACHE = CACHE_ONLY || process.env.BENCH_CACHE !== "0";
@@ -253,6 +257,10 @@ async function runBrowser() {
     if (CACHE_ONLY) return { version, ...(await cacheSteps(page, renderers)) };
     if (SCALING_ONLY) return { version, scaling: await scalingSteps(page) };
     if (PAIRING_ONLY) return { version, pairing: await workerStep(page, { cmd: "pairing" }, "pairing") };
+    if (DESIGNS.length) {
+      const designs = DESIGNS.map((file) => ({ name: basename(file, ".json"), json: readFileSync(resolve(ROOT, file), "utf8") }));
+      return { version, designs: await workerStep(page, { cmd: "designs", designs, repeats: REPEATS }, "designs") };
+    }
 
     // 0. Lattice path optimisation, in its own fresh worker.
     log(`browser ${version}: lattice path-optimisation workloads in a worker (${REPEATS} passes each)`);
@@ -474,6 +482,29 @@ async function workerStep(page, message, type) {
   }, { message, type, timeout: TIMEOUT });
 }
 
+/** Whole designs stage by stage: worker beside native (`weft bench --design` table rows). */
+function designsReport(browserRun, nativeText) {
+  const native = {};
+  for (const m of nativeText.matchAll(/^\| ([^|]+) \| ([^|*]+) \| ([0-9.]+) \|$/gm)) (native[m[1].trim()] ??= {})[m[2].trim()] = Number(m[3]) * 1000;
+  for (const m of nativeText.matchAll(/^\| ([^|]+) \| \*\*total\*\* \| \*\*([0-9.]+)\*\*/gm)) (native[m[1].trim()] ??= {}).total = Number(m[2]) * 1000;
+  const out = [];
+  out.push(`## Whole designs, stage by stage (best of ${REPEATS} runs, no cache)`);
+  out.push("");
+  out.push(`Browser: Chromium ${browserRun.version}, module Web Worker, wasm (\`Session.run\`, a fresh session per run). Native: \`weft bench --design\`. Milliseconds; a stage runs from its first progress report to the next stage's.`);
+  out.push("");
+  out.push("| design | stage | worker ms | native ms | worker / native |");
+  out.push("|---|---|---|---|---|");
+  for (const row of browserRun.designs.rows) {
+    const n = native[row.name] ?? {};
+    for (const s of row.stages) out.push(`| ${row.name} | ${s.stage} | ${f(s.ms, 1)} | ${f(n[s.stage], 1)} | ${n[s.stage] ? `${f(s.ms / n[s.stage], 2)}×` : "?"} |`);
+    const best = Math.min(...row.runs);
+    out.push(`| ${row.name} | **total** | **${f(best, 1)}** | **${f(n.total, 1)}** | ${n.total ? `${f(best / n.total, 2)}×` : "?"} |`);
+  }
+  out.push("");
+  out.push(`Worker runs (ms): ${browserRun.designs.rows.map((r) => `${r.name} ${r.runs.map((x) => f(x, 0)).join(", ")}`).join("; ")}; wasm linear memory after: ${f(browserRun.designs.memory / MiB, 0)} MiB.`);
+  return out.join("\n");
+}
+
 /** The pairing benchmark: worker rows beside the native table of `weft bench --pairing`. */
 function pairingReport(browserRun, nativeText) {
   const native = {};
@@ -512,6 +543,14 @@ if (SCALING_ONLY) {
   console.log(scalingReport(browserRun, native));
   console.log(`Load average (1, 5, 15 min): ${loadBefore} at the start, ${loadBrowser} after the worker runs, ${loadNative} after the native run.`);
   if (native) console.log("\n<details><summary>weft bench --scaling output</summary>\n\n```text\n" + native.text.trim() + "\n```\n\n</details>");
+  process.exit(0);
+}
+if (DESIGNS.length) {
+  const loadBrowser = readFileSync("/proc/loadavg", "utf8").split(" ").slice(0, 3).join(" ");
+  const native = WEFT_BIN ? execFileSync(WEFT_BIN, ["bench", "--design", ...DESIGNS.map((d) => resolve(ROOT, d))], { encoding: "utf8", maxBuffer: 1 << 24 }) : "";
+  const loadNative = readFileSync("/proc/loadavg", "utf8").split(" ").slice(0, 3).join(" ");
+  console.log(designsReport(browserRun, native));
+  console.log(`Load average (1, 5, 15 min): ${loadBefore} at the start, ${loadBrowser} after the worker runs, ${loadNative} after the native run.`);
   process.exit(0);
 }
 if (PAIRING_ONLY) {

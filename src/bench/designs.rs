@@ -1,0 +1,70 @@
+//! Whole designs timed stage by stage (`weft bench --design FILE…`; the browser benchmark
+//! runs the same designs through `Session.run` in the worker, `BENCH_DESIGNS`): the time
+//! from each stage's first progress report to the next stage's, and the total, best of
+//! `repeats` runs without a cache. Used for the job kinds whose work is one design (the
+//! axisymmetric examples: the paper's Ω1–Ω3).
+
+use crate::design::Design;
+use crate::pipeline::{self, Cache, Files, RunOptions};
+use crate::jobs::Registry;
+use std::time::Instant;
+
+/// One design's best run.
+#[derive(Clone, Debug)]
+pub struct DesignTiming {
+    /// Design name.
+    pub name: String,
+    /// (stage, seconds) in run order, from the best run.
+    pub stages: Vec<(String, f64)>,
+    /// Whole run, s (best of the repeats).
+    pub total_s: f64,
+    /// Every run's total, s.
+    pub runs_s: Vec<f64>,
+}
+
+/// Runs `design` `repeats` times (no cache) and keeps the fastest run's stage times.
+pub fn time_design(design: &Design, repeats: usize) -> Result<DesignTiming, String> {
+    let files = Files::default();
+    let mut best: Option<(f64, Vec<(String, f64)>)> = None;
+    let mut runs = Vec::new();
+    for _ in 0..repeats.max(1) {
+        let start = Instant::now();
+        let mut marks: Vec<(String, f64)> = Vec::new();
+        let mut progress = |stage: &str, _: f32| {
+            if marks.last().map(|m| m.0.as_str()) != Some(stage) {
+                marks.push((stage.to_string(), start.elapsed().as_secs_f64()));
+            }
+        };
+        let mut cache = Cache::disabled();
+        pipeline::run_in(&Registry::builtin(), &mut cache, design, &files, &RunOptions::default(), &mut progress).map_err(|e| format!("{}: {e}", design.name))?;
+        let total = start.elapsed().as_secs_f64();
+        runs.push(total);
+        // A stage's time: from its first report to the next stage's (the last one to the end).
+        let mut stages: Vec<(String, f64)> = Vec::new();
+        for (i, (name, t)) in marks.iter().enumerate() {
+            let end = marks.get(i + 1).map_or(total, |m| m.1);
+            match stages.iter_mut().find(|s| &s.0 == name) {
+                Some(s) => s.1 += end - t,
+                None => stages.push((name.clone(), end - t)),
+            }
+        }
+        if best.as_ref().is_none_or(|b| total < b.0) {
+            best = Some((total, stages));
+        }
+    }
+    let (total_s, stages) = best.unwrap_or_default();
+    Ok(DesignTiming { name: design.name.clone(), stages, total_s, runs_s: runs })
+}
+
+/// The table `weft bench --design` prints.
+pub fn table(rows: &[DesignTiming]) -> String {
+    let mut out = String::from("| design | stage | best s |\n|---|---|---|\n");
+    for r in rows {
+        for (stage, s) in &r.stages {
+            out.push_str(&format!("| {} | {stage} | {s:.3} |\n", r.name));
+        }
+        let runs: Vec<String> = r.runs_s.iter().map(|s| format!("{s:.3}")).collect();
+        out.push_str(&format!("| {} | **total** | **{:.3}** (runs: {}) |\n", r.name, r.total_s, runs.join(", ")));
+    }
+    out
+}

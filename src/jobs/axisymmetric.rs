@@ -1,0 +1,612 @@
+//! The `axisymmetric` job (Guzman-Bautista et al. 2025): quasi-uniform infill points on a
+//! curved, axisymmetric build platform, joined by one geodesic path, printed by a 5-axis head
+//! whose tool axis follows the surface normal.
+//!
+//! Stages: `platform` (the generatrix checked: C³ at the knots, no cusps or self-intersections,
+//! pole clearance; κ, metric and Christoffel symbols plotted along u), `points` (N from the
+//! paper's equation 4, a seed by EBNS / ERE / GBNS, geodesic repulsion energy; the validation
+//! metrics of section 2.5 for the seed and the result), `path` (nearest neighbour + 2-opt,
+//! each segment the geodesic between its points, on the surface offset by the layer height).
+//! The writer gets one free pass with a tool axis per point: the printer must be 5-axis
+//! (the `five-axis-head` profile), or write the poses CSV flavour.
+
+use super::{Inspection, Kind, Product, Shape, Slot, StageInfo, ViewInfo};
+use crate::axisym::domain::Domain;
+use crate::axisym::platform::{self, Platform};
+use crate::axisym::{surface::Surface, tour, uniform};
+use crate::design::Design;
+use crate::geom::{DVec3, Feature, Pass, PassKind, Path, PointData, Toolpath};
+use crate::pipeline::{Ctx, Error, Out};
+use crate::report::{Axis, Plot, PlotKind, Series, StageReport};
+use crate::settings::{choice_docs, mount, num, other, points, when, Field, Kind as FieldKind, Problem, Row};
+use serde::{Deserialize, Serialize};
+
+/// Default layer height: the strand's thickness over the platform, mm (the tip rides this far
+/// out along the normal).
+pub const DEFAULT_LAYER_HEIGHT_MM: f64 = 0.2;
+
+/// Settings of an `axisymmetric` job.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AxisymJob {
+    /// The build platform.
+    #[serde(default)]
+    pub platform: PlatformSpec,
+    /// The domain Ω in the embedded map (u, θ).
+    #[serde(default)]
+    pub domain: DomainSpec,
+    /// Uniform points: density, seed, repulsion.
+    #[serde(default)]
+    pub points: uniform::Options,
+    /// The path through the points.
+    #[serde(default)]
+    pub path: tour::Options,
+    /// Strand thickness over the platform, mm.
+    #[serde(default = "default_layer_height")]
+    pub layer_height_mm: f64,
+}
+
+fn default_layer_height() -> f64 {
+    DEFAULT_LAYER_HEIGHT_MM
+}
+
+impl Default for AxisymJob {
+    fn default() -> Self {
+        AxisymJob { platform: PlatformSpec::default(), domain: DomainSpec::default(), points: uniform::Options::default(), path: tour::Options::default(), layer_height_mm: DEFAULT_LAYER_HEIGHT_MM }
+    }
+}
+
+/// Which generatrix.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Preset {
+    /// The paper's barrel (table 2): u ∈ [0, 2], radius 25 mm at u = 1.
+    #[default]
+    Barrel,
+    /// The paper's hourglass (table 3): u ∈ [0, 4], a 25 mm neck at u = 2.
+    Hourglass,
+    /// The control points given.
+    Custom,
+}
+
+/// The platform: a preset, or a control polygon of 6·k + 1 points (x = radius, z = height, mm).
+/// A preset writes its own polygon into `control_points`, so the design shows the points it
+/// uses and switching to `custom` starts from them.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(from = "RawPlatform")]
+pub struct PlatformSpec {
+    /// Barrel, hourglass or custom.
+    pub preset: Preset,
+    /// The control polygon, mm.
+    pub control_points: Vec<[f64; 2]>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawPlatform {
+    #[serde(default)]
+    preset: Preset,
+    #[serde(default)]
+    control_points: Vec<[f64; 2]>,
+}
+
+impl From<RawPlatform> for PlatformSpec {
+    fn from(r: RawPlatform) -> Self {
+        let control_points = match r.preset {
+            Preset::Barrel => polygon_of(&Platform::barrel()),
+            Preset::Hourglass => polygon_of(&Platform::hourglass()),
+            Preset::Custom => r.control_points,
+        };
+        PlatformSpec { preset: r.preset, control_points }
+    }
+}
+
+impl Default for PlatformSpec {
+    fn default() -> Self {
+        PlatformSpec::from(RawPlatform { preset: Preset::Barrel, control_points: Vec::new() })
+    }
+}
+
+/// The flat control polygon of a platform (segments share their end points).
+fn polygon_of(p: &Platform) -> Vec<[f64; 2]> {
+    let mut out: Vec<[f64; 2]> = Vec::new();
+    for s in &p.segments {
+        let skip = usize::from(!out.is_empty());
+        out.extend_from_slice(&s[skip..]);
+    }
+    out
+}
+
+/// Rectangle or polygon.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum DomainKind {
+    /// u_min ≤ u ≤ u_max, θ_min ≤ θ ≤ θ_max.
+    #[default]
+    Rectangle,
+    /// The polygon's points (u, θ).
+    Polygon,
+}
+
+/// Ω as the form edits it (flat fields), turned into an [`axisym::domain::Domain`].
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct DomainSpec {
+    /// Rectangle or polygon.
+    pub kind: DomainKind,
+    /// Rectangle: lowest u.
+    pub u_min: f64,
+    /// Rectangle: highest u.
+    pub u_max: f64,
+    /// Rectangle: lowest θ, rad.
+    pub theta_min_rad: f64,
+    /// Rectangle: highest θ, rad.
+    pub theta_max_rad: f64,
+    /// Polygon: its corners (u, θ rad), in order; non-convex allowed.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub polygon: Vec<[f64; 2]>,
+}
+
+impl Default for DomainSpec {
+    /// The paper's Ω1 on the barrel.
+    fn default() -> Self {
+        DomainSpec { kind: DomainKind::Rectangle, u_min: 0.8, u_max: 1.2, theta_min_rad: 0.0, theta_max_rad: 1.0, polygon: Vec::new() }
+    }
+}
+
+impl DomainSpec {
+    /// The stage's domain.
+    pub fn domain(&self) -> Domain {
+        match self.kind {
+            DomainKind::Rectangle => Domain::Rectangle { u: [self.u_min, self.u_max], theta: [self.theta_min_rad, self.theta_max_rad] },
+            DomainKind::Polygon => Domain::Polygon { points: self.polygon.clone() },
+        }
+    }
+}
+
+/// The `axisymmetric` job kind.
+pub struct AxisymKind;
+
+const STAGES: &[StageInfo] = &[
+    StageInfo { name: "platform", label: "Checking the build platform" },
+    StageInfo { name: "points", label: "Spreading uniform points (geodesic repulsion)" },
+    StageInfo { name: "path", label: "Joining the points by geodesics" },
+];
+
+const VIEWS: &[ViewInfo] = &[
+    ViewInfo {
+        id: "map",
+        stage: "points",
+        label: "Embedded map (u, θ)",
+        shape: Shape::Lines2d,
+        index_label: "Step",
+        doc: "The domain Ω in the (θ, u) plane: 0 the seed points, 1 after repulsion, 2 the path (x: θ in rad, y: u).",
+    },
+    ViewInfo {
+        id: "platform3d",
+        stage: "path",
+        label: "Path on the platform",
+        shape: Shape::Lines3d,
+        index_label: "View",
+        doc: "The revolved platform (meridians and parallels) with the printed path on it, mm.",
+    },
+];
+
+const PLATFORM_FIELDS: &[Field] = &[
+    choice_docs(
+        other("preset", "Build platform", "Platform", FieldKind::Choice, &["barrel", "hourglass", "custom"], "The curved surface printed on, revolved about Z."),
+        &["The paper's barrel (table 2): 50 mm tall, radius 25 mm at u = 1.", "The paper's hourglass (table 3): 100 mm tall, a 25 mm neck at u = 2.", "Your own control polygon (below)."],
+    ),
+    when(
+        points("control_points", "Build platform", "Control points x z", "mm", -10000.0, 10000.0, 6 * 64 + 1, "6·k + 1 points (x = radius, z = height), one pair per line: each 7 make a degree-6 Bézier segment, the next starts at the last."),
+        "preset",
+        "custom",
+    ),
+];
+
+const DOMAIN_FIELDS: &[Field] = &[
+    other("kind", "Domain Ω", "Domain", FieldKind::Choice, &["rectangle", "polygon"], "The patch of the platform to fill, in the embedded map (u along the profile, θ around the axis)."),
+    when(num("u_min", "Domain Ω", "u from", "", 0.0, 64.0, 0.01, "Where the patch starts along the profile (u counts Bézier segments: 0 to their number)."), "kind", "rectangle"),
+    when(num("u_max", "Domain Ω", "u to", "", 0.0, 64.0, 0.01, "Where the patch ends along the profile."), "kind", "rectangle"),
+    when(num("theta_min_rad", "Domain Ω", "θ from", "rad", -7.0, 7.0, 0.01, "Where the patch starts around the axis."), "kind", "rectangle"),
+    when(num("theta_max_rad", "Domain Ω", "θ to", "rad", -7.0, 7.0, 0.01, "Where the patch ends around the axis (at most one turn, 6.283 rad, wider than the start)."), "kind", "rectangle"),
+    when(points("polygon", "Domain Ω", "Polygon u θ", "", -64.0, 64.0, 1000, "The outline's corners, one 'u θ' pair per line (θ in rad), in order; concave outlines are fine."), "kind", "polygon"),
+];
+
+const JOB_FIELDS: &[Field] = &[num("layer_height_mm", "Path", "Layer height", "mm", 0.01, 5.0, 0.01, "How thick the strand is: the nozzle tip rides this far out along the surface normal.")];
+
+impl Kind for AxisymKind {
+    type Settings = AxisymJob;
+    const NAME: &'static str = "axisymmetric";
+    const LABEL: &'static str = "Uniform infill on a curved platform";
+    const DOC: &'static str = "Quasi-uniform infill points on an axisymmetric build platform, joined by geodesics and printed by a 5-axis head along the surface normal.";
+    const SLOTS: &'static [Slot] = &[];
+    const STAGES: &'static [StageInfo] = STAGES;
+    const VIEWS: &'static [ViewInfo] = VIEWS;
+
+    fn fields() -> Vec<Row> {
+        let mut rows = mount("job.platform", PLATFORM_FIELDS);
+        rows.extend(mount("job.domain", DOMAIN_FIELDS));
+        rows.extend(mount("job.points", uniform::FIELDS));
+        rows.extend(mount("job.path", tour::FIELDS));
+        rows.extend(mount("job", JOB_FIELDS));
+        rows
+    }
+
+    fn validate(design: &Design, j: &AxisymJob, out: &mut Vec<Problem>) {
+        out.extend(super::thicker_than_nozzle("job.layer_height_mm", j.layer_height_mm, design.printer.nozzle_diameter_mm));
+        if !design.printer.machine.is_five_axis() && design.printer.flavor != crate::gcode::Flavor::PosesCsv {
+            out.push(Problem {
+                path: "printer.machine.kind".into(),
+                message: "this job tilts the tool along the platform's normal: pick a 5-axis machine (printer profile '5-axis head (B/C)', --printer five-axis-head) or the poses CSV output (printer.flavor = poses_csv)".into(),
+            });
+        }
+        let platform = match Platform::from_polygon(&j.platform.control_points) {
+            Ok(p) => p,
+            Err(e) => {
+                out.push(Problem { path: "job.platform.control_points".into(), message: e.to_string() });
+                return;
+            }
+        };
+        if let Err(e) = platform.validate(&platform::Options::default()) {
+            out.push(Problem { path: "job.platform.control_points".into(), message: e.to_string() });
+            return;
+        }
+        let path = match j.domain.kind {
+            DomainKind::Rectangle => "job.domain",
+            DomainKind::Polygon => "job.domain.polygon",
+        };
+        for message in j.domain.domain().problems(&platform) {
+            out.push(Problem { path: path.into(), message: message.to_string() });
+        }
+    }
+
+    fn estimate(j: &AxisymJob, ctx: &mut Ctx) -> Result<Vec<crate::budget::Estimate>, Error> {
+        let platform = build_platform(j)?;
+        let width = line_width(ctx.design);
+        let points = uniform::estimate(&platform, &j.domain.domain(), &j.points, width);
+        let path = tour::estimate(points.get("points") as usize, &j.path, uniform::spacing(&j.points, width));
+        Ok(vec![crate::budget::Estimate::new("platform"), points, path])
+    }
+
+    fn run(j: &AxisymJob, ctx: &mut Ctx) -> Result<Product, Error> {
+        let platform = platform_stage(j, ctx)?;
+        let distribution = points_stage(j, ctx, &platform)?;
+        let design = ctx.design;
+        let h = j.layer_height_mm;
+        let width = line_width(design);
+        let toolpath = ctx.stage("path", "path", &(&j.path, h, width), &[platform.key, distribution.key], |progress| {
+            let surface = Surface::new(&*platform.value);
+            let dist = |a: [f64; 2], b: [f64; 2]| surface.distance(a, b);
+            let t = tour::plan(&platform, &distribution.points, &j.path, &dist, progress).map_err(|e| Error::stage("path", e))?;
+            let toolpath = toolpath_of(&t, h, width);
+            let report = path_report(&t, &distribution, design)?;
+            Ok((toolpath, Some(report)))
+        })?;
+        Ok(Product::Toolpath(toolpath))
+    }
+
+    fn inspect(j: &AxisymJob, ctx: &mut Ctx, view: &str, index: usize) -> Result<Inspection, Error> {
+        let platform = platform_stage(j, ctx)?;
+        let distribution = points_stage(j, ctx, &platform)?;
+        match view {
+            "map" => Ok(map_view(j, ctx, &platform, &distribution, index)?),
+            "platform3d" => {
+                let surface = Surface::new(&*platform.value);
+                let dist = |a: [f64; 2], b: [f64; 2]| surface.distance(a, b);
+                let t = tour::plan(&platform, &distribution.points, &j.path, &dist, &mut |_| {}).map_err(|e| Error::stage("path", e))?;
+                Ok(platform_view(&platform, &t, j.layer_height_mm))
+            }
+            _ => Err(Error::UnknownView { view: view.into(), job: Self::NAME }),
+        }
+    }
+}
+
+/// e of equation 4: the nozzle diameter (the paper: 0.4 mm).
+fn line_width(design: &Design) -> f64 {
+    design.printer.nozzle_diameter_mm
+}
+
+fn build_platform(j: &AxisymJob) -> Result<Platform, Error> {
+    let p = Platform::from_polygon(&j.platform.control_points).map_err(|e| Error::stage("platform", e))?;
+    p.validate(&platform::Options::default()).map_err(|e| Error::stage("platform", e))?;
+    Ok(p)
+}
+
+/// Samples per segment of the platform plots.
+const PLOT_SAMPLES_PER_SEGMENT: usize = 64;
+
+fn platform_stage(j: &AxisymJob, ctx: &mut Ctx) -> Result<Out<Platform>, Error> {
+    ctx.stage("platform", "platform", &j.platform.control_points, &[], |_| {
+        let p = Platform::from_polygon(&j.platform.control_points).map_err(|e| Error::stage("platform", e))?;
+        let continuity = p.validate(&platform::Options::default()).map_err(|e| Error::stage("platform", e))?;
+        let report = platform_report(&p, &continuity);
+        Ok((p, Some(report)))
+    })
+}
+
+fn points_stage(j: &AxisymJob, ctx: &mut Ctx, platform: &Out<Platform>) -> Result<Out<uniform::Distribution>, Error> {
+    let design = ctx.design;
+    let width = line_width(design);
+    let domain = j.domain.domain();
+    ctx.stage("points", "points", &(&domain, &j.points, width, design.seed), &[platform.key], |progress| {
+        let d = uniform::distribute(&platform.value, &domain, &j.points, width, design.seed, progress).map_err(|e| Error::stage("points", e))?;
+        let report = points_report(&d, &j.points, width);
+        Ok((d, Some(report)))
+    })
+}
+
+fn platform_report(p: &Platform, c: &platform::Continuity) -> StageReport {
+    let (lo, hi) = (0.0, p.segments.len() as f64);
+    let n = p.segments.len() * PLOT_SAMPLES_PER_SEGMENT;
+    let clearance = platform::pole_clearance(p, platform::DEFAULT_MIN_POLE_RADIUS_MM);
+    let (mut us, mut kappa, mut guu, mut gtt, mut g_uuu, mut g_utt, mut g_tut) = (vec![], vec![], vec![], vec![], vec![], vec![], vec![]);
+    let mut max_kappa: f64 = 0.0;
+    for i in 0..=n {
+        let u = lo + (hi - lo) * i as f64 / n as f64;
+        let k = platform::curvature(p, u);
+        let m = platform::metric(p, u);
+        us.push(u);
+        kappa.push(k);
+        guu.push(m.g_uu);
+        gtt.push(m.g_tt);
+        max_kappa = max_kappa.max(k.abs());
+        // Γ^θ_uθ = x′/x is unbounded at the poles: plotted only where a domain may go.
+        let inside = clearance.is_some_and(|(a, b)| u >= a && u <= b);
+        let c = platform::christoffel(p, u);
+        g_uuu.push(c.u_uu);
+        g_utt.push(c.u_tt);
+        g_tut.push(if inside { c.t_ut } else { f64::NAN });
+    }
+    let line = |key: &str, title: &str, y: &str, unit: &str, series: Vec<Series>| Plot { key: key.into(), title: title.into(), kind: PlotKind::Line, x: Axis::new("u", ""), y: Axis::new(y, unit), group: None, series };
+    let mut r = StageReport::new("platform", "Checking the build platform", c)
+        .metric("segments", "Bézier segments", p.segments.len() as f64, "", "Degree-6 segments of the generatrix; u runs from 0 to this number.")
+        .metric("max_jump", "Largest C³ jump at a knot", c.worst_rel.iter().fold(0.0, |a: f64, b| a.max(*b)), "", "The largest jump of x, z or their first three derivatives across a knot, relative to their size (0: C³).")
+        .metric("max_curvature", "Largest |κ|", max_kappa, "1/mm", "The sharpest bend of the profile: 1/κ is the smallest radius of curvature.");
+    if let Some((a, b)) = clearance {
+        r = r.metric("u_clear_min", "Domain may start at u", a, "", "Closer to the top pole the metric degenerates (g_θθ → 0): keep Ω at or above this u.").metric(
+            "u_clear_max",
+            "Domain may end at u",
+            b,
+            "",
+            "Closer to the bottom pole the metric degenerates: keep Ω at or below this u.",
+        );
+    }
+    r.plots.push(line("curvature", "Curvature κ of the generatrix", "κ", "1/mm", vec![Series::xy("κ", us.clone(), kappa)]));
+    r.plots.push(line("metric", "Metric components", "g", "mm²", vec![Series::xy("g_uu", us.clone(), guu), Series::xy("g_θθ", us.clone(), gtt)]));
+    r.plots.push(line(
+        "christoffel",
+        "Christoffel symbols of the second kind",
+        "Γ",
+        "",
+        vec![Series::xy("Γ^u_uu", us.clone(), g_uuu), Series::xy("Γ^u_θθ", us.clone(), g_utt), Series::xy("Γ^θ_uθ", us, g_tut)],
+    ));
+    r
+}
+
+/// The `points` stage's typed report (`weft run --report`): the numbers, not the points.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PointsSummary {
+    /// True surface area of Ω, mm².
+    pub area_mm2: f64,
+    /// N of equation 4.
+    pub points: usize,
+    /// Normalised energy E/E0 after each accepted iteration.
+    pub energy: Vec<f64>,
+    /// Why the repulsion stopped.
+    pub stop: String,
+    /// 2n-NN distances of the seed: mean and standard deviation, mm.
+    pub seed_mean_mm: f64,
+    /// See `seed_mean_mm`.
+    pub seed_std_mm: f64,
+    /// 2n-NN distances after repulsion: mean and standard deviation, mm.
+    pub mean_mm: f64,
+    /// See `mean_mm`.
+    pub std_mm: f64,
+    /// 1 − std / seed std.
+    pub std_reduction: f64,
+    /// e / mean distance after repulsion.
+    pub ratio: f64,
+    /// e / mean distance of the seed.
+    pub seed_ratio: f64,
+}
+
+/// The `path` stage's typed report.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PathSummary {
+    /// Points visited (each once).
+    pub visited: usize,
+    /// Path length along the geodesics, mm.
+    pub length_mm: f64,
+    /// The nearest-neighbour path's length, mm.
+    pub nn_length_mm: f64,
+    /// Crossings 2-opt removed and left.
+    pub crossings_removed: usize,
+    /// See `crossings_removed`.
+    pub crossings_left: usize,
+    /// Poses written.
+    pub poses: usize,
+    /// Fastest tool-axis turn at the infill speed, °/s.
+    pub max_axis_speed_deg_s: f64,
+    /// Largest tool-axis angular acceleration at the infill speed, °/s².
+    pub max_axis_accel_deg_s2: f64,
+}
+
+fn points_report(d: &uniform::Distribution, o: &uniform::Options, width: f64) -> StageReport {
+    let s = &d.seed_metrics;
+    let m = &d.metrics;
+    let reduction = if s.nn_std_mm > 0.0 { 100.0 * (1.0 - m.nn_std_mm / s.nn_std_mm) } else { 0.0 };
+    let summary = PointsSummary {
+        area_mm2: d.area_mm2,
+        points: d.points.len(),
+        energy: d.iterations.iter().map(|i| i.energy).collect(),
+        stop: format!("{:?}", d.stop),
+        seed_mean_mm: s.nn_mean_mm,
+        seed_std_mm: s.nn_std_mm,
+        mean_mm: m.nn_mean_mm,
+        std_mm: m.nn_std_mm,
+        std_reduction: reduction / 100.0,
+        ratio: m.ratio,
+        seed_ratio: s.ratio,
+    };
+    let mut r = StageReport::new("points", "Spreading uniform points (geodesic repulsion)", &summary)
+        .metric("area", "Surface area of Ω", d.area_mm2, "mm²", "The true area A_Σ of the patch on the curved platform.")
+        .metric("points", "Points N", d.points.len() as f64, "", "Equation 4: N = A_Σ·ρ_c² / (n²·e²), e the nozzle diameter.")
+        .metric("iterations", "Repulsion iterations", d.iterations.len() as f64, "", "Geodesic repulsion steps taken before a tolerance or the cap stopped it.")
+        .metric("std_seed", "Spacing spread, seed", s.nn_std_mm, "mm", "Standard deviation of the distances to the 2n nearest neighbours before repulsion.")
+        .metric("std", "Spacing spread, result", m.nn_std_mm, "mm", "The same after repulsion: lower is more uniform.")
+        .metric("std_reduction", "Spread reduced by", reduction, "%", "How much repulsion evened the spacing (the paper: 71.7 %, 71.6 %, 44 % on its three cases).")
+        .metric("mean", "Mean neighbour distance", m.nn_mean_mm, "mm", "Mean distance to the 2n nearest neighbours after repulsion.")
+        .metric("ratio", "e / mean distance", 100.0 * m.ratio, "%", "Line width over the mean spacing: the density the points give, to compare with the command density.")
+        .metric("command", "Command density ρ_c", 100.0 * o.density, "%", "The density asked for.");
+    let it: Vec<f64> = (0..d.iterations.len()).map(|i| (i + 1) as f64).collect();
+    r.plots.push(Plot {
+        key: "energy".into(),
+        title: "Normalised repulsion energy per iteration".into(),
+        kind: PlotKind::Line,
+        x: Axis::new("Iteration", ""),
+        y: Axis::new("E / E0", ""),
+        group: None,
+        series: vec![Series::xy("E / E0", it, d.iterations.iter().map(|i| i.energy).collect())],
+    });
+    let rank = |v: &[f64]| -> Vec<f64> { (0..v.len()).map(|i| i as f64).collect() };
+    r.plots.push(Plot {
+        key: "kdf".into(),
+        title: format!("Kernel density per point, sorted (h = {:.3} mm)", 4.0 * o.rasters as f64 * width / o.density),
+        kind: PlotKind::Line,
+        x: Axis::new("Point (sorted)", ""),
+        y: Axis::new("Kernel density", "1/mm²"),
+        group: None,
+        series: vec![Series::xy("seed", rank(&s.kdf_sorted), s.kdf_sorted.clone()), Series::xy("repulsion", rank(&m.kdf_sorted), m.kdf_sorted.clone())],
+    });
+    let (edges, seed_counts, counts) = crate::axisym::metrics::shared_histogram(&s.nn_distances_mm, &m.nn_distances_mm, HISTOGRAM_BINS);
+    r.plots.push(Plot {
+        key: "nn".into(),
+        title: format!("Distances to the {} nearest neighbours", 2 * o.rasters),
+        kind: PlotKind::Histogram,
+        x: Axis::new("Distance", "mm"),
+        y: Axis::new("Pairs", ""),
+        group: None,
+        series: vec![Series::xy("seed", edges.clone(), seed_counts), Series::xy("repulsion", edges, counts)],
+    });
+    r
+}
+
+/// Bins of the neighbour-distance histogram.
+const HISTOGRAM_BINS: usize = 30;
+
+fn path_report(t: &tour::Tour, d: &uniform::Distribution, design: &Design) -> Result<StageReport, Error> {
+    let saving = if t.nn_length_mm > 0.0 { 100.0 * (1.0 - t.length_mm / t.nn_length_mm) } else { 0.0 };
+    let feed = design.speeds.infill_mm_s;
+    let dynamics = tour::rotary_dynamics(&t.poses, feed).map_err(|e| Error::stage("path", e))?;
+    let summary = PathSummary {
+        visited: t.order.len(),
+        length_mm: t.length_mm,
+        nn_length_mm: t.nn_length_mm,
+        crossings_removed: t.crossings_removed,
+        crossings_left: t.crossings_left,
+        poses: t.poses.len(),
+        max_axis_speed_deg_s: dynamics.max_angular_speed_deg_s,
+        max_axis_accel_deg_s2: dynamics.max_angular_accel_deg_s2,
+    };
+    Ok(StageReport::new("path", "Joining the points by geodesics", &summary)
+        .metric("visited", "Points visited", t.order.len() as f64, "", "Every point once, in one path.")
+        .metric("length", "Path length", t.length_mm, "mm", "Along the geodesics on the platform.")
+        .metric("nn_length", "Nearest-neighbour length", t.nn_length_mm, "mm", "The path before 2-opt.")
+        .metric("saving", "2-opt shortened it by", saving, "%", "What 2-opt removed from the nearest-neighbour path (crossings included).")
+        .metric("crossings", "Crossings left", t.crossings_left as f64, "", "Places the path crosses itself in the map: 0 is a clean raster.")
+        .metric("poses", "Poses", t.poses.len() as f64, "", "Tool positions with their normal, along the sampled geodesics.")
+        .metric("max_axis_speed", "Fastest tool-axis turn", dynamics.max_angular_speed_deg_s, "°/s", "How fast the tool axis turns at the infill speed: what the rotary axes must follow.")
+        .metric("max_axis_accel", "Largest tool-axis acceleration", dynamics.max_angular_accel_deg_s2, "°/s²", "The rotary axes' hardest change of turning speed at the infill speed.")
+        .metric("points_in", "Points from the previous stage", d.points.len() as f64, "", "The repulsion's points the path joins."))
+}
+
+/// The tour as one free pass: the tip `h` out along the normal, the tool axis the normal.
+fn toolpath_of(t: &tour::Tour, h: f64, width: f64) -> Toolpath {
+    let points: Vec<DVec3> = t.poses.iter().map(|p| DVec3::from_array(p.position) + DVec3::from_array(p.normal) * h).collect();
+    let axes: Vec<DVec3> = t.poses.iter().map(|p| DVec3::from_array(p.normal)).collect();
+    if points.len() < 2 {
+        return Toolpath::default();
+    }
+    let z = points.iter().map(|p| p.z).fold(f64::INFINITY, f64::min);
+    let data = PointData { tool_axis: Some(axes), ..PointData::default() };
+    let path = Path { points, feature: Feature::Infill, width, speed_factor: 1.0, approach: None, data: Some(Box::new(data)) };
+    Toolpath { passes: vec![Pass { kind: PassKind::Free, z, height: h, paths: vec![path] }] }
+}
+
+/// Half the size of a point's cross in the map view, in map units.
+const CROSS: f32 = 0.004;
+
+fn map_view(j: &AxisymJob, ctx: &mut Ctx, platform: &Out<Platform>, d: &uniform::Distribution, index: usize) -> Result<Inspection, Error> {
+    let index = index.min(2);
+    let mut data: Vec<f32> = Vec::new();
+    let mut seg = |a: [f64; 2], b: [f64; 2], code: u8| data.extend_from_slice(&[a[1] as f32, a[0] as f32, b[1] as f32, b[0] as f32, code as f32]);
+    // Outline of Ω (x: θ, y: u).
+    let outline: Vec<[f64; 2]> = match j.domain.domain() {
+        Domain::Rectangle { u, theta } => vec![[u[0], theta[0]], [u[1], theta[0]], [u[1], theta[1]], [u[0], theta[1]]],
+        Domain::Polygon { points } => points,
+    };
+    for k in 0..outline.len() {
+        seg(outline[k], outline[(k + 1) % outline.len()], Feature::Contour.code());
+    }
+    let pts = if index == 0 { &d.seed_points } else { &d.points };
+    if index < 2 {
+        for p in pts {
+            let (u, t) = (p[0] as f32, p[1] as f32);
+            data.extend_from_slice(&[t - CROSS, u, t + CROSS, u, Feature::Lattice.code() as f32]);
+            data.extend_from_slice(&[t, u - CROSS, t, u + CROSS, Feature::Lattice.code() as f32]);
+        }
+    } else {
+        let surface = Surface::new(&*platform.value);
+        let dist = |a: [f64; 2], b: [f64; 2]| surface.distance(a, b);
+        let t = tour::plan(&platform.value, &d.points, &j.path, &dist, &mut |_| {}).map_err(|e| Error::stage("path", e))?;
+        for s in &t.samples {
+            for w in s.windows(2) {
+                data.extend_from_slice(&[w[0][1] as f32, w[0][0] as f32, w[1][1] as f32, w[1][0] as f32, Feature::Infill.code() as f32]);
+            }
+        }
+    }
+    let _ = ctx;
+    let labels = ["seed points", "after repulsion", "path"];
+    Ok(Inspection {
+        view: "map".into(),
+        shape: Shape::Lines2d,
+        index,
+        count: 3,
+        stride: Shape::Lines2d.stride(),
+        data,
+        meta: serde_json::json!({ "x_label": "θ (rad)", "y_label": "u", "scale_bar": false, "caption": labels[index] }),
+    })
+}
+
+/// Meridians and parallels drawn on the platform view.
+const MERIDIANS: usize = 24;
+const PARALLELS_PER_SEGMENT: usize = 6;
+const RING_STEPS: usize = 96;
+
+fn platform_view(p: &Platform, t: &tour::Tour, h: f64) -> Inspection {
+    let mut data: Vec<f32> = Vec::new();
+    let code = Feature::Contour.code() as f32;
+    let k = p.segments.len();
+    let steps = k * 32;
+    let mut push = |a: [f64; 3], b: [f64; 3], c: f32| data.extend_from_slice(&[a[0] as f32, a[1] as f32, a[2] as f32, b[0] as f32, b[1] as f32, b[2] as f32, c]);
+    for m in 0..MERIDIANS {
+        let th = std::f64::consts::TAU * m as f64 / MERIDIANS as f64;
+        for i in 0..steps {
+            let (u0, u1) = (k as f64 * i as f64 / steps as f64, k as f64 * (i + 1) as f64 / steps as f64);
+            push(platform::position(p, u0, th), platform::position(p, u1, th), code);
+        }
+    }
+    for i in 0..=k * PARALLELS_PER_SEGMENT {
+        let u = i as f64 / PARALLELS_PER_SEGMENT as f64;
+        for s in 0..RING_STEPS {
+            let (a, b) = (std::f64::consts::TAU * s as f64 / RING_STEPS as f64, std::f64::consts::TAU * (s + 1) as f64 / RING_STEPS as f64);
+            push(platform::position(p, u, a), platform::position(p, u, b), code);
+        }
+    }
+    let tip = |q: &tour::Pose| [q.position[0] + q.normal[0] * h, q.position[1] + q.normal[1] * h, q.position[2] + q.normal[2] * h];
+    for w in t.poses.windows(2) {
+        push(tip(&w[0]), tip(&w[1]), Feature::Infill.code() as f32);
+    }
+    Inspection { view: "platform3d".into(), shape: Shape::Lines3d, index: 0, count: 1, stride: Shape::Lines3d.stride(), data, meta: serde_json::json!({}) }
+}

@@ -1,0 +1,135 @@
+//! The `axisymmetric` job end to end: the three shipped examples (the paper's Ω1, Ω2, Ω3)
+//! through the design, the pipeline, the 5-axis writer and the analyzer.
+
+use weft::design::Design;
+use weft::jobs::axisymmetric::{PathSummary, PointsSummary};
+use weft::pipeline::{self, Files, RunOptions};
+
+fn example(name: &str) -> Design {
+    let path = format!("{}/examples/{name}.json", env!("CARGO_MANIFEST_DIR"));
+    Design::from_json(name, &std::fs::read_to_string(path).unwrap()).unwrap()
+}
+
+fn run(d: &Design) -> pipeline::RunOutput {
+    pipeline::run(d, &Files::default(), &RunOptions { collect_preview: true }, &mut |_, _| {}).unwrap()
+}
+
+/// (example, the paper's N, the paper's 2n-NN standard-deviation reduction).
+const CASES: &[(&str, Option<usize>, f64)] = &[("barrel-omega1", Some(538), 0.717), ("barrel-omega2", Some(173), 0.716), ("hourglass-omega3", Some(204), 0.44)];
+
+#[test]
+fn examples_spread_points_evenly_and_visit_each_once() {
+    for &(name, paper_n, paper_reduction) in CASES {
+        let d = example(name);
+        let out = run(&d);
+        let points: PointsSummary = out.report.stage("points").unwrap();
+        let path: PathSummary = out.report.stage("path").unwrap();
+        if let Some(n) = paper_n {
+            // Equation 4 on the true area: within 2 % of the paper's N.
+            let rel = (points.points as f64 - n as f64).abs() / n as f64;
+            assert!(rel < 0.02, "{name}: N = {} against the paper's {n}", points.points);
+        }
+        // Repulsion evens the spacing (the paper's table 4).
+        assert!(points.std_mm < points.seed_std_mm, "{name}: std {} not below the seed's {}", points.std_mm, points.seed_std_mm);
+        eprintln!(
+            "{name}: N {} area {:.1} mm², std {:.3} → {:.3} mm ({:.1} % less; paper {:.1} %), e/mean {:.1} % (seed {:.1} %)",
+            points.points,
+            points.area_mm2,
+            points.seed_std_mm,
+            points.std_mm,
+            100.0 * points.std_reduction,
+            100.0 * paper_reduction,
+            100.0 * points.ratio,
+            100.0 * points.seed_ratio
+        );
+        // The normalised energy never rises by more than the tolerance.
+        let tol = d.job.value["points"]["energy_tolerance"].as_f64().unwrap();
+        for w in points.energy.windows(2) {
+            assert!(w[1] <= w[0] + tol + 1e-12, "{name}: energy rose {} → {}", w[0], w[1]);
+        }
+        assert_eq!(path.visited, points.points, "{name}");
+        assert_eq!(path.crossings_left, 0, "{name}");
+        assert!(path.length_mm <= path.nn_length_mm + 1e-9, "{name}");
+
+        // The G-code as read back: one extrusion path of the tour's length, tool axes stated.
+        let a = &out.report.analysis;
+        assert_eq!(a.extrusion_paths, 1, "{name}");
+        let preview = out.preview.as_ref().unwrap();
+        assert!(!preview.axis.is_empty(), "{name}: the G-code states no tool axis");
+        // The tip rides one layer height out along the normal, so the printed length is the
+        // surface path's within the layer height's share of the curvature.
+        let rel = (a.extruded_mm - path.length_mm).abs() / path.length_mm;
+        assert!(rel < 0.02, "{name}: extruded {} mm against a {} mm path", a.extruded_mm, path.length_mm);
+    }
+}
+
+#[test]
+fn same_design_same_bytes() {
+    let d = example("hourglass-omega3");
+    assert_eq!(run(&d).gcode, run(&d).gcode);
+    let mut other = d.clone();
+    other.seed += 1;
+    assert_ne!(run(&d).gcode, run(&other).gcode);
+}
+
+/// Every problem of `d` with `sets` applied (the design refuses an invalid result).
+fn problems_with(d: &Design, sets: &[&str]) -> Vec<String> {
+    let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
+    match d.with_overrides(&sets) {
+        Ok(d) => d.validate().into_iter().map(|p| format!("{}: {}", p.path, p.message)).collect(),
+        Err(weft::design::Error::Invalid { problems, .. }) => problems.into_iter().map(|p| format!("{}: {}", p.path, p.message)).collect(),
+        Err(e) => vec![e.to_string()],
+    }
+}
+
+#[test]
+fn bad_settings_are_named() {
+    let d = example("barrel-omega1");
+    assert!(problems_with(&d, &[]).is_empty(), "{:?}", problems_with(&d, &[]));
+
+    let p = problems_with(&d, &["printer.machine.kind=cartesian"]);
+    assert!(p.iter().any(|m| m.starts_with("printer.machine.kind") && m.contains("5-axis")), "{p:?}");
+
+    // A domain reaching the top pole: the message gives the u range to keep.
+    let p = problems_with(&d, &["job.domain.u_min=0.0"]);
+    assert!(p.iter().any(|m| m.starts_with("job.domain") && m.contains("pole")), "{p:?}");
+
+    // A custom polygon of the wrong length.
+    let p = problems_with(&d, &["job.platform.preset=custom", "job.platform.control_points=[[0,50],[5,50],[10,50]]"]);
+    assert!(p.iter().any(|m| m.starts_with("job.platform.control_points") && m.contains("6·k + 1")), "{p:?}");
+
+    // A cusp: two segments meeting at an angle.
+    let p = problems_with(
+        &d,
+        &["job.platform.preset=custom", "job.platform.control_points=[[0,50],[5,50],[10,50],[25,50],[25,35],[25,30],[25,25],[30,20],[25,15],[25,0],[10,0],[5,0],[0,0]]"],
+    );
+    assert!(p.iter().any(|m| m.starts_with("job.platform") && m.contains("jumps")), "{p:?}");
+}
+
+#[test]
+fn a_preset_writes_its_control_points() {
+    let d = example("hourglass-omega3");
+    let cp = d.job.value["platform"]["control_points"].as_array().unwrap();
+    assert_eq!(cp.len(), 4 * 6 + 1);
+    // Switching to custom keeps the points, so editing starts from the preset.
+    let custom = d.with_overrides(&["job.platform.preset=custom".to_string()]).unwrap();
+    assert_eq!(custom.job.value["platform"]["control_points"], d.job.value["platform"]["control_points"]);
+    assert_eq!(run(&custom).gcode, run(&d).gcode);
+}
+
+#[test]
+fn poses_csv_output_has_one_row_per_pose() {
+    let d = example("barrel-omega2").with_overrides(&["printer.flavor=poses_csv".to_string(), "printer.machine.kind=cartesian".to_string()]).unwrap();
+    let out = run(&d);
+    let path: PathSummary = out.report.stage("path").unwrap();
+    let csv = out.gcode.as_str();
+    let mut lines = csv.lines().filter(|l| !l.starts_with(';') && !l.is_empty());
+    assert_eq!(lines.next(), Some("x,y,z,nx,ny,nz"));
+    let rows: Vec<Vec<f64>> = lines.map(|l| l.split(',').map(|f| f.parse().unwrap()).collect()).collect();
+    assert_eq!(rows.len(), path.poses, "one row per pose");
+    // Every normal is a unit vector.
+    for r in &rows {
+        assert_eq!(r.len(), 6);
+        assert!(((r[3] * r[3] + r[4] * r[4] + r[5] * r[5]).sqrt() - 1.0).abs() < 1e-5, "{r:?}");
+    }
+}

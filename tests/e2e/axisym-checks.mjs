@@ -1,0 +1,105 @@
+// Browser checks of the axisymmetric job (uniform infill on a curved platform): the
+// hourglass example from the Examples menu runs in the worker; the platform card plots κ,
+// the metric and the Christoffel symbols; the points card plots energy, sorted kernel density
+// and the neighbour-distance histogram for seed and result; the embedded-map and 3D platform
+// views draw through inspect; the downloaded G-code carries rotary words and matches the
+// native CLI byte for byte; the custom platform's control points are edited as lines and a
+// kinked polygon is refused naming the field. Called by run.mjs:
+//
+//   import { axisymChecks } from "./axisym-checks.mjs";
+//   await axisymChecks({ baseUrl: base, weftBin: WEFT_BIN, check, newPage, outDir: OUT, first: n });
+import { readFileSync, writeFileSync } from "node:fs";
+import { execFileSync } from "node:child_process";
+import { join } from "node:path";
+import { downloadGcode, waitReady, waitResult } from "./page-helpers.mjs";
+
+const EXAMPLE = "hourglass-omega3.json";
+
+/**
+ * @param {{baseUrl: string, weftBin?: string, check: Function, newPage: Function, outDir: string,
+ *          first: number, timeoutMs?: number}} opts
+ * @returns {Promise<number>} the next check number
+ */
+export async function axisymChecks({ baseUrl, weftBin = process.env.WEFT_BIN, check, newPage, outDir, first, timeoutMs }) {
+  const jobTimeout = timeoutMs ?? Number(process.env.E2E_TIMEOUT_S ?? 120) * 1000;
+  let n = first;
+  const { context, page } = await newPage();
+  try {
+    await check(n++, "axisymmetric: hourglass-omega3 from the Examples menu runs; platform and points cards plot their curves; map and 3D views draw; G-code has B/C words and equals the CLI's", async () => {
+      await page.goto(`${baseUrl}/www/`);
+      await waitReady(page);
+      await page.waitForSelector(`#examples option[value="${EXAMPLE}"]`, { state: "attached", timeout: 10000 }).catch(() => {});
+      const before = await page.evaluate(() => window.weft.resultCount);
+      await page.selectOption("#examples", EXAMPLE);
+      await waitResult(page, before, `running ${EXAMPLE}`, jobTimeout);
+      const report = await page.evaluate(() => window.weft.result?.report ?? null);
+      const stage = (name) => report?.stages?.find((s) => s.stage === name);
+      for (const s of ["platform", "points", "path"]) if (!stage(s)) throw new Error(`no ${s} stage in the report (${(report?.stages ?? []).map((x) => x.stage)})`);
+      const drawn = await page.evaluate(() => {
+        const card = (s) => document.querySelector(`#report .stage-card[data-stage="${s}"]`);
+        const plots = (s) => [...(card(s)?.querySelectorAll("svg[data-plot-kind]") ?? [])].map((p) => p.dataset.plotKind);
+        const series = (s) => [...(card(s)?.querySelectorAll(".series[data-series]") ?? [])].map((e) => e.dataset.series);
+        const metric = (s, key) => card(s)?.querySelector(`.metrics [data-key="${key}"] dd`)?.textContent ?? null;
+        return { platform: plots("platform"), points: plots("points"), pointSeries: series("points"), n: metric("points", "points"), reduction: metric("points", "std_reduction"), visited: metric("path", "visited"), crossings: metric("path", "crossings") };
+      });
+      if (drawn.platform.filter((k) => k === "line").length < 3) throw new Error(`platform card plots: ${drawn.platform}`);
+      if (!drawn.points.includes("histogram") || drawn.points.filter((k) => k === "line").length < 2) throw new Error(`points card plots: ${drawn.points}`);
+      for (const name of ["seed", "repulsion"]) if (!drawn.pointSeries.includes(name)) throw new Error(`points card series: ${drawn.pointSeries}`);
+      const points = stage("points").data;
+      const path = stage("path").data;
+      if (path.visited !== points.points || path.crossings_left !== 0) throw new Error(`path visits ${path.visited} of ${points.points} points with ${path.crossings_left} crossings`);
+      if (!(points.std_mm < points.seed_std_mm)) throw new Error(`repulsion did not even the spacing: ${points.seed_std_mm} → ${points.std_mm}`);
+      for (const id of ["map", "platform3d"]) {
+        await page.waitForFunction((v) => window.weft.views.find((x) => x.id === v)?.answers > 0, id, { timeout: jobTimeout }).catch(() => {});
+        const view = await page.evaluate((v) => window.weft.views.find((x) => x.id === v) ?? null, id);
+        if (!(view?.items > 0)) throw new Error(`the ${id} view drew nothing: ${JSON.stringify(view)}`);
+      }
+      // Step the map view to the path (index 3).
+      const input = '.view-card[data-view="map"] input[type=number]';
+      const k = await page.evaluate(() => window.weft.views.find((x) => x.id === "map").answers);
+      await page.fill(input, "3");
+      await page.dispatchEvent(input, "change");
+      await page.waitForFunction((a) => { const v = window.weft.views.find((x) => x.id === "map"); return v.answers > a && v.index === 2; }, k, { timeout: jobTimeout });
+      const gcodePath = join(outDir, "hourglass-omega3.gcode");
+      const text = (await downloadGcode(page, gcodePath)).bytes.toString("utf8");
+      const rotary = text.split("\n").filter((l) => /^G1 .*\bB-?\d/.test(l) && /\bC-?\d/.test(l)).length;
+      if (rotary < 100) throw new Error(`only ${rotary} G1 lines with B and C words`);
+      let native = "";
+      if (weftBin) {
+        const cli = join(outDir, "hourglass-omega3.cli.gcode");
+        execFileSync(weftBin, ["run", join(process.cwd(), "examples", EXAMPLE), "--out", cli, "-q"]);
+        native = readFileSync(cli, "utf8");
+        if (native !== text) throw new Error("the page's G-code differs from the CLI's");
+      }
+      for (const [w, h, name] of [[1280, 800, "axisym-desktop.png"], [390, 844, "axisym-phone.png"]]) {
+        await page.setViewportSize({ width: w, height: h });
+        await page.waitForTimeout(300);
+        await page.screenshot({ path: join(outDir, name), fullPage: w < 500 });
+      }
+      await page.setViewportSize({ width: 1400, height: 900 });
+      return `N ${points.points}, spread −${(100 * points.std_reduction).toFixed(1)} %, path ${path.length_mm.toFixed(0)} mm, ${rotary} rotary moves${native ? ", same bytes as the CLI" : ""}`;
+    });
+
+    await check(n++, "axisymmetric: a custom platform's control points are edited as lines; a kinked polygon is refused naming the field and the previous result stays", async () => {
+      await waitReady(page);
+      await page.selectOption("#f-job-platform-preset", JSON.stringify("custom"));
+      const area = "#f-job-platform-control_points";
+      await page.waitForSelector(area, { state: "visible", timeout: 5000 });
+      const lines = (await page.inputValue(area)).split("\n").filter((l) => l.trim() !== "");
+      if (lines.length !== 25) throw new Error(`the hourglass polygon shows ${lines.length} lines, expected 25`);
+      const kinked = [...lines];
+      kinked[7] = "60 80"; // the second segment's first inner point: breaks C¹ at the knot
+      await page.fill(area, kinked.join("\n"));
+      await page.dispatchEvent(area, "change");
+      await page.waitForFunction(() => document.querySelector("#f-job-platform-control_points-error:not([hidden])") || /jumps/.test(document.querySelector("#error")?.textContent ?? ""), null, { timeout: 10000 });
+      const message = await page.evaluate(() => (document.querySelector("#f-job-platform-control_points-error:not([hidden])") ?? document.querySelector("#error"))?.textContent ?? "");
+      if (!/jump|knot/.test(message)) throw new Error(`the refusal does not say what is wrong: ${message}`);
+      writeFileSync(join(outDir, "axisym-refusal.txt"), message);
+      await page.screenshot({ path: join(outDir, "axisym-custom.png") });
+      return message.slice(0, 120);
+    });
+  } finally {
+    await context.close();
+  }
+  return n;
+}

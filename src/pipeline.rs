@@ -260,6 +260,17 @@ impl<'a> Ctx<'a> {
     /// the plate: XY centred on 0, lowest point at Z = 0. `slot` names the slot for messages
     /// and for the cache id.
     pub fn mesh(&mut self, slot: &str, input: &Input) -> Result<Out<Mesh>, Error> {
+        self.mesh_placed(slot, input, true)
+    }
+
+    /// The mesh of `slot` in its file's own coordinates (not moved onto the plate): for jobs
+    /// where the part's place relative to something else matters (a part resting on a curved
+    /// platform).
+    pub fn mesh_in_place(&mut self, slot: &str, input: &Input) -> Result<Out<Mesh>, Error> {
+        self.mesh_placed(slot, input, false)
+    }
+
+    fn mesh_placed(&mut self, slot: &str, input: &Input, place: bool) -> Result<Out<Mesh>, Error> {
         // A loaded file is keyed by its content; a built-in shape or an embedded file by the
         // input itself. Missing files and several-file inputs are refused by `load_input`.
         let file = match input {
@@ -271,9 +282,9 @@ impl<'a> Ctx<'a> {
             None => (serde_json::to_value(input).unwrap_or_default(), Vec::new()),
         };
         let files = self.files;
-        let id = format!("import:{slot}");
+        let id = if place { format!("import:{slot}") } else { format!("import-in-place:{slot}") };
         self.stage("import", &id, &parts, &upstream, |_| {
-            let (mesh, report) = load_input(slot, input, files)?;
+            let (mesh, report) = load_input(slot, input, files, place)?;
             let stage = report.as_ref().map(|r| {
                 StageReport::new("import", "Reading the mesh", r)
                     .metric("triangles", "Triangles", r.triangles as f64, "", "Facets in the mesh after repairs.")
@@ -406,8 +417,9 @@ impl Error {
 }
 
 /// Resolves the mesh input of `slot`: the built-in shape, or the file (loaded, or embedded in
-/// a share link) imported; placed on the plate: XY centred on 0, lowest point at Z = 0.
-fn load_input(slot: &str, input: &Input, files: &Files) -> Result<(Mesh, Option<ImportReport>), Error> {
+/// a share link) imported; with `place`, placed on the plate: XY centred on 0, lowest point at
+/// Z = 0.
+fn load_input(slot: &str, input: &Input, files: &Files, place: bool) -> Result<(Mesh, Option<ImportReport>), Error> {
     let (mut mesh, report) = match input {
         Input::Builtin(shape) => (shape.mesh(), None),
         Input::File { name, embedded } => {
@@ -425,7 +437,7 @@ fn load_input(slot: &str, input: &Input, files: &Files) -> Result<(Mesh, Option<
         }
         Input::Files(_) => return Err(Error::NoInput(format!("the {slot} input takes one mesh file, not several"))),
     };
-    if let Some(b) = mesh.bounds() {
+    if let Some(b) = mesh.bounds().filter(|_| place) {
         let c = (b.min + b.max) * 0.5;
         mesh.translate(DVec3::new(-c.x, -c.y, -b.min.z));
     }

@@ -133,3 +133,53 @@ fn poses_csv_output_has_one_row_per_pose() {
         assert!(((r[3] * r[3] + r[4] * r[4] + r[5] * r[5]).sqrt() - 1.0).abs() < 1e-5, "{r:?}");
     }
 }
+
+/// A binary STL of `mesh`.
+fn stl(mesh: &weft::geom::Mesh) -> Vec<u8> {
+    let mut out = vec![0u8; 80];
+    out.extend((mesh.triangles.len() as u32).to_le_bytes());
+    for t in &mesh.triangles {
+        out.extend([0u8; 12]);
+        for &i in t {
+            for c in mesh.vertices[i as usize] {
+                out.extend(c.to_le_bytes());
+            }
+        }
+        out.extend([0u8; 2]);
+    }
+    out
+}
+
+#[test]
+fn a_part_on_the_platform_gives_the_domain() {
+    // A ball of radius 8 mm centred on the barrel's equator (radius 25 mm at z = 25 mm): it
+    // meets the platform in one near-circular outline around u = 1, θ = 0.
+    let mut mesh = weft::geom::shapes::Shape::Sphere { radius: 8.0, segments: 96 }.mesh();
+    let zmin = mesh.vertices.iter().map(|v| v[2]).fold(f32::INFINITY, f32::min);
+    let zmax = mesh.vertices.iter().map(|v| v[2]).fold(f32::NEG_INFINITY, f32::max);
+    for v in &mut mesh.vertices {
+        v[0] += 25.0;
+        v[2] += 25.0 - 0.5 * (zmin + zmax);
+    }
+    let mut files = Files::default();
+    files.insert("box.stl".into(), stl(&mesh));
+    let d = example("barrel-omega1").with_overrides(&["job.domain.kind=part".to_string(), "job.part={\"file\":{\"name\":\"box.stl\"}}".to_string()]).unwrap();
+    let out = pipeline::run(&d, &files, &RunOptions { collect_preview: false }, &mut |_, _| {}).unwrap();
+    let points: PointsSummary = out.report.stage("points").unwrap();
+    let domain = out.report.stage_data("domain").unwrap();
+    assert_eq!(domain["kind"], "polygon");
+    let ring = domain["points"].as_array().unwrap();
+    assert!(ring.len() > 8, "{domain}");
+    // θ within ±asin(8/25) (the ball's radius over the platform's), u around the equator.
+    for q in ring {
+        let (u, t) = (q[0].as_f64().unwrap(), q[1].as_f64().unwrap());
+        assert!((0.6..1.4).contains(&u) && t.abs() <= (8.0f64 / 25.0).asin() + 1e-6, "({u}, {t})");
+    }
+    // N from the outline's true area (equation 4 at 50 %, e = 0.4 mm: 1.5625 points per mm²).
+    let want = points.area_mm2 * 0.25 / 0.16;
+    assert!((points.points as f64 - want).abs() <= 1.0, "{} points for {} mm²", points.points, points.area_mm2);
+    assert!(points.std_mm < points.seed_std_mm);
+    // Without the part, the design names the slot.
+    let p = problems_with(&example("barrel-omega1"), &["job.domain.kind=part"]);
+    assert!(p.iter().any(|m| m.starts_with("job.part") && m.contains("load the part")), "{p:?}");
+}

@@ -12,11 +12,14 @@ use std::process::Command;
 const CASES: &[(&str, &str, &[&str])] = &[
     ("arrowhead-10mm", "arrowhead-10mm", &[]),
     ("ball-burst-disc-48mm", "ball-burst-disc-48mm", &[]),
+    ("barrel-omega1", "barrel-omega1", &[]),
+    ("barrel-omega2", "barrel-omega2", &[]),
     ("concave-cylinder-honeycomb", "concave-cylinder-honeycomb", &[]),
     ("cube-20mm", "cube-20mm", &[]),
     ("cylinder-dense-infill", "cylinder-dense-infill", &[]),
     ("cylinder-on-sphere", "cylinder-on-sphere", &[]),
     ("honeycomb-10mm", "honeycomb-10mm", &[]),
+    ("hourglass-omega3", "hourglass-omega3", &[]),
     ("penrose-10mm", "penrose-10mm", &[]),
     ("reentrant-honeycomb-10mm", "reentrant-honeycomb-10mm", &[]),
     ("snub-square-10mm", "snub-square-10mm", &[]),
@@ -37,6 +40,8 @@ const CASES: &[(&str, &str, &[&str])] = &[
     ("v-continuous", "voronoi-10mm", &["job.paths.method=continuous"]),
     ("v-euler", "voronoi-10mm", &["job.paths.method=euler", "job.paths.order=min_travel"]),
     ("v-center", "cube-20mm", &["printer.origin=center", "printer.bed_size_mm=[200,200,200]"]),
+    ("v-poses-csv", "barrel-omega2", &["printer.flavor=poses_csv"]),
+    ("v-ijk", "barrel-omega2", &["printer.machine.axis_output=ijk"]),
 ];
 
 #[test]

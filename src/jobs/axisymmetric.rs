@@ -10,11 +10,12 @@
 //! The writer gets one free pass with a tool axis per point: the printer must be 5-axis
 //! (the `five-axis-head` profile), or write the poses CSV flavour.
 
-use super::{Inspection, Kind, Product, Shape, Slot, StageInfo, ViewInfo};
+use super::{Inspection, Kind, Product, Shape, Slot, SlotKind, StageInfo, ViewInfo};
 use crate::axisym::domain::Domain;
 use crate::axisym::platform::{self, Platform};
 use crate::axisym::{surface::Surface, tour, uniform};
-use crate::design::Design;
+use crate::axisym::contour;
+use crate::design::{Design, Input};
 use crate::geom::{DVec3, Feature, Pass, PassKind, Path, PointData, Toolpath};
 use crate::pipeline::{Ctx, Error, Out};
 use crate::report::{Axis, Plot, PlotKind, Series, StageReport};
@@ -44,6 +45,9 @@ pub struct AxisymJob {
     /// Strand thickness over the platform, mm.
     #[serde(default = "default_layer_height")]
     pub layer_height_mm: f64,
+    /// A part resting on the platform: where it meets the platform is Ω (domain kind `part`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub part: Option<Input>,
 }
 
 fn default_layer_height() -> f64 {
@@ -52,7 +56,7 @@ fn default_layer_height() -> f64 {
 
 impl Default for AxisymJob {
     fn default() -> Self {
-        AxisymJob { platform: PlatformSpec::default(), domain: DomainSpec::default(), points: uniform::Options::default(), path: tour::Options::default(), layer_height_mm: DEFAULT_LAYER_HEIGHT_MM }
+        AxisymJob { platform: PlatformSpec::default(), domain: DomainSpec::default(), points: uniform::Options::default(), path: tour::Options::default(), layer_height_mm: DEFAULT_LAYER_HEIGHT_MM, part: None }
     }
 }
 
@@ -126,6 +130,8 @@ pub enum DomainKind {
     Rectangle,
     /// The polygon's points (u, θ).
     Polygon,
+    /// Where the part (slot `part`) meets the platform: its largest outline.
+    Part,
 }
 
 /// Ω as the form edits it (flat fields), turned into an [`axisym::domain::Domain`].
@@ -155,11 +161,12 @@ impl Default for DomainSpec {
 }
 
 impl DomainSpec {
-    /// The stage's domain.
-    pub fn domain(&self) -> Domain {
+    /// The domain the settings state (`None` for [`DomainKind::Part`]: it comes from the mesh).
+    pub fn domain(&self) -> Option<Domain> {
         match self.kind {
-            DomainKind::Rectangle => Domain::Rectangle { u: [self.u_min, self.u_max], theta: [self.theta_min_rad, self.theta_max_rad] },
-            DomainKind::Polygon => Domain::Polygon { points: self.polygon.clone() },
+            DomainKind::Rectangle => Some(Domain::Rectangle { u: [self.u_min, self.u_max], theta: [self.theta_min_rad, self.theta_max_rad] }),
+            DomainKind::Polygon => Some(Domain::Polygon { points: self.polygon.clone() }),
+            DomainKind::Part => None,
         }
     }
 }
@@ -167,8 +174,18 @@ impl DomainSpec {
 /// The `axisymmetric` job kind.
 pub struct AxisymKind;
 
+const SLOTS: &[Slot] = &[Slot {
+    name: "part",
+    label: "Part on the platform",
+    kind: SlotKind::Mesh,
+    path: "job.part",
+    required: false,
+    doc: "A solid resting on the curved platform: the outline where it meets the platform becomes the domain Ω.",
+}];
+
 const STAGES: &[StageInfo] = &[
     StageInfo { name: "platform", label: "Checking the build platform" },
+    StageInfo { name: "domain", label: "Finding the domain Ω" },
     StageInfo { name: "points", label: "Spreading uniform points (geodesic repulsion)" },
     StageInfo { name: "path", label: "Joining the points by geodesics" },
 ];
@@ -205,7 +222,10 @@ const PLATFORM_FIELDS: &[Field] = &[
 ];
 
 const DOMAIN_FIELDS: &[Field] = &[
-    other("kind", "Domain Ω", "Domain", FieldKind::Choice, &["rectangle", "polygon"], "The patch of the platform to fill, in the embedded map (u along the profile, θ around the axis)."),
+    choice_docs(
+        other("kind", "Domain Ω", "Domain", FieldKind::Choice, &["rectangle", "polygon", "part"], "The patch of the platform to fill, in the embedded map (u along the profile, θ around the axis)."),
+        &["A u × θ rectangle.", "An outline of (u, θ) corners.", "Where a loaded part meets the platform (its largest outline)."],
+    ),
     when(num("u_min", "Domain Ω", "u from", "", 0.0, 64.0, 0.01, "Where the patch starts along the profile (u counts Bézier segments: 0 to their number)."), "kind", "rectangle"),
     when(num("u_max", "Domain Ω", "u to", "", 0.0, 64.0, 0.01, "Where the patch ends along the profile."), "kind", "rectangle"),
     when(num("theta_min_rad", "Domain Ω", "θ from", "rad", -7.0, 7.0, 0.01, "Where the patch starts around the axis."), "kind", "rectangle"),
@@ -220,7 +240,7 @@ impl Kind for AxisymKind {
     const NAME: &'static str = "axisymmetric";
     const LABEL: &'static str = "Uniform infill on a curved platform";
     const DOC: &'static str = "Quasi-uniform infill points on an axisymmetric build platform, joined by geodesics and printed by a 5-axis head along the surface normal.";
-    const SLOTS: &'static [Slot] = &[];
+    const SLOTS: &'static [Slot] = SLOTS;
     const STAGES: &'static [StageInfo] = STAGES;
     const VIEWS: &'static [ViewInfo] = VIEWS;
 
@@ -255,23 +275,40 @@ impl Kind for AxisymKind {
         let path = match j.domain.kind {
             DomainKind::Rectangle => "job.domain",
             DomainKind::Polygon => "job.domain.polygon",
+            DomainKind::Part => "job.part",
         };
-        for message in j.domain.domain().problems(&platform) {
-            out.push(Problem { path: path.into(), message: message.to_string() });
+        match j.domain.domain() {
+            Some(d) => {
+                for message in d.problems(&platform) {
+                    out.push(Problem { path: path.into(), message: message.to_string() });
+                }
+            }
+            None if j.part.is_none() => out.push(Problem { path: path.into(), message: "the domain is where a part meets the platform: load the part (its drop zone, or --input part=FILE) or pick a rectangle or polygon".into() }),
+            None => {}
         }
     }
 
+    fn slot_filled(slot: &str, mut j: AxisymJob) -> AxisymJob {
+        if slot == "part" {
+            j.domain.kind = DomainKind::Part;
+        }
+        j
+    }
+
     fn estimate(j: &AxisymJob, ctx: &mut Ctx) -> Result<Vec<crate::budget::Estimate>, Error> {
-        let platform = build_platform(j)?;
+        let platform = platform_stage(j, ctx)?;
         let width = line_width(ctx.design);
-        let points = uniform::estimate(&platform, &j.domain.domain(), &j.points, width);
+        // A part's outline is found first (its own estimate bounds that: linear in triangles).
+        let domain = domain_stage(j, ctx, &platform)?;
+        let points = uniform::estimate(&platform.value, &domain.value, &j.points, width);
         let path = tour::estimate(points.get("points") as usize, &j.path, uniform::spacing(&j.points, width));
         Ok(vec![crate::budget::Estimate::new("platform"), points, path])
     }
 
     fn run(j: &AxisymJob, ctx: &mut Ctx) -> Result<Product, Error> {
         let platform = platform_stage(j, ctx)?;
-        let distribution = points_stage(j, ctx, &platform)?;
+        let domain = domain_stage(j, ctx, &platform)?;
+        let distribution = points_stage(j, ctx, &platform, &domain)?;
         let design = ctx.design;
         let h = j.layer_height_mm;
         let width = line_width(design);
@@ -288,9 +325,10 @@ impl Kind for AxisymKind {
 
     fn inspect(j: &AxisymJob, ctx: &mut Ctx, view: &str, index: usize) -> Result<Inspection, Error> {
         let platform = platform_stage(j, ctx)?;
-        let distribution = points_stage(j, ctx, &platform)?;
+        let domain = domain_stage(j, ctx, &platform)?;
+        let distribution = points_stage(j, ctx, &platform, &domain)?;
         match view {
-            "map" => Ok(map_view(j, ctx, &platform, &distribution, index)?),
+            "map" => Ok(map_view(j, &platform, &domain.value, &distribution, index)?),
             "platform3d" => {
                 let surface = Surface::new(&*platform.value);
                 let dist = |a: [f64; 2], b: [f64; 2]| surface.distance(a, b);
@@ -307,12 +345,6 @@ fn line_width(design: &Design) -> f64 {
     design.printer.nozzle_diameter_mm
 }
 
-fn build_platform(j: &AxisymJob) -> Result<Platform, Error> {
-    let p = Platform::from_polygon(&j.platform.control_points).map_err(|e| Error::stage("platform", e))?;
-    p.validate(&platform::Options::default()).map_err(|e| Error::stage("platform", e))?;
-    Ok(p)
-}
-
 /// Samples per segment of the platform plots.
 const PLOT_SAMPLES_PER_SEGMENT: usize = 64;
 
@@ -325,12 +357,41 @@ fn platform_stage(j: &AxisymJob, ctx: &mut Ctx) -> Result<Out<Platform>, Error> 
     })
 }
 
-fn points_stage(j: &AxisymJob, ctx: &mut Ctx, platform: &Out<Platform>) -> Result<Out<uniform::Distribution>, Error> {
+/// Ω: the settings' rectangle or polygon, or the largest outline where the part meets the
+/// platform (holes and smaller outlines are reported, not filled).
+fn domain_stage(j: &AxisymJob, ctx: &mut Ctx, platform: &Out<Platform>) -> Result<Out<Domain>, Error> {
+    if let Some(d) = j.domain.domain() {
+        return ctx.stage("domain", "domain", &d, &[platform.key], |_| {
+            let corners = d.ring().len();
+            let r = StageReport::new("domain", "Finding the domain Ω", &d).metric("corners", "Outline corners", corners as f64, "", "Corners of Ω in the embedded map (a rectangle has 4).");
+            Ok((d.clone(), Some(r)))
+        });
+    }
+    let input = j.part.as_ref().ok_or_else(|| Error::NoInput("a part domain needs the part: load it, or pass --input part=FILE".into()))?;
+    // In the file's own coordinates: the platform's axis is Z through the origin.
+    let mesh = ctx.mesh_in_place("part", input)?;
+    ctx.stage("domain", "domain", &(), &[platform.key, mesh.key], |_| {
+        let c = contour::platform_contours(&mesh.value, &platform.value, &contour::Options::default()).map_err(|e| Error::stage("domain", e))?;
+        // (A hole always lies in an outline, so an outline exists whenever a loop does.)
+        let k = (0..c.loops.len()).find(|&k| !c.is_hole[k]).ok_or_else(|| Error::NoInput("the part meets the platform in no closed outline (an open mesh?): repair the part or move it onto the platform".into()))?;
+        let holes = c.is_hole.iter().filter(|h| **h).count();
+        let others = c.loops.len() - holes - 1;
+        let d = Domain::Polygon { points: c.loops[k].clone() };
+        let r = StageReport::new("domain", "Finding the domain Ω", &d)
+            .metric("corners", "Outline corners", c.loops[k].len() as f64, "", "Points of the outline where the part meets the platform, in the embedded map.")
+            .metric("area", "Outline area", c.area_mm2[k], "mm²", "The area the outline encloses on the platform.")
+            .metric("holes", "Holes not filled", holes as f64, "", "Openings inside the outline: filled over for now (the paper's method has none).")
+            .metric("other_outlines", "Smaller outlines left out", others as f64, "", "Other places the part meets the platform; only the largest is filled.")
+            .metric("open_chains", "Open cuts dropped", c.open_chains as f64, "", "Cuts that did not close because the mesh is open there: repair the mesh if this is not 0.");
+        Ok((d, Some(r)))
+    })
+}
+
+fn points_stage(j: &AxisymJob, ctx: &mut Ctx, platform: &Out<Platform>, domain: &Out<Domain>) -> Result<Out<uniform::Distribution>, Error> {
     let design = ctx.design;
     let width = line_width(design);
-    let domain = j.domain.domain();
-    ctx.stage("points", "points", &(&domain, &j.points, width, design.seed), &[platform.key], |progress| {
-        let d = uniform::distribute(&platform.value, &domain, &j.points, width, design.seed, progress).map_err(|e| Error::stage("points", e))?;
+    ctx.stage("points", "points", &(&j.points, width, design.seed), &[platform.key, domain.key], |progress| {
+        let d = uniform::distribute(&platform.value, &domain.value, &j.points, width, design.seed, progress).map_err(|e| Error::stage("points", e))?;
         let report = points_report(&d, &j.points, width);
         Ok((d, Some(report)))
     })
@@ -537,15 +598,12 @@ fn toolpath_of(t: &tour::Tour, h: f64, width: f64) -> Toolpath {
 /// Half the size of a point's cross in the map view, in map units.
 const CROSS: f32 = 0.004;
 
-fn map_view(j: &AxisymJob, ctx: &mut Ctx, platform: &Out<Platform>, d: &uniform::Distribution, index: usize) -> Result<Inspection, Error> {
+fn map_view(j: &AxisymJob, platform: &Out<Platform>, domain: &Domain, d: &uniform::Distribution, index: usize) -> Result<Inspection, Error> {
     let index = index.min(2);
     let mut data: Vec<f32> = Vec::new();
     let mut seg = |a: [f64; 2], b: [f64; 2], code: u8| data.extend_from_slice(&[a[1] as f32, a[0] as f32, b[1] as f32, b[0] as f32, code as f32]);
     // Outline of Ω (x: θ, y: u).
-    let outline: Vec<[f64; 2]> = match j.domain.domain() {
-        Domain::Rectangle { u, theta } => vec![[u[0], theta[0]], [u[1], theta[0]], [u[1], theta[1]], [u[0], theta[1]]],
-        Domain::Polygon { points } => points,
-    };
+    let outline = domain.ring();
     for k in 0..outline.len() {
         seg(outline[k], outline[(k + 1) % outline.len()], Feature::Contour.code());
     }
@@ -566,7 +624,6 @@ fn map_view(j: &AxisymJob, ctx: &mut Ctx, platform: &Out<Platform>, d: &uniform:
             }
         }
     }
-    let _ = ctx;
     let labels = ["seed points", "after repulsion", "path"];
     Ok(Inspection {
         view: "map".into(),

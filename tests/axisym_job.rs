@@ -134,22 +134,6 @@ fn poses_csv_output_has_one_row_per_pose() {
     }
 }
 
-/// A binary STL of `mesh`.
-fn stl(mesh: &weft::geom::Mesh) -> Vec<u8> {
-    let mut out = vec![0u8; 80];
-    out.extend((mesh.triangles.len() as u32).to_le_bytes());
-    for t in &mesh.triangles {
-        out.extend([0u8; 12]);
-        for &i in t {
-            for c in mesh.vertices[i as usize] {
-                out.extend(c.to_le_bytes());
-            }
-        }
-        out.extend([0u8; 2]);
-    }
-    out
-}
-
 #[test]
 fn a_part_on_the_platform_gives_the_domain() {
     // A ball of radius 8 mm centred on the barrel's equator (radius 25 mm at z = 25 mm): it
@@ -162,7 +146,7 @@ fn a_part_on_the_platform_gives_the_domain() {
         v[2] += 25.0 - 0.5 * (zmin + zmax);
     }
     let mut files = Files::default();
-    files.insert("box.stl".into(), stl(&mesh));
+    files.insert("box.stl".into(), mesh.to_stl_binary());
     let d = example("barrel-omega1").with_overrides(&["job.domain.kind=part".to_string(), "job.part={\"file\":{\"name\":\"box.stl\"}}".to_string()]).unwrap();
     let out = pipeline::run(&d, &files, &RunOptions { collect_preview: false }, &mut |_, _| {}).unwrap();
     let points: PointsSummary = out.report.stage("points").unwrap();
@@ -182,4 +166,21 @@ fn a_part_on_the_platform_gives_the_domain() {
     // Without the part, the design names the slot.
     let p = problems_with(&example("barrel-omega1"), &["job.domain.kind=part"]);
     assert!(p.iter().any(|m| m.starts_with("job.part") && m.contains("load the part")), "{p:?}");
+}
+
+#[test]
+fn switching_to_the_kind_puts_a_five_axis_head_in_place() {
+    // The default design (a slice on a Cartesian printer) switched to axisymmetric is valid:
+    // the kind puts the five-axis-head profile in place, and runs.
+    let d = Design::default().with_overrides(&["job.kind=axisymmetric".to_string()]).unwrap();
+    let preset = weft::gcode::presets::preset(weft::jobs::axisymmetric::FIVE_AXIS_PRESET).unwrap();
+    assert_eq!(serde_json::to_value(&d.printer).unwrap(), serde_json::to_value(&preset.printer).unwrap());
+    // A poses CSV printer is kept (it needs no machine).
+    let csv = Design::default().with_overrides(&["printer.flavor=poses_csv".to_string(), "job.kind=axisymmetric".to_string()]).unwrap();
+    assert_eq!(csv.printer.flavor, weft::gcode::Flavor::PosesCsv);
+    assert!(!csv.printer.machine.is_five_axis());
+    // The shipped examples use exactly that profile.
+    for name in ["barrel-omega1", "barrel-omega2", "hourglass-omega3"] {
+        assert_eq!(serde_json::to_value(&example(name).printer).unwrap(), serde_json::to_value(&preset.printer).unwrap(), "{name}");
+    }
 }

@@ -320,7 +320,7 @@ impl<'o> Machine<'o> {
             let b = if use_pts { self.m.arc_pts[k] } else { t };
             // Overlap and preview are in the part's frame (tips), flow at the machine's motion.
             let vb = if self.fk { self.view(b) } else { b };
-            self.segs.push(Seg { a: [va[0], va[1]], b: [vb[0], vb[1]], w });
+            self.segs.push(Seg { a: [va[0], va[1]], b: [vb[0], vb[1]], z: [va[2], vb[2]], w });
             if let Some(pv) = &mut self.preview {
                 let d = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
                 let seg_len = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();

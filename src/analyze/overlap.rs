@@ -28,13 +28,17 @@
 //! [`PIECES_PER_SEGMENT`]); only hostile input (hundreds of segments through one spot that do
 //! not cover each other) has candidates left unexamined.
 
-/// One extrusion segment in the layer plane.
+/// One extrusion segment: x, y in the layer plane, z kept so that a non-planar layer (a
+/// path over a curved surface, whose parts may lie above one another) counts only what
+/// also lies within half a width in height.
 #[derive(Clone, Copy, Debug)]
 pub struct Seg {
     /// Start x, y (mm).
     pub a: [f64; 2],
     /// End x, y (mm).
     pub b: [f64; 2],
+    /// Start and end z (mm).
+    pub z: [f64; 2],
     /// Line width (mm).
     pub w: f64,
 }
@@ -147,6 +151,8 @@ struct Prep {
     d: [f64; 2],
     /// Squared length.
     l2: f64,
+    /// Start z and its change.
+    z: [f64; 2],
     /// Line width.
     w: f64,
 }
@@ -155,7 +161,7 @@ impl Prep {
     #[inline]
     fn new(s: &Seg) -> Prep {
         let (dx, dy) = (s.b[0] - s.a[0], s.b[1] - s.a[1]);
-        Prep { a: s.a, b: s.b, d: [dx, dy], l2: dx * dx + dy * dy, w: s.w }
+        Prep { a: s.a, b: s.b, d: [dx, dy], l2: dx * dx + dy * dy, z: [s.z[0], s.z[1] - s.z[0]], w: s.w }
     }
 }
 
@@ -202,6 +208,9 @@ fn on_segment(a: &Prep, b: &Prep) -> Option<(f64, f64)> {
     let mut hi = 1.0f64;
     clip(&mut lo, &mut hi, d0, dd, -tol, tol)?;
     clip(&mut lo, &mut hi, s0, ds, 0.0, la)?;
+    // Height: B's z minus A's z where B projects, linear in t (0 in a planar layer).
+    let (ka, kb) = (a.z[1] / la, b.z[1]);
+    clip(&mut lo, &mut hi, b.z[0] - a.z[0] - s0 * ka, kb - ds * ka, -tol, tol)?;
     if hi - lo > 1e-12 { Some((lo, hi)) } else { None }
 }
 

@@ -507,10 +507,10 @@ impl<'a> Generatrix<'a> {
         for w in s.windows(2) {
             let (a, b) = (w[0], w[1]);
             let (dx, dz) = (b[1] - a[1], b[2] - a[2]);
-            let l = dx.hypot(dz);
+            let l = libm::hypot(dx, dz);
             for f in [0.25, 0.5, 0.75] {
                 let j = p.jet(a[0] + f * (b[0] - a[0]));
-                let off = if l > 0.0 { ((j.x[0] - a[1]) * dz - (j.z[0] - a[2]) * dx).abs() / l } else { (j.x[0] - a[1]).hypot(j.z[0] - a[2]) };
+                let off = if l > 0.0 { ((j.x[0] - a[1]) * dz - (j.z[0] - a[2]) * dx).abs() / l } else { libm::hypot(j.x[0] - a[1], j.z[0] - a[2]) };
                 sag = sag.max(off);
             }
         }
@@ -521,7 +521,7 @@ impl<'a> Generatrix<'a> {
     /// value when it is clearly away from zero (most vertices; no Newton steps), the exact one
     /// otherwise.
     fn classify(&self, q: [f64; 3], offset: f64) -> f64 {
-        let r = q[0].hypot(q[1]);
+        let r = libm::hypot(q[0], q[1]);
         let (d, _) = self.polyline(r, q[2]);
         if (d - offset).abs() > 2.0 * self.sag {
             return d - offset;
@@ -552,7 +552,7 @@ impl<'a> Generatrix<'a> {
 
     /// Signed distance of a 3-D point to the platform (positive outside) and the closest u.
     fn signed(&self, q: [f64; 3]) -> (f64, f64) {
-        let r = q[0].hypot(q[1]);
+        let r = libm::hypot(q[0], q[1]);
         self.signed_rz(r, q[2])
     }
 
@@ -585,7 +585,7 @@ impl<'a> Generatrix<'a> {
         let j0 = self.p.jet(u0);
         let (u, j) = if d2_at(&j) <= d2_at(&j0) { (u, j) } else { (u0, j0) };
         let (ex, ez) = (r - j.x[0], z - j.z[0]);
-        let d = ex.hypot(ez);
+        let d = libm::hypot(ex, ez);
         // Outward normal (−z′, x′): positive when the point lies on its side.
         let side = -ex * j.z[1] + ez * j.x[1];
         (if side >= 0.0 { d } else { -d }, u)
@@ -651,7 +651,7 @@ impl<'a> AreaTable<'a> {
         let h = (g.hi - g.lo) / n as f64;
         let dfa = |u: f64| {
             let j = g.p.jet(u);
-            j.x[0] * j.x[1].hypot(j.z[1])
+            j.x[0] * libm::hypot(j.x[1], j.z[1])
         };
         // 3-point Gauss–Legendre per interval: exact to degree 5, far below the loops' error.
         let (gx, gw) = ([-0.774_596_669_241_483_4, 0.0, 0.774_596_669_241_483_4], [5.0 / 9.0, 8.0 / 9.0, 5.0 / 9.0]);
@@ -671,7 +671,7 @@ impl<'a> AreaTable<'a> {
         let t = s - i as f64;
         let d = |k: usize| {
             let j = self.p.jet(self.lo + k as f64 * self.h);
-            j.x[0] * j.x[1].hypot(j.z[1]) * self.h
+            j.x[0] * libm::hypot(j.x[1], j.z[1]) * self.h
         };
         let (h00, h10, h01, h11) = (2.0 * t * t * t - 3.0 * t * t + 1.0, t * t * t - 2.0 * t * t + t, -2.0 * t * t * t + 3.0 * t * t, t * t * t - t * t);
         h00 * self.f[i] + h10 * d(i) + h01 * self.f[i + 1] + h11 * d(i + 1)

@@ -239,7 +239,7 @@ impl Domain {
         let f = |u: f64| {
             let j = p.jet(u);
             let w: f64 = self.theta_intervals(u).iter().map(|i| i[1] - i[0]).sum();
-            j.x[0] * j.x[1].hypot(j.z[1]) * w
+            j.x[0] * libm::hypot(j.x[1], j.z[1]) * w
         };
         let mut us: Vec<f64> = self.ring().iter().map(|q| q[0]).collect();
         us.sort_by(f64::total_cmp);
@@ -313,7 +313,7 @@ fn point_in_ring(r: &[[f64; 2]], q: [f64; 2]) -> bool {
 fn project_ring(ring: &[[f64; 2]], s: &Surface, q: [f64; 2]) -> [f64; 2] {
     // Metric at q: scale (u, θ) to mm so the nearest point is nearest on the surface.
     let j = s.profile().jet(q[0]);
-    let (su, st) = (j.x[1].hypot(j.z[1]), j.x[0].abs().max(1e-9));
+    let (su, st) = (libm::hypot(j.x[1], j.z[1]), j.x[0].abs().max(1e-9));
     let n = ring.len();
     let (mut best, mut best_d, mut best_e) = (ring[0], f64::INFINITY, 0);
     for i in 0..n {

@@ -155,7 +155,7 @@ fn clairaut<P: Profile + ?Sized>(p: &P, a: [f64; 2], b: [f64; 2], o: &Options) -
         Some(path) => {
             let end = path[steps];
             let miss = [b[0] - end[0], b[1] - end[1]];
-            let miss_mm = (miss[0] * jb.x[1].hypot(jb.z[1])).hypot(miss[1] * jb.x[0]);
+            let miss_mm = libm::hypot(miss[0] * libm::hypot(jb.x[1], jb.z[1]), miss[1] * jb.x[0]);
             if miss_mm <= 1e-6 * sol.length_mm.max(1e-3) {
                 let out = (0..o.path_samples)
                     .map(|i| {
@@ -219,9 +219,9 @@ fn shoot<P: Profile + ?Sized>(p: &P, a: [f64; 2], v: [f64; 2], steps: usize, min
 fn ode<P: Profile + ?Sized>(p: &P, a: [f64; 2], b: [f64; 2], o: &Options, v: [f64; 2]) -> Result<Geodesic, Error> {
     // Residual in mm: the miss in u and θ scaled by the metric at the target.
     let jb = p.jet(b[0]);
-    let (su, st) = (jb.x[1].hypot(jb.z[1]), jb.x[0]);
+    let (su, st) = (libm::hypot(jb.x[1], jb.z[1]), jb.x[0]);
     let res = |y: &[f64; 5]| [(y[0] - b[0]) * su, (y[1] - b[1]) * st];
-    let norm = |r: [f64; 2]| r[0].hypot(r[1]);
+    let norm = |r: [f64; 2]| libm::hypot(r[0], r[1]);
     let run = |v: [f64; 2]| shoot(p, a, v, o.ode_steps, o.min_pole_radius_mm, false).map(|(y, _)| y);
     let fail = |r: f64| Error::NoConvergence { u0: a[0], t0: a[1], u1: b[0], t1: b[1], residual_mm: r };
     let mut v = v;
@@ -281,30 +281,8 @@ fn ode<P: Profile + ?Sized>(p: &P, a: [f64; 2], b: [f64; 2], o: &Options, v: [f6
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::axisym::platform::{Jet, Platform};
-
-    /// Exact sphere of radius R: u = colatitude (rad), x = R sin u, z = R cos u.
-    struct Sphere(f64);
-    impl Profile for Sphere {
-        fn u_range(&self) -> (f64, f64) {
-            (0.0, PI)
-        }
-        fn jet(&self, u: f64) -> Jet {
-            let (s, c, r) = (libm::sin(u), libm::cos(u), self.0);
-            Jet { x: [r * s, r * c, -r * s, -r * c], z: [r * c, -r * s, -r * c, r * s] }
-        }
-    }
-
-    fn great_circle(r: f64, a: [f64; 2], b: [f64; 2]) -> f64 {
-        // Vincenty's form (well conditioned at all distances), latitudes φ = π/2 − u.
-        let (p1, p2) = (PI / 2.0 - a[0], PI / 2.0 - b[0]);
-        let dl = b[1] - a[1];
-        let y = ((libm::cos(p2) * libm::sin(dl)).powi(2)
-            + (libm::cos(p1) * libm::sin(p2) - libm::sin(p1) * libm::cos(p2) * libm::cos(dl)).powi(2))
-        .sqrt();
-        let x = libm::sin(p1) * libm::sin(p2) + libm::cos(p1) * libm::cos(p2) * libm::cos(dl);
-        r * libm::atan2(y, x)
-    }
+    use crate::axisym::testing::{great_circle, Sphere};
+    use crate::axisym::platform::Platform;
 
     /// Exact cylinder of radius 20 mm from two collinear degree-6 segments: z = 60 − 30u.
     fn cylinder() -> Platform {

@@ -26,6 +26,8 @@ pub mod platform;
 pub mod domain;
 pub mod metrics;
 pub mod surface;
+#[cfg(test)]
+mod testing;
 pub mod tour;
 pub mod uniform;
 

@@ -402,7 +402,7 @@ impl Platform {
             let mut jumps = [0.0; 4];
             for r in 0..4 {
                 let jump = ((a.x[r] - b.x[r]).powi(2) + (a.z[r] - b.z[r]).powi(2)).sqrt();
-                let scale = size.max(a.x[r].hypot(a.z[r])).max(b.x[r].hypot(b.z[r]));
+                let scale = size.max(libm::hypot(a.x[r], a.z[r])).max(libm::hypot(b.x[r], b.z[r]));
                 let tol = options.continuity_rel_tol * scale;
                 jumps[r] = jump;
                 cont.worst[r] = cont.worst[r].max(jump);
@@ -427,10 +427,10 @@ impl Platform {
         // Cusps: refine every local minimum of the speed by golden-section search.
         let speed = |u: f64| {
             let j = self.jet(u);
-            j.x[1].hypot(j.z[1])
+            libm::hypot(j.x[1], j.z[1])
         };
         let min_speed = options.min_speed_rel * size;
-        let sp: Vec<f64> = samples.iter().map(|(_, j)| j.x[1].hypot(j.z[1])).collect();
+        let sp: Vec<f64> = samples.iter().map(|(_, j)| libm::hypot(j.x[1], j.z[1])).collect();
         let h = (u1 - u0) / (samples.len() - 1) as f64;
         let mut last_cusp = f64::NEG_INFINITY;
         for i in 0..sp.len() {

@@ -105,7 +105,7 @@ impl<'a> Surface<'a> {
             .map(|i| {
                 let u = u_lo + (u_hi - u_lo) * i as f64 / sub_n as f64;
                 let j = profile.jet(u);
-                let s = j.x[1].hypot(j.z[1]);
+                let s = libm::hypot(j.x[1], j.z[1]);
                 let km = (j.x[1] * j.z[2] - j.z[1] * j.x[2]) / (s * s * s);
                 // Near a pole x → 0: the parallel curvature is capped by the meridian's limit
                 // there only in theory; keep it finite so the table stays usable.

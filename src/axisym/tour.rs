@@ -454,7 +454,7 @@ fn start_point(p: &Platform, points: &[[f64; 2]], s: &Start) -> usize {
     };
     let (lo, hi) = p.u_range();
     let j = p.jet(target[0].clamp(lo, hi));
-    let (su, st) = (j.x[1].hypot(j.z[1]), j.x[0].abs());
+    let (su, st) = (libm::hypot(j.x[1], j.z[1]), j.x[0].abs());
     let mut best = (f64::INFINITY, 0);
     for (i, q) in points.iter().enumerate() {
         let dt = libm::remainder(q[1] - target[1], 2.0 * PI);

@@ -332,7 +332,7 @@ impl Sampler {
         let mut cdf = vec![0.0];
         for i in 0..cells {
             let j = s.profile().jet(b[0][0] + (i as f64 + 0.5) * du);
-            let w = j.x[0] * j.x[1].hypot(j.z[1]);
+            let w = j.x[0] * libm::hypot(j.x[1], j.z[1]);
             cdf.push(cdf[i] + w);
         }
         Sampler { u0: b[0][0], du, cdf, theta: [b[0][1], b[1][1]] }
@@ -410,15 +410,15 @@ impl Engine<'_, '_> {
         let nodes: Vec<Node> = pts.iter().map(|&q| self.s.node(q)).collect();
         let mut f = vec![[0.0; 2]; pts.len()];
         let mut e = 0.0;
-        let shift = if self.rc.is_finite() { self.rc.powf(-self.m) } else { 0.0 };
+        let shift = if self.rc.is_finite() { libm::pow(self.rc, -self.m) } else { 0.0 };
         let visit = |i: usize, j: usize, e: &mut f64, f: &mut Vec<[f64; 2]>| {
             let pe: PairEval = if self.geodesic { self.s.pair_both(&nodes[i], &nodes[j]) } else { self.s.chord_pair(&nodes[i], &nodes[j]) };
             if !(pe.d < self.rc) {
                 return;
             }
             let d = pe.d.max(1e-9);
-            *e += d.powf(-self.m) - shift;
-            let w = self.m * d.powf(-self.m - 1.0);
+            *e += libm::pow(d, -self.m) - shift;
+            let w = self.m * libm::pow(d, -self.m - 1.0);
             f[i][0] += w * pe.ga[0];
             f[i][1] += w * pe.ga[1];
             f[j][0] += w * pe.gb[0];

@@ -318,6 +318,11 @@ impl Design {
             let new: Value = serde_json::from_str(raw).unwrap_or_else(|_| Value::String(raw.to_string()));
             set_path(&mut value, path.trim(), new).map_err(|message| Error::Override { assignment: assignment(), message })?;
         }
+        // A switch of job kind lets the new kind put what it needs in place (a machine).
+        let kind = value.pointer("/job/kind").and_then(Value::as_str).map(str::to_string);
+        if let Some(k) = kind.filter(|k| k != self.job.kind()).and_then(|k| registry.get(&k)) {
+            k.adopted(&mut value);
+        }
         Design::from_value_in(registry, "--set", value)
     }
 

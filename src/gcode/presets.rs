@@ -61,12 +61,17 @@ pub fn presets() -> Vec<Preset> {
         Preset {
             id: "five-axis-head",
             label: "5-axis head (B/C)",
-            doc: "A head that tilts (B about Y) and turns (C about Z), 300 × 300 × 300 mm around the centre, for non-planar jobs whose tool follows the surface normal.",
+            doc: "A head that tilts (B about Y, ±150°) and turns (C about Z), 300 × 300 × 300 mm around the centre, for non-planar jobs whose tool follows the surface normal (an hourglass's flare tilts it past 90°).",
             printer: Printer {
                 name: "5-axis B/C head 300 × 300".into(),
                 bed_size_mm: [300.0, 300.0, 300.0],
                 origin: Origin::Center,
-                machine: crate::machine::Machine { kind: crate::machine::Kind::FiveAxis, ..crate::machine::Machine::default() },
+                machine: crate::machine::Machine {
+                    kind: crate::machine::Kind::FiveAxis,
+                    rotary_min_deg: [-150.0, -150.0, -36000.0],
+                    rotary_max_deg: [150.0, 150.0, 36000.0],
+                    ..crate::machine::Machine::default()
+                },
                 retraction: Retraction { length_mm: 0.8, speed_mm_s: 35.0, z_hop_mm: 0.0, min_travel_mm: 1.0 },
                 travel_speed_mm_s: 100.0,
                 z_speed_mm_s: 10.0,

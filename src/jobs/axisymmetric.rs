@@ -22,6 +22,9 @@ use crate::report::{Axis, Plot, PlotKind, Series, StageReport};
 use crate::settings::{choice_docs, mount, num, other, points, when, Field, Kind as FieldKind, Problem, Row};
 use serde::{Deserialize, Serialize};
 
+/// The printer profile a design switching to this kind gets when its machine cannot tilt.
+pub const FIVE_AXIS_PRESET: &str = "five-axis-head";
+
 /// Default layer height: the strand's thickness over the platform, mm (the tip rides this far
 /// out along the normal).
 pub const DEFAULT_LAYER_HEIGHT_MM: f64 = 0.2;
@@ -285,6 +288,21 @@ impl Kind for AxisymKind {
             }
             None if j.part.is_none() => out.push(Problem { path: path.into(), message: "the domain is where a part meets the platform: load the part (its drop zone, or --input part=FILE) or pick a rectangle or polygon".into() }),
             None => {}
+        }
+    }
+
+    /// Switching to this kind on a machine that cannot tilt the tool puts the `five-axis-head`
+    /// profile in place (the poses CSV output is kept: it needs no machine).
+    fn adopted(design: &mut serde_json::Value) {
+        let printer = &design["printer"];
+        let five_axis = printer.pointer("/machine/kind").and_then(|k| k.as_str()) == Some("five_axis");
+        let poses = printer.get("flavor").and_then(|f| f.as_str()) == Some("poses_csv");
+        if !five_axis && !poses {
+            if let Ok(p) = crate::gcode::presets::preset(FIVE_AXIS_PRESET) {
+                if let Ok(v) = serde_json::to_value(&p.printer) {
+                    design["printer"] = v;
+                }
+            }
         }
     }
 

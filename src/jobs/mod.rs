@@ -218,6 +218,9 @@ pub trait JobKind: Sync {
     fn slot_filled(&self, _slot: &str, job: Value) -> Value {
         job
     }
+    /// The whole design (as JSON) when it has just switched to this kind: a kind that only
+    /// runs on some machines puts one in place (the axisymmetric job needs a 5-axis head).
+    fn adopted(&self, _design: &mut Value) {}
     /// The work of the job's own stages, stated before running them (each stage's
     /// `estimate`), in run order; the last one states `segments`, the toolpath segments the
     /// writer will get. May import meshes (bounded by their own estimate) but runs no stage.
@@ -252,6 +255,8 @@ pub trait Kind: Sync {
     fn slot_filled(_slot: &str, settings: Self::Settings) -> Self::Settings {
         settings
     }
+    /// The design (JSON) after switching to this kind (see [`JobKind::adopted`]).
+    fn adopted(_design: &mut Value) {}
     /// The work of its stages, stated before running (see [`JobKind::estimate`]).
     fn estimate(settings: &Self::Settings, ctx: &mut Ctx) -> Result<Vec<Estimate>, Error>;
     /// Runs the job's stages.
@@ -327,6 +332,9 @@ impl<K: Kind> JobKind for K {
         if let Ok(s) = settings::<K::Settings>(job) {
             K::validate(design, &s, out);
         }
+    }
+    fn adopted(&self, design: &mut Value) {
+        K::adopted(design)
     }
     fn slot_filled(&self, slot: &str, job: Value) -> Value {
         match settings::<K::Settings>(&job) {

@@ -540,6 +540,14 @@ function buildField(f) {
         el.setAttribute("aria-label", `${f.label || f.path} ${"xyz"[i]}`);
       }
       break;
+    case "points": {
+      // A list of 2-D points, one "a b" pair per line.
+      const el = make("textarea");
+      el.rows = 6;
+      el.spellcheck = false;
+      wrap.classList.add("multiline");
+      break;
+    }
     case "text": {
       // G-code templates and other multi-line values get a text area.
       const multiline = /gcode$/.test(f.path) || String(getPath(state.design, f.path) ?? "").includes("\n");
@@ -556,7 +564,7 @@ function buildField(f) {
     default:
       numeric(make("input"));
   }
-  if (f.kind !== "bool" && f.kind !== "section" && f.kind !== "text") {
+  if (f.kind !== "bool" && f.kind !== "section" && f.kind !== "text" && f.kind !== "points") {
     const unit = document.createElement("span"); // empty too, so the inputs line up
     unit.className = "unit";
     unit.textContent = f.percent ? "%" : f.unit ?? "";
@@ -596,6 +604,7 @@ function writeField(view, value) {
     const i = (f.choices ?? []).findIndex((c) => (typeof c === "object" && c !== null ? c.value ?? c.name : c) === value);
     if (view.doc && f.choice_docs?.[i]) view.doc.textContent = `${f.choice_docs[i]}`;
   } else if (f.kind === "vec3") inputs.forEach((el, i) => { el.value = Array.isArray(value) ? String(value[i]) : ""; });
+  else if (f.kind === "points") inputs[0].value = Array.isArray(value) ? value.map((p) => (Array.isArray(p) ? p.join(" ") : String(p))).join("\n") : "";
   else if (f.percent && typeof value === "number") inputs[0].value = String(Number((value * 100).toPrecision(12)));
   else inputs[0].value = value === undefined || value === null ? "" : String(value);
 }
@@ -608,6 +617,10 @@ function readField({ f, inputs }) {
     case "choice": return inputs[0].value;
     case "text": return JSON.stringify(inputs[0].value);
     case "vec3": return `[${inputs.map((el) => el.value.trim() || "null").join(",")}]`;
+    // Lines "a b" (commas or spaces); a number that does not read is null, which the design
+    // names with its point.
+    case "points": return JSON.stringify(inputs[0].value.split("\n").map((l) => l.trim()).filter((l) => l !== "")
+      .map((l) => l.split(/[\s,;]+/).map((t) => (Number.isFinite(Number(t)) ? Number(t) : null))));
     default: {
       const text = inputs[0].value.trim();
       // A percentage back to the fraction the design stores (anything else is left for the
@@ -1088,7 +1101,8 @@ async function requestInspect(v) {
   redrawView(v);
   const what = res.shape === "image" ? `${res.meta?.width ?? 0} × ${res.meta?.height ?? 0} px`
     : `${v.items.toLocaleString("en-US")} ${res.shape === "mesh" ? "triangles" : "segments"}`;
-  v.info.textContent = `of ${Math.max(1, res.count)} · ${what} · ${Math.round(res.ms)} ms`;
+  const caption = typeof res.meta?.caption === "string" ? `${res.meta.caption} · ` : "";
+  v.info.textContent = `of ${Math.max(1, res.count)} · ${caption}${what} · ${Math.round(res.ms)} ms`;
 }
 
 function redrawView(v) {

@@ -125,7 +125,20 @@ export function drawSegments2d(canvas, segments, opts = {}) {
     ctx.lineTo(sx(segments[i + 2]), sy(segments[i + 3]));
   });
   if (opts.scaleBar) scaleBar(ctx, w, h, dpr, scale);
+  if (opts.axes) axisLabels(ctx, w, h, dpr, box, opts.axes);
   return { items: n, counts };
+}
+
+/** Names and ranges of a plot-like 2D view whose units are not mm (meta.x_label, y_label). */
+function axisLabels(ctx, w, h, dpr, [minX, minY, maxX, maxY], { x, y }) {
+  const fmt = (v) => String(Number(v.toPrecision(3)));
+  ctx.fillStyle = TEXT;
+  ctx.font = `${11 * dpr}px system-ui, sans-serif`;
+  ctx.textBaseline = "bottom";
+  ctx.textAlign = "left";
+  ctx.fillText(`${x}: ${fmt(minX)} … ${fmt(maxX)}`, 8 * dpr, h - 4 * dpr);
+  ctx.textBaseline = "top";
+  ctx.fillText(`${y}: ${fmt(minY)} … ${fmt(maxY)}`, 8 * dpr, 4 * dpr);
 }
 
 /** Orthographic view from the front left, above (the 3D preview's default direction). */
@@ -270,7 +283,12 @@ export function drawImage(canvas, data, meta = {}) {
 export function drawView(canvas, answer, styles) {
   if (!answer) return drawSegments2d(canvas, null);
   switch (answer.shape) {
-    case "lines2d": return drawSegments2d(canvas, answer.data, { stride: answer.stride || 5, styles, scaleBar: true });
+    case "lines2d": {
+      // A view in other units than mm names its axes instead of a scale bar.
+      const m = answer.meta ?? {};
+      const axes = m.x_label && m.y_label ? { x: m.x_label, y: m.y_label } : null;
+      return drawSegments2d(canvas, answer.data, { stride: answer.stride || 5, styles, scaleBar: m.scale_bar !== false && !axes, axes });
+    }
     case "lines3d": return drawLines3d(canvas, answer.data, { stride: answer.stride || 7, styles });
     case "mesh": return drawMesh(canvas, answer.data, { stride: answer.stride || 9 });
     case "image": return drawImage(canvas, answer.data, answer.meta ?? {});

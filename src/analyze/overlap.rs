@@ -151,7 +151,7 @@ struct Prep {
     d: [f64; 2],
     /// Squared length.
     l2: f64,
-    /// Start z and its change.
+    /// Start z and its change (0 in a planar layer).
     z: [f64; 2],
     /// Line width.
     w: f64,
@@ -168,6 +168,9 @@ impl Prep {
 /// The part of `b` (as a parameter interval of `b`) lying on `a`, if longer than nothing.
 #[inline]
 fn on_segment(a: &Prep, b: &Prep) -> Option<(f64, f64)> {
+    if a.z[1] != 0.0 || b.z[1] != 0.0 || a.z[0] != b.z[0] {
+        return on_segment_3d(a, b);
+    }
     let [ax, ay] = a.d;
     let [bx, by] = b.d;
     let la2 = a.l2;
@@ -208,9 +211,49 @@ fn on_segment(a: &Prep, b: &Prep) -> Option<(f64, f64)> {
     let mut hi = 1.0f64;
     clip(&mut lo, &mut hi, d0, dd, -tol, tol)?;
     clip(&mut lo, &mut hi, s0, ds, 0.0, la)?;
-    // Height: B's z minus A's z where B projects, linear in t (0 in a planar layer).
-    let (ka, kb) = (a.z[1] / la, b.z[1]);
-    clip(&mut lo, &mut hi, b.z[0] - a.z[0] - s0 * ka, kb - ds * ka, -tol, tol)?;
+    if hi - lo > 1e-12 { Some((lo, hi)) } else { None }
+}
+
+/// [`on_segment`] in space, for segments not in one horizontal plane (a path over a curved
+/// surface, where parts of one layer lie above one another or run up a wall): the same rule
+/// with the angle, the lateral distance and the projection measured in 3-D. In a horizontal
+/// plane it gives the planar rule's interval.
+fn on_segment_3d(a: &Prep, b: &Prep) -> Option<(f64, f64)> {
+    let da = [a.d[0], a.d[1], a.z[1]];
+    let db = [b.d[0], b.d[1], b.z[1]];
+    let dot = |p: [f64; 3], q: [f64; 3]| p[0] * q[0] + p[1] * q[1] + p[2] * q[2];
+    let (la2, lb2) = (dot(da, da), dot(db, db));
+    if !(la2 > 0.0 && lb2 > 0.0) {
+        return None;
+    }
+    let c = [da[1] * db[2] - da[2] * db[1], da[2] * db[0] - da[0] * db[2], da[0] * db[1] - da[1] * db[0]];
+    if dot(c, c) > SIN_MAX_ANGLE * SIN_MAX_ANGLE * la2 * lb2 {
+        return None;
+    }
+    let tol = 0.25 * (a.w + b.w);
+    let la = la2.sqrt();
+    let u = [da[0] / la, da[1] / la, da[2] / la];
+    // B(t) − A's start: r0 + t·db; along A: s(t) = s0 + t·ds; across: l(t) = l0 + t·dl.
+    let r0 = [b.a[0] - a.a[0], b.a[1] - a.a[1], b.z[0] - a.z[0]];
+    let (s0, ds) = (dot(r0, u), dot(db, u));
+    let l0 = [r0[0] - s0 * u[0], r0[1] - s0 * u[1], r0[2] - s0 * u[2]];
+    let dl = [db[0] - ds * u[0], db[1] - ds * u[1], db[2] - ds * u[2]];
+    let mut lo = 0.0f64;
+    let mut hi = 1.0f64;
+    clip(&mut lo, &mut hi, s0, ds, 0.0, la)?;
+    // |l(t)|² ≤ tol²: a convex quadratic in t.
+    let (qa, qb, qc) = (dot(dl, dl), 2.0 * dot(l0, dl), dot(l0, l0) - tol * tol);
+    if qa > 0.0 {
+        let disc = qb * qb - 4.0 * qa * qc;
+        if disc < 0.0 {
+            return None;
+        }
+        let root = disc.sqrt();
+        lo = lo.max((-qb - root) / (2.0 * qa));
+        hi = hi.min((-qb + root) / (2.0 * qa));
+    } else if qc > 0.0 {
+        return None;
+    }
     if hi - lo > 1e-12 { Some((lo, hi)) } else { None }
 }
 
@@ -371,5 +414,37 @@ impl Overlap {
             total += covered * (dx * dx + dy * dy).sqrt();
         }
         total
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn prep(a: [f64; 3], b: [f64; 3]) -> Prep {
+        Prep::new(&Seg { a: [a[0], a[1]], b: [b[0], b[1]], z: [a[2], b[2]], w: 0.4 })
+    }
+
+    fn overlap_mm(a: &Prep, b: &Prep) -> f64 {
+        on_segment(a, b).map_or(0.0, |(lo, hi)| (hi - lo) * b.l2.sqrt().hypot(b.z[1]))
+    }
+
+    #[test]
+    fn layers_of_a_curved_path_count_in_space() {
+        // Up a vertical wall (x = 10): a second strand 0.1 mm beside the first lies on it,
+        // one 1 mm beside it does not, though both project onto the same point in XY.
+        let a = prep([10.0, 0.0, 0.0], [10.0, 0.0, 5.0]);
+        assert!((overlap_mm(&a, &prep([10.0, 0.1, 0.0], [10.0, 0.1, 5.0])) - 5.0).abs() < 1e-9);
+        assert_eq!(overlap_mm(&a, &prep([10.0, 1.0, 0.0], [10.0, 1.0, 5.0])), 0.0);
+        // Stacked: the same XY line 1 mm higher is not on it; 0.1 mm higher is.
+        let flat = prep([0.0, 0.0, 2.0], [4.0, 0.0, 2.0]);
+        assert_eq!(overlap_mm(&flat, &prep([0.0, 0.0, 3.0], [4.0, 0.0, 3.0])), 0.0);
+        assert!((overlap_mm(&flat, &prep([1.0, 0.0, 2.1], [3.0, 0.0, 2.1])) - 2.0).abs() < 1e-9);
+        // A sloped strand half on it: [2, 6] along A's [0, 4].
+        let slope = prep([0.0, 0.0, 0.0], [4.0, 0.0, 4.0]);
+        let got = overlap_mm(&slope, &prep([2.0, 0.0, 2.0], [6.0, 0.0, 6.0]));
+        assert!((got - 2.0 * 2f64.sqrt()).abs() < 1e-9, "{got}");
+        // Crossing at 90° in space counts nothing.
+        assert_eq!(overlap_mm(&slope, &prep([2.0, -2.0, 2.0], [2.0, 2.0, 2.0])), 0.0);
     }
 }

@@ -47,6 +47,16 @@ fn examples_spread_points_evenly_and_visit_each_once() {
         for w in points.energy.windows(2) {
             assert!(w[1] <= w[0] + tol + 1e-12, "{name}: energy rose {} → {}", w[0], w[1]);
         }
+        // The neighbour-distance histogram: n + 1 bin edges per n counts, every distance in.
+        let report = serde_json::to_value(&out.report).unwrap();
+        let stage = report["stages"].as_array().unwrap().iter().find(|s| s["stage"] == "points").unwrap();
+        let nn = stage["plots"].as_array().unwrap().iter().find(|p| p["key"] == "nn").unwrap();
+        for series in nn["series"].as_array().unwrap() {
+            let (x, y) = (series["x"].as_array().unwrap(), series["y"].as_array().unwrap());
+            assert_eq!(x.len(), y.len() + 1, "{name}: histogram edges");
+            let total: f64 = y.iter().map(|v| v.as_f64().unwrap()).sum();
+            assert_eq!(total as usize, 2 * points.points, "{name}: every point's 2 distances counted");
+        }
         assert_eq!(path.visited, points.points, "{name}");
         assert_eq!(path.crossings_left, 0, "{name}");
         assert!(path.length_mm <= path.nn_length_mm + 1e-9, "{name}");

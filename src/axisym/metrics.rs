@@ -54,7 +54,7 @@ pub fn histogram(values: &[f64], bins: usize) -> Histogram {
 }
 
 /// Two value sets counted on the same `bins` bins (so a seed and a result compare bar by bar):
-/// (bin centres, counts of `a`, counts of `b`).
+/// (the bins + 1 edges, counts of `a`, counts of `b`), as a histogram plot takes them.
 pub fn shared_histogram(a: &[f64], b: &[f64], bins: usize) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
     let both: Vec<f64> = a.iter().chain(b).copied().collect();
     let h = histogram(&both, bins);
@@ -68,8 +68,8 @@ pub fn shared_histogram(a: &[f64], b: &[f64], bins: usize) -> (Vec<f64>, Vec<f64
         }
         c
     };
-    let centres = (0..bins).map(|k| h.lo + (k as f64 + 0.5) * w).collect();
-    (centres, count(a), count(b))
+    let edges = (0..=bins).map(|k| h.lo + k as f64 * w).collect();
+    (edges, count(a), count(b))
 }
 
 /// Metrics of `points` for n = `rasters`, ρ_c = `density`, e = `line_width_mm`.

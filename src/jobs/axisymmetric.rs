@@ -327,17 +327,9 @@ impl Kind for AxisymKind {
         let platform = platform_stage(j, ctx)?;
         let domain = domain_stage(j, ctx, &platform)?;
         let distribution = points_stage(j, ctx, &platform, &domain)?;
-        let design = ctx.design;
-        let h = j.layer_height_mm;
-        let width = line_width(design);
-        let toolpath = ctx.stage("path", "path", &(&j.path, h, width), &[platform.key, distribution.key], |progress| {
-            let surface = Surface::new(&*platform.value);
-            let dist = |a: [f64; 2], b: [f64; 2]| surface.distance(a, b);
-            let t = tour::plan(&platform, &distribution.points, &j.path, &dist, progress).map_err(|e| Error::stage("path", e))?;
-            let toolpath = toolpath_of(&t, h, width);
-            let report = path_report(&t, &distribution, design)?;
-            Ok((toolpath, Some(report)))
-        })?;
+        let tour = path_stage(j, ctx, &platform, &distribution)?;
+        let (h, width) = (j.layer_height_mm, line_width(ctx.design));
+        let toolpath = ctx.stage("path", "toolpath", &(h, width), &[tour.key], |_| Ok((toolpath_of(&tour.value, h, width), None)))?;
         Ok(Product::Toolpath(toolpath))
     }
 
@@ -345,14 +337,11 @@ impl Kind for AxisymKind {
         let platform = platform_stage(j, ctx)?;
         let domain = domain_stage(j, ctx, &platform)?;
         let distribution = points_stage(j, ctx, &platform, &domain)?;
+        // The path comes from the stage cache when the run made it (the worker's session).
         match view {
-            "map" => Ok(map_view(j, &platform, &domain.value, &distribution, index)?),
-            "platform3d" => {
-                let surface = Surface::new(&*platform.value);
-                let dist = |a: [f64; 2], b: [f64; 2]| surface.distance(a, b);
-                let t = tour::plan(&platform, &distribution.points, &j.path, &dist, &mut |_| {}).map_err(|e| Error::stage("path", e))?;
-                Ok(platform_view(&platform, &t, j.layer_height_mm))
-            }
+            "map" if index < 2 => Ok(map_view(&domain.value, &distribution, None, index)),
+            "map" => Ok(map_view(&domain.value, &distribution, Some(&path_stage(j, ctx, &platform, &distribution)?.value), index)),
+            "platform3d" => Ok(platform_view(&platform, &path_stage(j, ctx, &platform, &distribution)?.value, j.layer_height_mm)),
             _ => Err(Error::UnknownView { view: view.into(), job: Self::NAME }),
         }
     }
@@ -402,6 +391,18 @@ fn domain_stage(j: &AxisymJob, ctx: &mut Ctx, platform: &Out<Platform>) -> Resul
             .metric("other_outlines", "Smaller outlines left out", others as f64, "", "Other places the part meets the platform; only the largest is filled.")
             .metric("open_chains", "Open cuts dropped", c.open_chains as f64, "", "Cuts that did not close because the mesh is open there: repair the mesh if this is not 0.");
         Ok((d, Some(r)))
+    })
+}
+
+/// The path through the points (with its report); the toolpath is made from it by the run.
+fn path_stage(j: &AxisymJob, ctx: &mut Ctx, platform: &Out<Platform>, distribution: &Out<uniform::Distribution>) -> Result<Out<tour::Tour>, Error> {
+    let design = ctx.design;
+    ctx.stage("path", "path", &j.path, &[platform.key, distribution.key], |progress| {
+        let surface = Surface::new(&*platform.value);
+        let dist = |a: [f64; 2], b: [f64; 2]| surface.distance(a, b);
+        let t = tour::plan(&platform.value, &distribution.points, &j.path, &dist, progress).map_err(|e| Error::stage("path", e))?;
+        let report = path_report(&t, &distribution.value, design)?;
+        Ok((t, Some(report)))
     })
 }
 
@@ -616,7 +617,7 @@ fn toolpath_of(t: &tour::Tour, h: f64, width: f64) -> Toolpath {
 /// Half the size of a point's cross in the map view, in map units.
 const CROSS: f32 = 0.004;
 
-fn map_view(j: &AxisymJob, platform: &Out<Platform>, domain: &Domain, d: &uniform::Distribution, index: usize) -> Result<Inspection, Error> {
+fn map_view(domain: &Domain, d: &uniform::Distribution, tour: Option<&tour::Tour>, index: usize) -> Inspection {
     let index = index.min(2);
     let mut data: Vec<f32> = Vec::new();
     let mut seg = |a: [f64; 2], b: [f64; 2], code: u8| data.extend_from_slice(&[a[1] as f32, a[0] as f32, b[1] as f32, b[0] as f32, code as f32]);
@@ -632,10 +633,7 @@ fn map_view(j: &AxisymJob, platform: &Out<Platform>, domain: &Domain, d: &unifor
             data.extend_from_slice(&[t - CROSS, u, t + CROSS, u, Feature::Lattice.code() as f32]);
             data.extend_from_slice(&[t, u - CROSS, t, u + CROSS, Feature::Lattice.code() as f32]);
         }
-    } else {
-        let surface = Surface::new(&*platform.value);
-        let dist = |a: [f64; 2], b: [f64; 2]| surface.distance(a, b);
-        let t = tour::plan(&platform.value, &d.points, &j.path, &dist, &mut |_| {}).map_err(|e| Error::stage("path", e))?;
+    } else if let Some(t) = tour {
         for s in &t.samples {
             for w in s.windows(2) {
                 data.extend_from_slice(&[w[0][1] as f32, w[0][0] as f32, w[1][1] as f32, w[1][0] as f32, Feature::Infill.code() as f32]);
@@ -643,7 +641,7 @@ fn map_view(j: &AxisymJob, platform: &Out<Platform>, domain: &Domain, d: &unifor
         }
     }
     let labels = ["seed points", "after repulsion", "path"];
-    Ok(Inspection {
+    Inspection {
         view: "map".into(),
         shape: Shape::Lines2d,
         index,
@@ -651,7 +649,7 @@ fn map_view(j: &AxisymJob, platform: &Out<Platform>, domain: &Domain, d: &unifor
         stride: Shape::Lines2d.stride(),
         data,
         meta: serde_json::json!({ "x_label": "θ (rad)", "y_label": "u", "scale_bar": false, "caption": labels[index] }),
-    })
+    }
 }
 
 /// Meridians and parallels drawn on the platform view.

@@ -125,11 +125,25 @@ export async function latticeChecks({ browser, baseUrl, weftBin = process.env.WE
       const metrics = await page.evaluate(() => {
         const card = document.querySelector('#report .stage-card[data-stage="paths"]');
         const value = (key) => card?.querySelector(`.metrics [data-key="${key}"] dd`)?.firstChild?.textContent ?? null;
-        return { paths: value("paths"), bound: value("lower_bound"), line: Boolean(card?.querySelector('svg[data-plot-kind="line"]')) };
+        // The per-layer table as drawn: the "Pairing quality" column's cells.
+        const table = card?.querySelector('table.report-table[data-key="layers"]');
+        let quality = [];
+        if (table?.classList.contains("transposed")) {
+          const row = [...table.querySelectorAll("tr")].find((r) => /Pairing quality/.test(r.querySelector("th")?.textContent ?? ""));
+          quality = row ? [row.querySelector("td")?.textContent.trim() ?? ""] : [];
+        } else if (table) {
+          const col = [...table.querySelectorAll("thead th")].findIndex((h) => /Pairing quality/.test(h.textContent));
+          quality = col >= 0 ? [...table.querySelectorAll("tbody tr")].map((r) => r.children[col]?.textContent.trim() ?? "") : [];
+        }
+        return { paths: value("paths"), bound: value("lower_bound"), line: Boolean(card?.querySelector('svg[data-plot-kind="line"]')), quality };
       });
       if (metrics.paths === null || metrics.bound === null) throw new Error(`the paths card lacks the paths / lower_bound metrics: ${JSON.stringify(metrics)}`);
       if (metrics.paths !== metrics.bound) throw new Error(`euler made ${metrics.paths} paths, lower bound ${metrics.bound}`);
-      return `${metrics.paths} paths = bound${metrics.line ? "" : " (no iteration plot for euler)"}`;
+      const layers = await page.evaluate(() => window.weft.result?.report?.stages?.find((s) => s.stage === "paths")?.tables?.find((t) => t.key === "layers")?.rows?.length ?? 0);
+      if (!metrics.quality.length || metrics.quality.length !== layers) throw new Error(`the per-layer table shows ${metrics.quality.length} pairing-quality cells for ${layers} layers`);
+      const bad = metrics.quality.filter((q) => !/^(optimal|within \d+(\.\d)? %)$/.test(q));
+      if (bad.length) throw new Error(`pairing quality cells that say neither "optimal" nor "within x %": ${bad.slice(0, 5).join(" | ")}`);
+      return `${metrics.paths} paths = bound${metrics.line ? "" : " (no iteration plot for euler)"}; pairing per layer: ${[...new Set(metrics.quality)].join(", ")}`;
     });
 
     await check(n++, "lattice: share link in a fresh browser gives the same G-code (SHA-256) as `weft run design.json`", async () => {

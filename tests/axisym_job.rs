@@ -194,3 +194,66 @@ fn switching_to_the_kind_puts_a_five_axis_head_in_place() {
         assert_eq!(serde_json::to_value(&example(name).printer).unwrap(), serde_json::to_value(&preset.printer).unwrap(), "{name}");
     }
 }
+
+#[test]
+fn a_tip_below_the_plate_is_refused_before_the_points() {
+    // Near the barrel's lower pole the normal points down: the tip, one layer height out
+    // along it, dips under Z = 0. The domain stage refuses it; no points are spread.
+    let d = example("barrel-omega1").with_overrides(&["job.domain.u_min=1.8".into(), "job.domain.u_max=1.96".into()]).unwrap();
+    let mut stages = Vec::new();
+    let e = pipeline::run(&d, &Files::default(), &RunOptions { collect_preview: false }, &mut |p, _| stages.push(p.to_string())).unwrap_err().to_string();
+    assert!(e.starts_with("domain:") && e.contains("below the plate") && e.contains("raise the platform by at least"), "{e}");
+    assert!(!stages.iter().any(|s| s == "points"), "the points stage ran: {stages:?}");
+    // Raised by the amount the message states (rounded up), the same domain prints.
+    let raise: f64 = e.split("at least ").nth(1).unwrap().split(' ').next().unwrap().parse().unwrap();
+    let raised: Vec<[f64; 2]> = d.job.settings::<weft::jobs::axisymmetric::AxisymJob>().unwrap().platform.control_points.iter().map(|p| [p[0], p[1] + raise + 1e-3]).collect();
+    // (The tool points almost straight down there: the head's B limit is opened for it.)
+    let d = d
+        .with_overrides(&[
+            "job.platform.preset=custom".into(),
+            format!("job.platform.control_points={}", serde_json::to_string(&raised).unwrap()),
+            "printer.machine.rotary_min_deg=[-120,-181,-36000]".into(),
+            "printer.machine.rotary_max_deg=[120,181,36000]".into(),
+        ])
+        .unwrap();
+    let out = run(&d);
+    assert!(!out.gcode.is_empty());
+}
+
+/// X Y Z words of every G1 move.
+fn xyz_of(gcode: &str) -> Vec<[String; 3]> {
+    gcode
+        .lines()
+        .filter(|l| l.starts_with("G1 "))
+        .map(|l| {
+            let word = |c: char| l.split_whitespace().find(|w| w.starts_with(c)).map(|w| w[1..].to_string()).unwrap_or_default();
+            [word('X'), word('Y'), word('Z')]
+        })
+        .collect()
+}
+
+#[test]
+fn smoothing_the_tool_axis_lowers_every_rotary_acceleration_and_keeps_the_tip() {
+    use weft::jobs::axisymmetric::AxesSummary;
+    for name in ["barrel-omega1", "hourglass-omega3"] {
+        let d = example(name);
+        let plain = run(&d);
+        let s = d.with_overrides(&["job.tool_axis.max_tilt_deg=10".into(), "job.tool_axis.window_mm=2".into()]).unwrap();
+        let smooth = run(&s);
+        let a: AxesSummary = smooth.report.stage("axes").unwrap();
+        assert!(a.max_tilt_deg > 0.1 && a.max_tilt_deg < 10.0, "{name}: tilt {}", a.max_tilt_deg);
+        // Tool axis, B and C on the five-axis head.
+        assert_eq!(a.raw.iter().map(|(k, _)| k.as_str()).collect::<Vec<_>>(), ["tool axis", "B", "C"]);
+        for ((axis, raw), (_, after)) in a.raw.iter().zip(&a.smoothed) {
+            assert!(after[1] < 0.5 * raw[1], "{name} {axis}: acceleration {} → {}", raw[1], after[1]);
+            assert!(after[0] <= raw[0] * (1.0 + 1e-9), "{name} {axis}: speed {} → {}", raw[0], after[0]);
+        }
+        // Off: the report's before and after agree, and the axes are the normals.
+        let p: AxesSummary = plain.report.stage("axes").unwrap();
+        assert_eq!(p.max_tilt_deg, 0.0);
+        assert_eq!(p.raw, p.smoothed);
+        // The tip path is the same (pivot 0: machine X Y Z are the tip); only the axis words differ.
+        assert_eq!(xyz_of(&plain.gcode), xyz_of(&smooth.gcode), "{name}");
+        assert_ne!(plain.gcode, smooth.gcode);
+    }
+}

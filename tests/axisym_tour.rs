@@ -3,7 +3,7 @@
 use std::time::Instant;
 use weft::axisym::geodesic::{self, geodesic};
 use weft::axisym::platform::{normal, position, Platform, Profile};
-use weft::axisym::tour::{self, plan, rotary_dynamics, Error, Options, Pose, Start, Tour};
+use weft::axisym::tour::{self, plan, Error, Options, Start, Tour};
 
 /// SplitMix64: a fixed, platform-independent stream for the test points.
 struct Rng(u64);
@@ -246,24 +246,5 @@ fn bad_input_is_refused_with_typed_errors() {
     let o: Options = serde_json::from_str(r#"{"start":{"kind":"nearest","u":1.0,"theta":0.5}}"#).unwrap();
     assert_eq!(o.step_mm, tour::DEFAULT_STEP_MM);
     assert!(serde_json::from_str::<Options>(r#"{"stepmm":1}"#).is_err());
-    assert!(rotary_dynamics(&[], 0.0).is_err());
 }
 
-#[test]
-fn rotary_dynamics_on_the_equator() {
-    // Around the barrel's equator (radius 25 mm) the axis turns at v/R rad/s.
-    let p = Platform::barrel();
-    let poses: Vec<Pose> = (0..=100).map(|i| {
-        let t = i as f64 * 0.01;
-        Pose { position: position(&p, 1.0, t), normal: normal(&p, 1.0, t) }
-    }).collect();
-    let d = rotary_dynamics(&poses, 50.0).unwrap();
-    let want = (50.0f64 / 25.0).to_degrees();
-    assert!((d.max_angular_speed_deg_s - want).abs() < 1e-3 * want, "{d:?}");
-    assert!(d.max_angular_accel_deg_s2 < 1e-3 * want, "constant rate: {d:?}");
-    assert!((d.path_mm - 25.0).abs() < 0.01);
-    let tour = plan(&p, &rect(100, [0.8, 1.2], [0.0, 1.0], 10), &Options::default(), &chord_dist(&p), &mut |_| {}).unwrap();
-    let d = rotary_dynamics(&tour.poses, 50.0).unwrap();
-    println!("barrel 100 points at 50 mm/s: {d:?}");
-    assert!(d.max_angular_speed_deg_s > 0.0 && d.max_angular_speed_deg_s.is_finite());
-}

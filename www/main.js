@@ -1109,7 +1109,11 @@ function redrawView(v) {
   if (!v.card.isConnected) return;
   const r = drawView(v.canvas, v.last, styles);
   v.items = r.items;
-  const entries = Object.keys(r.counts).map((code) => [styles.get(Number(code))?.color ?? "#e0b84d", styles.get(Number(code))?.label ?? `feature ${code}`]);
+  // A view may name its own entries (meta.legend: feature code → words), e.g. "seed points"
+  // drawn in the lattice colour; otherwise the feature's name.
+  const named = v.last?.meta?.legend ?? {};
+  const entries = Object.keys(r.counts).map((code) => [styles.get(Number(code))?.color ?? "#e0b84d",
+    typeof named[code] === "string" ? named[code] : styles.get(Number(code))?.label ?? `feature ${code}`]);
   if (r.range) entries.push([null, `${formatNumber(r.range[0], 4)} … ${formatNumber(r.range[1], 4)}${v.last?.meta?.unit ? ` ${v.last.meta.unit}` : ""}`]);
   v.legend.replaceChildren(...entries.map(([color, text]) => {
     const el = document.createElement("span");

@@ -13,6 +13,8 @@
 //!   Clairaut shooting first, Runge–Kutta shooting as the fallback.
 //! - [`tour`]: the infill path through given (u, θ) points (nearest neighbour + 2-opt, no
 //!   crossings in the map), sampled along geodesics into tool poses.
+//! - [`dynamics`]: the tool axis smoothed within a tilt for the rotary axes, and their speed
+//!   and acceleration at a feed.
 //!
 //! Units: millimetres, radians. Deterministic: transcendentals through `libm`, no hash maps.
 
@@ -21,6 +23,7 @@
 
 pub mod clairaut;
 pub mod contour;
+pub mod dynamics;
 pub mod geodesic;
 pub mod platform;
 pub mod domain;

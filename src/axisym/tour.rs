@@ -690,54 +690,6 @@ pub fn proper(a: [f64; 2], b: [f64; 2], c: [f64; 2], d: [f64; 2]) -> bool {
     ((o1 > 0.0 && o2 < 0.0) || (o1 < 0.0 && o2 > 0.0)) && ((o3 > 0.0 && o4 < 0.0) || (o3 < 0.0 && o4 > 0.0))
 }
 
-/// Tool-axis motion along a posed path at constant feed.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
-pub struct Dynamics {
-    /// Largest rate of turn of the tool axis, °/s.
-    pub max_angular_speed_deg_s: f64,
-    /// Largest change of that rate, °/s² (corners at segment joints dominate: the path turns
-    /// there within one sample).
-    pub max_angular_accel_deg_s2: f64,
-    /// Path length, mm.
-    pub path_mm: f64,
-    /// Time at the feed, s.
-    pub duration_s: f64,
-}
-
-/// Angular speed and acceleration of the tool axis (the pose normals) along `poses` at
-/// `feed_mm_s`: angle between consecutive normals over the time between them, by finite
-/// differences on the samples (so they depend on the sampling step).
-pub fn rotary_dynamics(poses: &[Pose], feed_mm_s: f64) -> Result<Dynamics, Error> {
-    if !(feed_mm_s > 0.0 && feed_mm_s.is_finite()) {
-        return Err(Error::BadOption { name: "feed_mm_s", value: feed_mm_s, hint: "give a feed > 0 mm/s" });
-    }
-    // (time of the step's middle, angular speed) per step of nonzero length.
-    let mut rates: Vec<(f64, f64)> = Vec::new();
-    let (mut t, mut path) = (0.0, 0.0);
-    let (mut max_w, mut max_a) = (0.0f64, 0.0f64);
-    for w in poses.windows(2) {
-        let l = chord(w[0].position, w[1].position);
-        if l <= 0.0 {
-            continue;
-        }
-        let (a, b) = (w[0].normal, w[1].normal);
-        let cross = [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]];
-        // atan2 of |a×b| and a·b stays accurate for the tiny angles of fine sampling.
-        let ang = libm::atan2((cross[0].powi(2) + cross[1].powi(2) + cross[2].powi(2)).sqrt(), a[0] * b[0] + a[1] * b[1] + a[2] * b[2]);
-        let dt = l / feed_mm_s;
-        let rate = ang.to_degrees() / dt;
-        max_w = max_w.max(rate);
-        let mid = t + 0.5 * dt;
-        if let Some(&(tp, rp)) = rates.last() {
-            max_a = max_a.max((rate - rp).abs() / (mid - tp));
-        }
-        rates.push((mid, rate));
-        t += dt;
-        path += l;
-    }
-    Ok(Dynamics { max_angular_speed_deg_s: max_w, max_angular_accel_deg_s2: max_a, path_mm: path, duration_s: t })
-}
-
 /// Implicit 3-D kd-tree (median splits on the widest axis) with live counts for the
 /// nearest-unvisited query.
 struct Kd<'a> {

@@ -13,7 +13,7 @@
 use super::{Inspection, Kind, Product, Shape, Slot, SlotKind, StageInfo, ViewInfo};
 use crate::axisym::domain::Domain;
 use crate::axisym::platform::{self, Platform};
-use crate::axisym::{surface::Surface, tour, uniform};
+use crate::axisym::{dynamics, surface::Surface, tour, uniform};
 use crate::axisym::contour;
 use crate::design::{Design, Input};
 use crate::geom::{DVec3, Feature, Pass, PassKind, Path, PointData, Toolpath};
@@ -51,6 +51,9 @@ pub struct AxisymJob {
     /// A part resting on the platform: where it meets the platform is Ω (domain kind `part`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub part: Option<Input>,
+    /// The tool axis: the normal, or smoothed within a tilt for the rotary axes.
+    #[serde(default)]
+    pub tool_axis: dynamics::Options,
 }
 
 fn default_layer_height() -> f64 {
@@ -59,7 +62,7 @@ fn default_layer_height() -> f64 {
 
 impl Default for AxisymJob {
     fn default() -> Self {
-        AxisymJob { platform: PlatformSpec::default(), domain: DomainSpec::default(), points: uniform::Options::default(), path: tour::Options::default(), layer_height_mm: DEFAULT_LAYER_HEIGHT_MM, part: None }
+        AxisymJob { platform: PlatformSpec::default(), domain: DomainSpec::default(), points: uniform::Options::default(), path: tour::Options::default(), layer_height_mm: DEFAULT_LAYER_HEIGHT_MM, part: None, tool_axis: dynamics::Options::default() }
     }
 }
 
@@ -191,6 +194,7 @@ const STAGES: &[StageInfo] = &[
     StageInfo { name: "domain", label: "Finding the domain Ω" },
     StageInfo { name: "points", label: "Spreading uniform points (geodesic repulsion)" },
     StageInfo { name: "path", label: "Joining the points by geodesics" },
+    StageInfo { name: "axes", label: "Tool axis and machine dynamics" },
 ];
 
 const VIEWS: &[ViewInfo] = &[
@@ -253,6 +257,7 @@ impl Kind for AxisymKind {
         rows.extend(mount("job.points", uniform::FIELDS));
         rows.extend(mount("job.path", tour::FIELDS));
         rows.extend(mount("job", JOB_FIELDS));
+        rows.extend(mount("job.tool_axis", dynamics::FIELDS));
         rows
     }
 
@@ -328,8 +333,9 @@ impl Kind for AxisymKind {
         let domain = domain_stage(j, ctx, &platform)?;
         let distribution = points_stage(j, ctx, &platform, &domain)?;
         let tour = path_stage(j, ctx, &platform, &distribution)?;
+        let axes = axes_stage(j, ctx, &tour)?;
         let (h, width) = (j.layer_height_mm, line_width(ctx.design));
-        let toolpath = ctx.stage("path", "toolpath", &(h, width), &[tour.key], |_| Ok((toolpath_of(&tour.value, h, width), None)))?;
+        let toolpath = ctx.stage("axes", "toolpath", &(h, width), &[tour.key, axes.key], |_| Ok((toolpath_of(&tour.value, &axes.axes, h, width), None)))?;
         Ok(Product::Toolpath(toolpath))
     }
 
@@ -367,6 +373,49 @@ fn platform_stage(j: &AxisymJob, ctx: &mut Ctx) -> Result<Out<Platform>, Error> 
 /// Ω: the settings' rectangle or polygon, or the largest outline where the part meets the
 /// platform (holes and smaller outlines are reported, not filled).
 fn domain_stage(j: &AxisymJob, ctx: &mut Ctx, platform: &Out<Platform>) -> Result<Out<Domain>, Error> {
+    let domain = domain_of(j, ctx, platform)?;
+    // The tip must stay above the plate: checked here, before the points and path stages
+    // spend their time (the writer would refuse the toolpath only at the end).
+    let [[u_lo, _], [u_hi, _]] = domain.value.bounds();
+    below_plate(&*platform.value, u_lo, u_hi, j.layer_height_mm).map_err(|e| Error::stage("domain", e))?;
+    Ok(domain)
+}
+
+/// The nozzle tip would go below the plate.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("the nozzle tip would reach z = {z_mm:.3} mm at u = {u:.4}, below the plate (Z < 0): raise the platform by at least {raise_mm:.3} mm (add it to every control point's z), or keep the domain's u where the platform stands higher")]
+pub struct BelowPlate {
+    /// Lowest tip height, mm.
+    pub z_mm: f64,
+    /// Where along the profile.
+    pub u: f64,
+    /// How far to raise the platform, mm.
+    pub raise_mm: f64,
+}
+
+/// Samples of the tip height per unit u when looking for its lowest point (then refined).
+const PLATE_SAMPLES_PER_U: f64 = 512.0;
+
+/// Checks that the tip, `h` out along the normal, stays at Z ≥ 0 for u ∈ [u_lo, u_hi] (the
+/// height depends on u only, and every u of a connected domain's range is in the domain).
+fn below_plate(p: &dyn platform::Profile, u_lo: f64, u_hi: f64, h: f64) -> Result<(), BelowPlate> {
+    let tip_z = |u: f64| platform::position(p, u, 0.0)[2] + platform::normal(p, u, 0.0)[2] * h;
+    let n = (((u_hi - u_lo) * PLATE_SAMPLES_PER_U).ceil() as usize).clamp(1, 1 << 16);
+    let at = |i: usize| u_lo + (u_hi - u_lo) * i as f64 / n as f64;
+    let k = (0..=n).min_by(|&a, &b| tip_z(at(a)).total_cmp(&tip_z(at(b)))).unwrap_or(0);
+    // Golden-section refinement in the bracket around the lowest sample.
+    let (mut a, mut b) = (at(k.saturating_sub(1)), at((k + 1).min(n)));
+    for _ in 0..60 {
+        let (c, d) = (b - 0.618_033_988_749_895 * (b - a), a + 0.618_033_988_749_895 * (b - a));
+        if tip_z(c) < tip_z(d) { b = d } else { a = c }
+    }
+    let (u, z) = [at(k), 0.5 * (a + b)].into_iter().map(|u| (u, tip_z(u))).min_by(|x, y| x.1.total_cmp(&y.1)).unwrap_or((u_lo, 0.0));
+    // The writer's tolerance (1e-6 mm).
+    if z < -1e-6 { Err(BelowPlate { z_mm: z, u, raise_mm: -z }) } else { Ok(()) }
+}
+
+/// Ω from the settings or the part, with its stage report.
+fn domain_of(j: &AxisymJob, ctx: &mut Ctx, platform: &Out<Platform>) -> Result<Out<Domain>, Error> {
     if let Some(d) = j.domain.domain() {
         return ctx.stage("domain", "domain", &d, &[platform.key], |_| {
             let corners = d.ring().len();
@@ -396,14 +445,92 @@ fn domain_stage(j: &AxisymJob, ctx: &mut Ctx, platform: &Out<Platform>) -> Resul
 
 /// The path through the points (with its report); the toolpath is made from it by the run.
 fn path_stage(j: &AxisymJob, ctx: &mut Ctx, platform: &Out<Platform>, distribution: &Out<uniform::Distribution>) -> Result<Out<tour::Tour>, Error> {
-    let design = ctx.design;
     ctx.stage("path", "path", &j.path, &[platform.key, distribution.key], |progress| {
         let surface = Surface::new(&*platform.value);
         let dist = |a: [f64; 2], b: [f64; 2]| surface.distance(a, b);
         let t = tour::plan(&platform.value, &distribution.points, &j.path, &dist, progress).map_err(|e| Error::stage("path", e))?;
-        let report = path_report(&t, &distribution.value, design)?;
+        let report = path_report(&t, &distribution.value);
         Ok((t, Some(report)))
     })
+}
+
+/// The tool axes along the tour (the normals, or smoothed within the tilt) and what they ask
+/// of the machine at the infill speed, before and after smoothing.
+fn axes_stage(j: &AxisymJob, ctx: &mut Ctx, tour: &Out<tour::Tour>) -> Result<Out<dynamics::Smoothed>, Error> {
+    let design = ctx.design;
+    let (h, feed, machine) = (j.layer_height_mm, design.speeds.infill_mm_s, &design.printer.machine);
+    ctx.stage("axes", "axes", &(&j.tool_axis, h, feed, machine), &[tour.key], |_| {
+        let poses = &tour.value.poses;
+        let positions: Vec<[f64; 3]> = poses.iter().map(|p| p.position).collect();
+        let normals: Vec<[f64; 3]> = poses.iter().map(|p| p.normal).collect();
+        let tips: Vec<[f64; 3]> = poses.iter().map(|p| tip(p, h)).collect();
+        let smoothed = dynamics::smooth_axes(&positions, &normals, &j.tool_axis).map_err(|e| Error::stage("axes", e))?;
+        let raw = dynamics::dynamics(&tips, &normals, machine, feed).map_err(|e| Error::stage("axes", e))?;
+        let after = dynamics::dynamics(&tips, &smoothed.axes, machine, feed).map_err(|e| Error::stage("axes", e))?;
+        let report = axes_report(&j.tool_axis, &smoothed, &raw, &after, feed);
+        Ok((smoothed, Some(report)))
+    })
+}
+
+/// What the `axes` stage reports.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct AxesSummary {
+    /// Largest tilt of the tool axis from the normal, degrees (0: the normals).
+    pub max_tilt_deg: f64,
+    /// Per axis (tool axis first, then the rotary letters): [speed °/s, acceleration °/s²]
+    /// before smoothing.
+    pub raw: Vec<(String, [f64; 2])>,
+    /// The same after smoothing (equal to `raw` when smoothing is off).
+    pub smoothed: Vec<(String, [f64; 2])>,
+}
+
+fn axes_report(o: &dynamics::Options, s: &dynamics::Smoothed, raw: &dynamics::Dynamics, after: &dynamics::Dynamics, feed: f64) -> StageReport {
+    let pairs = |d: &dynamics::Dynamics| d.axes.iter().map(|a| (a.axis.clone(), [a.max_speed_deg_s, a.max_accel_deg_s2])).collect::<Vec<_>>();
+    let summary = AxesSummary { max_tilt_deg: s.max_tilt_deg, raw: pairs(raw), smoothed: pairs(after) };
+    let on = o.max_tilt_deg > 0.0;
+    let mut r = StageReport::new("axes", "Tool axis and machine dynamics", &summary)
+        .metric("max_tilt", "Largest tilt from the normal", s.max_tilt_deg, "°", "How far smoothing leans the tool axis away from the surface normal (0: the axis is the normal).")
+        .metric("feed", "At the infill speed", feed, "mm/s", "The speeds and accelerations below are for this feed; they scale with it (accelerations with its square).")
+        .metric("duration", "Path time", after.duration_s, "s", "The path's length over the infill speed.");
+    for (k, (a, b)) in raw.axes.iter().zip(&after.axes).enumerate() {
+        let name = if k == 0 { "tool axis".to_string() } else { format!("{} axis", a.axis) };
+        let key = if k == 0 { "tool".to_string() } else { a.axis.to_lowercase() };
+        r = r
+            .metric(&format!("{key}_speed"), &format!("Fastest turn, {name}"), b.max_speed_deg_s, "°/s", "What the rotary axes must follow at the infill speed (after smoothing, when on).")
+            .metric(&format!("{key}_accel"), &format!("Largest acceleration, {name}"), b.max_accel_deg_s2, "°/s²", "The hardest change of turning speed; corners of the raster set it.");
+        if on {
+            let cut = if a.max_accel_deg_s2 > 0.0 { 100.0 * (1.0 - b.max_accel_deg_s2 / a.max_accel_deg_s2) } else { 0.0 };
+            r = r.metric(&format!("{key}_accel_cut"), &format!("Smoothing lowered the {name} acceleration by"), cut, "%", "Against the tool axis equal to the normal everywhere.");
+        }
+    }
+    r.tables.push(crate::report::Table {
+        key: "dynamics".into(),
+        title: "Axis speeds and accelerations at the infill speed".into(),
+        group: None,
+        columns: [("Axis", ""), ("Speed, normal", "°/s"), ("Acceleration, normal", "°/s²"), ("Speed, smoothed", "°/s"), ("Acceleration, smoothed", "°/s²")]
+            .iter()
+            .map(|(label, unit)| crate::report::Column { label: (*label).into(), unit: (*unit).into() })
+            .collect(),
+        rows: raw
+            .axes
+            .iter()
+            .zip(&after.axes)
+            .map(|(a, b)| crate::report::Row {
+                group_index: None,
+                cells: vec![a.axis.clone().into(), round(a.max_speed_deg_s).into(), round(a.max_accel_deg_s2).into(), round(b.max_speed_deg_s).into(), round(b.max_accel_deg_s2).into()],
+            })
+            .collect(),
+    });
+    r
+}
+
+/// Four significant digits, for table cells.
+fn round(v: f64) -> f64 {
+    if v == 0.0 || !v.is_finite() {
+        return v;
+    }
+    let scale = libm::pow(10.0, 3.0 - libm::floor(libm::log10(v.abs())));
+    libm::round(v * scale) / scale
 }
 
 fn points_stage(j: &AxisymJob, ctx: &mut Ctx, platform: &Out<Platform>, domain: &Out<Domain>) -> Result<Out<uniform::Distribution>, Error> {
@@ -506,10 +633,6 @@ pub struct PathSummary {
     pub crossings_left: usize,
     /// Poses written.
     pub poses: usize,
-    /// Fastest tool-axis turn at the infill speed, °/s.
-    pub max_axis_speed_deg_s: f64,
-    /// Largest tool-axis angular acceleration at the infill speed, °/s².
-    pub max_axis_accel_deg_s2: f64,
 }
 
 fn points_report(d: &uniform::Distribution, o: &uniform::Options, width: f64) -> StageReport {
@@ -575,10 +698,8 @@ fn points_report(d: &uniform::Distribution, o: &uniform::Options, width: f64) ->
 /// Bins of the neighbour-distance histogram.
 const HISTOGRAM_BINS: usize = 30;
 
-fn path_report(t: &tour::Tour, d: &uniform::Distribution, design: &Design) -> Result<StageReport, Error> {
+fn path_report(t: &tour::Tour, d: &uniform::Distribution) -> StageReport {
     let saving = if t.nn_length_mm > 0.0 { 100.0 * (1.0 - t.length_mm / t.nn_length_mm) } else { 0.0 };
-    let feed = design.speeds.infill_mm_s;
-    let dynamics = tour::rotary_dynamics(&t.poses, feed).map_err(|e| Error::stage("path", e))?;
     let summary = PathSummary {
         visited: t.order.len(),
         length_mm: t.length_mm,
@@ -586,25 +707,27 @@ fn path_report(t: &tour::Tour, d: &uniform::Distribution, design: &Design) -> Re
         crossings_removed: t.crossings_removed,
         crossings_left: t.crossings_left,
         poses: t.poses.len(),
-        max_axis_speed_deg_s: dynamics.max_angular_speed_deg_s,
-        max_axis_accel_deg_s2: dynamics.max_angular_accel_deg_s2,
     };
-    Ok(StageReport::new("path", "Joining the points by geodesics", &summary)
+    StageReport::new("path", "Joining the points by geodesics", &summary)
         .metric("visited", "Points visited", t.order.len() as f64, "", "Every point once, in one path.")
         .metric("length", "Path length", t.length_mm, "mm", "Along the geodesics on the platform.")
         .metric("nn_length", "Nearest-neighbour length", t.nn_length_mm, "mm", "The path before 2-opt.")
         .metric("saving", "2-opt shortened it by", saving, "%", "What 2-opt removed from the nearest-neighbour path (crossings included).")
         .metric("crossings", "Crossings left", t.crossings_left as f64, "", "Places the path crosses itself in the map: 0 is a clean raster.")
         .metric("poses", "Poses", t.poses.len() as f64, "", "Tool positions with their normal, along the sampled geodesics.")
-        .metric("max_axis_speed", "Fastest tool-axis turn", dynamics.max_angular_speed_deg_s, "°/s", "How fast the tool axis turns at the infill speed: what the rotary axes must follow.")
-        .metric("max_axis_accel", "Largest tool-axis acceleration", dynamics.max_angular_accel_deg_s2, "°/s²", "The rotary axes' hardest change of turning speed at the infill speed.")
-        .metric("points_in", "Points from the previous stage", d.points.len() as f64, "", "The repulsion's points the path joins."))
+        .metric("points_in", "Points from the previous stage", d.points.len() as f64, "", "The repulsion's points the path joins.")
 }
 
-/// The tour as one free pass: the tip `h` out along the normal, the tool axis the normal.
-fn toolpath_of(t: &tour::Tour, h: f64, width: f64) -> Toolpath {
-    let points: Vec<DVec3> = t.poses.iter().map(|p| DVec3::from_array(p.position) + DVec3::from_array(p.normal) * h).collect();
-    let axes: Vec<DVec3> = t.poses.iter().map(|p| DVec3::from_array(p.normal)).collect();
+/// The nozzle tip of a pose: `h` out along the normal.
+fn tip(p: &tour::Pose, h: f64) -> [f64; 3] {
+    (DVec3::from_array(p.position) + DVec3::from_array(p.normal) * h).to_array()
+}
+
+/// The tour as one free pass: the tip `h` out along the normal, the tool axis `axes` (one per
+/// pose: the normals, or smoothed).
+fn toolpath_of(t: &tour::Tour, axes: &[[f64; 3]], h: f64, width: f64) -> Toolpath {
+    let points: Vec<DVec3> = t.poses.iter().map(|p| DVec3::from_array(tip(p, h))).collect();
+    let axes: Vec<DVec3> = axes.iter().map(|a| DVec3::from_array(*a)).collect();
     if points.len() < 2 {
         return Toolpath::default();
     }
@@ -648,7 +771,10 @@ fn map_view(domain: &Domain, d: &uniform::Distribution, tour: Option<&tour::Tour
         count: 3,
         stride: Shape::Lines2d.stride(),
         data,
-        meta: serde_json::json!({ "x_label": "θ (rad)", "y_label": "u", "scale_bar": false, "caption": labels[index] }),
+        meta: serde_json::json!({
+            "x_label": "θ (rad)", "y_label": "u", "scale_bar": false, "caption": labels[index],
+            "legend": legend(&[(Feature::Contour, "outline of Ω"), (Feature::Lattice, labels[index.min(1)]), (Feature::Infill, "path (geodesics)")]),
+        }),
     }
 }
 
@@ -681,5 +807,11 @@ fn platform_view(p: &Platform, t: &tour::Tour, h: f64) -> Inspection {
     for w in t.poses.windows(2) {
         push(tip(&w[0]), tip(&w[1]), Feature::Infill.code() as f32);
     }
-    Inspection { view: "platform3d".into(), shape: Shape::Lines3d, index: 0, count: 1, stride: Shape::Lines3d.stride(), data, meta: serde_json::json!({}) }
+    let meta = serde_json::json!({ "legend": legend(&[(Feature::Contour, "platform (meridians, parallels)"), (Feature::Infill, "path (nozzle tip)")]) });
+    Inspection { view: "platform3d".into(), shape: Shape::Lines3d, index: 0, count: 1, stride: Shape::Lines3d.stride(), data, meta }
+}
+
+/// A view's legend: feature code → what the view draws with it.
+fn legend(entries: &[(Feature, &str)]) -> serde_json::Value {
+    serde_json::Value::Object(entries.iter().map(|(f, text)| (f.code().to_string(), serde_json::Value::from(*text))).collect())
 }

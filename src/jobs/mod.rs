@@ -142,7 +142,8 @@ pub struct Inspection {
     /// The data.
     #[serde(skip)]
     pub data: Vec<f32>,
-    /// Shape-specific facts (an image's `width` and `height`, value range, …).
+    /// Shape-specific facts (an image's `width` and `height`, value range, …); `legend`, an
+    /// object of feature code → words, names what the view draws with each feature colour.
     pub meta: Value,
 }
 

@@ -4,7 +4,8 @@
 // and the neighbour-distance histogram for seed and result; the embedded-map and 3D platform
 // views draw through inspect; the downloaded G-code carries rotary words and matches the
 // native CLI byte for byte; the custom platform's control points are edited as lines and a
-// kinked polygon is refused naming the field. Called by run.mjs:
+// kinked polygon is refused naming the field; the tool-axis smoothing lowers the axes'
+// accelerations in the axes card. Called by run.mjs:
 //
 //   import { axisymChecks } from "./axisym-checks.mjs";
 //   await axisymChecks({ baseUrl: base, weftBin: WEFT_BIN, check, newPage, outDir: OUT, first: n });
@@ -60,6 +61,9 @@ export async function axisymChecks({ baseUrl, weftBin = process.env.WEFT_BIN, ch
       await page.fill(input, "3");
       await page.dispatchEvent(input, "change");
       await page.waitForFunction((a) => { const v = window.weft.views.find((x) => x.id === "map"); return v.answers > a && v.index === 2; }, k, { timeout: jobTimeout });
+      // The view names its own legend entries (not the feature names "Contour" / "Infill").
+      const legend = await page.evaluate(() => document.querySelector('.view-card[data-view="map"] .mini-legend')?.textContent ?? "");
+      if (!/outline of Ω/.test(legend) || !/path \(geodesics\)/.test(legend) || /Contour|Lattice/.test(legend)) throw new Error(`map legend reads "${legend}"`);
       const gcodePath = join(outDir, "hourglass-omega3.gcode");
       const text = (await downloadGcode(page, gcodePath)).bytes.toString("utf8");
       const rotary = text.split("\n").filter((l) => /^G1 .*\bB-?\d/.test(l) && /\bC-?\d/.test(l)).length;
@@ -78,6 +82,30 @@ export async function axisymChecks({ baseUrl, weftBin = process.env.WEFT_BIN, ch
       }
       await page.setViewportSize({ width: 1400, height: 900 });
       return `N ${points.points}, spread −${(100 * points.std_reduction).toFixed(1)} %, path ${path.length_mm.toFixed(0)} mm, ${rotary} rotary moves${native ? ", same bytes as the CLI" : ""}`;
+    });
+
+    await check(n++, "axisymmetric: smoothing the tool axis (most tilt 10°) in the form lowers every axis's acceleration in the axes card's table, as drawn", async () => {
+      await waitReady(page);
+      const field = "#f-job-tool_axis-max_tilt_deg";
+      await page.waitForSelector(field, { state: "attached", timeout: 5000 });
+      const before = await page.evaluate(() => window.weft.resultCount);
+      await page.evaluate((sel) => { const el = document.querySelector(sel); el.closest("details")?.setAttribute("open", ""); }, field);
+      await page.fill(field, "10");
+      await page.dispatchEvent(field, "change");
+      const tilt = await page.evaluate(() => JSON.parse(window.weft.design).job.tool_axis?.max_tilt_deg);
+      if (tilt !== 10) throw new Error(`the design's tilt is ${tilt}`);
+      await page.click("#slice");
+      await waitResult(page, before, "running with a smoothed tool axis", jobTimeout);
+      const rows = await page.evaluate(() => {
+        const table = document.querySelector('#report .stage-card[data-stage="axes"] table.report-table[data-key="dynamics"]');
+        return [...(table?.querySelectorAll("tbody tr") ?? [])].map((r) => [...r.children].map((c) => c.textContent.trim()));
+      });
+      if (rows.length !== 3) throw new Error(`the dynamics table has ${rows.length} rows (want tool axis, B, C): ${JSON.stringify(rows)}`);
+      const num = (t) => Number(t.replace(/[\s,\u202f]/g, ""));
+      const cuts = rows.map((r) => [r[0], num(r[2]), num(r[4])]);
+      const worse = cuts.filter(([, raw, smooth]) => !(smooth < raw));
+      if (worse.length) throw new Error(`smoothing did not lower: ${JSON.stringify(worse)}`);
+      return cuts.map(([a, raw, smooth]) => `${a} ${raw} → ${smooth} °/s²`).join(", ");
     });
 
     await check(n++, "axisymmetric: a custom platform's control points are edited as lines; a kinked polygon is refused naming the field and the previous result stays", async () => {

@@ -13,6 +13,7 @@ const CASES: &[(&str, &str, &[&str])] = &[
     ("arrowhead-10mm", "arrowhead-10mm", &[]),
     ("ball-burst-disc-48mm", "ball-burst-disc-48mm", &[]),
     ("barrel-omega1", "barrel-omega1", &[]),
+    ("barrel-graded", "barrel-graded", &[]),
     ("barrel-omega2", "barrel-omega2", &[]),
     ("concave-cylinder-honeycomb", "concave-cylinder-honeycomb", &[]),
     ("cube-20mm", "cube-20mm", &[]),

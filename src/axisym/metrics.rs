@@ -22,6 +22,22 @@ pub struct Metrics {
     pub nn_std_mm: f64,
     /// e / mean (the paper's density check: close to ρ_c when uniform).
     pub ratio: f64,
+    /// Per point, its 2n-NN distances over its own target spacing s(q_i) (row-major as
+    /// `nn_distances_mm`): 1 is on target, graded or not.
+    pub nn_relative: Vec<f64>,
+    /// Mean of `nn_relative`.
+    pub rel_mean: f64,
+    /// Standard deviation of `nn_relative` (uniform: `nn_std_mm` / s).
+    pub rel_std: f64,
+    /// Per point, the commanded density ρ(q_i) = n·e/s(q_i).
+    pub target_density: Vec<f64>,
+    /// Per point, the density its neighbours give: n·e / (mean of its 2n-NN distances).
+    pub local_density: Vec<f64>,
+    /// Per point, the KDF over what points at the target density give inside Ω (1.5/(h_i·s_i²):
+    /// the kernel's integral 1.5/h times 1/s² points per mm²); about 1 inside, less at edges.
+    pub kdf_relative: Vec<f64>,
+    /// The same, ascending.
+    pub kdf_relative_sorted: Vec<f64>,
 }
 
 /// A histogram: `counts[k]` values fall in [lo + k·w, lo + (k + 1)·w), w = (hi − lo)/bins.
@@ -74,45 +90,92 @@ pub fn shared_histogram(a: &[f64], b: &[f64], bins: usize) -> (Vec<f64>, Vec<f64
 
 /// Metrics of `points` for n = `rasters`, ρ_c = `density`, e = `line_width_mm`.
 pub fn metrics(s: &Surface, points: &[[f64; 2]], rasters: u32, density: f64, line_width_mm: f64) -> Metrics {
-    let k = 2 * rasters.max(1) as usize;
     let spacing = rasters.max(1) as f64 * line_width_mm / density;
+    graded_metrics(s, points, rasters, line_width_mm, spacing, &vec![spacing; points.len()])
+}
+
+/// Metrics against a graded target: point i's target spacing is `local[i]` (mm), its kernel
+/// radius h_i = 4·local[i] (the paper's h = 4·n·e/ρ with the local ρ); `spacing` is the
+/// command density's, reported as `kernel_radius_mm`. With every `local[i]` = `spacing` this
+/// is [`metrics`] (the same numbers).
+pub fn graded_metrics(s: &Surface, points: &[[f64; 2]], rasters: u32, line_width_mm: f64, spacing: f64, local: &[f64]) -> Metrics {
+    let k = 2 * rasters.max(1) as usize;
+    let ne = rasters.max(1) as f64 * line_width_mm;
     let h = 4.0 * spacing;
+    let h_max = 4.0 * local.iter().copied().fold(spacing, f64::max);
     let nodes: Vec<Node> = points.iter().map(|&q| s.node(q)).collect();
     let n = nodes.len();
     let mut kdf = vec![0.0; n];
     let mut nn = Vec::with_capacity(n * k);
-    if !(h > 0.0 && h.is_finite()) || n == 0 {
+    if !(h > 0.0 && h.is_finite() && h_max.is_finite()) || n == 0 || local.len() != n {
         return Metrics { kernel_radius_mm: h, ..Default::default() };
     }
-    let grid = Grid::new(nodes.iter().map(|n| n.p), h);
-    let norm = 15.0 / (PI * h.powi(6));
+    let grid = Grid::new(nodes.iter().map(|n| n.p), h_max);
     let mut cand = Vec::new();
     let mut d: Vec<f64> = Vec::new();
     for i in 0..n {
+        let hi = 4.0 * local[i];
+        let norm = 15.0 / (PI * hi.powi(6));
         cand.clear();
-        grid.near(nodes[i].p, h, &mut cand);
+        grid.near(nodes[i].p, h_max, &mut cand);
         d.clear();
         for &j in &cand {
             if j as usize != i {
                 let dij = s.pair(&nodes[i], &nodes[j as usize]).0;
                 d.push(dij);
-                if dij <= h {
-                    kdf[i] += norm * (h - dij).powi(3);
+                if dij <= hi {
+                    kdf[i] += norm * (hi - dij).powi(3);
                 }
             }
         }
-        if d.iter().filter(|&&x| x <= h).count() < k {
+        if d.iter().filter(|&&x| x <= hi).count() < k {
             // Sparse neighbourhood: every other point (the chord query only saw radius h).
             d = (0..n).filter(|&j| j != i).map(|j| s.pair(&nodes[i], &nodes[j]).0).collect();
         }
         d.sort_by(f64::total_cmp);
         nn.extend(d.iter().take(k));
     }
-    let mean = if nn.is_empty() { 0.0 } else { nn.iter().sum::<f64>() / nn.len() as f64 };
-    let var = if nn.is_empty() { 0.0 } else { nn.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>() / nn.len() as f64 };
+    let (mean, std) = mean_std(&nn);
     let mut kdf_sorted = kdf.clone();
     kdf_sorted.sort_by(f64::total_cmp);
-    Metrics { kdf, kdf_sorted, kernel_radius_mm: h, nn_distances_mm: nn, nn_mean_mm: mean, nn_std_mm: var.sqrt(), ratio: if mean > 0.0 { line_width_mm / mean } else { 0.0 } }
+    // Per point: distances over its own target, and the density they measure.
+    let mut nn_relative = Vec::with_capacity(nn.len());
+    let mut local_density = Vec::with_capacity(n);
+    // Every row holds min(2n, N − 1) distances.
+    let per = nn.len().checked_div(n).unwrap_or(0);
+    for i in 0..n {
+        let row = &nn[i * per..(i + 1) * per];
+        nn_relative.extend(row.iter().map(|x| x / local[i]));
+        let m = if row.is_empty() { 0.0 } else { row.iter().sum::<f64>() / row.len() as f64 };
+        local_density.push(if m > 0.0 { ne / m } else { 0.0 });
+    }
+    let (rel_mean, rel_std) = mean_std(&nn_relative);
+    let kdf_relative: Vec<f64> = (0..n).map(|i| kdf[i] * 4.0 * local[i] * local[i] * local[i] / 1.5).collect();
+    let mut kdf_relative_sorted = kdf_relative.clone();
+    kdf_relative_sorted.sort_by(f64::total_cmp);
+    Metrics {
+        kdf,
+        kdf_sorted,
+        kernel_radius_mm: h,
+        nn_distances_mm: nn,
+        nn_mean_mm: mean,
+        nn_std_mm: std,
+        ratio: if mean > 0.0 { line_width_mm / mean } else { 0.0 },
+        nn_relative,
+        rel_mean,
+        rel_std,
+        target_density: local.iter().map(|s| ne / s).collect(),
+        local_density,
+        kdf_relative,
+        kdf_relative_sorted,
+    }
+}
+
+/// (mean, population standard deviation); zeros when empty.
+fn mean_std(v: &[f64]) -> (f64, f64) {
+    let mean = if v.is_empty() { 0.0 } else { v.iter().sum::<f64>() / v.len() as f64 };
+    let var = if v.is_empty() { 0.0 } else { v.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>() / v.len() as f64 };
+    (mean, var.sqrt())
 }
 
 #[cfg(test)]

@@ -11,6 +11,8 @@
 //!   paper's domain Ω₂ (marching triangles on the signed distance to the surface).
 //! - [`geodesic`]: shortest paths between two (u, θ) points on any [`platform::Profile`]:
 //!   Clairaut shooting first, Runge–Kutta shooting as the fallback.
+//! - [`grading`]: a command density that varies over Ω (linear in u, θ or the geodesic
+//!   distance from a centre), its local spacing and N = ∫ρ² dA/(n²e²) (the paper's future work).
 //! - [`tour`]: the infill path through given (u, θ) points (nearest neighbour + 2-opt, no
 //!   crossings in the map), sampled along geodesics into tool poses.
 //! - [`dynamics`]: the tool axis smoothed within a tilt for the rotary axes, and their speed
@@ -25,6 +27,7 @@ pub mod clairaut;
 pub mod contour;
 pub mod dynamics;
 pub mod geodesic;
+pub mod grading;
 pub mod platform;
 pub mod domain;
 pub mod metrics;

@@ -4,7 +4,8 @@
 //! energy does not rise.
 
 use super::domain::{Domain, DomainProblem};
-use super::metrics::{metrics, Metrics};
+use super::grading::{Along, Field, Grading};
+use super::metrics::{graded_metrics, metrics, Metrics};
 use super::platform::Platform;
 use super::surface::{Node, PairEval, Surface};
 use crate::budget::{Estimate, OverBudget};
@@ -32,6 +33,9 @@ pub const DEFAULT_DISPLACEMENT_TOLERANCE: f64 = 1e-4;
 /// with the cutoff stay within 25 % and 3 % of the all-pairs run (the test
 /// `cutoff_barely_changes_the_result`), at a fraction of the pairs.
 pub const DEFAULT_CUTOFF_SPACINGS: f64 = 3.0;
+/// Most candidate draws for one seed point of a graded density (each kept with probability
+/// ρ(q)²/ρ_max², so the seed follows the target's point density ρ²/(n²e²)).
+pub const MAX_GRADED_DRAWS: usize = 100_000;
 /// Most points a run may place.
 pub const MAX_POINTS: usize = 20_000;
 /// Most iterations accepted in options.
@@ -61,7 +65,7 @@ pub const OMEGA2_POLYGON: &[[f64; 2]] = &[
 
 /// The stage's form rows (paths relative to [`Options`]).
 pub const FIELDS: &[crate::settings::Field] = {
-    use crate::settings::{choice_docs, int, num, other, percent, Kind};
+    use crate::settings::{choice_docs, int, num, other, percent, when, Kind};
     &[
         percent(num("density", "Infill points", "Command density", "%", 0.01, 1.0, 0.01, "How much of the patch the infill covers: more density, more points closer together.")),
         int("rasters", "Infill points", "Lines through each point", 1.0, 16.0, "n of the paper: how many equally angled rasters cross at each point (1 for a single path)."),
@@ -78,6 +82,22 @@ pub const FIELDS: &[crate::settings::Field] = {
         num("energy_tolerance", "Infill points", "Energy tolerance", "", 0.0, 0.5, 1e-6, "Stop when the energy changes by less than this fraction in a step."),
         num("displacement_tolerance", "Infill points", "Movement tolerance", "spacings", 0.0, 0.5, 1e-4, "Stop when no point moves more than this fraction of the target spacing."),
         num("cutoff_spacings", "Infill points", "Interaction range", "spacings", 0.0, 100.0, 0.5, "Pairs farther apart than this many target spacings are ignored (0 = every pair, as the paper; slower)."),
+        crate::settings::Field {
+            default: Some("{\"along\":\"u\",\"density_to\":0.25,\"centre_u\":1.0,\"centre_theta_rad\":0.5,\"radius_mm\":10.0}"),
+            ..other("grading", "Infill points", "Graded density", Kind::Section, &[], "Let the density change over the patch instead of staying at the command density.")
+        },
+        choice_docs(
+            other("grading.along", "Infill points", "Grade along", Kind::Choice, &["u", "theta", "radial"], "Which way the density changes, from the command density to the end density."),
+            &[
+                "Along the profile: the command density at the patch's lowest u, the end density at its highest.",
+                "Around the axis: the command density at the patch's lowest θ, the end density at its highest.",
+                "Outwards from a centre: the command density there, the end density at the radius (distance along the surface) and beyond.",
+            ],
+        ),
+        percent(num("grading.density_to", "Infill points", "End density", "%", 0.01, 1.0, 0.01, "The density at the far end of the grading (the command density is the near end).")),
+        when(num("grading.centre_u", "Infill points", "Centre u", "", 0.0, 64.0, 0.01, "Where the radial grading is centred along the profile."), "grading.along", "radial"),
+        when(num("grading.centre_theta_rad", "Infill points", "Centre θ", "rad", -7.0, 7.0, 0.01, "Where the radial grading is centred around the axis."), "grading.along", "radial"),
+        when(num("grading.radius_mm", "Infill points", "Grading radius", "mm", 0.1, 10000.0, 0.1, "Distance along the surface over which the density goes from the command to the end density."), "grading.along", "radial"),
     ]
 };
 
@@ -113,6 +133,10 @@ pub struct Options {
     pub displacement_tolerance: f64,
     /// See [`DEFAULT_CUTOFF_SPACINGS`].
     pub cutoff_spacings: f64,
+    /// A graded density (absent: uniform at `density`, the paper's method). Left out of the
+    /// serialised options when absent, so uniform designs read and hash as before.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub grading: Option<Grading>,
 }
 
 impl Default for Options {
@@ -126,6 +150,7 @@ impl Default for Options {
             energy_tolerance: DEFAULT_ENERGY_TOLERANCE,
             displacement_tolerance: DEFAULT_DISPLACEMENT_TOLERANCE,
             cutoff_spacings: DEFAULT_CUTOFF_SPACINGS,
+            grading: None,
         }
     }
 }
@@ -196,7 +221,7 @@ pub struct Iteration {
 pub struct Distribution {
     /// True surface area of Ω, mm².
     pub area_mm2: f64,
-    /// N from equation (4).
+    /// N from equation (4) (graded: ∫ρ² dA/(n²e²)).
     pub target_points: usize,
     /// The seed, (u, θ).
     pub seed_points: Vec<[f64; 2]>,
@@ -210,6 +235,24 @@ pub struct Distribution {
     pub seed_metrics: Metrics,
     /// Metrics of the result.
     pub metrics: Metrics,
+    /// A graded density's grading coordinate per point (`None` when uniform).
+    pub graded: Option<GradedPoints>,
+}
+
+/// Where the points of a graded run lie along the grading coordinate (the report bins the
+/// commanded and measured densities by it).
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct GradedPoints {
+    /// Coordinate name and unit.
+    pub label: (&'static str, &'static str),
+    /// The coordinate span [command density end, far end].
+    pub range: [f64; 2],
+    /// Coordinate of each seed point (u, θ rad, or distance from the centre mm).
+    pub seed: Vec<f64>,
+    /// Coordinate of each optimised point.
+    pub points: Vec<f64>,
+    /// Commanded ρ at `bins + 1` evenly spaced coordinates over the points' span (a line).
+    pub commanded: Vec<[f64; 2]>,
 }
 
 fn check_options(o: &Options, line_width_mm: f64) -> Result<(), Error> {
@@ -238,7 +281,56 @@ fn check_options(o: &Options, line_width_mm: f64) -> Result<(), Error> {
     if !(line_width_mm > 0.0 && line_width_mm.is_finite()) {
         return bad("line_width_mm", line_width_mm, "a positive width in mm, e.g. 0.4");
     }
+    if let Some(g) = &o.grading {
+        if !(g.density_to > 0.0 && g.density_to <= 1.0) {
+            return bad("grading.density_to", g.density_to, "a fraction in (0, 1]: 0.25 is 25 %");
+        }
+        if g.along == Along::Radial {
+            if !(g.radius_mm >= 0.1 && g.radius_mm <= 10000.0) {
+                return bad("grading.radius_mm", g.radius_mm, "a distance from 0.1 to 10000 mm along the surface");
+            }
+            if !g.centre_u.is_finite() {
+                return bad("grading.centre_u", g.centre_u, "a u inside the platform's range");
+            }
+            if !(g.centre_theta_rad.is_finite() && g.centre_theta_rad.abs() <= 7.0) {
+                return bad("grading.centre_theta_rad", g.centre_theta_rad, "an angle from −7 to 7 rad");
+            }
+        }
+    }
     Ok(())
+}
+
+/// The radial centre must lie where the platform's metric is trusted (as a domain must).
+pub fn check_centre(p: &Platform, o: &Options) -> Result<(), Error> {
+    let Some(g) = o.grading.as_ref().filter(|g| g.along == Along::Radial) else { return Ok(()) };
+    let clear = super::platform::pole_clearance(p, super::platform::DEFAULT_MIN_POLE_RADIUS_MM);
+    match clear {
+        Some((a, b)) if g.centre_u >= a && g.centre_u <= b => Ok(()),
+        _ => Err(Error::BadOption { name: "grading.centre_u", value: g.centre_u, hint: "the centre must lie on the platform clear of the poles: pick a u inside the range a domain may use (the platform stage's report states it)" }),
+    }
+}
+
+/// The graded density field of a run (`None` when uniform).
+fn field_of(s: &Surface, domain: &Domain, o: &Options, line_width_mm: f64) -> Option<Field> {
+    o.grading.as_ref().map(|g| Field::new(s, domain, g, o.density, o.rasters as f64 * line_width_mm))
+}
+
+/// N = ∫_Ω ρ² dA/(n²e²) of a graded density, rounded, at least 1 (equation (4) per area
+/// element; [`target_points`] when uniform).
+pub fn graded_target_points(s: &Surface, domain: &Domain, o: &Options, line_width_mm: f64) -> f64 {
+    match field_of(s, domain, o, line_width_mm) {
+        None => target_points(domain.area_mm2(s), o, line_width_mm),
+        Some(f) => {
+            let ne = o.rasters as f64 * line_width_mm;
+            (f.integral_rho2(s, domain) / (ne * ne)).round().max(1.0)
+        }
+    }
+}
+
+/// The largest target spacing over Ω, mm: n·e over the smallest density (graded or not).
+pub fn largest_spacing(o: &Options, line_width_mm: f64) -> f64 {
+    let lo = o.grading.as_ref().map_or(o.density, |g| o.density.min(g.density_to));
+    o.rasters as f64 * line_width_mm / lo
 }
 
 /// Target spacing s = n·e/ρ_c, mm.
@@ -258,9 +350,12 @@ fn pairs_per_eval(n: f64, o: &Options) -> f64 {
 
 /// The stage's work before running it.
 pub fn estimate(p: &Platform, domain: &Domain, o: &Options, line_width_mm: f64) -> Estimate {
-    let ok = check_options(o, line_width_mm).is_ok() && domain.problems(p).is_empty();
-    let area = if ok { domain.area_mm2(&Surface::new(p)) } else { 0.0 };
-    let n = if ok { target_points(area, o, line_width_mm) } else { 0.0 };
+    let ok = check_options(o, line_width_mm).is_ok() && check_centre(p, o).is_ok() && domain.problems(p).is_empty();
+    let n = match (ok, &o.grading) {
+        (false, _) => 0.0,
+        (true, None) => target_points(domain.area_mm2(&Surface::new(p)), o, line_width_mm),
+        (true, Some(_)) => graded_target_points(&Surface::new(p), domain, o, line_width_mm),
+    };
     let pairs = pairs_per_eval(n, o);
     // About 1.5 energy evaluations per iteration, two metric passes, the seed.
     let evals = 1.5 * o.iterations as f64 + 4.0 + if o.seed_method == SeedMethod::Ere { 1.5 * ERE_ITERATIONS as f64 } else { 0.0 };
@@ -351,38 +446,63 @@ impl Sampler {
     }
 }
 
+/// A candidate seed point: area-uniform when uniform; for a graded density kept with
+/// probability ρ(q)²/ρ_max² (rejection), so candidates follow the target point density.
+fn draw(sampler: &Sampler, s: &Surface, field: Option<&Field>, rng: &mut Pcg64, d: &Domain) -> Option<[f64; 2]> {
+    let Some(f) = field else { return sampler.draw(rng, d) };
+    let top = f.density_bounds()[1];
+    for _ in 0..MAX_GRADED_DRAWS {
+        let q = sampler.draw(rng, d)?;
+        let rho = f.density(s, &s.node(q));
+        if unit(rng) * top * top <= rho * rho {
+            return Some(q);
+        }
+    }
+    None
+}
+
 /// Consecutive misses after which dart throwing shrinks its radius by 5 %. A constant (not one
 /// growing with N) keeps seeding linear in N: with 100 + N the seed stage of a 10× larger
 /// domain took 16.6× as long.
 const DART_MISS_LIMIT: usize = 300;
 
 /// Dart throwing with a minimum distance (chord, or geodesic when `geodesic`), the radius
-/// shrinking by 5 % after [`DART_MISS_LIMIT`] consecutive misses until N points are in.
-fn dart_throw(s: &Surface, d: &Domain, n: usize, spacing: f64, geodesic: bool, rng: &mut Pcg64) -> Result<Vec<[f64; 2]>, Error> {
+/// shrinking by 5 % after [`DART_MISS_LIMIT`] consecutive misses until N points are in. With a graded
+/// `field` the minimum distance of a pair is r·s̄/s, s̄ the mean of the two points' target
+/// spacings (the pair scale of the repulsion), candidates drawn as [`draw`].
+fn dart_throw(s: &Surface, d: &Domain, n: usize, spacing: f64, geodesic: bool, field: Option<&Field>, rng: &mut Pcg64) -> Result<Vec<[f64; 2]>, Error> {
     let sampler = Sampler::new(s, d);
     let mut r = spacing;
+    // Largest pair scale over the spacing (1 when uniform): the grid's cell and query radius.
+    let widest = field.map_or(1.0, |f| f.spacing_of(f.density_bounds()[0]) / spacing);
+    let local = |q: &Node| field.map_or(spacing, |f| f.spacing_of(f.density(s, q)));
     let mut pts: Vec<[f64; 2]> = Vec::with_capacity(n);
     let mut nodes: Vec<Node> = Vec::with_capacity(n);
-    let mut grid = Grid { cell: spacing, map: BTreeMap::new() };
+    let mut scales: Vec<f64> = Vec::with_capacity(n);
+    let mut grid = Grid { cell: spacing * widest, map: BTreeMap::new() };
     let mut misses = 0;
     let mut cand = Vec::new();
     while pts.len() < n {
-        let Some(q) = sampler.draw(rng, d) else {
+        let Some(q) = draw(&sampler, s, field, rng, d) else {
             return Err(Error::SeedFailed { wanted: n, placed: pts.len() });
         };
         let node = s.node(q);
+        let sq = local(&node);
         cand.clear();
-        grid.near(node.p, r, &mut cand);
+        grid.near(node.p, r * widest, &mut cand);
         let ok = cand.iter().all(|&j| {
             let o = &nodes[j as usize];
+            // Uniform: s̄ = s, so the radius is r exactly.
+            let rij = r * (0.5 * (sq + scales[j as usize]) / spacing);
             let c = ((o.p[0] - node.p[0]).powi(2) + (o.p[1] - node.p[1]).powi(2) + (o.p[2] - node.p[2]).powi(2)).sqrt();
             // The geodesic is never shorter than the chord: only chords under r need it.
-            c >= r || (geodesic && s.pair(&node, o).0 >= r)
+            c >= rij || (geodesic && s.pair(&node, o).0 >= rij)
         });
         if ok {
             grid.insert(node.p, pts.len() as u32);
             pts.push(q);
             nodes.push(node);
+            scales.push(sq);
             misses = 0;
         } else {
             misses += 1;
@@ -406,12 +526,93 @@ struct Engine<'a, 'b> {
     rc: f64,
     /// Geodesic (GRE) or chord (ERE) distances.
     geodesic: bool,
+    /// A graded density: the pair energy becomes (d/s̄)^−m (see [`Engine::eval_graded`]).
+    field: Option<&'a Field>,
+    /// Cutoff in pair scales s̄ (∞ = all pairs); graded runs only.
+    cutoff_spacings: f64,
 }
 
 impl Engine<'_, '_> {
+    /// (E, force covectors F_i = −∇_i E, nodes, target spacing per point — empty when
+    /// uniform).
+    fn eval(&self, pts: &[[f64; 2]]) -> (f64, Vec<[f64; 2]>, Vec<Node>, Vec<f64>) {
+        match self.field {
+            None => {
+                let (e, f, n) = self.eval_uniform(pts);
+                (e, f, n, Vec::new())
+            }
+            Some(field) => self.eval_graded(pts, field),
+        }
+    }
+
+    /// The graded energy E = Σ (d_ij/s̄_ij)^−m − c^−m over pairs with d_ij < c·s̄_ij, where
+    /// s̄_ij = ½(s_i + s_j) and c the cutoff in spacings (shifted so it is continuous at the
+    /// cutoff, as the uniform one). Scale-free: a pair at its local target spacing weighs the
+    /// same anywhere, and for N = ∫ρ²/(n²e²) points the minimum has point density ∝ 1/s².
+    /// The forces are the exact gradient, ∂s̄/∂q included (ρ(q) is linear in u, θ or the
+    /// geodesic distance from the centre), so a small enough step always lowers this E and
+    /// the descent's no-rise rule holds as in the uniform case:
+    /// F_i = m·x^(−m−1)/s̄·(∇_i d − x·∇_i s̄), x = d/s̄, ∇_i s̄ = −½·s_i/ρ_i·∇ρ_i.
+    fn eval_graded(&self, pts: &[[f64; 2]], field: &Field) -> (f64, Vec<[f64; 2]>, Vec<Node>, Vec<f64>) {
+        let nodes: Vec<Node> = pts.iter().map(|&q| self.s.node(q)).collect();
+        let mut sp = Vec::with_capacity(nodes.len());
+        let mut dsp = Vec::with_capacity(nodes.len());
+        for n in &nodes {
+            let (rho, g) = field.density_gradient(self.s, n);
+            let s = field.spacing_of(rho);
+            sp.push(s);
+            dsp.push([-s / rho * g[0], -s / rho * g[1]]);
+        }
+        let c = self.cutoff_spacings;
+        let shift = if c.is_finite() { libm::pow(c, -self.m) } else { 0.0 };
+        let mut f = vec![[0.0; 2]; pts.len()];
+        let mut e = 0.0;
+        let mut visit = |i: usize, j: usize| {
+            let pe: PairEval = if self.geodesic { self.s.pair_both(&nodes[i], &nodes[j]) } else { self.s.chord_pair(&nodes[i], &nodes[j]) };
+            let sbar = 0.5 * (sp[i] + sp[j]);
+            if !(pe.d < c * sbar) {
+                return;
+            }
+            let x = pe.d.max(1e-9) / sbar;
+            e += libm::pow(x, -self.m) - shift;
+            let w = self.m * libm::pow(x, -self.m - 1.0) / sbar;
+            for k in 0..2 {
+                f[i][k] += w * (pe.ga[k] - x * 0.5 * dsp[i][k]);
+                f[j][k] += w * (pe.gb[k] - x * 0.5 * dsp[j][k]);
+            }
+        };
+        if c.is_finite() {
+            let widest = sp.iter().copied().fold(0.0, f64::max) * c;
+            let grid = Grid::new(nodes.iter().map(|n| n.p), widest);
+            let mut cand = Vec::new();
+            for i in 0..nodes.len() {
+                cand.clear();
+                grid.near(nodes[i].p, widest, &mut cand);
+                for &j in &cand {
+                    let j = j as usize;
+                    if j > i {
+                        let (a, b) = (nodes[i].p, nodes[j].p);
+                        let c2 = (a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2);
+                        let rc = c * 0.5 * (sp[i] + sp[j]);
+                        if c2 < rc * rc {
+                            visit(i, j);
+                        }
+                    }
+                }
+            }
+        } else {
+            for i in 0..nodes.len() {
+                for j in i + 1..nodes.len() {
+                    visit(i, j);
+                }
+            }
+        }
+        (e, f, nodes, sp)
+    }
+
     /// (E, force covectors F_i = −∇_i E, nodes). The pair energy is shifted by rc^−m so it
     /// is continuous at the cutoff (a truncated, unshifted energy jumps as pairs cross it).
-    fn eval(&self, pts: &[[f64; 2]]) -> (f64, Vec<[f64; 2]>, Vec<Node>) {
+    fn eval_uniform(&self, pts: &[[f64; 2]]) -> (f64, Vec<[f64; 2]>, Vec<Node>) {
         let nodes: Vec<Node> = pts.iter().map(|&q| self.s.node(q)).collect();
         let mut f = vec![[0.0; 2]; pts.len()];
         let mut e = 0.0;
@@ -485,7 +686,7 @@ fn descend(eng: &Engine, d: &Domain, start: Vec<[f64; 2]>, iterations: usize, e_
     if pts.len() < 2 {
         return (pts, Vec::new(), StopReason::Trivial);
     }
-    let (e0, mut forces, mut nodes) = eng.eval(&pts);
+    let (e0, mut forces, mut nodes, mut scales) = eng.eval(&pts);
     let f0 = nodes.iter().zip(&forces).map(|(n, f)| cov_norm(n, *f)).fold(0.0, f64::max);
     if !(e0 > 0.0 && f0 > 0.0) {
         return (pts, Vec::new(), StopReason::Trivial);
@@ -503,13 +704,16 @@ fn descend(eng: &Engine, d: &Domain, start: Vec<[f64; 2]>, iterations: usize, e_
                 .iter()
                 .zip(&nodes)
                 .zip(&forces)
-                .map(|((q, n), f)| {
-                    // Raise the index (vector = g⁻¹·F), then scale to τ·s·min(|F|/F_ref, 1).
+                .enumerate()
+                .map(|(i, ((q, n), f))| {
+                    // Raise the index (vector = g⁻¹·F), then scale to τ·s·min(|F|/F_ref, 1)
+                    // (s the point's own target spacing when graded).
                     let len = cov_norm(n, *f);
                     if !(len > 0.0) {
                         return *q;
                     }
-                    let k = tau * spacing * (len / f_ref).min(1.0) / len;
+                    let s_i = scales.get(i).copied().unwrap_or(spacing);
+                    let k = tau * s_i * (len / f_ref).min(1.0) / len;
                     let v = [k * f[0] / n.g[0], if n.g[1] > 0.0 { k * f[1] / n.g[1] } else { 0.0 }];
                     let t = d.project_inside(eng.s, [q[0] + v[0], q[1] + v[1]]);
                     let moved = (n.g[0] * (t[0] - q[0]).powi(2) + n.g[1] * (t[1] - q[1]).powi(2)).sqrt();
@@ -517,15 +721,15 @@ fn descend(eng: &Engine, d: &Domain, start: Vec<[f64; 2]>, iterations: usize, e_
                     t
                 })
                 .collect();
-            let (e, f, nd) = eng.eval(&trial);
+            let (e, f, nd, sc) = eng.eval(&trial);
             let en = e / e0;
             if en <= e_prev + e_tol {
-                accepted = Some((trial, f, nd, en, max_step));
+                accepted = Some((trial, f, nd, sc, en, max_step));
                 break;
             }
             tau *= 0.5;
         }
-        let Some((trial, f, nd, en, max_step)) = accepted else {
+        let Some((trial, f, nd, sc, en, max_step)) = accepted else {
             stop = StopReason::Stalled;
             break;
         };
@@ -536,6 +740,7 @@ fn descend(eng: &Engine, d: &Domain, start: Vec<[f64; 2]>, iterations: usize, e_
         pts = trial;
         forces = f;
         nodes = nd;
+        scales = sc;
         e_prev = en;
         if max_step < disp_tol_mm {
             stop = StopReason::Displacement;
@@ -550,40 +755,60 @@ fn descend(eng: &Engine, d: &Domain, start: Vec<[f64; 2]>, iterations: usize, e_
     (pts, log, stop)
 }
 
-/// Places N = A·ρ_c²/(n²e²) quasi-uniform points on Ω and reports the seed, the result and
-/// their metrics. `seed` drives every random choice; `progress` gets the GRE fraction done.
+/// Places N = A·ρ_c²/(n²e²) quasi-uniform points on Ω (graded: N = ∫ρ² dA/(n²e²) points
+/// at local spacing s(q) = n·e/ρ(q)) and reports the seed, the result and their metrics.
+/// `seed` drives every random choice; `progress` gets the GRE fraction done.
 pub fn distribute(p: &Platform, domain: &Domain, o: &Options, line_width_mm: f64, seed: u64, progress: &mut dyn FnMut(f32)) -> Result<Distribution, Error> {
     check_options(o, line_width_mm)?;
+    check_centre(p, o)?;
     let problems = domain.problems(p);
     if !problems.is_empty() {
         return Err(Error::Domain(problems));
     }
-    estimate(p, domain, o, line_width_mm).check().map_err(Error::TooBig)?;
+    let est = estimate(p, domain, o, line_width_mm);
+    est.check().map_err(Error::TooBig)?;
     let s = Surface::new(p);
     let area = domain.area_mm2(&s);
-    let n = target_points(area, o, line_width_mm) as usize;
+    let field = field_of(&s, domain, o, line_width_mm);
+    let n = if field.is_some() { est.get("points") as usize } else { target_points(area, o, line_width_mm) as usize };
     let sp = spacing(o, line_width_mm);
     let rc = if o.cutoff_spacings > 0.0 { o.cutoff_spacings * sp } else { f64::INFINITY };
+    let cut = if o.cutoff_spacings > 0.0 { o.cutoff_spacings } else { f64::INFINITY };
     let mut rng = Pcg64::seed_from_u64(seed);
     let seed_points = match o.seed_method {
-        SeedMethod::Ebns => dart_throw(&s, domain, n, sp, false, &mut rng)?,
-        SeedMethod::Gbns => dart_throw(&s, domain, n, sp, true, &mut rng)?,
+        SeedMethod::Ebns => dart_throw(&s, domain, n, sp, false, field.as_ref(), &mut rng)?,
+        SeedMethod::Gbns => dart_throw(&s, domain, n, sp, true, field.as_ref(), &mut rng)?,
         SeedMethod::Ere => {
             let sampler = Sampler::new(&s, domain);
             let mut start = Vec::with_capacity(n);
             for _ in 0..n {
-                start.push(sampler.draw(&mut rng, domain).ok_or(Error::SeedFailed { wanted: n, placed: start.len() })?);
+                start.push(draw(&sampler, &s, field.as_ref(), &mut rng, domain).ok_or(Error::SeedFailed { wanted: n, placed: start.len() })?);
             }
-            let eng = Engine { s: &s, m: o.exponent, rc, geodesic: false };
+            let eng = Engine { s: &s, m: o.exponent, rc, geodesic: false, field: field.as_ref(), cutoff_spacings: cut };
             descend(&eng, domain, start, ERE_ITERATIONS, o.energy_tolerance, o.displacement_tolerance * sp, sp, &mut |_| {}).0
         }
     };
-    let eng = Engine { s: &s, m: o.exponent, rc, geodesic: true };
+    let eng = Engine { s: &s, m: o.exponent, rc, geodesic: true, field: field.as_ref(), cutoff_spacings: cut };
     let (points, iterations, stop) = descend(&eng, domain, seed_points.clone(), o.iterations, o.energy_tolerance, o.displacement_tolerance * sp, sp, progress);
-    let seed_metrics = metrics(&s, &seed_points, o.rasters, o.density, line_width_mm);
-    let m = metrics(&s, &points, o.rasters, o.density, line_width_mm);
-    Ok(Distribution { area_mm2: area, target_points: n, seed_points, points, iterations, stop, seed_metrics, metrics: m })
+    let (seed_metrics, m, graded) = match &field {
+        None => (metrics(&s, &seed_points, o.rasters, o.density, line_width_mm), metrics(&s, &points, o.rasters, o.density, line_width_mm), None),
+        Some(f) => {
+            // Per point: the grading coordinate and the target spacing there.
+            let at = |v: &[[f64; 2]]| -> (Vec<f64>, Vec<f64>) { v.iter().map(|&q| s.node(q)).map(|n| f.coordinate(&s, &n)).map(|c| (c, f.spacing_of(f.density_at(c)))).unzip() };
+            let (seed_c, seed_s) = at(&seed_points);
+            let (pts_c, pts_s) = at(&points);
+            let lo = pts_c.iter().chain(&seed_c).copied().fold(f64::INFINITY, f64::min);
+            let hi = pts_c.iter().chain(&seed_c).copied().fold(f64::NEG_INFINITY, f64::max);
+            let commanded = (0..=GRADED_BINS).map(|k| lo + (hi - lo) * k as f64 / GRADED_BINS as f64).map(|c| [c, f.density_at(c)]).collect();
+            let graded = GradedPoints { label: f.coordinate_label(), range: f.range(), seed: seed_c, points: pts_c, commanded };
+            (graded_metrics(&s, &seed_points, o.rasters, line_width_mm, sp, &seed_s), graded_metrics(&s, &points, o.rasters, line_width_mm, sp, &pts_s), Some(graded))
+        }
+    };
+    Ok(Distribution { area_mm2: area, target_points: n, seed_points, points, iterations, stop, seed_metrics, metrics: m, graded })
 }
+
+/// Bins along the grading coordinate of the commanded-vs-measured density plot.
+pub const GRADED_BINS: usize = 10;
 
 #[cfg(test)]
 mod tests {
@@ -700,5 +925,115 @@ mod tests {
         let e = distribute(&p, &big, &Options { density: 1.0, ..Options::default() }, 0.1, 1, &mut |_| {}).unwrap_err();
         assert!(matches!(e, Error::TooBig(_)), "{e}");
         println!("{e}");
+    }
+
+    /// Barrel Ω1 graded along u from 50 % to 25 %.
+    fn graded_omega1(along: Along, seed_method: SeedMethod) -> (Platform, Domain, Options) {
+        let (p, d, o) = omega("barrel-omega1");
+        let g = Grading { along, density_to: 0.25, centre_u: 1.0, centre_theta_rad: 0.5, radius_mm: 12.0 };
+        (p, d, Options { seed_method, grading: Some(g), ..o })
+    }
+
+    #[test]
+    fn graded_n_is_the_integral_of_rho_squared() {
+        // The cylinder of `n_matches_equation_4` (480 mm²), ρ linear in u from 0.6 to 0.3:
+        // ∫ρ² dA = 480·(0.36 + 0.18 + 0.09)/3 = 100.8 mm², N = 100.8/0.16 = 630.
+        let pts: Vec<[f64; 2]> = (0..13).map(|i| [20.0, 60.0 - 5.0 * i as f64]).collect();
+        let cyl = Platform::from_polygon(&pts).unwrap();
+        let d = Domain::Rectangle { u: [0.5, 1.5], theta: [0.0, 0.8] };
+        let g = Grading { along: Along::U, density_to: 0.3, ..Grading::default() };
+        let o = Options { density: 0.6, grading: Some(g.clone()), ..Options::default() };
+        assert_eq!(estimate(&cyl, &d, &o, 0.4).get("points"), 630.0);
+        // A "grading" to the same density is equation 4: 750 points at 50 %.
+        for along in [Along::U, Along::Theta, Along::Radial] {
+            let same = Options { grading: Some(Grading { along, density_to: 0.5, ..g.clone() }), ..Options::default() };
+            assert_eq!(estimate(&cyl, &d, &same, 0.4).get("points"), 750.0, "{along:?}");
+        }
+    }
+
+    #[test]
+    fn graded_points_follow_the_target() {
+        for (along, method) in [(Along::U, SeedMethod::Ebns), (Along::Theta, SeedMethod::Gbns), (Along::Radial, SeedMethod::Ere)] {
+            let (p, d, o) = graded_omega1(along, method);
+            let t = std::time::Instant::now();
+            let r = distribute(&p, &d, &o, 0.4, 1, &mut |_| {}).unwrap();
+            let secs = t.elapsed().as_secs_f64();
+            let (sm, m) = (&r.seed_metrics, &r.metrics);
+            println!(
+                "{along:?}/{method:?}: N = {}, {secs:.3} s, {} iterations ({:?}); d/s(q) mean {:.3} → {:.3}, std {:.4} → {:.4} ({:.1} % lower); mm std {:.3} → {:.3}",
+                r.points.len(),
+                r.iterations.len(),
+                r.stop,
+                sm.rel_mean,
+                m.rel_mean,
+                sm.rel_std,
+                m.rel_std,
+                100.0 * (1.0 - m.rel_std / sm.rel_std),
+                sm.nn_std_mm,
+                m.nn_std_mm
+            );
+            assert_eq!(r.points.len(), r.target_points);
+            assert!(m.rel_std < sm.rel_std, "{along:?}: no improvement against the graded target");
+            let mut prev = 1.0;
+            for it in &r.iterations {
+                assert!(it.energy <= prev + o.energy_tolerance, "{along:?}: energy rose {prev} → {}", it.energy);
+                prev = it.energy;
+            }
+            assert!(r.points.iter().all(|&q| d.contains(q)), "{along:?}: a point left Ω");
+            let g = r.graded.as_ref().unwrap();
+            assert_eq!((g.points.len(), g.seed.len()), (r.points.len(), r.seed_points.len()));
+            if along == Along::U {
+                // Counts in the first and last third of u against ∫ρ² dA over those thirds.
+                let s = Surface::new(&p);
+                let f = field_of(&s, &d, &o, 0.4).unwrap();
+                let third = |k: f64| Domain::Rectangle { u: [0.8 + 0.4 * k / 3.0, 0.8 + 0.4 * (k + 1.0) / 3.0], theta: [0.0, 1.0] };
+                let want = f.integral_rho2(&s, &third(0.0)) / f.integral_rho2(&s, &third(2.0));
+                let count = |v: &[[f64; 2]], k: f64| v.iter().filter(|q| third(k).contains(**q)).count() as f64;
+                for (name, v) in [("seed", &r.seed_points), ("result", &r.points)] {
+                    let got = count(v, 0.0) / count(v, 2.0);
+                    println!("  {name}: first/last third {} / {} = {got:.3}, ∫ρ² ratio {want:.3}", count(v, 0.0), count(v, 2.0));
+                    assert!((got / want - 1.0).abs() < 0.15, "{name}: count ratio {got} against {want}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn uniform_metrics_are_the_graded_ones_at_constant_spacing() {
+        // The relative spread of a uniform run is its spread in mm over the spacing.
+        let (p, d, mut o) = omega("barrel-omega1");
+        o.iterations = 3;
+        let r = distribute(&p, &d, &o, 0.4, 1, &mut |_| {}).unwrap();
+        let s = spacing(&o, 0.4);
+        assert!((r.metrics.rel_std - r.metrics.nn_std_mm / s).abs() < 1e-12);
+        assert!(r.graded.is_none());
+    }
+
+    #[test]
+    fn bad_grading_is_refused_with_its_name() {
+        let p = Platform::barrel();
+        let d = Domain::Rectangle { u: [0.8, 1.2], theta: [0.0, 1.0] };
+        let g = Grading { along: Along::Radial, ..Grading::default() };
+        let cases = [
+            (Grading { density_to: 0.0, ..g.clone() }, "grading.density_to"),
+            (Grading { density_to: f64::NAN, ..g.clone() }, "grading.density_to"),
+            (Grading { density_to: 1.5, ..g.clone() }, "grading.density_to"),
+            (Grading { radius_mm: 0.0, ..g.clone() }, "grading.radius_mm"),
+            (Grading { centre_u: f64::INFINITY, ..g.clone() }, "grading.centre_u"),
+            // The barrel's top pole: no metric to measure distances with there.
+            (Grading { centre_u: 0.0, ..g.clone() }, "grading.centre_u"),
+            (Grading { centre_theta_rad: f64::NAN, ..g.clone() }, "grading.centre_theta_rad"),
+        ];
+        for (g, want) in cases {
+            let o = Options { grading: Some(g.clone()), ..Options::default() };
+            let e = distribute(&p, &d, &o, 0.4, 1, &mut |_| {}).unwrap_err();
+            assert!(matches!(&e, Error::BadOption { name, .. } if *name == want), "{g:?}: {e}");
+            // The estimate refuses nothing but counts no points.
+            assert_eq!(estimate(&p, &d, &o, 0.4).get("points"), 0.0);
+        }
+        // Too many points from the graded integral: refused before allocating.
+        let big = Domain::Rectangle { u: [0.3, 1.7], theta: [0.0, 6.0] };
+        let o = Options { density: 1.0, grading: Some(Grading { density_to: 0.9, ..Grading::default() }), ..Options::default() };
+        assert!(matches!(distribute(&p, &big, &o, 0.1, 1, &mut |_| {}), Err(Error::TooBig(_))));
     }
 }

@@ -294,6 +294,10 @@ impl Kind for AxisymKind {
             None if j.part.is_none() => out.push(Problem { path: path.into(), message: "the domain is where a part meets the platform: load the part (its drop zone, or --input part=FILE) or pick a rectangle or polygon".into() }),
             None => {}
         }
+        // A radial grading's centre needs the metric too (the form's range allows the poles).
+        if let Err(e) = uniform::check_centre(&platform, &j.points) {
+            out.push(Problem { path: "job.points.grading.centre_u".into(), message: e.to_string() });
+        }
     }
 
     /// Switching to this kind on a machine that cannot tilt the tool puts the `five-axis-head`
@@ -324,7 +328,7 @@ impl Kind for AxisymKind {
         // A part's outline is found first (its own estimate bounds that: linear in triangles).
         let domain = domain_stage(j, ctx, &platform)?;
         let points = uniform::estimate(&platform.value, &domain.value, &j.points, width);
-        let path = tour::estimate(points.get("points") as usize, &j.path, uniform::spacing(&j.points, width));
+        let path = tour::estimate(points.get("points") as usize, &j.path, uniform::largest_spacing(&j.points, width));
         Ok(vec![crate::budget::Estimate::new("platform"), points, path])
     }
 
@@ -616,6 +620,19 @@ pub struct PointsSummary {
     pub ratio: f64,
     /// e / mean distance of the seed.
     pub seed_ratio: f64,
+    /// 2n-NN distances over each point's target spacing s(q) = n·e/ρ(q): standard deviation
+    /// of the seed (uniform: `seed_std_mm` / s).
+    #[serde(default)]
+    pub seed_rel_std: f64,
+    /// The same after repulsion.
+    #[serde(default)]
+    pub rel_std: f64,
+    /// 1 − rel_std / seed_rel_std.
+    #[serde(default)]
+    pub rel_std_reduction: f64,
+    /// Whether the density is graded.
+    #[serde(default)]
+    pub graded: bool,
 }
 
 /// The `path` stage's typed report.
@@ -651,6 +668,10 @@ fn points_report(d: &uniform::Distribution, o: &uniform::Options, width: f64) ->
         std_reduction: reduction / 100.0,
         ratio: m.ratio,
         seed_ratio: s.ratio,
+        seed_rel_std: s.rel_std,
+        rel_std: m.rel_std,
+        rel_std_reduction: if s.rel_std > 0.0 { 1.0 - m.rel_std / s.rel_std } else { 0.0 },
+        graded: d.graded.is_some(),
     };
     let mut r = StageReport::new("points", "Spreading uniform points (geodesic repulsion)", &summary)
         .metric("area", "Surface area of Ω", d.area_mm2, "mm²", "The true area A_Σ of the patch on the curved platform.")
@@ -661,8 +682,12 @@ fn points_report(d: &uniform::Distribution, o: &uniform::Options, width: f64) ->
         .metric("std_reduction", "Spread reduced by", reduction, "%", "How much repulsion evened the spacing (the paper: 71.7 %, 71.6 %, 44 % on its three cases).")
         .metric("mean", "Mean neighbour distance", m.nn_mean_mm, "mm", "Mean distance to the 2n nearest neighbours after repulsion.")
         .metric("ratio", "e / mean distance", 100.0 * m.ratio, "%", "Line width over the mean spacing: the density the points give, to compare with the command density.")
-        .metric("command", "Command density ρ_c", 100.0 * o.density, "%", "The density asked for.");
+        .metric("command", "Command density ρ_c", 100.0 * o.density, "%", if o.grading.is_some() { "The density asked for at the near end of the grading." } else { "The density asked for." });
+    if let (Some(g), Some(gp)) = (&o.grading, &d.graded) {
+        r = graded_report(r, d, g, gp);
+    }
     let it: Vec<f64> = (0..d.iterations.len()).map(|i| (i + 1) as f64).collect();
+    let h = if o.grading.is_some() { "h = 4·s(q) per point".to_string() } else { format!("h = {:.3} mm", 4.0 * o.rasters as f64 * width / o.density) };
     r.plots.push(Plot {
         key: "energy".into(),
         title: "Normalised repulsion energy per iteration".into(),
@@ -675,7 +700,7 @@ fn points_report(d: &uniform::Distribution, o: &uniform::Options, width: f64) ->
     let rank = |v: &[f64]| -> Vec<f64> { (0..v.len()).map(|i| i as f64).collect() };
     r.plots.push(Plot {
         key: "kdf".into(),
-        title: format!("Kernel density per point, sorted (h = {:.3} mm)", 4.0 * o.rasters as f64 * width / o.density),
+        title: format!("Kernel density per point, sorted ({h})"),
         kind: PlotKind::Line,
         x: Axis::new("Point (sorted)", ""),
         y: Axis::new("Kernel density", "1/mm²"),
@@ -697,6 +722,71 @@ fn points_report(d: &uniform::Distribution, o: &uniform::Options, width: f64) ->
 
 /// Bins of the neighbour-distance histogram.
 const HISTOGRAM_BINS: usize = 30;
+
+/// Mean of `values` per bin of `coord` over `range` (`bins` bins; NaN where a bin is empty).
+fn binned_mean(coord: &[f64], values: &[f64], range: [f64; 2], bins: usize) -> Vec<f64> {
+    let (mut sum, mut count) = (vec![0.0; bins], vec![0usize; bins]);
+    let w = (range[1] - range[0]) / bins as f64;
+    for (c, v) in coord.iter().zip(values) {
+        let k = if w > 0.0 { (((c - range[0]) / w).max(0.0) as usize).min(bins - 1) } else { 0 };
+        sum[k] += v;
+        count[k] += 1;
+    }
+    sum.iter().zip(&count).map(|(s, &c)| if c > 0 { s / c as f64 } else { f64::NAN }).collect()
+}
+
+/// The graded run's rows and plots: spread of the distances against the local target, the
+/// commanded density against the measured one along the grading coordinate.
+fn graded_report(mut r: StageReport, d: &uniform::Distribution, g: &crate::axisym::grading::Grading, gp: &uniform::GradedPoints) -> StageReport {
+    let (s, m) = (&d.seed_metrics, &d.metrics);
+    let reduction = if s.rel_std > 0.0 { 100.0 * (1.0 - m.rel_std / s.rel_std) } else { 0.0 };
+    r = r
+        .metric("end_density", "End density", 100.0 * g.density_to, "%", "The density asked for at the far end of the grading.")
+        .metric("rel_std_seed", "Spread against the target, seed", 100.0 * s.rel_std, "%", "Standard deviation of the 2n-nearest-neighbour distances, each over its point's target spacing n·e/ρ(q), before repulsion.")
+        .metric("rel_std", "Spread against the target, result", 100.0 * m.rel_std, "%", "The same after repulsion: lower follows the graded target more evenly.")
+        .metric("rel_std_reduction", "Spread against the target reduced by", reduction, "%", "How much repulsion evened the spacing relative to the graded target.")
+        .metric("rel_mean", "Mean distance over target", m.rel_mean, "", "Mean of the neighbour distances over their target spacings: near 1 (a hexagonal packing gives 1.07).");
+    let (label, unit) = gp.label;
+    let lo = gp.commanded.first().map_or(0.0, |c| c[0]);
+    let hi = gp.commanded.last().map_or(0.0, |c| c[0]);
+    let bins = gp.commanded.len().saturating_sub(1).max(1);
+    let centres: Vec<f64> = (0..bins).map(|k| lo + (hi - lo) * (k as f64 + 0.5) / bins as f64).collect();
+    let pct = |v: Vec<f64>| v.into_iter().map(|x| 100.0 * x).collect::<Vec<f64>>();
+    r.plots.push(Plot {
+        key: "graded_density".into(),
+        title: format!("Commanded and measured density along {label}"),
+        kind: PlotKind::Line,
+        x: Axis::new(label, unit),
+        y: Axis::new("Density", "%"),
+        group: None,
+        series: vec![
+            Series::xy("commanded ρ", gp.commanded.iter().map(|c| c[0]).collect(), pct(gp.commanded.iter().map(|c| c[1]).collect())),
+            Series::xy("seed (n·e / mean 2n-NN distance)", centres.clone(), pct(binned_mean(&gp.seed, &s.local_density, [lo, hi], bins))),
+            Series::xy("repulsion (n·e / mean 2n-NN distance)", centres, pct(binned_mean(&gp.points, &m.local_density, [lo, hi], bins))),
+        ],
+    });
+    let rank = |v: &[f64]| -> Vec<f64> { (0..v.len()).map(|i| i as f64).collect() };
+    r.plots.push(Plot {
+        key: "kdf_relative".into(),
+        title: "Kernel density over the graded target's, sorted".into(),
+        kind: PlotKind::Line,
+        x: Axis::new("Point (sorted)", ""),
+        y: Axis::new("KDF / target", ""),
+        group: None,
+        series: vec![Series::xy("seed", rank(&s.kdf_relative_sorted), s.kdf_relative_sorted.clone()), Series::xy("repulsion", rank(&m.kdf_relative_sorted), m.kdf_relative_sorted.clone())],
+    });
+    let (edges, seed_counts, counts) = crate::axisym::metrics::shared_histogram(&s.nn_relative, &m.nn_relative, HISTOGRAM_BINS);
+    r.plots.push(Plot {
+        key: "nn_relative".into(),
+        title: "Neighbour distances over the local target spacing".into(),
+        kind: PlotKind::Histogram,
+        x: Axis::new("Distance / s(q)", ""),
+        y: Axis::new("Pairs", ""),
+        group: None,
+        series: vec![Series::xy("seed", edges.clone(), seed_counts), Series::xy("repulsion", edges, counts)],
+    });
+    r
+}
 
 fn path_report(t: &tour::Tour, d: &uniform::Distribution) -> StageReport {
     let saving = if t.nn_length_mm > 0.0 { 100.0 * (1.0 - t.length_mm / t.nn_length_mm) } else { 0.0 };

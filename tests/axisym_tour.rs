@@ -267,3 +267,33 @@ fn rotary_dynamics_on_the_equator() {
     println!("barrel 100 points at 50 mm/s: {d:?}");
     assert!(d.max_angular_speed_deg_s > 0.0 && d.max_angular_speed_deg_s.is_finite());
 }
+
+#[test]
+fn the_path_goes_around_a_hole() {
+    use weft::axisym::domain::Domain;
+    use weft::axisym::uniform;
+    let p = Platform::barrel();
+    let d = Domain::Polygon { points: vec![[0.8, 0.0], [1.2, 0.0], [1.2, 1.0], [0.8, 1.0]], holes: vec![vec![[0.9, 0.4], [1.1, 0.4], [1.1, 0.6], [0.9, 0.6]]] };
+    let pts = uniform::distribute(&p, &d, &uniform::Options { iterations: 20, ..uniform::Options::default() }, 0.4, 1, &mut |_| {}).unwrap().points;
+    let dist = geo_dist(&p);
+    let crosses = |a: [f64; 2], b: [f64; 2]| d.segment_crosses_hole(a, b);
+    let plain = plan(&p, &pts, &Options::default(), &dist, None, &mut |_| {}).unwrap();
+    let around = plan(&p, &pts, &Options::default(), &dist, Some(&crosses), &mut |_| {}).unwrap();
+    let over = |t: &Tour| t.samples.iter().filter(|s| s.windows(2).any(|w| crosses(w[0], w[1]))).count();
+    println!(
+        "{} points around a hole: {} segments over it without avoidance ({:.1} mm), {} with ({:.1} mm, {} crossings left)",
+        pts.len(),
+        over(&plain),
+        plain.length_mm,
+        around.hole_crossings,
+        around.length_mm,
+        around.crossings_left
+    );
+    assert_eq!(plain.hole_crossings, 0, "not counted without avoid");
+    assert!(over(&plain) > 0, "the plain path should cross the hole somewhere");
+    assert_eq!(around.hole_crossings, over(&around));
+    assert!(around.hole_crossings < over(&plain) && around.hole_crossings <= 1, "{}", around.hole_crossings);
+    assert_eq!(around.order.len(), pts.len());
+    // The lengths leave the penalty out: a few percent longer at most.
+    assert!(around.length_mm < 1.1 * plain.length_mm, "{} vs {}", around.length_mm, plain.length_mm);
+}

@@ -18,7 +18,8 @@
 //!
 //! Holes: a caller may pass `avoid(a, b)` (true when the straight map segment a → b crosses a
 //! hole of the domain). Such a pair costs [`HOLE_PENALTY_MM`] more in the nearest-neighbour
-//! choice and in 2-opt, so both route around holes where they can; the segments whose sampled
+//! choice and in 2-opt (whose candidate lists skip neighbours across a hole), so both route
+//! around holes where they can; the segments whose sampled
 //! geodesic still crosses a hole are counted in [`Tour::hole_crossings`] (reported, not
 //! hidden). The lengths reported leave the penalty out.
 //!
@@ -312,7 +313,15 @@ pub fn plan(p: &dyn Profile, points: &[[f64; 2]], o: &Options, dist: &dyn Fn([f6
     let k = o.neighbours.min(n - 1);
     let mut cand: Vec<usize> = Vec::with_capacity(n * k);
     for i in 0..n {
-        cand.extend(kd.knn(xyz[i], i, k));
+        if avoid.is_none() {
+            cand.extend(kd.knn(xyz[i], i, k));
+            continue;
+        }
+        // Beside a hole the nearest points across it are useless candidates: draw from 4k
+        // and keep the k nearest reachable without crossing (then the others, if short).
+        let wide = kd.knn(xyz[i], i, (4 * k).min(n - 1));
+        let (ok, over): (Vec<usize>, Vec<usize>) = wide.into_iter().partition(|&c| !crosses(i, c));
+        cand.extend(ok.into_iter().chain(over).take(k));
     }
     let cand_d: Vec<f64> = (0..n * k).map(|e| raw(e / k, cand[e])).collect();
     check_bad()?;
@@ -410,8 +419,9 @@ pub fn plan(p: &dyn Profile, points: &[[f64; 2]], o: &Options, dist: &dyn Fn([f6
     let found = crossings(&samples);
     let mut now = found.clone();
     for _ in 0..o.uncross_rounds {
-        // Two consecutive segments cannot be swapped by 2-opt: take the first other pair.
-        let Some(&(i, j)) = now.iter().find(|(i, j)| *j > *i + 1) else { break };
+        // Two consecutive segments cannot be swapped by 2-opt: take the first other pair
+        // whose swap does not bring in a segment over a hole (without holes: the first).
+        let Some(&(i, j)) = now.iter().find(|&&(i, j)| j > i + 1 && !crosses(order[i], order[j]) && (j + 1 >= order.len() || !crosses(order[i + 1], order[j + 1]))) else { break };
         order[i + 1..=j].reverse();
         (geodesic_length_mm, samples) = build(&order, &mut cache)?;
         now = crossings(&samples);

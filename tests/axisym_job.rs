@@ -244,6 +244,14 @@ fn three_layers_stack_along_the_normal() {
     let sets = ["job.layers=3".to_string()];
     let d = example("barrel-omega1").with_overrides(&sets).unwrap();
     let h = d.job.value["layer_height_mm"].as_f64().unwrap_or(0.2);
+    // The estimate states every layer's points before running (the sum, refused as a whole).
+    let plan = pipeline::estimate(&weft::jobs::Registry::builtin(), &mut weft::pipeline::Cache::disabled(), &d, &Files::default()).unwrap();
+    let stated = plan.stages.iter().find(|e| e.stage == "axisym_uniform").unwrap().get("points");
+    assert!((stated - 3.0 * 538.0).abs() <= 0.03 * 3.0 * 538.0, "{stated}");
+    let many = example("barrel-omega1").with_overrides(&["job.layers=100".to_string(), "job.points.density=1".to_string()]).unwrap();
+    let plan = pipeline::estimate(&weft::jobs::Registry::builtin(), &mut weft::pipeline::Cache::disabled(), &many, &Files::default()).unwrap();
+    eprintln!("100 layers at 100 %: {:?}", plan.refusal);
+    assert!(plan.refusal.is_some());
     // The G-code: three extrusion paths (one pass per layer).
     let out = run(&d);
     assert_eq!(out.report.analysis.extrusion_paths, 3);

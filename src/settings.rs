@@ -27,6 +27,10 @@ pub enum Kind {
     /// A list of 2-D points `[[a, b], …]` (a control polygon, a domain outline); `min`/`max`
     /// bound every number, `max_len` the number of points. The page edits it as lines `a b`.
     Points,
+    /// Several closed rings of 2-D points `[[[a, b], …], …]` (holes of a domain); `min`/`max`
+    /// bound every number, `max_len` the points of all rings together. The page edits it as
+    /// lines `a b`, a blank line between rings.
+    Rings,
     /// An optional block, present or absent (a checkbox); `default` is its JSON when switched on.
     Section,
 }
@@ -121,6 +125,11 @@ pub const fn vec3(path: &'static str, section: &'static str, label: &'static str
 #[allow(clippy::too_many_arguments)] // a table row constructor: one argument per column
 pub const fn points(path: &'static str, section: &'static str, label: &'static str, unit: &'static str, min: f64, max: f64, max_points: usize, doc: &'static str) -> Field {
     Field { path, section, label, unit, kind: Kind::Points, min: Some(min), max: Some(max), step: None, choices: &[], choice_docs: &[], percent: false, doc, default: None, when: None, widget: None, max_len: Some(max_points) }
+}
+/// Several rings of 2-D points, each number in `min..=max`, at most `max_points` in all.
+#[allow(clippy::too_many_arguments)] // a table row constructor: one argument per column
+pub const fn rings(path: &'static str, section: &'static str, label: &'static str, unit: &'static str, min: f64, max: f64, max_points: usize, doc: &'static str) -> Field {
+    Field { path, section, label, unit, kind: Kind::Rings, min: Some(min), max: Some(max), step: None, choices: &[], choice_docs: &[], percent: false, doc, default: None, when: None, widget: None, max_len: Some(max_points) }
 }
 /// `f` with one line of plain words per choice.
 pub const fn choice_docs(mut f: Field, docs: &'static [&'static str]) -> Field {
@@ -229,6 +238,7 @@ impl Field {
             Kind::Choice => format!("one of: {}", self.choices.join(", ")),
             Kind::Vec3 => format!("three numbers [x, y, z], each from {lo} to {hi}{unit}"),
             Kind::Points => format!("a list of points [[a, b], …] (at most {}), each number from {lo} to {hi}{unit}", self.max_len.unwrap_or(MAX_POINTS)),
+            Kind::Rings => format!("a list of rings [[[a, b], …], …] (at most {} points in all), each number from {lo} to {hi}{unit}", self.max_len.unwrap_or(MAX_POINTS)),
             Kind::Section => "a group of settings { … }, or left out to switch it off".into(),
         }
     }
@@ -238,7 +248,7 @@ fn check_number(path: &str, v: f64, f: &Field, out: &mut Vec<Problem>) {
     let (lo, hi) = (f.min.unwrap_or(f64::MIN), f.max.unwrap_or(f64::MAX));
     if !v.is_finite() || v < lo || v > hi {
         // A Vec3 component is one number of the row's range.
-        let f = Field { kind: if matches!(f.kind, Kind::Vec3 | Kind::Points) { Kind::Number } else { f.kind }, min: Some(lo), max: Some(hi), ..*f };
+        let f = Field { kind: if matches!(f.kind, Kind::Vec3 | Kind::Points | Kind::Rings) { Kind::Number } else { f.kind }, min: Some(lo), max: Some(hi), ..*f };
         let message = format!("{} is out of range: {} must be {}", fmt(v), f.label, f.must_be());
         out.push(Problem { path: path.to_string(), message });
     } else if f.kind == Kind::Integer && v.fract() != 0.0 {
@@ -301,17 +311,20 @@ fn check_one(root: &Value, path: &str, f: &Field, out: &mut Vec<Problem>) {
                 out.push(Problem { path: path.to_string(), message: format!("{} has {} points; at most {most} are allowed", f.label, points.len()) });
                 return;
             }
-            for (i, p) in points.iter().enumerate() {
-                match p.as_array() {
-                    Some(xy) if xy.len() == 2 => {
-                        for (k, x) in xy.iter().enumerate() {
-                            match x.as_f64() {
-                                Some(x) => check_number(&format!("{path}.{i}.{k}"), x, f, out),
-                                None => not_a_number(format!("{path}.{i}.{k}"), out),
-                            }
-                        }
-                    }
-                    _ => out.push(Problem { path: format!("{path}.{i}"), message: format!("point {} of {} must be two numbers [a, b]", i + 1, f.label) }),
+            check_pairs(path, points, f, "", out);
+        }
+        Kind::Rings => {
+            let Some(rings) = v.as_array() else { return };
+            let most = f.max_len.unwrap_or(MAX_POINTS);
+            let total: usize = rings.iter().map(|r| r.as_array().map_or(0, Vec::len)).sum();
+            if total > most {
+                out.push(Problem { path: path.to_string(), message: format!("{} has {total} points in all; at most {most} are allowed", f.label) });
+                return;
+            }
+            for (r, ring) in rings.iter().enumerate() {
+                match ring.as_array() {
+                    Some(points) => check_pairs(&format!("{path}.{r}"), points, f, &format!(" of ring {}", r + 1), out),
+                    None => out.push(Problem { path: format!("{path}.{r}"), message: format!("ring {} of {} must be a list of points [[a, b], …]", r + 1, f.label) }),
                 }
             }
         }
@@ -330,6 +343,23 @@ fn check_one(root: &Value, path: &str, f: &Field, out: &mut Vec<Problem>) {
             }
         }
         _ => {}
+    }
+}
+
+/// Each of `points` must be two numbers within the row's range (`of` names the ring).
+fn check_pairs(path: &str, points: &[Value], f: &Field, of: &str, out: &mut Vec<Problem>) {
+    for (i, p) in points.iter().enumerate() {
+        match p.as_array() {
+            Some(xy) if xy.len() == 2 => {
+                for (k, x) in xy.iter().enumerate() {
+                    match x.as_f64() {
+                        Some(x) => check_number(&format!("{path}.{i}.{k}"), x, f, out),
+                        None => out.push(Problem { path: format!("{path}.{i}.{k}"), message: format!("{} must be a finite number", f.label) }),
+                    }
+                }
+            }
+            _ => out.push(Problem { path: format!("{path}.{i}"), message: format!("point {}{of} of {} must be two numbers [a, b]", i + 1, f.label) }),
+        }
     }
 }
 
@@ -371,6 +401,20 @@ mod tests {
         assert!(out[1].message.contains("whole number"), "{}", out[1].message);
         let local = check(&serde_json::json!({"a": -1.0}), F, "job.x");
         assert_eq!(local[0].path, "job.x.a");
+    }
+
+    #[test]
+    fn rings_are_checked_point_by_point() {
+        const F: &[Field] = &[rings("h", "S", "Holes", "", -1.0, 1.0, 5, "")];
+        let ok = check(&serde_json::json!({"h": [[[0, 0], [0.5, 0], [0, 0.5]]]}), F, "p");
+        assert!(ok.is_empty(), "{ok:?}");
+        let out = check(&serde_json::json!({"h": [[[0, 0], [2, 0], [0, 0.5]], [[0, 0, 1]], 3]}), F, "p");
+        assert_eq!(out.len(), 3, "{out:?}");
+        assert_eq!(out[0].path, "p.h.0.1.0");
+        assert!(out[1].message.contains("point 1 of ring 2"), "{}", out[1].message);
+        assert!(out[2].message.contains("ring 3"), "{}", out[2].message);
+        let many = check(&serde_json::json!({"h": [[[0, 0], [0, 0], [0, 0]], [[0, 0], [0, 0], [0, 0]]]}), F, "p");
+        assert!(many[0].message.contains("6 points in all"), "{many:?}");
     }
 
     #[test]

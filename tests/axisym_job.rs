@@ -332,3 +332,218 @@ fn bad_grading_is_named() {
     let off = example("barrel-graded").with_overrides(&["job.points.grading=null".to_string()]).unwrap();
     assert_eq!(off.job.value["points"], d.job.value["points"]);
 }
+
+/// (u, θ) points of layer `layer` after repulsion, read from the map view (each point is a
+/// cross: its horizontal bar is the first of its two segments).
+fn map_points(d: &Design, files: &Files, cache: &mut weft::pipeline::Cache, layer: usize) -> (Vec<[f64; 2]>, serde_json::Value, usize) {
+    let v = pipeline::inspect(&weft::jobs::Registry::builtin(), cache, d, files, "map", 3 * layer + 1).unwrap();
+    let lattice = weft::geom::Feature::Lattice.code() as f32;
+    let segs: Vec<&[f32]> = v.data.chunks(v.stride).filter(|s| s[4] == lattice).collect();
+    let pts = segs.chunks(2).map(|c| [c[0][1] as f64, 0.5 * (c[0][0] + c[0][2]) as f64]).collect();
+    (pts, v.meta, v.count)
+}
+
+/// Splits poses CSV rows by layer: the tip lies (k + 1)·h out along the normal from the
+/// barrel; returns the layer of each row and the barrel point under it.
+fn layer_of_rows(rows: &[Vec<f64>], h: f64, layers: usize) -> Vec<(usize, [f64; 3], [f64; 2])> {
+    use weft::axisym::platform::{normal, position, Profile};
+    let p = weft::axisym::Platform::barrel();
+    rows.iter()
+        .map(|r| {
+            let theta = r[4].atan2(r[3]);
+            // For each layer k, the point (k + 1)·h back along the normal; the barrel's height
+            // falls from 50 (u = 0) to 0 (u = 2): bisect u on it, then compare the point
+            // there (the CSV has 3 decimals in mm).
+            let fit = |k: usize| {
+                let b: [f64; 3] = std::array::from_fn(|i| r[i] - r[3 + i] * (k + 1) as f64 * h);
+                let (mut lo, mut hi) = (0.0, 2.0);
+                for _ in 0..80 {
+                    let m = 0.5 * (lo + hi);
+                    if p.jet(m).z[0] > b[2] { lo = m } else { hi = m }
+                }
+                let u = 0.5 * (lo + hi);
+                let on = position(&p, u, theta);
+                let miss = (0..3).map(|i| (on[i] - b[i]).abs()).fold(0.0, f64::max);
+                (miss, on, [u, theta])
+            };
+            let (k, (miss, b, q)) = (0..layers).map(|k| (k, fit(k))).min_by(|a, b| a.1 .0.total_cmp(&b.1 .0)).unwrap();
+            assert!(miss < 2e-3, "row {r:?}: no whole number of layer heights out from the barrel (best layer {k}, {miss} mm off)");
+            // The tool axis is the platform's normal there (to the CSV's digits and the u the
+            // rounded height gives).
+            let n = normal(&p, q[0], theta);
+            assert!((0..3).all(|i| (n[i] - r[3 + i]).abs() < 1e-3), "{r:?}: axis {n:?}");
+            (k, b, q)
+        })
+        .collect()
+}
+
+#[test]
+fn three_layers_stack_along_the_normal() {
+    let sets = ["job.layers=3".to_string()];
+    let d = example("barrel-omega1").with_overrides(&sets).unwrap();
+    let h = d.job.value["layer_height_mm"].as_f64().unwrap_or(0.2);
+    // The estimate states every layer's points before running (the sum, refused as a whole).
+    let plan = pipeline::estimate(&weft::jobs::Registry::builtin(), &mut weft::pipeline::Cache::disabled(), &d, &Files::default()).unwrap();
+    let stated = plan.stages.iter().find(|e| e.stage == "axisym_uniform").unwrap().get("points");
+    assert!((stated - 3.0 * 538.0).abs() <= 0.03 * 3.0 * 538.0, "{stated}");
+    let many = example("barrel-omega1").with_overrides(&["job.layers=100".to_string(), "job.points.density=1".to_string()]).unwrap();
+    let plan = pipeline::estimate(&weft::jobs::Registry::builtin(), &mut weft::pipeline::Cache::disabled(), &many, &Files::default()).unwrap();
+    eprintln!("100 layers at 100 %: {:?}", plan.refusal);
+    assert!(plan.refusal.is_some());
+    // The G-code: three extrusion paths (one pass per layer).
+    let out = run(&d);
+    assert_eq!(out.report.analysis.extrusion_paths, 3);
+    let one: PointsSummary = run(&example("barrel-omega1")).report.stage("points").unwrap();
+    let points: PointsSummary = out.report.stage("points").unwrap();
+    assert_eq!(points, one, "layer 0 is the one-layer job's");
+    let report = serde_json::to_value(&out.report).unwrap();
+    let path = report["stages"].as_array().unwrap().iter().find(|s| s["stage"] == "path").unwrap();
+    let table = path["tables"].as_array().unwrap().iter().find(|t| t["key"] == "layers").unwrap();
+    let rows = table["rows"].as_array().unwrap();
+    assert_eq!(rows.len(), 3);
+    for (k, r) in rows.iter().enumerate() {
+        eprintln!("layer table row {k}: {}", r["cells"]);
+        assert_eq!(r["cells"][0], k + 1);
+        assert!((r["cells"][1].as_f64().unwrap() - k as f64 * h).abs() < 1e-12);
+    }
+
+    // The poses, read back: each layer's tips (k + 1)·h out along the barrel's normal, the
+    // layers in order, each inside Ω.
+    let csv_sets = ["job.layers=3".to_string(), "printer.flavor=poses_csv".to_string(), "printer.machine.kind=cartesian".to_string()];
+    let csv_design = example("barrel-omega1").with_overrides(&csv_sets).unwrap();
+    let csv = run(&csv_design).gcode;
+    let rows: Vec<Vec<f64>> = csv.lines().filter(|l| !l.starts_with(';') && !l.is_empty()).skip(1).map(|l| l.split(',').map(|f| f.parse().unwrap()).collect()).collect();
+    let layers = layer_of_rows(&rows, h, 3);
+    assert!(layers.windows(2).all(|w| w[1].0 >= w[0].0), "layers out of order");
+    for k in 0..3 {
+        let n = layers.iter().filter(|l| l.0 == k).count();
+        assert!(n > 500, "layer {k}: {n} poses");
+    }
+    for (_, _, q) in &layers {
+        assert!(q[0] > 0.8 - 1e-3 && q[0] < 1.2 + 1e-3 && q[1] > -1e-3 && q[1] < 1.0 + 1e-3, "{q:?} outside Ω");
+    }
+    // Layer k + 1 starts where layer k ended: the nearest of its points, well under a spacing.
+    for k in 0..2 {
+        let last = layers.iter().rfind(|l| l.0 == k).unwrap().1;
+        let first = layers.iter().find(|l| l.0 == k + 1).unwrap().1;
+        let gap = ((last[0] - first[0]).powi(2) + (last[1] - first[1]).powi(2) + (last[2] - first[2]).powi(2)).sqrt();
+        eprintln!("layer {k} ends {gap:.3} mm (on the platform) from where layer {} starts", k + 1);
+        assert!(gap < 0.8, "{gap}");
+    }
+
+    // Each layer's own points (the map view steps through them), inside Ω, N from its area.
+    let mut cache = weft::pipeline::Cache::new();
+    let files = Files::default();
+    let mut seen = Vec::new();
+    for k in 0..3 {
+        let (pts, meta, count) = map_points(&d, &files, &mut cache, k);
+        assert_eq!(count, 9);
+        assert_eq!(meta["caption"], format!("layer {} of 3: after repulsion", k + 1));
+        assert!(pts.iter().all(|q| q[0] >= 0.8 - 1e-6 && q[0] <= 1.2 + 1e-6 && q[1] >= -1e-6 && q[1] <= 1.0 + 1e-6));
+        // The outer layers are a little larger (radius + k·h): never fewer points.
+        assert!(pts.len() >= one.points, "layer {k}: {} points", pts.len());
+        seen.push(pts);
+    }
+    assert_ne!(seen[0], seen[1], "layers are seeded apart");
+}
+
+/// A square tube along x (radially through the barrel's equator): outer y, z half-width 5 mm,
+/// inner 2.5 mm, from x = 15 to 35 mm.
+fn square_tube() -> weft::geom::Mesh {
+    let (o, i, zc) = (5.0f32, 2.5f32, 25.0f32);
+    let mut m = weft::geom::Mesh { vertices: Vec::new(), triangles: Vec::new() };
+    // Square rings at each end: outer corners 0..4, inner 4..8 (per end).
+    for x in [15.0f32, 35.0] {
+        for r in [o, i] {
+            for (y, z) in [(-r, -r), (r, -r), (r, r), (-r, r)] {
+                m.vertices.push([x, y, zc + z]);
+            }
+        }
+    }
+    let mut quad = |a: u32, b: u32, c: u32, d: u32| {
+        m.triangles.push([a, b, c]);
+        m.triangles.push([a, c, d]);
+    };
+    for s in 0..4u32 {
+        let t = (s + 1) % 4;
+        quad(s, t, 8 + t, 8 + s); // outer wall
+        quad(4 + s, 12 + s, 12 + t, 4 + t); // inner wall
+        quad(s, 4 + s, 4 + t, t); // end x = 15
+        quad(8 + s, 8 + t, 12 + t, 12 + s); // end x = 35
+    }
+    m
+}
+
+#[test]
+fn a_part_with_a_hole_keeps_it_on_every_layer() {
+    let mut files = Files::default();
+    files.insert("tube.stl".into(), square_tube().to_stl_binary());
+    let sets = ["job.domain.kind=part".to_string(), "job.part={\"file\":{\"name\":\"tube.stl\"}}".to_string(), "job.layers=2".to_string()];
+    let d = example("barrel-omega1").with_overrides(&sets).unwrap();
+    let out = pipeline::run(&d, &files, &RunOptions { collect_preview: false }, &mut |_, _| {}).unwrap();
+    let domain: weft::axisym::domain::Domain = serde_json::from_value(out.report.stage_data("domain").unwrap().clone()).unwrap();
+    let holes = domain.holes();
+    assert_eq!(holes.len(), 1, "{domain:?}");
+    // The hole is the inner square: |θ| ≤ asin(2.5/25), u about the equator.
+    for q in &holes[0] {
+        // (The cut interpolates along the mesh's edges: a few µrad of slack.)
+        assert!(q[1].abs() <= (2.5f64 / 25.0).asin() + 1e-3 && (q[0] - 1.0).abs() < 0.3, "{q:?}");
+    }
+    let report = serde_json::to_value(&out.report).unwrap();
+    let dstage = report["stages"].as_array().unwrap().iter().find(|s| s["stage"] == "domain").unwrap();
+    let kept = dstage["metrics"].as_array().unwrap().iter().find(|m| m["key"] == "holes").unwrap();
+    assert_eq!(kept["label"], "Holes kept");
+    assert_eq!(kept["value"], 1.0);
+    let points: PointsSummary = out.report.stage("points").unwrap();
+    let path: PathSummary = out.report.stage("path").unwrap();
+    // Equation 4 on the area between the outline and the hole (about 100 − 25 mm²).
+    let want = points.area_mm2 * 0.25 / 0.16;
+    assert!((points.points as f64 - want).abs() <= 1.0 && points.area_mm2 > 60.0 && points.area_mm2 < 90.0, "{} points, {} mm²", points.points, points.area_mm2);
+    eprintln!("tube: area {:.2} mm², N {}, path {:.1} mm, {} segments over the hole", points.area_mm2, points.points, path.length_mm, path.hole_crossings);
+    // Segments still crossing the hole are hops without extrusion: one more printed path each.
+    let table = report["stages"].as_array().unwrap().iter().find(|s| s["stage"] == "path").unwrap()["tables"].as_array().unwrap().iter().find(|t| t["key"] == "layers").unwrap().clone();
+    let hops: usize = table["rows"].as_array().unwrap().iter().map(|r| r["cells"][6].as_u64().unwrap() as usize).sum();
+    assert!(hops >= path.hole_crossings && hops <= 8, "{hops} hops");
+    // (A hop at a path's end or two in a row add no path.)
+    assert!((2..=2 + hops).contains(&out.report.analysis.extrusion_paths), "{} paths, {hops} hops", out.report.analysis.extrusion_paths);
+    // Read back from the toolpath: no printed segment's middle lies in the hole (in the map of
+    // the platform: θ from x, y; u from the height, monotone on the barrel).
+    // The G-code read back by the analyzer (the five-axis head's origin is the bed centre and
+    // its pivot 0: X Y Z are the tip).
+    assert_eq!(d.printer.origin, weft::gcode::Origin::Center);
+    let preview = pipeline::run(&d, &files, &RunOptions { collect_preview: true }, &mut |_, _| {}).unwrap().preview.unwrap();
+    let hole = weft::axisym::domain::Domain::Polygon { points: holes[0].clone(), holes: Vec::new() };
+    let barrel = weft::axisym::Platform::barrel();
+    let u_of = |z: f64| {
+        use weft::axisym::platform::Profile;
+        let (mut lo, mut hi) = (0.0, 2.0);
+        for _ in 0..60 {
+            let m = 0.5 * (lo + hi);
+            if barrel.jet(m).z[0] > z { lo = m } else { hi = m }
+        }
+        0.5 * (lo + hi)
+    };
+    let c = holes[0].iter().fold([0.0, 0.0], |s, v| [s[0] + v[0] / holes[0].len() as f64, s[1] + v[1] / holes[0].len() as f64]);
+    let mut printed = 0;
+    for seg in preview.positions.chunks(6) {
+        let m: Vec<f64> = (0..3).map(|i| 0.5 * (seg[i] + seg[3 + i]) as f64).collect();
+        // The tip is 0.2–0.4 mm out along a near-horizontal normal: z is the platform's.
+        let q = [u_of(m[2]), m[1].atan2(m[0])];
+        // 80 % of the hole: the cut's slack and the tip's offset stay out of the test.
+        let q80 = [c[0] + (q[0] - c[0]) / 0.8, c[1] + (q[1] - c[1]) / 0.8];
+        assert!(!hole.contains(q80), "a printed segment at (u, θ) = {q:?} lies over the hole");
+        printed += 1;
+    }
+    assert!(printed > 100);
+    // No point of either layer in the hole (the second layer's domain is its own contour).
+    let mut cache = weft::pipeline::Cache::new();
+    for k in 0..2 {
+        let (pts, _, _) = map_points(&d, &files, &mut cache, k);
+        assert!(!pts.is_empty());
+        // Layer 1's hole is a touch narrower in θ (radius 25.2 mm): test the middle 90 %.
+        let c = holes[0].iter().fold([0.0, 0.0], |s, q| [s[0] + q[0] / holes[0].len() as f64, s[1] + q[1] / holes[0].len() as f64]);
+        let shrunk = holes[0].iter().map(|q| [c[0] + 0.9 * (q[0] - c[0]), c[1] + 0.9 * (q[1] - c[1])]).collect();
+        let inner = weft::axisym::domain::Domain::Polygon { points: shrunk, holes: Vec::new() };
+        assert!(pts.iter().all(|q| !inner.contains(*q)), "layer {k}: a point in the hole");
+    }
+}

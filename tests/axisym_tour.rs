@@ -82,7 +82,7 @@ fn brute_crossings(s: &[Vec<[f64; 2]>]) -> usize {
 fn run(p: &Platform, pts: &[[f64; 2]], o: &Options, d: &dyn Fn([f64; 2], [f64; 2]) -> f64, label: &str) -> Tour {
     let t0 = Instant::now();
     let mut last = -1.0f32;
-    let tour = plan(p, pts, o, d, &mut |f| {
+    let tour = plan(p, pts, o, d, None, &mut |f| {
         assert!(f >= last && (0.0..=1.0).contains(&f), "progress goes up within 0..=1");
         last = f;
     })
@@ -198,15 +198,15 @@ fn deterministic() {
     let p = Platform::hourglass();
     let pts = rect(150, [1.0, 3.0], [0.0, 1.0], 7);
     let d = chord_dist(&p);
-    let a = plan(&p, &pts, &Options::default(), &d, &mut |_| {}).unwrap();
-    let b = plan(&p, &pts, &Options::default(), &d, &mut |_| {}).unwrap();
+    let a = plan(&p, &pts, &Options::default(), &d, None, &mut |_| {}).unwrap();
+    let b = plan(&p, &pts, &Options::default(), &d, None, &mut |_| {}).unwrap();
     assert_eq!(a, b);
 }
 
 #[test]
 fn barrel_equator_normal_is_plus_x() {
     let p = Platform::barrel();
-    let t = plan(&p, &[[1.0, 0.0]], &Options::default(), &chord_dist(&p), &mut |_| {}).unwrap();
+    let t = plan(&p, &[[1.0, 0.0]], &Options::default(), &chord_dist(&p), None, &mut |_| {}).unwrap();
     assert_eq!(t.order, [0]);
     assert!(t.samples.is_empty());
     let n = t.poses[0].normal;
@@ -218,7 +218,7 @@ fn barrel_equator_normal_is_plus_x() {
 fn bad_input_is_refused_with_typed_errors() {
     let p = Platform::barrel();
     let d = chord_dist(&p);
-    let go = |pts: &[[f64; 2]], o: &Options| plan(&p, pts, o, &d, &mut |_| {});
+    let go = |pts: &[[f64; 2]], o: &Options| plan(&p, pts, o, &d, None, &mut |_| {});
     let o = Options::default();
     assert_eq!(go(&[], &o), Err(Error::NoPoints));
     assert_eq!(go(&[[1.0, 0.0], [f64::NAN, 0.0]], &o), Err(Error::NotFinite { index: 1 }));
@@ -231,13 +231,13 @@ fn bad_input_is_refused_with_typed_errors() {
     assert!(matches!(go(&[[1.0, 0.0]], &Options { start: Start::Nearest { u: f64::NAN, theta: 0.0 }, ..o.clone() }), Err(Error::BadOption { .. })));
     assert!(matches!(go(&[[1.0, 0.0]], &Options { neighbours: 0, ..o.clone() }), Err(Error::BadOption { .. })));
     let nan = |_: [f64; 2], _: [f64; 2]| f64::NAN;
-    assert!(matches!(plan(&p, &rect(20, [0.9, 1.1], [0.0, 1.0], 8), &o, &nan, &mut |_| {}), Err(Error::BadDistance { .. })));
+    assert!(matches!(plan(&p, &rect(20, [0.9, 1.1], [0.0, 1.0], 8), &o, &nan, None, &mut |_| {}), Err(Error::BadDistance { .. })));
     let many = vec![[1.0, 0.0]; tour::MAX_POINTS + 1];
     let e = go(&many, &o).unwrap_err();
     assert!(matches!(e, Error::OverBudget(_)) && e.to_string().contains("points in one tour"), "{e}");
     // Fine step over a long path: refused before the samples are allocated.
     let far = |_: [f64; 2], _: [f64; 2]| 1e4;
-    let e = plan(&p, &rect(200, [0.3, 1.7], [0.0, 6.0], 9), &Options { step_mm: 0.01, ..o.clone() }, &far, &mut |_| {}).unwrap_err();
+    let e = plan(&p, &rect(200, [0.3, 1.7], [0.0, 6.0], 9), &Options { step_mm: 0.01, ..o.clone() }, &far, None, &mut |_| {}).unwrap_err();
     assert!(e.to_string().contains("path samples"), "{e}");
     // Duplicate points are a valid (degenerate) input.
     let t = go(&[[1.0, 0.0], [1.0, 0.0], [1.05, 0.1]], &o).unwrap();
@@ -248,3 +248,35 @@ fn bad_input_is_refused_with_typed_errors() {
     assert!(serde_json::from_str::<Options>(r#"{"stepmm":1}"#).is_err());
 }
 
+#[test]
+fn the_path_goes_around_a_hole() {
+    use weft::axisym::domain::Domain;
+    use weft::axisym::uniform;
+    let p = Platform::barrel();
+    // A slit 9 mm long and 0.75 mm wide (about a spacing): a plain path hops over it often.
+    let d = Domain::Polygon { points: vec![[0.8, 0.0], [1.2, 0.0], [1.2, 1.0], [0.8, 1.0]], holes: vec![vec![[0.85, 0.485], [1.15, 0.485], [1.15, 0.515], [0.85, 0.515]]] };
+    let pts = uniform::distribute(&p, &d, &uniform::Options { iterations: 20, ..uniform::Options::default() }, 0.4, 1, &mut |_| {}).unwrap().points;
+    let dist = geo_dist(&p);
+    let crosses = |a: [f64; 2], b: [f64; 2]| d.segment_crosses_hole(a, b);
+    let plain = plan(&p, &pts, &Options::default(), &dist, None, &mut |_| {}).unwrap();
+    let around = plan(&p, &pts, &Options::default(), &dist, Some(&crosses), &mut |_| {}).unwrap();
+    let over = |t: &Tour| t.samples.iter().filter(|s| s.windows(2).any(|w| crosses(w[0], w[1]))).count();
+    println!(
+        "{} points around a hole: {} segments over it without avoidance ({:.1} mm), {} with ({:.1} mm, {} crossings left)",
+        pts.len(),
+        over(&plain),
+        plain.length_mm,
+        around.hole_crossings,
+        around.length_mm,
+        around.crossings_left
+    );
+    let chords = around.order.windows(2).filter(|w| crosses(pts[w[0]], pts[w[1]])).count();
+    println!("chords over the hole: {chords}");
+    assert_eq!(plain.hole_crossings, 0, "not counted without avoid");
+    assert!(over(&plain) > 0, "the plain path should cross the hole somewhere");
+    assert_eq!(around.hole_crossings, over(&around));
+    assert!(around.hole_crossings < over(&plain) && around.hole_crossings <= 1, "{}", around.hole_crossings);
+    assert_eq!(around.order.len(), pts.len());
+    // The lengths leave the penalty out: a few percent longer at most.
+    assert!(around.length_mm < 1.1 * plain.length_mm, "{} vs {}", around.length_mm, plain.length_mm);
+}

@@ -540,8 +540,9 @@ function buildField(f) {
         el.setAttribute("aria-label", `${f.label || f.path} ${"xyz"[i]}`);
       }
       break;
-    case "points": {
-      // A list of 2-D points, one "a b" pair per line.
+    case "points":
+    case "rings": {
+      // A list of 2-D points, one "a b" pair per line (rings: a blank line between rings).
       const el = make("textarea");
       el.rows = 6;
       el.spellcheck = false;
@@ -564,7 +565,7 @@ function buildField(f) {
     default:
       numeric(make("input"));
   }
-  if (f.kind !== "bool" && f.kind !== "section" && f.kind !== "text" && f.kind !== "points") {
+  if (f.kind !== "bool" && f.kind !== "section" && f.kind !== "text" && f.kind !== "points" && f.kind !== "rings") {
     const unit = document.createElement("span"); // empty too, so the inputs line up
     unit.className = "unit";
     unit.textContent = f.percent ? "%" : f.unit ?? "";
@@ -604,9 +605,21 @@ function writeField(view, value) {
     const i = (f.choices ?? []).findIndex((c) => (typeof c === "object" && c !== null ? c.value ?? c.name : c) === value);
     if (view.doc && f.choice_docs?.[i]) view.doc.textContent = `${f.choice_docs[i]}`;
   } else if (f.kind === "vec3") inputs.forEach((el, i) => { el.value = Array.isArray(value) ? String(value[i]) : ""; });
-  else if (f.kind === "points") inputs[0].value = Array.isArray(value) ? value.map((p) => (Array.isArray(p) ? p.join(" ") : String(p))).join("\n") : "";
+  else if (f.kind === "points") inputs[0].value = pointLines(value);
+  else if (f.kind === "rings") inputs[0].value = Array.isArray(value) ? value.map(pointLines).join("\n\n") : "";
   else if (f.percent && typeof value === "number") inputs[0].value = String(Number((value * 100).toPrecision(12)));
   else inputs[0].value = value === undefined || value === null ? "" : String(value);
+}
+
+/** Points as lines "a b". */
+function pointLines(value) {
+  return Array.isArray(value) ? value.map((p) => (Array.isArray(p) ? p.join(" ") : String(p))).join("\n") : "";
+}
+
+/** Lines "a b" (commas or spaces) to points; a number that does not read is null. */
+function readPoints(text) {
+  return text.split("\n").map((l) => l.trim()).filter((l) => l !== "")
+    .map((l) => l.split(/[\s,;]+/).map((t) => (Number.isFinite(Number(t)) ? Number(t) : null)));
 }
 
 function readField({ f, inputs }) {
@@ -619,8 +632,9 @@ function readField({ f, inputs }) {
     case "vec3": return `[${inputs.map((el) => el.value.trim() || "null").join(",")}]`;
     // Lines "a b" (commas or spaces); a number that does not read is null, which the design
     // names with its point.
-    case "points": return JSON.stringify(inputs[0].value.split("\n").map((l) => l.trim()).filter((l) => l !== "")
-      .map((l) => l.split(/[\s,;]+/).map((t) => (Number.isFinite(Number(t)) ? Number(t) : null))));
+    case "points": return JSON.stringify(readPoints(inputs[0].value));
+    // Rings: blocks of such lines separated by blank lines.
+    case "rings": return JSON.stringify(inputs[0].value.split(/\n[ \t]*\n/).map(readPoints).filter((r) => r.length > 0));
     default: {
       const text = inputs[0].value.trim();
       // A percentage back to the fraction the design stores (anything else is left for the

@@ -13,6 +13,8 @@
 //!   Clairaut shooting first, Runge–Kutta shooting as the fallback.
 //! - [`grading`]: a command density that varies over Ω (linear in u, θ or the geodesic
 //!   distance from a centre), its local spacing and N = ∫ρ² dA/(n²e²) (the paper's future work).
+//! - [`offset`]: the platform offset along its normal (the surface a higher layer lies on),
+//!   exact to the third derivative, refused where it would fold.
 //! - [`tour`]: the infill path through given (u, θ) points (nearest neighbour + 2-opt, no
 //!   crossings in the map), sampled along geodesics into tool poses.
 //! - [`dynamics`]: the tool axis smoothed within a tilt for the rotary axes, and their speed
@@ -31,6 +33,7 @@ pub mod grading;
 pub mod platform;
 pub mod domain;
 pub mod metrics;
+pub mod offset;
 pub mod surface;
 #[cfg(test)]
 mod testing;
@@ -109,6 +112,32 @@ pub enum Error {
         t1: f64,
         /// Remaining miss, mm.
         residual_mm: f64,
+    },
+    /// An offset surface would fold (its height reaches a concave bend's radius of curvature).
+    #[error("the platform offset by {height_mm} mm folds near u = {u:.5}, where a concave bend has a radius of curvature of {radius_of_curvature_mm:.3} mm: the offset must stay well under it; offsets up to {max_height_mm:.4} mm are allowed over the domain, so use fewer layers or a smaller layer height")]
+    OffsetFolds {
+        /// Offset asked for, mm.
+        height_mm: f64,
+        /// Where it folds.
+        u: f64,
+        /// 1/κ there, mm.
+        radius_of_curvature_mm: f64,
+        /// Largest offset allowed over the domain's u span, mm.
+        max_height_mm: f64,
+    },
+    /// An offset surface comes too near the axis.
+    #[error("the platform offset by {height_mm} mm comes within {radius_mm:.4} mm of the axis at u = {u:.5} (at least {min_radius_mm} mm needed, the metric degenerates at the pole); offsets up to {max_height_mm:.4} mm are allowed over the domain, so use fewer layers or a smaller layer height")]
+    OffsetNearPole {
+        /// Offset asked for, mm.
+        height_mm: f64,
+        /// Where.
+        u: f64,
+        /// The offset's radius there, mm.
+        radius_mm: f64,
+        /// Minimum radius, mm.
+        min_radius_mm: f64,
+        /// Largest offset allowed over the domain's u span, mm.
+        max_height_mm: f64,
     },
     /// Options out of range.
     #[error("option {name} = {value} is out of range: {hint}")]

@@ -391,6 +391,20 @@ impl Platform {
         Jet { x: out.map(|p| p[0]), z: out.map(|p| p[1]) }
     }
 
+    /// Fourth derivative (x⁗, z⁗) of segment `k` at local parameter t: the degree-2 polygon
+    /// of fourth differences, scaled by 6·5·4·3. The offset surfaces need it for κ″.
+    pub fn segment_fourth(&self, k: usize, t: f64) -> [f64; 2] {
+        let mut d: [[f64; 2]; 7] = self.segments[k];
+        for r in 0..4 {
+            for i in 0..6 - r {
+                for axis in 0..2 {
+                    d[i][axis] = d[i + 1][axis] - d[i][axis];
+                }
+            }
+        }
+        [360.0 * casteljau(&d[..3], 0, t), 360.0 * casteljau(&d[..3], 1, t)]
+    }
+
     /// Runs every check and returns all problems with the continuity report.
     pub fn check(&self, options: &Options) -> Check {
         let size = self.size();
@@ -511,6 +525,21 @@ impl Profile for Platform {
         // Segment k covers [k, k + 1]: the knots are the integers inside the range.
         let first = libm::floor(lo).max(0.0) as usize + 1;
         out.extend((first..self.segments.len()).map(|k| k as f64).filter(|&k| k > lo && k < hi));
+    }
+}
+
+/// A profile that also gives exact fourth derivatives (what an offset of it needs).
+pub trait Profile4: Profile {
+    /// (x⁗, z⁗) at u.
+    fn fourth(&self, u: f64) -> [f64; 2];
+}
+
+impl Profile4 for Platform {
+    fn fourth(&self, u: f64) -> [f64; 2] {
+        // The same segment choice as `jet`.
+        let last = self.segments.len() - 1;
+        let k = if u <= 0.0 { 0 } else { (libm::floor(u) as usize).min(last) };
+        self.segment_fourth(k, u - k as f64)
     }
 }
 

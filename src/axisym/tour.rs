@@ -16,13 +16,20 @@
 //!    2-opt move that swaps its two segments, for at most `uncross_rounds` rounds. Whatever
 //!    remains is reported in [`Tour::crossings_left`], never looped on.
 //!
+//! Holes: a caller may pass `avoid(a, b)` (true when the straight map segment a → b crosses a
+//! hole of the domain). Such a pair costs [`HOLE_PENALTY_MM`] more in the nearest-neighbour
+//! choice and in 2-opt (whose candidate lists skip neighbours across a hole), so both route
+//! around holes where they can; the segments whose sampled geodesic still crosses a hole are
+//! listed in [`Tour::hole_segments`]: the job writes them as travel hops (no extrusion), so
+//! nothing is printed over a hole. The lengths reported leave the penalty out.
+//!
 //! The map check takes each segment's θ unwrapped from its start: a domain spanning the θ seam
 //! (θ and θ + 2π both present) is not checked across the seam.
 //!
 //! Deterministic: ties broken by point index, ordered containers only, `libm` transcendentals.
 
 use super::geodesic::{self, geodesic};
-use super::platform::{self, Platform, Profile};
+use super::platform::{self, Profile};
 use crate::budget::{Estimate, OverBudget};
 use serde::{Deserialize, Serialize};
 use std::cell::Cell;
@@ -54,6 +61,9 @@ pub const MAX_POINTS: usize = 20_000;
 /// Most path samples (poses) one tour may make: 48 bytes each, 2 M ≈ 100 MB with the map
 /// samples.
 pub const MAX_SAMPLES: f64 = 2e6;
+/// Extra cost, mm, of a pair whose straight map segment crosses a hole: more than any path
+/// through a few thousand points saves by taking it, so 2-opt trades any detour for it.
+pub const HOLE_PENALTY_MM: f64 = 1000.0;
 /// Time per point on the reference machine, s: one Clairaut geodesic per segment and its
 /// sampling dominate (200 hourglass points take 0.15 s); a safe upper value.
 const SECONDS_PER_POINT: f64 = 2e-3;
@@ -203,6 +213,10 @@ pub struct Tour {
     pub crossings_removed: usize,
     /// Crossings left (0 unless `uncross_rounds` ran out or two consecutive geodesics cross).
     pub crossings_left: usize,
+    /// Segments whose sampled geodesic crosses a hole (by the caller's `avoid`; 0 without).
+    pub hole_crossings: usize,
+    /// Which segments (index k: `order[k] → order[k + 1]`) those are, ascending.
+    pub hole_segments: Vec<usize>,
     /// Per segment `order[k] → order[k + 1]`: its geodesic sampled in (u, θ), ends included
     /// (θ unwrapped from the segment's start).
     pub samples: Vec<Vec<[f64; 2]>>,
@@ -229,9 +243,13 @@ pub fn estimate(n_points: usize, o: &Options, spacing_mm: f64) -> Estimate {
         .budgets("lower the infill density or split the domain")
 }
 
-/// Plans the path through `points` (u, θ) on `p`. `dist` is the geodesic distance (mm)
-/// between two points; `progress` gets 0..=1.
-pub fn plan(p: &Platform, points: &[[f64; 2]], o: &Options, dist: &dyn Fn([f64; 2], [f64; 2]) -> f64, progress: &mut dyn FnMut(f32)) -> Result<Tour, Error> {
+/// A test of whether the straight map segment between two (u, θ) points crosses a hole.
+pub type Avoid<'a> = &'a dyn Fn([f64; 2], [f64; 2]) -> bool;
+
+/// Plans the path through `points` (u, θ) on `p` (the platform, or an offset of it). `dist` is
+/// the geodesic distance (mm) between two points; `avoid`, when given, marks pairs whose
+/// segment would cross a hole (see the module notes); `progress` gets 0..=1.
+pub fn plan(p: &dyn Profile, points: &[[f64; 2]], o: &Options, dist: &dyn Fn([f64; 2], [f64; 2]) -> f64, avoid: Option<Avoid>, progress: &mut dyn FnMut(f32)) -> Result<Tour, Error> {
     check_options(o)?;
     if points.is_empty() {
         return Err(Error::NoPoints);
@@ -262,6 +280,8 @@ pub fn plan(p: &Platform, points: &[[f64; 2]], o: &Options, dist: &dyn Fn([f64; 
             two_opt_moves: 0,
             crossings_removed: 0,
             crossings_left: 0,
+            hole_crossings: 0,
+            hole_segments: Vec::new(),
             samples: Vec::new(),
             poses: vec![pose(points[0], sign)],
         });
@@ -270,6 +290,7 @@ pub fn plan(p: &Platform, points: &[[f64; 2]], o: &Options, dist: &dyn Fn([f64; 
     // Symmetric, checked distance: always asked from the lower index so a solver's small
     // asymmetry cannot make a 2-opt move look improving both ways.
     let bad: Cell<Option<(usize, usize, f64)>> = Cell::new(None);
+    let crosses = |i: usize, j: usize| i != j && avoid.is_some_and(|f| f(points[i.min(j)], points[i.max(j)]));
     let raw = |i: usize, j: usize| -> f64 {
         let (a, b) = if i < j { (i, j) } else { (j, i) };
         if a == b {
@@ -277,7 +298,7 @@ pub fn plan(p: &Platform, points: &[[f64; 2]], o: &Options, dist: &dyn Fn([f64; 
         }
         let v = dist(points[a], points[b]);
         if v.is_finite() && v >= 0.0 {
-            v
+            if crosses(a, b) { v + HOLE_PENALTY_MM } else { v }
         } else {
             if bad.get().is_none() {
                 bad.set(Some((a, b, v)));
@@ -295,7 +316,15 @@ pub fn plan(p: &Platform, points: &[[f64; 2]], o: &Options, dist: &dyn Fn([f64; 
     let k = o.neighbours.min(n - 1);
     let mut cand: Vec<usize> = Vec::with_capacity(n * k);
     for i in 0..n {
-        cand.extend(kd.knn(xyz[i], i, k));
+        if avoid.is_none() {
+            cand.extend(kd.knn(xyz[i], i, k));
+            continue;
+        }
+        // Beside a hole the nearest points across it are useless candidates: draw from 4k
+        // and keep the k nearest reachable without crossing (then the others, if short).
+        let wide = kd.knn(xyz[i], i, (4 * k).min(n - 1));
+        let (ok, over): (Vec<usize>, Vec<usize>) = wide.into_iter().partition(|&c| !crosses(i, c));
+        cand.extend(ok.into_iter().chain(over).take(k));
     }
     let cand_d: Vec<f64> = (0..n * k).map(|e| raw(e / k, cand[e])).collect();
     check_bad()?;
@@ -330,7 +359,8 @@ pub fn plan(p: &Platform, points: &[[f64; 2]], o: &Options, dist: &dyn Fn([f64; 
             None => kd.nearest_live(xyz[cur]),
         };
     }
-    let path_len = |t: &[usize]| t.windows(2).map(|w| dd(w[0], w[1])).sum::<f64>();
+    // The length without the hole penalty (what is printed).
+    let path_len = |t: &[usize]| t.windows(2).map(|w| dd(w[0], w[1]) - if crosses(w[0], w[1]) { HOLE_PENALTY_MM } else { 0.0 }).sum::<f64>();
     let nn_length_mm = path_len(&order);
     check_bad()?;
     progress(0.25);
@@ -358,7 +388,7 @@ pub fn plan(p: &Platform, points: &[[f64; 2]], o: &Options, dist: &dyn Fn([f64; 
     let segment = |i: usize, j: usize, cache: &mut BTreeMap<(usize, usize), (f64, Vec<[f64; 2]>)>| -> Result<(f64, Vec<[f64; 2]>), Error> {
         let (a, b) = if i < j { (i, j) } else { (j, i) };
         if !cache.contains_key(&(a, b)) {
-            let s = sample_geodesic(p, points[a], points[b], raw(a, b), o.step_mm, &gopts).map_err(|source| Error::Geodesic { from: a, to: b, source })?;
+            let s = sample_geodesic(p, points[a], points[b], raw(a, b) - if crosses(a, b) { HOLE_PENALTY_MM } else { 0.0 }, o.step_mm, &gopts).map_err(|source| Error::Geodesic { from: a, to: b, source })?;
             cache.insert((a, b), s);
         }
         let (len, path) = &cache[&(a, b)];
@@ -392,8 +422,9 @@ pub fn plan(p: &Platform, points: &[[f64; 2]], o: &Options, dist: &dyn Fn([f64; 
     let found = crossings(&samples);
     let mut now = found.clone();
     for _ in 0..o.uncross_rounds {
-        // Two consecutive segments cannot be swapped by 2-opt: take the first other pair.
-        let Some(&(i, j)) = now.iter().find(|(i, j)| *j > *i + 1) else { break };
+        // Two consecutive segments cannot be swapped by 2-opt: take the first other pair
+        // whose swap does not bring in a segment over a hole (without holes: the first).
+        let Some(&(i, j)) = now.iter().find(|&&(i, j)| j > i + 1 && !crosses(order[i], order[j]) && (j + 1 >= order.len() || !crosses(order[i + 1], order[j + 1]))) else { break };
         order[i + 1..=j].reverse();
         (geodesic_length_mm, samples) = build(&order, &mut cache)?;
         now = crossings(&samples);
@@ -402,6 +433,11 @@ pub fn plan(p: &Platform, points: &[[f64; 2]], o: &Options, dist: &dyn Fn([f64; 
     let length_mm = path_len(&order);
     progress(0.95);
 
+    let hole_segments: Vec<usize> = match avoid {
+        Some(f) => (0..samples.len()).filter(|&k| samples[k].windows(2).any(|w| f(w[0], w[1]))).collect(),
+        None => Vec::new(),
+    };
+    let hole_crossings = hole_segments.len();
     let mut poses = Vec::with_capacity(samples.iter().map(|s| s.len()).sum::<usize>());
     for (s, seg) in samples.iter().enumerate() {
         for &q in &seg[if s == 0 { 0 } else { 1 }..] {
@@ -418,6 +454,8 @@ pub fn plan(p: &Platform, points: &[[f64; 2]], o: &Options, dist: &dyn Fn([f64; 
         two_opt_moves: moves,
         crossings_removed: found.len().saturating_sub(now.len()),
         crossings_left: now.len(),
+        hole_crossings,
+        hole_segments,
         samples,
         poses,
     })
@@ -443,7 +481,7 @@ fn check_options(o: &Options) -> Result<(), Error> {
 
 /// Index of the start point: nearest (in mm, metric at the target's u, θ wrapped) to the
 /// corner or the given point; lowest index on ties.
-fn start_point(p: &Platform, points: &[[f64; 2]], s: &Start) -> usize {
+fn start_point(p: &dyn Profile, points: &[[f64; 2]], s: &Start) -> usize {
     let target = match *s {
         Start::Corner => {
             let u = points.iter().map(|q| q[0]).fold(f64::NEG_INFINITY, f64::max);
@@ -469,9 +507,10 @@ fn start_point(p: &Platform, points: &[[f64; 2]], s: &Start) -> usize {
 /// +1 when r_u × r_θ points out of the solid the generatrix bounds with the axis, else −1:
 /// the closed curve (generatrix, then back along the axis) is clockwise in (x, z) exactly when
 /// the left-hand normal (−z′, x′) points outward.
-fn outward_sign(p: &Platform) -> f64 {
+fn outward_sign(p: &dyn Profile) -> f64 {
     let (lo, hi) = p.u_range();
-    let m = 64 * p.segments.len();
+    // 64 samples per unit u (per Bézier segment on a platform).
+    let m = 64 * libm::ceil(hi - lo).max(1.0) as usize;
     let pt = |i: usize| {
         let j = p.jet(lo + (hi - lo) * i as f64 / m as f64);
         [j.x[0], j.z[0]]
@@ -489,7 +528,7 @@ fn outward_sign(p: &Platform) -> f64 {
 }
 
 /// Geodesic a → b sampled so that consecutive samples are ≤ `step` apart in 3-D, ends exact.
-fn sample_geodesic(p: &Platform, a: [f64; 2], b: [f64; 2], est_len: f64, step: f64, o: &geodesic::Options) -> Result<(f64, Vec<[f64; 2]>), super::Error> {
+fn sample_geodesic(p: &dyn Profile, a: [f64; 2], b: [f64; 2], est_len: f64, step: f64, o: &geodesic::Options) -> Result<(f64, Vec<[f64; 2]>), super::Error> {
     // The ODE path has one sample per RK4 step at most; finer sampling comes from bisection.
     let m = if est_len.is_finite() { libm::ceil(2.0 * est_len / step) as usize + 1 } else { 3 };
     let g = geodesic(p, a, b, &geodesic::Options { path_samples: m.clamp(3, o.ode_steps + 1), ..o.clone() })?;

@@ -6,7 +6,7 @@
 use super::domain::{Domain, DomainProblem};
 use super::grading::{Along, Field, Grading};
 use super::metrics::{graded_metrics, metrics, Metrics};
-use super::platform::Platform;
+use super::platform::Profile;
 use super::surface::{Node, PairEval, Surface};
 use crate::budget::{Estimate, OverBudget};
 use rand_core::{Rng, SeedableRng};
@@ -301,7 +301,7 @@ fn check_options(o: &Options, line_width_mm: f64) -> Result<(), Error> {
 }
 
 /// The radial centre must lie where the platform's metric is trusted (as a domain must).
-pub fn check_centre(p: &Platform, o: &Options) -> Result<(), Error> {
+pub fn check_centre(p: &dyn Profile, o: &Options) -> Result<(), Error> {
     let Some(g) = o.grading.as_ref().filter(|g| g.along == Along::Radial) else { return Ok(()) };
     let clear = super::platform::pole_clearance(p, super::platform::DEFAULT_MIN_POLE_RADIUS_MM);
     match clear {
@@ -349,7 +349,7 @@ fn pairs_per_eval(n: f64, o: &Options) -> f64 {
 }
 
 /// The stage's work before running it.
-pub fn estimate(p: &Platform, domain: &Domain, o: &Options, line_width_mm: f64) -> Estimate {
+pub fn estimate(p: &dyn Profile, domain: &Domain, o: &Options, line_width_mm: f64) -> Estimate {
     let ok = check_options(o, line_width_mm).is_ok() && check_centre(p, o).is_ok() && domain.problems(p).is_empty();
     let n = match (ok, &o.grading) {
         (false, _) => 0.0,
@@ -758,7 +758,7 @@ fn descend(eng: &Engine, d: &Domain, start: Vec<[f64; 2]>, iterations: usize, e_
 /// Places N = A·ρ_c²/(n²e²) quasi-uniform points on Ω (graded: N = ∫ρ² dA/(n²e²) points
 /// at local spacing s(q) = n·e/ρ(q)) and reports the seed, the result and their metrics.
 /// `seed` drives every random choice; `progress` gets the GRE fraction done.
-pub fn distribute(p: &Platform, domain: &Domain, o: &Options, line_width_mm: f64, seed: u64, progress: &mut dyn FnMut(f32)) -> Result<Distribution, Error> {
+pub fn distribute(p: &dyn Profile, domain: &Domain, o: &Options, line_width_mm: f64, seed: u64, progress: &mut dyn FnMut(f32)) -> Result<Distribution, Error> {
     check_options(o, line_width_mm)?;
     check_centre(p, o)?;
     let problems = domain.problems(p);
@@ -819,7 +819,7 @@ mod tests {
         let base = Options::default();
         match name {
             "barrel-omega1" => (Platform::barrel(), Domain::Rectangle { u: [0.8, 1.2], theta: [0.0, 1.0] }, Options { density: 0.5, seed_method: SeedMethod::Ebns, ..base }),
-            "barrel-omega2" => (Platform::barrel(), Domain::Polygon { points: OMEGA2_POLYGON.to_vec() }, Options { density: 0.25, seed_method: SeedMethod::Ere, ..base }),
+            "barrel-omega2" => (Platform::barrel(), Domain::Polygon { holes: Vec::new(), points: OMEGA2_POLYGON.to_vec() }, Options { density: 0.25, seed_method: SeedMethod::Ere, ..base }),
             _ => (Platform::hourglass(), Domain::Rectangle { u: [1.0, 3.0], theta: [0.0, 1.0] }, Options { density: 0.1, seed_method: SeedMethod::Gbns, ..base }),
         }
     }
@@ -913,12 +913,12 @@ mod tests {
             assert!(matches!(distribute(&p, &d, &o, 0.4, 1, &mut |_| {}), Err(Error::BadOption { name: "density", .. })));
         }
         assert!(matches!(distribute(&p, &d, &Options::default(), f64::NAN, 1, &mut |_| {}), Err(Error::BadOption { .. })));
-        let bow = Domain::Polygon { points: vec![[0.8, 0.0], [1.2, 1.0], [1.2, 0.0], [0.8, 1.0]] };
+        let bow = Domain::Polygon { holes: Vec::new(), points: vec![[0.8, 0.0], [1.2, 1.0], [1.2, 0.0], [0.8, 1.0]] };
         assert!(matches!(distribute(&p, &bow, &Options::default(), 0.4, 1, &mut |_| {}), Err(Error::Domain(_))));
         let pole = Domain::Rectangle { u: [0.0, 0.3], theta: [0.0, 1.0] };
         let e = distribute(&p, &pole, &Options::default(), 0.4, 1, &mut |_| {}).unwrap_err();
         assert!(matches!(&e, Error::Domain(v) if v.iter().any(|x| matches!(x, DomainProblem::NearPole { .. }))), "{e}");
-        let nan = Domain::Polygon { points: vec![[0.8, 0.0], [f64::NAN, 1.0], [1.2, 0.0]] };
+        let nan = Domain::Polygon { holes: Vec::new(), points: vec![[0.8, 0.0], [f64::NAN, 1.0], [1.2, 0.0]] };
         assert!(matches!(distribute(&p, &nan, &Options::default(), 0.4, 1, &mut |_| {}), Err(Error::Domain(_))));
         // Too many points: refused before allocating.
         let big = Domain::Rectangle { u: [0.3, 1.7], theta: [0.0, 6.0] };

@@ -7,19 +7,28 @@
 //! paper's equation 4, a seed by EBNS / ERE / GBNS, geodesic repulsion energy; the validation
 //! metrics of section 2.5 for the seed and the result), `path` (nearest neighbour + 2-opt,
 //! each segment the geodesic between its points, on the surface offset by the layer height).
-//! The writer gets one free pass with a tool axis per point: the printer must be 5-axis
-//! (the `five-axis-head` profile), or write the poses CSV flavour.
+//! The writer gets one free pass per layer with a tool axis per point: the printer must be
+//! 5-axis (the `five-axis-head` profile), or write the poses CSV flavour.
+//!
+//! Beyond the paper: the polygon domain may have holes (the points and the path keep out of
+//! them), and `layers` > 1 stacks layers: layer k (0-based) spreads its own points on the
+//! platform offset by k·h along its normal ([`crate::axisym::offset`], the top of the layer
+//! below) with its own domain (the same (u, θ) region, or for a part the contour at that
+//! offset), seeded from the design seed and k; its path starts nearest where layer k − 1's
+//! ended, and its tip rides (k + 1)·h out along the normal. Layer 0 is exactly the one-layer
+//! job (its stage ids, seed and bytes).
 
 use super::{Inspection, Kind, Product, Shape, Slot, SlotKind, StageInfo, ViewInfo};
 use crate::axisym::domain::Domain;
-use crate::axisym::platform::{self, Platform};
+use crate::axisym::offset::Offset;
+use crate::axisym::platform::{self, Platform, Profile};
 use crate::axisym::{dynamics, surface::Surface, tour, uniform};
 use crate::axisym::contour;
 use crate::design::{Design, Input};
 use crate::geom::{DVec3, Feature, Pass, PassKind, Path, PointData, Toolpath};
 use crate::pipeline::{Ctx, Error, Out};
 use crate::report::{Axis, Plot, PlotKind, Series, StageReport};
-use crate::settings::{choice_docs, mount, num, other, points, when, Field, Kind as FieldKind, Problem, Row};
+use crate::settings::{choice_docs, int, mount, num, other, points, rings, when, Field, Kind as FieldKind, Problem, Row};
 use serde::{Deserialize, Serialize};
 
 /// The printer profile a design switching to this kind gets when its machine cannot tilt.
@@ -28,6 +37,10 @@ pub const FIVE_AXIS_PRESET: &str = "five-axis-head";
 /// Default layer height: the strand's thickness over the platform, mm (the tip rides this far
 /// out along the normal).
 pub const DEFAULT_LAYER_HEIGHT_MM: f64 = 0.2;
+/// Default number of layers (the paper's single layer).
+pub const DEFAULT_LAYERS: usize = 1;
+/// Most layers a job may stack (each is a full point spreading and tour).
+pub const MAX_LAYERS: usize = 100;
 
 /// Settings of an `axisymmetric` job.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -51,6 +64,10 @@ pub struct AxisymJob {
     /// A part resting on the platform: where it meets the platform is Ω (domain kind `part`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub part: Option<Input>,
+    /// Layers stacked along the normal (left out of the JSON at 1, so one-layer designs keep
+    /// their bytes).
+    #[serde(default = "default_layers", skip_serializing_if = "is_default_layers")]
+    pub layers: usize,
     /// The tool axis: the normal, or smoothed within a tilt for the rotary axes.
     #[serde(default)]
     pub tool_axis: dynamics::Options,
@@ -60,9 +77,17 @@ fn default_layer_height() -> f64 {
     DEFAULT_LAYER_HEIGHT_MM
 }
 
+fn default_layers() -> usize {
+    DEFAULT_LAYERS
+}
+
+fn is_default_layers(n: &usize) -> bool {
+    *n == DEFAULT_LAYERS
+}
+
 impl Default for AxisymJob {
     fn default() -> Self {
-        AxisymJob { platform: PlatformSpec::default(), domain: DomainSpec::default(), points: uniform::Options::default(), path: tour::Options::default(), layer_height_mm: DEFAULT_LAYER_HEIGHT_MM, part: None, tool_axis: dynamics::Options::default() }
+        AxisymJob { platform: PlatformSpec::default(), domain: DomainSpec::default(), points: uniform::Options::default(), path: tour::Options::default(), layer_height_mm: DEFAULT_LAYER_HEIGHT_MM, part: None, tool_axis: dynamics::Options::default(), layers: DEFAULT_LAYERS }
     }
 }
 
@@ -136,7 +161,7 @@ pub enum DomainKind {
     Rectangle,
     /// The polygon's points (u, θ).
     Polygon,
-    /// Where the part (slot `part`) meets the platform: its largest outline.
+    /// Where the part (slot `part`) meets the platform: its largest outline and the holes in it.
     Part,
 }
 
@@ -157,12 +182,15 @@ pub struct DomainSpec {
     /// Polygon: its corners (u, θ rad), in order; non-convex allowed.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub polygon: Vec<[f64; 2]>,
+    /// Polygon: holes inside it, each a list of corners (u, θ rad).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub holes: Vec<Vec<[f64; 2]>>,
 }
 
 impl Default for DomainSpec {
     /// The paper's Ω1 on the barrel.
     fn default() -> Self {
-        DomainSpec { kind: DomainKind::Rectangle, u_min: 0.8, u_max: 1.2, theta_min_rad: 0.0, theta_max_rad: 1.0, polygon: Vec::new() }
+        DomainSpec { kind: DomainKind::Rectangle, u_min: 0.8, u_max: 1.2, theta_min_rad: 0.0, theta_max_rad: 1.0, polygon: Vec::new(), holes: Vec::new() }
     }
 }
 
@@ -171,7 +199,7 @@ impl DomainSpec {
     pub fn domain(&self) -> Option<Domain> {
         match self.kind {
             DomainKind::Rectangle => Some(Domain::Rectangle { u: [self.u_min, self.u_max], theta: [self.theta_min_rad, self.theta_max_rad] }),
-            DomainKind::Polygon => Some(Domain::Polygon { points: self.polygon.clone() }),
+            DomainKind::Polygon => Some(Domain::Polygon { points: self.polygon.clone(), holes: self.holes.clone() }),
             DomainKind::Part => None,
         }
     }
@@ -204,7 +232,7 @@ const VIEWS: &[ViewInfo] = &[
         label: "Embedded map (u, θ)",
         shape: Shape::Lines2d,
         index_label: "Step",
-        doc: "The domain Ω in the (θ, u) plane: 0 the seed points, 1 after repulsion, 2 the path (x: θ in rad, y: u).",
+        doc: "The domain Ω in the (θ, u) plane: 0 the seed points, 1 after repulsion, 2 the path (x: θ in rad, y: u); with several layers, 3·layer + step.",
     },
     ViewInfo {
         id: "platform3d",
@@ -231,16 +259,20 @@ const PLATFORM_FIELDS: &[Field] = &[
 const DOMAIN_FIELDS: &[Field] = &[
     choice_docs(
         other("kind", "Domain Ω", "Domain", FieldKind::Choice, &["rectangle", "polygon", "part"], "The patch of the platform to fill, in the embedded map (u along the profile, θ around the axis)."),
-        &["A u × θ rectangle.", "An outline of (u, θ) corners.", "Where a loaded part meets the platform (its largest outline)."],
+        &["A u × θ rectangle.", "An outline of (u, θ) corners, optionally with holes.", "Where a loaded part meets the platform (its largest outline and the holes in it)."],
     ),
     when(num("u_min", "Domain Ω", "u from", "", 0.0, 64.0, 0.01, "Where the patch starts along the profile (u counts Bézier segments: 0 to their number)."), "kind", "rectangle"),
     when(num("u_max", "Domain Ω", "u to", "", 0.0, 64.0, 0.01, "Where the patch ends along the profile."), "kind", "rectangle"),
     when(num("theta_min_rad", "Domain Ω", "θ from", "rad", -7.0, 7.0, 0.01, "Where the patch starts around the axis."), "kind", "rectangle"),
     when(num("theta_max_rad", "Domain Ω", "θ to", "rad", -7.0, 7.0, 0.01, "Where the patch ends around the axis (at most one turn, 6.283 rad, wider than the start)."), "kind", "rectangle"),
     when(points("polygon", "Domain Ω", "Polygon u θ", "", -64.0, 64.0, 1000, "The outline's corners, one 'u θ' pair per line (θ in rad), in order; concave outlines are fine."), "kind", "polygon"),
+    when(rings("holes", "Domain Ω", "Holes u θ", "", -64.0, 64.0, 1000, "Openings left empty inside the outline: each hole's corners one 'u θ' pair per line, a blank line between holes."), "kind", "polygon"),
 ];
 
-const JOB_FIELDS: &[Field] = &[num("layer_height_mm", "Path", "Layer height", "mm", 0.01, 5.0, 0.01, "How thick the strand is: the nozzle tip rides this far out along the surface normal.")];
+const JOB_FIELDS: &[Field] = &[
+    num("layer_height_mm", "Path", "Layer height", "mm", 0.01, 5.0, 0.01, "How thick the strand is: the nozzle tip rides this far out along the surface normal."),
+    int("layers", "Path", "Layers", 1.0, MAX_LAYERS as f64, "How many layers to stack: each lies one layer height further out along the normal, with its own points and path."),
+];
 
 impl Kind for AxisymKind {
     type Settings = AxisymJob;
@@ -287,8 +319,17 @@ impl Kind for AxisymKind {
         };
         match j.domain.domain() {
             Some(d) => {
-                for message in d.problems(&platform) {
+                let problems = d.problems(&platform);
+                for message in &problems {
                     out.push(Problem { path: path.into(), message: message.to_string() });
+                }
+                // The top layer's surface is the furthest offset: if it neither folds nor nears
+                // the axis over Ω, no lower one does.
+                if problems.is_empty() && (2..=MAX_LAYERS).contains(&j.layers) && j.layer_height_mm.is_finite() {
+                    let k = j.layers - 1;
+                    if let Err(e) = layer_offset(&platform, j, k, &d) {
+                        out.push(Problem { path: "job.layers".into(), message: e.to_string() });
+                    }
                 }
             }
             None if j.part.is_none() => out.push(Problem { path: path.into(), message: "the domain is where a part meets the platform: load the part (its drop zone, or --input part=FILE) or pick a rectangle or polygon".into() }),
@@ -325,33 +366,56 @@ impl Kind for AxisymKind {
     fn estimate(j: &AxisymJob, ctx: &mut Ctx) -> Result<Vec<crate::budget::Estimate>, Error> {
         let platform = platform_stage(j, ctx)?;
         let width = line_width(ctx.design);
-        // A part's outline is found first (its own estimate bounds that: linear in triangles).
-        let domain = domain_stage(j, ctx, &platform)?;
-        let points = uniform::estimate(&platform.value, &domain.value, &j.points, width);
-        let path = tour::estimate(points.get("points") as usize, &j.path, uniform::largest_spacing(&j.points, width));
-        Ok(vec![crate::budget::Estimate::new("platform"), points, path])
+        check_layers(j)?;
+        // A part's outlines are found first (their own estimate bounds that: linear in
+        // triangles); every layer states its points, the sums are refused over the budgets.
+        let (mut points, mut paths) = (Vec::new(), Vec::new());
+        for k in 0..j.layers {
+            let domain = domain_stage(j, ctx, &platform, k)?;
+            let surface = layer_offset(&platform, j, k, &domain).map_err(|e| Error::stage("points", e))?;
+            let e = uniform::estimate(surface.profile(), &domain.value, &j.points, width);
+            paths.push(tour::estimate(e.get("points") as usize, &j.path, uniform::largest_spacing(&j.points, width)));
+            points.push(e);
+        }
+        Ok(vec![crate::budget::Estimate::new("platform"), sum_layers(points, "lower the density, the iterations, cutoff_spacings or the layers"), sum_layers(paths, "lower the infill density, the layers or split the domain")])
     }
 
     fn run(j: &AxisymJob, ctx: &mut Ctx) -> Result<Product, Error> {
         let platform = platform_stage(j, ctx)?;
-        let domain = domain_stage(j, ctx, &platform)?;
-        let distribution = points_stage(j, ctx, &platform, &domain)?;
-        let tour = path_stage(j, ctx, &platform, &distribution)?;
-        let axes = axes_stage(j, ctx, &tour)?;
+        let layers = all_layers(j, ctx, &platform, j.layers, true)?;
         let (h, width) = (j.layer_height_mm, line_width(ctx.design));
-        let toolpath = ctx.stage("axes", "toolpath", &(h, width), &[tour.key, axes.key], |_| Ok((toolpath_of(&tour.value, &axes.axes, h, width), None)))?;
+        let tours: Vec<&tour::Tour> = layers.iter().filter_map(|l| l.tour.as_deref()).collect();
+        let mut keys: Vec<_> = layers.iter().map(|l| l.tour.as_ref().map_or(l.points.key, |t| t.key)).collect();
+        let axes = axes_stage(j, ctx, &tours, &keys)?;
+        keys.push(axes.key);
+        let toolpath = ctx.stage("axes", "toolpath", &(h, width), &keys, |_| Ok((toolpath_of(&tours, &axes.layers, h, width), None)))?;
+        // The per-layer table joins the path stage's report (cached or not, it is added here).
+        let table = layer_table(&layers, h);
+        if let Some(r) = ctx.reports.iter_mut().find(|r| r.stage == "path") {
+            r.tables.retain(|t| t.key != "layers");
+            r.tables.push(table);
+        }
         Ok(Product::Toolpath(toolpath))
     }
 
     fn inspect(j: &AxisymJob, ctx: &mut Ctx, view: &str, index: usize) -> Result<Inspection, Error> {
         let platform = platform_stage(j, ctx)?;
-        let domain = domain_stage(j, ctx, &platform)?;
-        let distribution = points_stage(j, ctx, &platform, &domain)?;
+        check_layers(j)?;
         // The path comes from the stage cache when the run made it (the worker's session).
         match view {
-            "map" if index < 2 => Ok(map_view(&domain.value, &distribution, None, index)),
-            "map" => Ok(map_view(&domain.value, &distribution, Some(&path_stage(j, ctx, &platform, &distribution)?.value), index)),
-            "platform3d" => Ok(platform_view(&platform, &path_stage(j, ctx, &platform, &distribution)?.value, j.layer_height_mm)),
+            "map" => {
+                let index = index.min(3 * j.layers - 1);
+                let (layer, step) = (index / 3, index % 3);
+                // The points of a layer do not need the paths below it; its path does.
+                let layers = all_layers(j, ctx, &platform, layer + 1, step == 2)?;
+                let l = &layers[layer];
+                Ok(map_view(&l.domain, &l.points, l.tour.as_deref(), layer, j.layers, step))
+            }
+            "platform3d" => {
+                let layers = all_layers(j, ctx, &platform, j.layers, true)?;
+                let tours: Vec<&tour::Tour> = layers.iter().filter_map(|l| l.tour.as_deref()).collect();
+                Ok(platform_view(&platform, &tours, j.layer_height_mm))
+            }
             _ => Err(Error::UnknownView { view: view.into(), job: Self::NAME }),
         }
     }
@@ -374,14 +438,128 @@ fn platform_stage(j: &AxisymJob, ctx: &mut Ctx) -> Result<Out<Platform>, Error> 
     })
 }
 
-/// Ω: the settings' rectangle or polygon, or the largest outline where the part meets the
-/// platform (holes and smaller outlines are reported, not filled).
-fn domain_stage(j: &AxisymJob, ctx: &mut Ctx, platform: &Out<Platform>) -> Result<Out<Domain>, Error> {
-    let domain = domain_of(j, ctx, platform)?;
-    // The tip must stay above the plate: checked here, before the points and path stages
-    // spend their time (the writer would refuse the toolpath only at the end).
+/// The layer count within 1..=[`MAX_LAYERS`] (the settings table says so too; a design read
+/// without its checks must not loop or index out of range).
+fn check_layers(j: &AxisymJob) -> Result<(), Error> {
+    if (1..=MAX_LAYERS).contains(&j.layers) {
+        Ok(())
+    } else {
+        Err(Error::stage("points", crate::axisym::Error::BadOption { name: "layers", value: j.layers as f64, hint: "1 to 100 layers" }))
+    }
+}
+
+/// The stage cache id of `stage` for layer k: the plain name for layer 0 (so a one-layer job
+/// keeps its ids, keys and reports), `name@k` above.
+fn layer_id(stage: &str, k: usize) -> String {
+    if k == 0 { stage.to_string() } else { format!("{stage}@{k}") }
+}
+
+/// The seed of layer k: the design seed for layer 0, a fixed odd multiple of k mixed in above.
+pub fn layer_seed(seed: u64, k: usize) -> u64 {
+    seed ^ (k as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15)
+}
+
+/// The surface layer k spreads its points on: the platform itself, or its offset by k·h.
+enum LayerSurface<'a> {
+    Base(&'a Platform),
+    Offset(Offset<'a, Platform>),
+}
+
+impl LayerSurface<'_> {
+    fn profile(&self) -> &dyn Profile {
+        match self {
+            LayerSurface::Base(p) => *p,
+            LayerSurface::Offset(o) => o,
+        }
+    }
+}
+
+/// Why a layer's surface cannot be used.
+#[derive(Debug, thiserror::Error)]
+#[error("layer {layer} (on the platform offset by {offset_mm} mm): {source}")]
+pub struct LayerError {
+    /// Layer, 1-based.
+    pub layer: usize,
+    /// Its offset, mm.
+    pub offset_mm: f64,
+    /// The offset's reason.
+    pub source: crate::axisym::Error,
+}
+
+/// Layer k's surface, checked over the u span of its domain.
+fn layer_offset<'a>(p: &'a Platform, j: &AxisymJob, k: usize, domain: &Domain) -> Result<LayerSurface<'a>, LayerError> {
+    if k == 0 {
+        return Ok(LayerSurface::Base(p));
+    }
+    let h = k as f64 * j.layer_height_mm;
+    let b = domain.bounds();
+    Offset::new(p, h, [b[0][0], b[1][0]], platform::DEFAULT_MIN_POLE_RADIUS_MM).map(LayerSurface::Offset).map_err(|source| LayerError { layer: k + 1, offset_mm: h, source })
+}
+
+/// Sums per-layer estimates of one stage: counts and times add, the peak memory is the
+/// largest layer's, the first layer refused refuses, then the budgets on the totals.
+fn sum_layers(layers: Vec<crate::budget::Estimate>, fix: &str) -> crate::budget::Estimate {
+    let mut it = layers.into_iter();
+    let Some(mut total) = it.next() else { return crate::budget::Estimate::new("axisym_uniform") };
+    let mut more = false;
+    for e in it {
+        more = true;
+        for q in e.quantities {
+            match total.quantities.iter_mut().find(|t| t.key == q.key) {
+                Some(t) => t.value += q.value,
+                None => total.quantities.push(q),
+            }
+        }
+        total.bytes = total.bytes.max(e.bytes);
+        total.seconds += e.seconds;
+        if total.refused.is_none() {
+            total.refused = e.refused;
+        }
+    }
+    // One layer: exactly its own estimate.
+    if more { total.budgets(fix) } else { total }
+}
+
+/// One layer's stages.
+struct Layer {
+    offset_mm: f64,
+    domain: Out<Domain>,
+    points: Out<uniform::Distribution>,
+    tour: Option<Out<tour::Tour>>,
+}
+
+/// Layers 0..count: domains and points, and with `paths` each layer's path (layer k + 1's
+/// starting nearest where layer k's ended).
+fn all_layers(j: &AxisymJob, ctx: &mut Ctx, platform: &Out<Platform>, count: usize, paths: bool) -> Result<Vec<Layer>, Error> {
+    check_layers(j)?;
+    let mut out: Vec<Layer> = Vec::with_capacity(count);
+    for k in 0..count {
+        let domain = domain_stage(j, ctx, platform, k)?;
+        let points = points_stage(j, ctx, platform, &domain, k)?;
+        out.push(Layer { offset_mm: k as f64 * j.layer_height_mm, domain, points, tour: None });
+    }
+    if paths {
+        for k in 0..count {
+            let start = if k == 0 {
+                None
+            } else {
+                let prev = &out[k - 1];
+                prev.tour.as_ref().and_then(|t| t.order.last()).map(|&i| prev.points.points[i])
+            };
+            let t = path_stage(j, ctx, platform, &out[k].domain, &out[k].points, k, start)?;
+            out[k].tour = Some(t);
+        }
+    }
+    Ok(out)
+}
+
+/// Ω of layer k ([`domain_of`]), refused when the layer's nozzle tip, (k + 1)·h out along the
+/// normal, would go below the plate: checked here, before the points and path stages spend
+/// their time (the writer would refuse the toolpath only at the end).
+fn domain_stage(j: &AxisymJob, ctx: &mut Ctx, platform: &Out<Platform>, k: usize) -> Result<Out<Domain>, Error> {
+    let domain = domain_of(j, ctx, platform, k)?;
     let [[u_lo, _], [u_hi, _]] = domain.value.bounds();
-    below_plate(&*platform.value, u_lo, u_hi, j.layer_height_mm).map_err(|e| Error::stage("domain", e))?;
+    below_plate(&*platform.value, u_lo, u_hi, (k + 1) as f64 * j.layer_height_mm).map_err(|e| Error::stage("domain", e))?;
     Ok(domain)
 }
 
@@ -418,62 +596,107 @@ fn below_plate(p: &dyn platform::Profile, u_lo: f64, u_hi: f64, h: f64) -> Resul
     if z < -1e-6 { Err(BelowPlate { z_mm: z, u, raise_mm: -z }) } else { Ok(()) }
 }
 
-/// Ω from the settings or the part, with its stage report.
-fn domain_of(j: &AxisymJob, ctx: &mut Ctx, platform: &Out<Platform>) -> Result<Out<Domain>, Error> {
+/// Ω of layer k: the settings' rectangle or polygon (every layer the same (u, θ) region), or
+/// the largest outline where the part meets the platform offset by k·h, with the holes in it
+/// (smaller outlines are reported, not filled).
+fn domain_of(j: &AxisymJob, ctx: &mut Ctx, platform: &Out<Platform>, k: usize) -> Result<Out<Domain>, Error> {
     if let Some(d) = j.domain.domain() {
         return ctx.stage("domain", "domain", &d, &[platform.key], |_| {
             let corners = d.ring().len();
-            let r = StageReport::new("domain", "Finding the domain Ω", &d).metric("corners", "Outline corners", corners as f64, "", "Corners of Ω in the embedded map (a rectangle has 4).");
+            let mut r = StageReport::new("domain", "Finding the domain Ω", &d).metric("corners", "Outline corners", corners as f64, "", "Corners of Ω in the embedded map (a rectangle has 4).");
+            if !d.holes().is_empty() {
+                r = r.metric("holes", "Holes kept", d.holes().len() as f64, "", "Openings inside the outline, left unfilled: the points and the path keep out of them.");
+            }
             Ok((d.clone(), Some(r)))
         });
     }
     let input = j.part.as_ref().ok_or_else(|| Error::NoInput("a part domain needs the part: load it, or pass --input part=FILE".into()))?;
     // In the file's own coordinates: the platform's axis is Z through the origin.
     let mesh = ctx.mesh_in_place("part", input)?;
-    ctx.stage("domain", "domain", &(), &[platform.key, mesh.key], |_| {
-        let c = contour::platform_contours(&mesh.value, &platform.value, &contour::Options::default()).map_err(|e| Error::stage("domain", e))?;
+    let offset_mm = k as f64 * j.layer_height_mm;
+    ctx.stage("domain", &layer_id("domain", k), &offset_mm, &[platform.key, mesh.key], |_| {
+        let c = contour::platform_contours(&mesh.value, &platform.value, &contour::Options { offset_mm, ..contour::Options::default() }).map_err(|e| Error::stage("domain", e))?;
         // (A hole always lies in an outline, so an outline exists whenever a loop does.)
-        let k = (0..c.loops.len()).find(|&k| !c.is_hole[k]).ok_or_else(|| Error::NoInput("the part meets the platform in no closed outline (an open mesh?): repair the part or move it onto the platform".into()))?;
-        let holes = c.is_hole.iter().filter(|h| **h).count();
-        let others = c.loops.len() - holes - 1;
-        let d = Domain::Polygon { points: c.loops[k].clone() };
+        let outline = (0..c.loops.len()).find(|&i| !c.is_hole[i]).ok_or_else(|| Error::NoInput("the part meets the platform in no closed outline (an open mesh?): repair the part or move it onto the platform".into()))?;
+        let kept: Vec<usize> = (0..c.loops.len()).filter(|&i| c.is_hole[i] && c.parent[i] == Some(outline)).collect();
+        let outlines = c.is_hole.iter().filter(|h| !**h).count();
+        let d = Domain::Polygon { points: c.loops[outline].clone(), holes: kept.iter().map(|&i| c.loops[i].clone()).collect() };
         let r = StageReport::new("domain", "Finding the domain Ω", &d)
-            .metric("corners", "Outline corners", c.loops[k].len() as f64, "", "Points of the outline where the part meets the platform, in the embedded map.")
-            .metric("area", "Outline area", c.area_mm2[k], "mm²", "The area the outline encloses on the platform.")
-            .metric("holes", "Holes not filled", holes as f64, "", "Openings inside the outline: filled over for now (the paper's method has none).")
-            .metric("other_outlines", "Smaller outlines left out", others as f64, "", "Other places the part meets the platform; only the largest is filled.")
+            .metric("corners", "Outline corners", c.loops[outline].len() as f64, "", "Points of the outline where the part meets the platform, in the embedded map.")
+            .metric("area", "Outline area", c.area_mm2[outline], "mm²", "The area the outline encloses on the platform (its holes not taken off).")
+            .metric("holes", "Holes kept", kept.len() as f64, "", "Openings inside the outline, left unfilled: the points and the path keep out of them.")
+            .metric("other_outlines", "Smaller outlines left out", (outlines - 1) as f64, "", "Other places the part meets the platform; only the largest is filled.")
             .metric("open_chains", "Open cuts dropped", c.open_chains as f64, "", "Cuts that did not close because the mesh is open there: repair the mesh if this is not 0.");
-        Ok((d, Some(r)))
+        // Only layer 0 reports; the others are in the per-layer table.
+        Ok((d, (k == 0).then_some(r)))
     })
 }
 
-/// The path through the points (with its report); the toolpath is made from it by the run.
-fn path_stage(j: &AxisymJob, ctx: &mut Ctx, platform: &Out<Platform>, distribution: &Out<uniform::Distribution>) -> Result<Out<tour::Tour>, Error> {
-    ctx.stage("path", "path", &j.path, &[platform.key, distribution.key], |progress| {
-        let surface = Surface::new(&*platform.value);
-        let dist = |a: [f64; 2], b: [f64; 2]| surface.distance(a, b);
-        let t = tour::plan(&platform.value, &distribution.points, &j.path, &dist, progress).map_err(|e| Error::stage("path", e))?;
-        let report = path_report(&t, &distribution.value);
-        Ok((t, Some(report)))
+/// The path of layer k through its points (with its report for layer 0), starting nearest
+/// `start` when given (where the layer below ended); the toolpath is made from it by the run.
+#[allow(clippy::too_many_arguments)]
+fn path_stage(j: &AxisymJob, ctx: &mut Ctx, platform: &Out<Platform>, domain: &Out<Domain>, distribution: &Out<uniform::Distribution>, k: usize, start: Option<[f64; 2]>) -> Result<Out<tour::Tour>, Error> {
+    let mut o = j.path.clone();
+    if let Some([u, theta]) = start {
+        o.start = tour::Start::Nearest { u, theta };
+    }
+    let parts = (&o, k as f64 * j.layer_height_mm);
+    ctx.stage("path", &layer_id("path", k), &parts, &[platform.key, domain.key, distribution.key], |progress| {
+        let surface = layer_offset(&platform.value, j, k, &domain.value).map_err(|e| Error::stage("path", e))?;
+        let profile = surface.profile();
+        let s = Surface::new(profile);
+        let dist = |a: [f64; 2], b: [f64; 2]| s.distance(a, b);
+        let d = &*domain.value;
+        let crosses = |a: [f64; 2], b: [f64; 2]| d.segment_crosses_hole(a, b);
+        let avoid: Option<tour::Avoid> = if d.holes().is_empty() { None } else { Some(&crosses) };
+        let t = tour::plan(profile, &distribution.points, &o, &dist, avoid, progress).map_err(|e| Error::stage("path", e))?;
+        let report = (k == 0).then(|| path_report(&t, &distribution.value, avoid.is_some()));
+        Ok((t, report))
     })
 }
 
-/// The tool axes along the tour (the normals, or smoothed within the tilt) and what they ask
-/// of the machine at the infill speed, before and after smoothing.
-fn axes_stage(j: &AxisymJob, ctx: &mut Ctx, tour: &Out<tour::Tour>) -> Result<Out<dynamics::Smoothed>, Error> {
+/// Tool axes of every layer's path.
+pub struct LayerAxes {
+    /// Per layer, one unit axis per pose.
+    pub layers: Vec<Vec<[f64; 3]>>,
+}
+
+/// The tool axes along each layer's tour (the normals, or smoothed within the tilt) and what
+/// they ask of the machine at the infill speed, before and after smoothing: the largest speed
+/// and acceleration of each axis over the layers (each layer is its own pass).
+fn axes_stage(j: &AxisymJob, ctx: &mut Ctx, tours: &[&tour::Tour], keys: &[crate::pipeline::Key]) -> Result<Out<LayerAxes>, Error> {
     let design = ctx.design;
     let (h, feed, machine) = (j.layer_height_mm, design.speeds.infill_mm_s, &design.printer.machine);
-    ctx.stage("axes", "axes", &(&j.tool_axis, h, feed, machine), &[tour.key], |_| {
-        let poses = &tour.value.poses;
-        let positions: Vec<[f64; 3]> = poses.iter().map(|p| p.position).collect();
-        let normals: Vec<[f64; 3]> = poses.iter().map(|p| p.normal).collect();
-        let tips: Vec<[f64; 3]> = poses.iter().map(|p| tip(p, h)).collect();
-        let smoothed = dynamics::smooth_axes(&positions, &normals, &j.tool_axis).map_err(|e| Error::stage("axes", e))?;
-        let raw = dynamics::dynamics(&tips, &normals, machine, feed).map_err(|e| Error::stage("axes", e))?;
-        let after = dynamics::dynamics(&tips, &smoothed.axes, machine, feed).map_err(|e| Error::stage("axes", e))?;
-        let report = axes_report(&j.tool_axis, &smoothed, &raw, &after, feed);
-        Ok((smoothed, Some(report)))
+    ctx.stage("axes", "axes", &(&j.tool_axis, h, feed, machine), keys, |_| {
+        let (mut layers, mut raw_all, mut after_all, mut tilt) = (Vec::new(), Vec::new(), Vec::new(), 0.0f64);
+        for t in tours {
+            let positions: Vec<[f64; 3]> = t.poses.iter().map(|p| p.position).collect();
+            let normals: Vec<[f64; 3]> = t.poses.iter().map(|p| p.normal).collect();
+            let tips: Vec<[f64; 3]> = t.poses.iter().map(|p| tip(p, h).to_array()).collect();
+            let smoothed = dynamics::smooth_axes(&positions, &normals, &j.tool_axis).map_err(|e| Error::stage("axes", e))?;
+            raw_all.push(dynamics::dynamics(&tips, &normals, machine, feed).map_err(|e| Error::stage("axes", e))?);
+            after_all.push(dynamics::dynamics(&tips, &smoothed.axes, machine, feed).map_err(|e| Error::stage("axes", e))?);
+            tilt = tilt.max(smoothed.max_tilt_deg);
+            layers.push(smoothed.axes);
+        }
+        let report = axes_report(&j.tool_axis, tilt, &worst(&raw_all), &worst(&after_all), feed);
+        Ok((LayerAxes { layers }, Some(report)))
     })
+}
+
+/// The largest speed and acceleration of each axis over several passes, their lengths and
+/// times added.
+fn worst(all: &[dynamics::Dynamics]) -> dynamics::Dynamics {
+    let mut out = all.first().cloned().unwrap_or(dynamics::Dynamics { axes: Vec::new(), path_mm: 0.0, duration_s: 0.0 });
+    for d in all.iter().skip(1) {
+        for (o, a) in out.axes.iter_mut().zip(&d.axes) {
+            o.max_speed_deg_s = o.max_speed_deg_s.max(a.max_speed_deg_s);
+            o.max_accel_deg_s2 = o.max_accel_deg_s2.max(a.max_accel_deg_s2);
+        }
+        out.path_mm += d.path_mm;
+        out.duration_s += d.duration_s;
+    }
+    out
 }
 
 /// What the `axes` stage reports.
@@ -488,14 +711,14 @@ pub struct AxesSummary {
     pub smoothed: Vec<(String, [f64; 2])>,
 }
 
-fn axes_report(o: &dynamics::Options, s: &dynamics::Smoothed, raw: &dynamics::Dynamics, after: &dynamics::Dynamics, feed: f64) -> StageReport {
+fn axes_report(o: &dynamics::Options, max_tilt_deg: f64, raw: &dynamics::Dynamics, after: &dynamics::Dynamics, feed: f64) -> StageReport {
     let pairs = |d: &dynamics::Dynamics| d.axes.iter().map(|a| (a.axis.clone(), [a.max_speed_deg_s, a.max_accel_deg_s2])).collect::<Vec<_>>();
-    let summary = AxesSummary { max_tilt_deg: s.max_tilt_deg, raw: pairs(raw), smoothed: pairs(after) };
+    let summary = AxesSummary { max_tilt_deg, raw: pairs(raw), smoothed: pairs(after) };
     let on = o.max_tilt_deg > 0.0;
     let mut r = StageReport::new("axes", "Tool axis and machine dynamics", &summary)
-        .metric("max_tilt", "Largest tilt from the normal", s.max_tilt_deg, "°", "How far smoothing leans the tool axis away from the surface normal (0: the axis is the normal).")
+        .metric("max_tilt", "Largest tilt from the normal", max_tilt_deg, "°", "How far smoothing leans the tool axis away from the surface normal (0: the axis is the normal).")
         .metric("feed", "At the infill speed", feed, "mm/s", "The speeds and accelerations below are for this feed; they scale with it (accelerations with its square).")
-        .metric("duration", "Path time", after.duration_s, "s", "The path's length over the infill speed.");
+        .metric("duration", "Path time", after.duration_s, "s", "The paths' length (every layer) over the infill speed.");
     for (k, (a, b)) in raw.axes.iter().zip(&after.axes).enumerate() {
         let name = if k == 0 { "tool axis".to_string() } else { format!("{} axis", a.axis) };
         let key = if k == 0 { "tool".to_string() } else { a.axis.to_lowercase() };
@@ -537,14 +760,41 @@ fn round(v: f64) -> f64 {
     libm::round(v * scale) / scale
 }
 
-fn points_stage(j: &AxisymJob, ctx: &mut Ctx, platform: &Out<Platform>, domain: &Out<Domain>) -> Result<Out<uniform::Distribution>, Error> {
+/// Layer k's points on its surface, seeded by [`layer_seed`] (layer 0 reports).
+fn points_stage(j: &AxisymJob, ctx: &mut Ctx, platform: &Out<Platform>, domain: &Out<Domain>, k: usize) -> Result<Out<uniform::Distribution>, Error> {
     let design = ctx.design;
     let width = line_width(design);
-    ctx.stage("points", "points", &(&j.points, width, design.seed), &[platform.key, domain.key], |progress| {
-        let d = uniform::distribute(&platform.value, &domain.value, &j.points, width, design.seed, progress).map_err(|e| Error::stage("points", e))?;
-        let report = points_report(&d, &j.points, width);
-        Ok((d, Some(report)))
+    let seed = layer_seed(design.seed, k);
+    let parts = (&j.points, width, seed, k as f64 * j.layer_height_mm);
+    ctx.stage("points", &layer_id("points", k), &parts, &[platform.key, domain.key], |progress| {
+        let surface = layer_offset(&platform.value, j, k, &domain.value).map_err(|e| Error::stage("points", e))?;
+        let d = uniform::distribute(surface.profile(), &domain.value, &j.points, width, seed, progress).map_err(|e| Error::stage("points", e))?;
+        let report = (k == 0).then(|| points_report(&d, &j.points, width));
+        Ok((d, report))
     })
+}
+
+/// Per layer: its offset, points, spread reduction and path length.
+fn layer_table(layers: &[Layer], h: f64) -> crate::report::Table {
+    use crate::report::{Column, Row as TableRow, Table};
+    let col = |label: &str, unit: &str| Column { label: label.into(), unit: unit.into() };
+    let rows = layers
+        .iter()
+        .enumerate()
+        .map(|(k, l)| {
+            let (s, m) = (&l.points.seed_metrics, &l.points.metrics);
+            let reduction = if s.nn_std_mm > 0.0 { 100.0 * (1.0 - m.nn_std_mm / s.nn_std_mm) } else { 0.0 };
+            let (length, over) = l.tour.as_ref().map_or((0.0, 0), |t| (t.length_mm, t.hole_crossings));
+            TableRow { group_index: None, cells: vec![(k + 1).into(), l.offset_mm.into(), ((k + 1) as f64 * h).into(), l.points.points.len().into(), reduction.into(), length.into(), over.into()] }
+        })
+        .collect();
+    Table {
+        key: "layers".into(),
+        title: "Layers: each on the platform offset by the layers below".into(),
+        group: None,
+        columns: vec![col("Layer", ""), col("Surface offset", "mm"), col("Tip offset", "mm"), col("Points", ""), col("Spread reduced by", "%"), col("Path length", "mm"), col("Hops over a hole (not printed)", "")],
+        rows,
+    }
 }
 
 fn platform_report(p: &Platform, c: &platform::Continuity) -> StageReport {
@@ -650,6 +900,9 @@ pub struct PathSummary {
     pub crossings_left: usize,
     /// Poses written.
     pub poses: usize,
+    /// Path segments that cross a hole of Ω (0 without holes).
+    #[serde(default)]
+    pub hole_crossings: usize,
 }
 
 fn points_report(d: &uniform::Distribution, o: &uniform::Options, width: f64) -> StageReport {
@@ -788,7 +1041,7 @@ fn graded_report(mut r: StageReport, d: &uniform::Distribution, g: &crate::axisy
     r
 }
 
-fn path_report(t: &tour::Tour, d: &uniform::Distribution) -> StageReport {
+fn path_report(t: &tour::Tour, d: &uniform::Distribution, holes: bool) -> StageReport {
     let saving = if t.nn_length_mm > 0.0 { 100.0 * (1.0 - t.length_mm / t.nn_length_mm) } else { 0.0 };
     let summary = PathSummary {
         visited: t.order.len(),
@@ -797,50 +1050,87 @@ fn path_report(t: &tour::Tour, d: &uniform::Distribution) -> StageReport {
         crossings_removed: t.crossings_removed,
         crossings_left: t.crossings_left,
         poses: t.poses.len(),
+        hole_crossings: t.hole_crossings,
     };
-    StageReport::new("path", "Joining the points by geodesics", &summary)
+    let r = StageReport::new("path", "Joining the points by geodesics", &summary)
         .metric("visited", "Points visited", t.order.len() as f64, "", "Every point once, in one path.")
         .metric("length", "Path length", t.length_mm, "mm", "Along the geodesics on the platform.")
         .metric("nn_length", "Nearest-neighbour length", t.nn_length_mm, "mm", "The path before 2-opt.")
         .metric("saving", "2-opt shortened it by", saving, "%", "What 2-opt removed from the nearest-neighbour path (crossings included).")
         .metric("crossings", "Crossings left", t.crossings_left as f64, "", "Places the path crosses itself in the map: 0 is a clean raster.")
         .metric("poses", "Poses", t.poses.len() as f64, "", "Tool positions with their normal, along the sampled geodesics.")
-        .metric("points_in", "Points from the previous stage", d.points.len() as f64, "", "The repulsion's points the path joins.")
+        .metric("points_in", "Points from the previous stage", d.points.len() as f64, "", "The repulsion's points the path joins.");
+    if holes { r.metric("hole_crossings", "Hops over a hole", t.hole_crossings as f64, "", "Path segments that would cross a hole of Ω: the nozzle travels over them without extruding (0 when the path goes around every hole).") } else { r }
 }
 
-/// The nozzle tip of a pose: `h` out along the normal.
-fn tip(p: &tour::Pose, h: f64) -> [f64; 3] {
-    (DVec3::from_array(p.position) + DVec3::from_array(p.normal) * h).to_array()
+/// The nozzle tip of a pose: `h` out along the normal from the layer's surface.
+fn tip(p: &tour::Pose, h: f64) -> DVec3 {
+    DVec3::from_array(p.position) + DVec3::from_array(p.normal) * h
 }
 
-/// The tour as one free pass: the tip `h` out along the normal, the tool axis `axes` (one per
-/// pose: the normals, or smoothed).
-fn toolpath_of(t: &tour::Tour, axes: &[[f64; 3]], h: f64, width: f64) -> Toolpath {
-    let points: Vec<DVec3> = t.poses.iter().map(|p| DVec3::from_array(tip(p, h))).collect();
-    let axes: Vec<DVec3> = axes.iter().map(|a| DVec3::from_array(*a)).collect();
-    if points.len() < 2 {
-        return Toolpath::default();
+/// The lowest nozzle tip Z over every layer's path, mm (∞ without poses): what must stay on or
+/// above the plate (Z ≥ 0).
+pub fn lowest_tip_z(tours: &[&tour::Tour], h: f64) -> f64 {
+    tours.iter().flat_map(|t| &t.poses).map(|p| tip(p, h).z).fold(f64::INFINITY, f64::min)
+}
+
+/// Each layer's tour as one free pass: the tip `h` out along the normal from the layer's
+/// surface ((k + 1)·h from the platform), the tool axes `axes[k]` (one per pose: the normals,
+/// or smoothed).
+fn toolpath_of(tours: &[&tour::Tour], axes: &[Vec<[f64; 3]>], h: f64, width: f64) -> Toolpath {
+    let mut passes = Vec::with_capacity(tours.len());
+    for (t, axes) in tours.iter().zip(axes) {
+        if t.poses.len() < 2 {
+            continue;
+        }
+        // A segment that still crosses a hole is not printed: the path stops at its start and
+        // the next one starts at its end, reached along the segment's geodesic without
+        // extruding (the writer's approach route), so no strand is laid over the hole.
+        let mut cuts: Vec<(usize, usize)> = Vec::with_capacity(t.hole_segments.len());
+        let mut start = 0;
+        let mut next_hole = t.hole_segments.iter().peekable();
+        for (k, seg) in t.samples.iter().enumerate() {
+            let end = start + seg.len().saturating_sub(1);
+            if next_hole.next_if_eq(&&k).is_some() {
+                cuts.push((start, end));
+            }
+            start = end;
+        }
+        let mut paths = Vec::with_capacity(cuts.len() + 1);
+        let mut from = 0;
+        let mut approach = None;
+        for (a, b) in cuts.into_iter().chain(std::iter::once((t.poses.len() - 1, t.poses.len() - 1))) {
+            if a > from {
+                let points: Vec<DVec3> = t.poses[from..=a].iter().map(|p| tip(p, h)).collect();
+                let data = PointData { tool_axis: Some(axes[from..=a].iter().map(|a| DVec3::from_array(*a)).collect()), ..PointData::default() };
+                paths.push(Path { points, feature: Feature::Infill, width, speed_factor: 1.0, approach: approach.take(), data: Some(Box::new(data)) });
+            }
+            // The hop's inner samples, at the tip height.
+            approach = Some(t.poses[(a + 1).min(b)..b].iter().map(|p| tip(p, h)).collect::<Vec<_>>());
+            from = b;
+        }
+        if !paths.is_empty() {
+            passes.push(Pass { kind: PassKind::Free, z: lowest_tip_z(&[t], h), height: h, paths });
+        }
     }
-    let z = points.iter().map(|p| p.z).fold(f64::INFINITY, f64::min);
-    let data = PointData { tool_axis: Some(axes), ..PointData::default() };
-    let path = Path { points, feature: Feature::Infill, width, speed_factor: 1.0, approach: None, data: Some(Box::new(data)) };
-    Toolpath { passes: vec![Pass { kind: PassKind::Free, z, height: h, paths: vec![path] }] }
+    Toolpath { passes }
 }
 
 /// Half the size of a point's cross in the map view, in map units.
 const CROSS: f32 = 0.004;
 
-fn map_view(domain: &Domain, d: &uniform::Distribution, tour: Option<&tour::Tour>, index: usize) -> Inspection {
-    let index = index.min(2);
+fn map_view(domain: &Domain, d: &uniform::Distribution, tour: Option<&tour::Tour>, layer: usize, layers: usize, step: usize) -> Inspection {
+    let index = 3 * layer + step;
     let mut data: Vec<f32> = Vec::new();
     let mut seg = |a: [f64; 2], b: [f64; 2], code: u8| data.extend_from_slice(&[a[1] as f32, a[0] as f32, b[1] as f32, b[0] as f32, code as f32]);
-    // Outline of Ω (x: θ, y: u).
-    let outline = domain.ring();
-    for k in 0..outline.len() {
-        seg(outline[k], outline[(k + 1) % outline.len()], Feature::Contour.code());
+    // Outline of Ω and its holes (x: θ, y: u).
+    for ring in std::iter::once(domain.ring()).chain(domain.holes()) {
+        for k in 0..ring.len() {
+            seg(ring[k], ring[(k + 1) % ring.len()], Feature::Contour.code());
+        }
     }
-    let pts = if index == 0 { &d.seed_points } else { &d.points };
-    if index < 2 {
+    let pts = if step == 0 { &d.seed_points } else { &d.points };
+    if step < 2 {
         for p in pts {
             let (u, t) = (p[0] as f32, p[1] as f32);
             data.extend_from_slice(&[t - CROSS, u, t + CROSS, u, Feature::Lattice.code() as f32]);
@@ -854,16 +1144,18 @@ fn map_view(domain: &Domain, d: &uniform::Distribution, tour: Option<&tour::Tour
         }
     }
     let labels = ["seed points", "after repulsion", "path"];
+    // One layer keeps the plain caption; several name the layer.
+    let caption = if layers > 1 { format!("layer {} of {layers}: {}", layer + 1, labels[step]) } else { labels[step].to_string() };
     Inspection {
         view: "map".into(),
         shape: Shape::Lines2d,
         index,
-        count: 3,
+        count: 3 * layers,
         stride: Shape::Lines2d.stride(),
         data,
         meta: serde_json::json!({
-            "x_label": "θ (rad)", "y_label": "u", "scale_bar": false, "caption": labels[index],
-            "legend": legend(&[(Feature::Contour, "outline of Ω"), (Feature::Lattice, labels[index.min(1)]), (Feature::Infill, "path (geodesics)")]),
+            "x_label": "θ (rad)", "y_label": "u", "scale_bar": false, "caption": caption,
+            "legend": legend(&[(Feature::Contour, "outline of Ω"), (Feature::Lattice, labels[step.min(1)]), (Feature::Infill, "path (geodesics)")]),
         }),
     }
 }
@@ -873,7 +1165,7 @@ const MERIDIANS: usize = 24;
 const PARALLELS_PER_SEGMENT: usize = 6;
 const RING_STEPS: usize = 96;
 
-fn platform_view(p: &Platform, t: &tour::Tour, h: f64) -> Inspection {
+fn platform_view(p: &Platform, tours: &[&tour::Tour], h: f64) -> Inspection {
     let mut data: Vec<f32> = Vec::new();
     let code = Feature::Contour.code() as f32;
     let k = p.segments.len();
@@ -893,9 +1185,11 @@ fn platform_view(p: &Platform, t: &tour::Tour, h: f64) -> Inspection {
             push(platform::position(p, u, a), platform::position(p, u, b), code);
         }
     }
-    let tip = |q: &tour::Pose| [q.position[0] + q.normal[0] * h, q.position[1] + q.normal[1] * h, q.position[2] + q.normal[2] * h];
-    for w in t.poses.windows(2) {
-        push(tip(&w[0]), tip(&w[1]), Feature::Infill.code() as f32);
+    // Every layer's path, each tip one layer height out from its layer's surface.
+    for t in tours {
+        for w in t.poses.windows(2) {
+            push(tip(&w[0], h).to_array(), tip(&w[1], h).to_array(), Feature::Infill.code() as f32);
+        }
     }
     let meta = serde_json::json!({ "legend": legend(&[(Feature::Contour, "platform (meridians, parallels)"), (Feature::Infill, "path (nozzle tip)")]) });
     Inspection { view: "platform3d".into(), shape: Shape::Lines3d, index: 0, count: 1, stride: Shape::Lines3d.stride(), data, meta }

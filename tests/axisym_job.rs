@@ -547,3 +547,17 @@ fn a_part_with_a_hole_keeps_it_on_every_layer() {
         assert!(pts.iter().all(|q| !inner.contains(*q)), "layer {k}: a point in the hole");
     }
 }
+
+#[test]
+fn switching_the_domain_to_a_polygon_starts_from_the_rectangle() {
+    // The form switches the kind alone: the design stays valid, the outline is the rectangle's.
+    let d = example("barrel-omega1").with_overrides(&["job.domain.kind=polygon".into()]).unwrap();
+    assert!(d.validate().is_empty(), "{:?}", d.validate());
+    let j: weft::jobs::axisymmetric::AxisymJob = d.job.settings().unwrap();
+    assert_eq!(j.domain.polygon, vec![[0.8, 0.0], [1.2, 0.0], [1.2, 1.0], [0.8, 1.0]]);
+    // Same points as the rectangle: the same (u, θ) region.
+    let a: PointsSummary = run(&example("barrel-omega1")).report.stage("points").unwrap();
+    let b: PointsSummary = run(&d).report.stage("points").unwrap();
+    assert_eq!(a.points, b.points);
+    assert!(serde_json::from_str::<weft::jobs::axisymmetric::DomainSpec>(r#"{"kind":"polygon","polgon":[]}"#).is_err(), "unknown fields are still refused");
+}

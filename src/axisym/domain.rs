@@ -283,8 +283,8 @@ impl Domain {
         }
     }
 
-    /// True surface area ∫∫_Ω x(u)·√g_uu du dθ, mm² (adaptive Simpson between the vertices'
-    /// u values, where the θ width is linear and the integrand smooth).
+    /// True surface area ∫∫_Ω x(u)·√g_uu du dθ, mm² (the θ width is piecewise linear in u
+    /// and the integrand smooth between vertices: see [`Domain::integrate_u`]).
     pub fn area_mm2(&self, s: &Surface) -> f64 {
         let p = s.profile();
         let f = |u: f64| {
@@ -292,7 +292,13 @@ impl Domain {
             let w: f64 = self.theta_intervals(u).iter().map(|i| i[1] - i[0]).sum();
             j.x[0] * libm::hypot(j.x[1], j.z[1]) * w
         };
-        // Split at every vertex u of the outline and the holes (the width is piecewise linear).
+        self.integrate_u(&f, AREA_REL_TOL)
+    }
+
+    /// ∫ f(u) du over Ω's u range by adaptive Simpson, split at every vertex u of the outline
+    /// and the holes: integrands built on [`Domain::theta_intervals`] are only piecewise
+    /// smooth, with kinks or jumps at those u.
+    pub fn integrate_u(&self, f: &dyn Fn(f64) -> f64, rel_tol: f64) -> f64 {
         let mut us: Vec<f64> = self.ring().iter().chain(self.holes().iter().flatten()).map(|q| q[0]).collect();
         us.sort_by(f64::total_cmp);
         us.dedup();
@@ -302,7 +308,7 @@ impl Domain {
             // where edges start or end horizontally.
             let (a, b) = (w[0], w[1]);
             let e = (b - a) * 1e-12;
-            total += simpson(&f, a + e, b - e, AREA_REL_TOL);
+            total += simpson(f, a + e, b - e, rel_tol);
         }
         total
     }

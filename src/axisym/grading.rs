@@ -154,7 +154,7 @@ impl Field {
     }
 
     /// ∫_D ρ² dA over `domain` (any part of the platform, e.g. a third of Ω), mm²: adaptive
-    /// Simpson in u between the outline's vertex u values (x·√g_uu times the θ integral); the
+    /// Simpson in u between the vertex u values of the outline and holes (x·√g_uu times the θ integral); the
     /// θ integral is exact for u and θ gradings (ρ constant or linear in θ) and adaptive
     /// Simpson for the radial one.
     pub fn integral_rho2(&self, s: &Surface, domain: &Domain) -> f64 {
@@ -187,17 +187,7 @@ impl Field {
             let j = p.jet(u);
             j.x[0] * libm::hypot(j.x[1], j.z[1]) * theta_part(u)
         };
-        let mut us: Vec<f64> = domain.ring().iter().map(|q| q[0]).collect();
-        us.sort_by(f64::total_cmp);
-        us.dedup();
-        let mut total = 0.0;
-        for w in us.windows(2) {
-            // Just inside each interval, as `Domain::area_mm2`: the θ width jumps at vertices.
-            let (a, b) = (w[0], w[1]);
-            let e = (b - a) * 1e-12;
-            total += simpson(&f, a + e, b - e, INTEGRAL_REL_TOL);
-        }
-        total
+        domain.integrate_u(&f, INTEGRAL_REL_TOL)
     }
 }
 

@@ -165,9 +165,11 @@ pub enum DomainKind {
     Part,
 }
 
-/// Ω as the form edits it (flat fields), turned into an [`axisym::domain::Domain`].
+/// Ω as the form edits it (flat fields), turned into an [`axisym::domain::Domain`]. A polygon
+/// domain without corners starts from the rectangle's (as a preset writes its control points):
+/// switching the kind in the form gives a valid design whose outline can then be edited.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, default)]
+#[serde(from = "RawDomain")]
 pub struct DomainSpec {
     /// Rectangle or polygon.
     pub kind: DomainKind,
@@ -191,6 +193,36 @@ impl Default for DomainSpec {
     /// The paper's Ω1 on the barrel.
     fn default() -> Self {
         DomainSpec { kind: DomainKind::Rectangle, u_min: 0.8, u_max: 1.2, theta_min_rad: 0.0, theta_max_rad: 1.0, polygon: Vec::new(), holes: Vec::new() }
+    }
+}
+
+/// [`DomainSpec`] as read, before an empty polygon takes the rectangle's corners.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields, default)]
+struct RawDomain {
+    kind: DomainKind,
+    u_min: f64,
+    u_max: f64,
+    theta_min_rad: f64,
+    theta_max_rad: f64,
+    polygon: Vec<[f64; 2]>,
+    holes: Vec<Vec<[f64; 2]>>,
+}
+
+impl Default for RawDomain {
+    fn default() -> Self {
+        let d = DomainSpec::default();
+        RawDomain { kind: d.kind, u_min: d.u_min, u_max: d.u_max, theta_min_rad: d.theta_min_rad, theta_max_rad: d.theta_max_rad, polygon: d.polygon, holes: d.holes }
+    }
+}
+
+impl From<RawDomain> for DomainSpec {
+    fn from(r: RawDomain) -> Self {
+        let mut polygon = r.polygon;
+        if r.kind == DomainKind::Polygon && polygon.is_empty() {
+            polygon = vec![[r.u_min, r.theta_min_rad], [r.u_max, r.theta_min_rad], [r.u_max, r.theta_max_rad], [r.u_min, r.theta_max_rad]];
+        }
+        DomainSpec { kind: r.kind, u_min: r.u_min, u_max: r.u_max, theta_min_rad: r.theta_min_rad, theta_max_rad: r.theta_max_rad, polygon, holes: r.holes }
     }
 }
 

@@ -108,6 +108,62 @@ export async function axisymChecks({ baseUrl, weftBin = process.env.WEFT_BIN, ch
       return cuts.map(([a, raw, smooth]) => `${a} ${raw} → ${smooth} °/s²`).join(", ");
     });
 
+    await check(n++, "axisymmetric: barrel-graded draws commanded against measured density; then 2 layers and a polygon with a hole from the form: the per-layer table, the domain's hole and the map's 6 pictures", async () => {
+      // Its own page: the next check edits the hourglass loaded above.
+      const own = await newPage();
+      const page = own.page;
+      try {
+        await page.goto(`${baseUrl}/www/`);
+        await waitReady(page);
+        await page.waitForSelector('#examples option[value="barrel-graded.json"]', { state: "attached", timeout: 10000 }).catch(() => {});
+        let before = await page.evaluate(() => window.weft.resultCount);
+        await page.selectOption("#examples", "barrel-graded.json");
+        await waitResult(page, before, "running barrel-graded", jobTimeout);
+        const graded = await page.evaluate(() => {
+          const card = document.querySelector('#report .stage-card[data-stage="points"]');
+          const plot = card?.querySelector('[data-plot-key="graded_density"]');
+          const series = [...(plot?.querySelectorAll(".series[data-series]") ?? [])].map((e) => e.dataset.series);
+          const value = (key) => card?.querySelector(`.metrics [data-key="${key}"] dd`)?.firstChild?.textContent ?? null;
+          return { series, reduction: value("rel_std_reduction") };
+        });
+        if (graded.series.length < 3) throw new Error(`the graded-density plot draws ${graded.series.length} series: ${graded.series}`);
+        if (!(Number(graded.reduction) > 30)) throw new Error(`spread against the target reduced by ${graded.reduction} %`);
+        // Two layers on a polygon with a square hole, typed into the form.
+        await page.selectOption("#f-job-domain-kind", JSON.stringify("polygon"));
+        await page.waitForSelector("#f-job-domain-polygon", { state: "visible", timeout: 5000 });
+        await page.fill("#f-job-domain-polygon", "0.8 0\n1.2 0\n1.2 1\n0.8 1");
+        await page.dispatchEvent("#f-job-domain-polygon", "change");
+        await page.fill("#f-job-domain-holes", "0.95 0.4\n1.05 0.4\n1.05 0.6\n0.95 0.6");
+        await page.dispatchEvent("#f-job-domain-holes", "change");
+        await page.fill("#f-job-layers", "2");
+        await page.dispatchEvent("#f-job-layers", "change");
+        const job = await page.evaluate(() => JSON.parse(window.weft.design).job);
+        if (job.layers !== 2 || job.domain.holes?.length !== 1 || job.domain.holes[0].length !== 4) throw new Error(`the design did not take the form: ${JSON.stringify({ layers: job.layers, holes: job.domain.holes })}`);
+        before = await page.evaluate(() => window.weft.resultCount);
+        await page.click("#slice");
+        await waitResult(page, before, "running 2 layers with a hole", jobTimeout);
+        const shown = await page.evaluate(() => {
+          const table = document.querySelector('#report .stage-card[data-stage="path"] table.report-table[data-key="layers"]');
+          const rows = [...(table?.querySelectorAll("tbody tr") ?? [])].map((r) => [...r.children].map((c) => c.textContent.trim()));
+          const holes = document.querySelector('#report .stage-card[data-stage="domain"] .metrics [data-key="holes"] dd')?.firstChild?.textContent ?? null;
+          return { rows, holes };
+        });
+        if (shown.rows.length !== 2 || shown.holes !== "1") throw new Error(`per-layer rows ${shown.rows.length}, holes kept ${shown.holes}`);
+        await page.waitForFunction(() => (window.weft.views.find((x) => x.id === "map")?.count ?? 0) === 6, null, { timeout: jobTimeout });
+        const input = '.view-card[data-view="map"] input[type=number]';
+        const k = await page.evaluate(() => window.weft.views.find((x) => x.id === "map").answers);
+        await page.fill(input, "5");
+        await page.dispatchEvent(input, "change");
+        await page.waitForFunction((a) => { const v = window.weft.views.find((x) => x.id === "map"); return v.answers > a && v.index === 4; }, k, { timeout: jobTimeout });
+        const info = await page.evaluate(() => document.querySelector('.view-card[data-view="map"] output.hint')?.textContent ?? "");
+        if (!/layer 2 of 2/.test(info)) throw new Error(`the map's caption reads "${info}"`);
+        await page.screenshot({ path: join(outDir, "axisym-layers-hole.png"), fullPage: true });
+        return `graded: ${graded.series.length} series, spread −${graded.reduction} %; layers: ${shown.rows.map((r) => `${r[0]}: ${r[3]} points`).join(", ")}; map "${info.slice(0, 60)}"`;
+      } finally {
+        await own.context.close();
+      }
+    });
+
     await check(n++, "axisymmetric: a custom platform's control points are edited as lines; a kinked polygon is refused naming the field and the previous result stays", async () => {
       await waitReady(page);
       await page.selectOption("#f-job-platform-preset", JSON.stringify("custom"));

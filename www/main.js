@@ -327,7 +327,7 @@ const fieldViews = new Map();
  * Schema fields shown for the current design: those of its job kind whose path exists in the
  * design (so only the current pattern's, domain's, surface's and built-in shape's parameters),
  * plus each `…kind` choice and optional Section whose parent object exists; a field with a
- * `when` condition only while the field at `when_path` has the stated value.
+ * `when` condition while the field at `when_path` has the stated value (even when absent).
  */
 function visibleFields() {
   const design = state.design;
@@ -339,7 +339,9 @@ function visibleFields() {
     if (f.path === "job.kind") return true;
     if (!f.path.startsWith("job.")) return true;
     const parent = f.path.slice(0, f.path.lastIndexOf("."));
-    if (f.kind === "section" || (f.kind === "choice" && f.path.endsWith(".kind"))) {
+    // A section, a `…kind` choice, or a field its `when` condition asks for (e.g. a polygon's
+    // holes, left out of the design while there are none) shows while its parent exists.
+    if (f.kind === "section" || (f.kind === "choice" && f.path.endsWith(".kind")) || (whenPath && f.when)) {
       const p = getPath(design, parent);
       return p !== null && typeof p === "object" && !Array.isArray(p);
     }

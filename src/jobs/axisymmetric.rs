@@ -64,9 +64,9 @@ pub struct AxisymJob {
     /// A part resting on the platform: where it meets the platform is Ω (domain kind `part`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub part: Option<Input>,
-    /// Layers stacked along the normal (left out of the JSON at 1, so one-layer designs keep
-    /// their bytes).
-    #[serde(default = "default_layers", skip_serializing_if = "is_default_layers")]
+    /// Layers stacked along the normal (1: the paper's single layer). Always written, so the
+    /// form shows the field.
+    #[serde(default = "default_layers")]
     pub layers: usize,
     /// The tool axis: the normal, or smoothed within a tilt for the rotary axes.
     #[serde(default)]
@@ -79,10 +79,6 @@ fn default_layer_height() -> f64 {
 
 fn default_layers() -> usize {
     DEFAULT_LAYERS
-}
-
-fn is_default_layers(n: &usize) -> bool {
-    *n == DEFAULT_LAYERS
 }
 
 impl Default for AxisymJob {

@@ -560,4 +560,14 @@ fn switching_the_domain_to_a_polygon_starts_from_the_rectangle() {
     let b: PointsSummary = run(&d).report.stage("points").unwrap();
     assert_eq!(a.points, b.points);
     assert!(serde_json::from_str::<weft::jobs::axisymmetric::DomainSpec>(r#"{"kind":"polygon","polgon":[]}"#).is_err(), "unknown fields are still refused");
+    // The map offers to draw a polygon domain (which field, and that its pairs are (u, θ) =
+    // (y, x) of the map), and not a rectangle.
+    let mut cache = weft::pipeline::Cache::new();
+    let registry = weft::jobs::Registry::builtin();
+    let v = pipeline::inspect(&registry, &mut cache, &d, &Files::default(), "map", 1).unwrap();
+    assert_eq!(v.meta["draw"]["path"], "job.domain.polygon");
+    assert_eq!(v.meta["draw"]["pair"], serde_json::json!(["y", "x"]));
+    let v = pipeline::inspect(&registry, &mut cache, &example("barrel-omega1"), &Files::default(), "map", 1).unwrap();
+    assert!(v.meta["draw"].is_null());
+    assert_eq!(v.meta["legend"][weft::geom::Feature::Contour.code().to_string()], "outline of Ω");
 }

@@ -1069,7 +1069,36 @@ function buildViews() {
     legend.className = "mini-legend";
     card.append(head, range, box, legend);
     host.append(card);
-    const v = { view, card, canvas, range, number, info, legend, last: null, seq: 0, timer: 0, count: 0, answers: 0, items: 0 };
+    // Drawing a points field on the view (meta.draw of the answer: which field, which data
+    // axis goes in each slot of a pair): clicks add corners, Finish writes the field.
+    const tools = document.createElement("div");
+    tools.className = "view-tools";
+    tools.hidden = true;
+    const drawButton = document.createElement("button");
+    drawButton.type = "button";
+    drawButton.className = "view-draw";
+    const finishButton = document.createElement("button");
+    finishButton.type = "button";
+    finishButton.className = "view-finish";
+    finishButton.hidden = true;
+    const cancelButton = document.createElement("button");
+    cancelButton.type = "button";
+    cancelButton.className = "view-cancel";
+    cancelButton.textContent = "Cancel";
+    cancelButton.hidden = true;
+    tools.append(drawButton, finishButton, cancelButton);
+    card.append(tools);
+    const v = { view, card, canvas, range, number, info, legend, tools, drawButton, finishButton, cancelButton, drawing: null, frame: null, last: null, seq: 0, timer: 0, count: 0, answers: 0, items: 0 };
+    drawButton.addEventListener("click", () => { v.drawing = []; syncDrawTools(v); redrawView(v); });
+    cancelButton.addEventListener("click", () => { v.drawing = null; syncDrawTools(v); redrawView(v); });
+    finishButton.addEventListener("click", () => finishDrawing(v));
+    canvas.addEventListener("click", (e) => {
+      if (!v.drawing || !v.frame?.toData) return;
+      const r = canvas.getBoundingClientRect();
+      v.drawing.push(v.frame.toData(e.clientX - r.left, e.clientY - r.top));
+      syncDrawTools(v);
+      redrawView(v);
+    });
     number.addEventListener("change", () => { range.value = number.value; scheduleInspect(0, v); });
     range.addEventListener("input", () => { number.value = range.value; scheduleInspect(INSPECT_DEBOUNCE_MS / 2, v); });
     new ResizeObserver(() => redrawView(v)).observe(box);
@@ -1114,6 +1143,7 @@ async function requestInspect(v) {
   for (const el of [v.number, v.range]) el.max = max;
   v.range.hidden = res.count < 2;
   if (res.index !== index && document.activeElement !== v.number) v.number.value = v.range.value = String(res.index + 1);
+  syncDrawTools(v);
   redrawView(v);
   const what = res.shape === "image" ? `${res.meta?.width ?? 0} × ${res.meta?.height ?? 0} px`
     : `${v.items.toLocaleString("en-US")} ${res.shape === "mesh" ? "triangles" : "segments"}`;
@@ -1121,9 +1151,54 @@ async function requestInspect(v) {
   v.info.textContent = `of ${Math.max(1, res.count)} · ${caption}${what} · ${Math.round(res.ms)} ms`;
 }
 
+/** Shows the view's draw tools for the answer's `meta.draw` (hidden without one). */
+function syncDrawTools(v) {
+  const spec = v.last?.meta?.draw;
+  v.tools.hidden = !spec;
+  if (!spec) { v.drawing = null; return; }
+  const on = Array.isArray(v.drawing);
+  v.drawButton.hidden = on;
+  v.drawButton.textContent = spec.label ?? "Draw";
+  v.finishButton.hidden = !on;
+  v.cancelButton.hidden = !on;
+  v.finishButton.disabled = !on || v.drawing.length < (spec.min_points ?? 3);
+  v.finishButton.textContent = on ? `Finish (${v.drawing.length} point${v.drawing.length === 1 ? "" : "s"})` : "Finish";
+  v.canvas.classList.toggle("drawing", on);
+}
+
+/** Writes the drawn corners into the field `meta.draw.path` (pairs ordered by `meta.draw.pair`). */
+function finishDrawing(v) {
+  const spec = v.last?.meta?.draw;
+  if (!spec || !v.drawing) return;
+  const round = (x) => Math.round(x * 1e4) / 1e4;
+  const pairs = v.drawing.map(([x, y]) => (spec.pair ?? ["x", "y"]).map((k) => round(k === "x" ? x : y)));
+  const problem = setFields([[spec.path, JSON.stringify(pairs)]]);
+  if (problem) {
+    v.info.textContent = problem;
+    v.info.classList.add("field-error");
+    return;
+  }
+  v.drawing = null;
+  syncDrawTools(v);
+}
+
 function redrawView(v) {
   if (!v.card.isConnected) return;
   const r = drawView(v.canvas, v.last, styles);
+  v.frame = r.toData ? r : null;
+  // The corners drawn so far, over the view.
+  if (v.drawing?.length && v.frame) {
+    const ctx = v.canvas.getContext("2d");
+    ctx.save();
+    ctx.scale(v.frame.dpr, v.frame.dpr);
+    ctx.strokeStyle = ctx.fillStyle = "#f5d76e";
+    ctx.lineWidth = 1.5;
+    ctx.beginPath();
+    v.drawing.forEach(([x, y], i) => { const [px, py] = v.frame.toPx(x, y); if (i) ctx.lineTo(px, py); else ctx.moveTo(px, py); });
+    ctx.stroke();
+    for (const [x, y] of v.drawing) { const [px, py] = v.frame.toPx(x, y); ctx.fillRect(px - 3, py - 3, 6, 6); }
+    ctx.restore();
+  }
   v.items = r.items;
   // A view may name its own entries (meta.legend: feature code → words), e.g. "seed points"
   // drawn in the lattice colour; otherwise the feature's name.

@@ -41,7 +41,7 @@ function fitFrame(w, h, margin, [minX, minY, maxX, maxY]) {
   const scale = Math.min((w - 2 * margin) / spanX, (h - 2 * margin) / spanY);
   const ox = (w - spanX * scale) / 2 - minX * scale;
   const oy = (h + spanY * scale) / 2 + minY * scale;
-  return { scale, sx: (x) => ox + x * scale, sy: (y) => oy - y * scale };
+  return { scale, sx: (x) => ox + x * scale, sy: (y) => oy - y * scale, ix: (px) => (px - ox) / scale, iy: (py) => (oy - py) / scale };
 }
 
 function scaleBar(ctx, w, h, dpr, scale) {
@@ -91,7 +91,8 @@ function strokeByColor(ctx, n, colorOf, draw) {
  * @param {{stride?: number, frame?: number[]|null, lineWidth?: number, scaleBar?: boolean,
  *          background?: string, color?: string|null, styles?: Map<number, {color: string}>}} [opts]
  *        frame: [minX, minY, maxX, maxY] to fit instead of the segments' bounds
- * @returns {{items: number, counts: Object<number, number>}}
+ * @returns {{items: number, counts: Object<number, number>, toData?: Function, toPx?: Function}}
+ *          toData(x, y) / toPx(x, y): CSS pixels of the canvas ↔ data coordinates
  */
 export function drawSegments2d(canvas, segments, opts = {}) {
   const { stride = 5, frame = null, lineWidth = 1.25, background = BACKGROUND, color = null, styles = new Map() } = opts;
@@ -112,7 +113,7 @@ export function drawSegments2d(canvas, segments, opts = {}) {
       }
     }
   }
-  const { scale, sx, sy } = fitFrame(w, h, 8 * dpr, box);
+  const { scale, sx, sy, ix, iy } = fitFrame(w, h, 8 * dpr, box);
   ctx.lineCap = "round";
   ctx.lineWidth = lineWidth * dpr;
   strokeByColor(ctx, n, (s) => {
@@ -126,7 +127,10 @@ export function drawSegments2d(canvas, segments, opts = {}) {
   });
   if (opts.scaleBar) scaleBar(ctx, w, h, dpr, scale);
   if (opts.axes) axisLabels(ctx, w, h, dpr, box, opts.axes);
-  return { items: n, counts };
+  // The fit both ways, in CSS pixels of the canvas: for overlays and clicks (drawing a field).
+  const toData = (x, y) => [ix(x * dpr), iy(y * dpr)];
+  const toPx = (x, y) => [sx(x) / dpr, sy(y) / dpr];
+  return { items: n, counts, toData, toPx, dpr };
 }
 
 /** Names and ranges of a plot-like 2D view whose units are not mm (meta.x_label, y_label). */

@@ -437,7 +437,7 @@ impl Kind for AxisymKind {
                 // The points of a layer do not need the paths below it; its path does.
                 let layers = all_layers(j, ctx, &platform, layer + 1, step == 2)?;
                 let l = &layers[layer];
-                Ok(map_view(&l.domain, &l.points, l.tour.as_deref(), layer, j.layers, step))
+                Ok(map_view(&l.domain, &l.points, l.tour.as_deref(), layer, j.layers, step, j.domain.kind == DomainKind::Polygon))
             }
             "platform3d" => {
                 let layers = all_layers(j, ctx, &platform, j.layers, true)?;
@@ -744,25 +744,27 @@ fn axes_report(o: &dynamics::Options, max_tilt_deg: f64, raw: &dynamics::Dynamic
     let summary = AxesSummary { max_tilt_deg, raw: pairs(raw), smoothed: pairs(after) };
     let on = o.max_tilt_deg > 0.0;
     let mut r = StageReport::new("axes", "Tool axis and machine dynamics", &summary)
-        .metric("max_tilt", "Largest tilt from the normal", max_tilt_deg, "°", "How far smoothing leans the tool axis away from the surface normal (0: the axis is the normal).")
-        .metric("feed", "At the infill speed", feed, "mm/s", "The speeds and accelerations below are for this feed; they scale with it (accelerations with its square).")
-        .metric("duration", "Path time", after.duration_s, "s", "The paths' length (every layer) over the infill speed.");
-    for (k, (a, b)) in raw.axes.iter().zip(&after.axes).enumerate() {
-        let name = if k == 0 { "tool axis".to_string() } else { format!("{} axis", a.axis) };
-        let key = if k == 0 { "tool".to_string() } else { a.axis.to_lowercase() };
+        .metric("max_tilt", "Largest tilt from the normal", max_tilt_deg, "°", "How far smoothing leans the tool axis (0: the axis is the normal).")
+        .metric("feed", "At the infill speed", feed, "mm/s", "Speeds below scale with it, accelerations with its square.")
+        .metric("duration", "Path time", after.duration_s, "s", "Every layer's path at the infill speed.");
+    // The tool axis as metrics; every axis (rotary ones too) in the table below.
+    if let Some(b) = after.axes.first() {
         r = r
-            .metric(&format!("{key}_speed"), &format!("Fastest turn, {name}"), b.max_speed_deg_s, "°/s", "What the rotary axes must follow at the infill speed (after smoothing, when on).")
-            .metric(&format!("{key}_accel"), &format!("Largest acceleration, {name}"), b.max_accel_deg_s2, "°/s²", "The hardest change of turning speed; corners of the raster set it.");
-        if on {
+            .metric("tool_speed", "Tool-axis turn, fastest", b.max_speed_deg_s, "°/s", "How fast the tool axis turns at the infill speed (smoothed, when on).")
+            .metric("tool_accel", "Tool-axis acceleration, largest", b.max_accel_deg_s2, "°/s²", "Its hardest change of turning speed: the raster's corners set it.");
+    }
+    if on {
+        for (a, b) in raw.axes.iter().zip(&after.axes) {
             let cut = if a.max_accel_deg_s2 > 0.0 { 100.0 * (1.0 - b.max_accel_deg_s2 / a.max_accel_deg_s2) } else { 0.0 };
-            r = r.metric(&format!("{key}_accel_cut"), &format!("Smoothing lowered the {name} acceleration by"), cut, "%", "Against the tool axis equal to the normal everywhere.");
+            let key = if a.axis == "tool axis" { "tool".to_string() } else { a.axis.to_lowercase() };
+            r = r.metric(&format!("{key}_accel_cut"), &format!("Acceleration cut, {}", a.axis), cut, "%", "Against the axis equal to the normal everywhere.");
         }
     }
     r.tables.push(crate::report::Table {
         key: "dynamics".into(),
         title: "Axis speeds and accelerations at the infill speed".into(),
         group: None,
-        columns: [("Axis", ""), ("Speed, normal", "°/s"), ("Acceleration, normal", "°/s²"), ("Speed, smoothed", "°/s"), ("Acceleration, smoothed", "°/s²")]
+        columns: [("Axis", ""), ("Speed", "°/s"), ("Accel.", "°/s²"), ("Speed, smoothed", "°/s"), ("Accel., smoothed", "°/s²")]
             .iter()
             .map(|(label, unit)| crate::report::Column { label: (*label).into(), unit: (*unit).into() })
             .collect(),
@@ -811,7 +813,8 @@ fn layer_table(layers: &[Layer], h: f64) -> crate::report::Table {
         .enumerate()
         .map(|(k, l)| {
             let (s, m) = (&l.points.seed_metrics, &l.points.metrics);
-            let reduction = if s.nn_std_mm > 0.0 { 100.0 * (1.0 - m.nn_std_mm / s.nn_std_mm) } else { 0.0 };
+            // Against the local target spacing (the same ratio as in mm when the density is uniform).
+            let reduction = if s.rel_std > 0.0 { 100.0 * (1.0 - m.rel_std / s.rel_std) } else { 0.0 };
             let (length, over) = l.tour.as_ref().map_or((0.0, 0), |t| (t.length_mm, t.hole_crossings));
             TableRow { group_index: None, cells: vec![(k + 1).into(), l.offset_mm.into(), ((k + 1) as f64 * h).into(), l.points.points.len().into(), reduction.into(), length.into(), over.into()] }
         })
@@ -960,7 +963,13 @@ fn points_report(d: &uniform::Distribution, o: &uniform::Options, width: f64) ->
         .metric("iterations", "Repulsion iterations", d.iterations.len() as f64, "", "Geodesic repulsion steps taken before a tolerance or the cap stopped it.")
         .metric("std_seed", "Spacing spread, seed", s.nn_std_mm, "mm", "Standard deviation of the distances to the 2n nearest neighbours before repulsion.")
         .metric("std", "Spacing spread, result", m.nn_std_mm, "mm", "The same after repulsion: lower is more uniform.")
-        .metric("std_reduction", "Spread reduced by", reduction, "%", "How much repulsion evened the spacing (the paper: 71.7 %, 71.6 %, 44 % on its three cases).")
+        .metric(
+            "std_reduction",
+            "Spread reduced by",
+            reduction,
+            "%",
+            if o.grading.is_some() { "In mm, which a graded density spreads on purpose: see the spread against the target below." } else { "How much repulsion evened the spacing (the paper: 71.7 %, 71.6 %, 44 % on its three cases)." },
+        )
         .metric("mean", "Mean neighbour distance", m.nn_mean_mm, "mm", "Mean distance to the 2n nearest neighbours after repulsion.")
         .metric("ratio", "e / mean distance", 100.0 * m.ratio, "%", "Line width over the mean spacing: the density the points give, to compare with the command density.")
         .metric("command", "Command density ρ_c", 100.0 * o.density, "%", if o.grading.is_some() { "The density asked for at the near end of the grading." } else { "The density asked for." });
@@ -1147,7 +1156,10 @@ fn toolpath_of(tours: &[&tour::Tour], axes: &[Vec<[f64; 3]>], h: f64, width: f64
 /// Half the size of a point's cross in the map view, in map units.
 const CROSS: f32 = 0.004;
 
-fn map_view(domain: &Domain, d: &uniform::Distribution, tour: Option<&tour::Tour>, layer: usize, layers: usize, step: usize) -> Inspection {
+/// The map of layer `layer` at `step` (seed, result, path); with `drawable` (a polygon
+/// domain) the page offers to draw the outline on it (`meta.draw`: field, pair order).
+#[allow(clippy::too_many_arguments)]
+fn map_view(domain: &Domain, d: &uniform::Distribution, tour: Option<&tour::Tour>, layer: usize, layers: usize, step: usize, drawable: bool) -> Inspection {
     let index = 3 * layer + step;
     let mut data: Vec<f32> = Vec::new();
     let mut seg = |a: [f64; 2], b: [f64; 2], code: u8| data.extend_from_slice(&[a[1] as f32, a[0] as f32, b[1] as f32, b[0] as f32, code as f32]);
@@ -1184,6 +1196,8 @@ fn map_view(domain: &Domain, d: &uniform::Distribution, tour: Option<&tour::Tour
         meta: serde_json::json!({
             "x_label": "θ (rad)", "y_label": "u", "scale_bar": false, "caption": caption,
             "legend": legend(&[(Feature::Contour, "outline of Ω"), (Feature::Lattice, labels[step.min(1)]), (Feature::Infill, "path (geodesics)")]),
+            // x is θ and y is u here; the polygon field holds (u, θ) pairs.
+            "draw": if drawable { serde_json::json!({ "path": "job.domain.polygon", "pair": ["y", "x"], "label": "Draw Ω on the map", "min_points": 3 }) } else { serde_json::Value::Null },
         }),
     }
 }

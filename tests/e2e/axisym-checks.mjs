@@ -108,7 +108,7 @@ export async function axisymChecks({ baseUrl, weftBin = process.env.WEFT_BIN, ch
       return cuts.map(([a, raw, smooth]) => `${a} ${raw} → ${smooth} °/s²`).join(", ");
     });
 
-    await check(n++, "axisymmetric: barrel-graded draws commanded against measured density; then 2 layers and a polygon with a hole from the form: the per-layer table, the domain's hole and the map's 6 pictures", async () => {
+    await check(n++, "axisymmetric: barrel-graded draws commanded against measured density; Ω drawn by clicks on the map fills the polygon field; then 2 layers and a polygon with a hole from the form: the per-layer table, the domain's hole and the map's 6 pictures", async () => {
       // Its own page: the next check edits the hourglass loaded above.
       const own = await newPage();
       const page = own.page;
@@ -131,6 +131,21 @@ export async function axisymChecks({ baseUrl, weftBin = process.env.WEFT_BIN, ch
         // Two layers on a polygon with a square hole, typed into the form.
         await page.selectOption("#f-job-domain-kind", JSON.stringify("polygon"));
         await page.waitForSelector("#f-job-domain-polygon", { state: "visible", timeout: 5000 });
+        // Draw Ω on the map: the view offers it for a polygon domain; four clicks, Finish.
+        const mapCard = '.view-card[data-view="map"]';
+        await page.waitForFunction((c) => document.querySelector(`${c} .view-tools`)?.hidden === false, mapCard, { timeout: jobTimeout });
+        await page.click(`${mapCard} .view-draw`);
+        const box = await (await page.$(`${mapCard} canvas`)).boundingBox();
+        for (const [fx, fy] of [[0.35, 0.4], [0.65, 0.4], [0.65, 0.6], [0.35, 0.6]]) await page.mouse.click(box.x + fx * box.width, box.y + fy * box.height);
+        const finish = await page.textContent(`${mapCard} .view-finish`);
+        if (!/4 points/.test(finish)) throw new Error(`the Finish button reads "${finish}"`);
+        await page.click(`${mapCard} .view-finish`);
+        const drawn = await page.evaluate(() => JSON.parse(window.weft.design).job.domain.polygon);
+        // (u, θ) pairs: x on the map is θ (rightwards), y is u (upwards).
+        const ok = drawn?.length === 4 && drawn[0][1] < drawn[1][1] && drawn[2][0] < drawn[1][0] && Math.abs(drawn[0][0] - drawn[1][0]) < 1e-3 && drawn.every(([u, t]) => Number.isFinite(u) && Number.isFinite(t));
+        if (!ok) throw new Error(`the drawn outline is ${JSON.stringify(drawn)}`);
+        const typed = await page.inputValue("#f-job-domain-polygon");
+        if (typed.split("\n").filter((l) => l.trim()).length !== 4) throw new Error(`the polygon field shows "${typed}" after drawing`);
         await page.fill("#f-job-domain-polygon", "0.8 0\n1.2 0\n1.2 1\n0.8 1");
         await page.dispatchEvent("#f-job-domain-polygon", "change");
         await page.fill("#f-job-domain-holes", "0.95 0.4\n1.05 0.4\n1.05 0.6\n0.95 0.6");
@@ -158,7 +173,7 @@ export async function axisymChecks({ baseUrl, weftBin = process.env.WEFT_BIN, ch
         const info = await page.evaluate(() => document.querySelector('.view-card[data-view="map"] output.hint')?.textContent ?? "");
         if (!/layer 2 of 2/.test(info)) throw new Error(`the map's caption reads "${info}"`);
         await page.screenshot({ path: join(outDir, "axisym-layers-hole.png"), fullPage: true });
-        return `graded: ${graded.series.length} series, spread −${graded.reduction} %; layers: ${shown.rows.map((r) => `${r[0]}: ${r[3]} points`).join(", ")}; map "${info.slice(0, 60)}"`;
+        return `drawn ${JSON.stringify(drawn)}; graded: ${graded.series.length} series, spread −${graded.reduction} %; layers: ${shown.rows.map((r) => `${r[0]}: ${r[3]} points`).join(", ")}; map "${info.slice(0, 60)}"`;
       } finally {
         await own.context.close();
       }

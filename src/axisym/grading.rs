@@ -86,11 +86,6 @@ impl Field {
         Field { along: g.along, rho0: rho_c, rho1: g.density_to, range, centre, ne }
     }
 
-    /// Which coordinate.
-    pub fn along(&self) -> Along {
-        self.along
-    }
-
     /// The grading coordinate of a point: u, θ (rad) or the geodesic distance r (mm).
     pub fn coordinate(&self, s: &Surface, n: &Node) -> f64 {
         match self.along {

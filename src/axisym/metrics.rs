@@ -29,8 +29,6 @@ pub struct Metrics {
     pub rel_mean: f64,
     /// Standard deviation of `nn_relative` (uniform: `nn_std_mm` / s).
     pub rel_std: f64,
-    /// Per point, the commanded density ρ(q_i) = n·e/s(q_i).
-    pub target_density: Vec<f64>,
     /// Per point, the density its neighbours give: n·e / (mean of its 2n-NN distances).
     pub local_density: Vec<f64>,
     /// Per point, the KDF over what points at the target density give inside Ω (1.5/(h_i·s_i²):
@@ -164,7 +162,6 @@ pub fn graded_metrics(s: &Surface, points: &[[f64; 2]], rasters: u32, line_width
         nn_relative,
         rel_mean,
         rel_std,
-        target_density: local.iter().map(|s| ne / s).collect(),
         local_density,
         kdf_relative,
         kdf_relative_sorted,

@@ -10,7 +10,7 @@
 //! reaches the radius of curvature of a concave bend) the offset folds into a cusp:
 //! [`Offset::new`] refuses well before that.
 
-use super::platform::{Jet, Profile, Profile4};
+use super::platform::{curvature_of, Jet, Profile, Profile4};
 use super::Error;
 
 /// Default smallest stretch 1 − hκ of the offset's meridian against its base: below 0.2 the
@@ -35,20 +35,22 @@ impl<'a, P: Profile4 + ?Sized> Offset<'a, P> {
             return Err(Error::BadOption { name: "offset height", value: h_mm, hint: "a finite height in mm" });
         }
         let o = Offset { base, h: h_mm };
-        let max_height_mm = largest_height(base, span, min_radius_mm);
+        // The largest height allowed (a second pass) is only needed for a refusal's message.
+        let max_height_mm = || largest_height(base, span, min_radius_mm);
         for u in samples(base, span) {
             let j = base.jet(u);
             if j.x[0] < min_radius_mm {
                 // The pole region: the domain's own check names it.
                 continue;
             }
-            let k = kappa(&j);
+            let k = curvature_of(&j);
             if !(1.0 - h_mm * k >= DEFAULT_MIN_STRETCH) {
-                return Err(Error::OffsetFolds { height_mm: h_mm, u, radius_of_curvature_mm: 1.0 / k, max_height_mm });
+                return Err(Error::OffsetFolds { height_mm: h_mm, u, radius_of_curvature_mm: 1.0 / k, max_height_mm: max_height_mm() });
             }
-            let r = o.jet(u).x[0];
+            // The offset radius x − h·z′/s (what `jet` gives as x[0], without its derivatives).
+            let r = j.x[0] - h_mm * j.z[1] / (j.x[1] * j.x[1] + j.z[1] * j.z[1]).sqrt();
             if !(r >= min_radius_mm) {
-                return Err(Error::OffsetNearPole { height_mm: h_mm, u, radius_mm: r, min_radius_mm, max_height_mm });
+                return Err(Error::OffsetNearPole { height_mm: h_mm, u, radius_mm: r, min_radius_mm, max_height_mm: max_height_mm() });
             }
         }
         Ok(o)
@@ -70,11 +72,6 @@ fn samples<P: Profile + ?Sized>(p: &P, span: [f64; 2]) -> impl Iterator<Item = f
     (0..=n).filter(move |_| b >= a).map(move |i| a + (b - a) * i as f64 / n as f64)
 }
 
-fn kappa(j: &Jet) -> f64 {
-    let s2 = j.x[1] * j.x[1] + j.z[1] * j.z[1];
-    (j.x[1] * j.z[2] - j.z[1] * j.x[2]) / (s2 * s2.sqrt())
-}
-
 /// The largest outward offset (≥ 0, mm) of `base` that neither folds nor comes nearer than
 /// `min_radius_mm` to the axis for u in `span` (∞ when nothing limits it).
 pub fn largest_height<P: Profile + ?Sized>(base: &P, span: [f64; 2], min_radius_mm: f64) -> f64 {
@@ -84,7 +81,7 @@ pub fn largest_height<P: Profile + ?Sized>(base: &P, span: [f64; 2], min_radius_
         if j.x[0] < min_radius_mm {
             continue;
         }
-        let k = kappa(&j);
+        let k = curvature_of(&j);
         if k > 0.0 {
             best = best.min((1.0 - DEFAULT_MIN_STRETCH) / k);
         }

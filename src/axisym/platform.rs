@@ -147,7 +147,11 @@ pub(crate) fn christoffel_of(j: &Jet) -> Christoffel {
 /// Signed curvature κ of the generatrix at u, 1/mm (positive when it turns counter-clockwise
 /// in the (x, z) plane).
 pub fn curvature<P: Profile + ?Sized>(p: &P, u: f64) -> f64 {
-    let j = p.jet(u);
+    curvature_of(&p.jet(u))
+}
+
+/// κ from a jet already at hand.
+pub(crate) fn curvature_of(j: &Jet) -> f64 {
     let s2 = j.x[1] * j.x[1] + j.z[1] * j.z[1];
     (j.x[1] * j.z[2] - j.z[1] * j.x[2]) / (s2 * s2.sqrt())
 }

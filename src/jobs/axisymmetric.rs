@@ -416,7 +416,7 @@ impl Kind for AxisymKind {
         let mut keys: Vec<_> = layers.iter().map(|l| l.tour.as_ref().map_or(l.points.key, |t| t.key)).collect();
         let axes = axes_stage(j, ctx, &tours, &keys)?;
         keys.push(axes.key);
-        let toolpath = ctx.stage("axes", "toolpath", &(h, width), &keys, |_| Ok((toolpath_of(&tours, &axes.layers, h, width), None)))?;
+        let toolpath = ctx.stage("axes", "toolpath", &(h, width), &keys, |_| Ok((toolpath_of(&tours, &axes, h, width), None)))?;
         // The per-layer table joins the path stage's report (cached or not, it is added here).
         let table = layer_table(&layers, h);
         if let Some(r) = ctx.reports.iter_mut().find(|r| r.stage == "path") {
@@ -612,7 +612,7 @@ fn below_plate(p: &dyn platform::Profile, u_lo: f64, u_hi: f64, h: f64) -> Resul
     let tip_z = |u: f64| platform::position(p, u, 0.0)[2] + platform::normal(p, u, 0.0)[2] * h;
     let n = (((u_hi - u_lo) * PLATE_SAMPLES_PER_U).ceil() as usize).clamp(1, 1 << 16);
     let at = |i: usize| u_lo + (u_hi - u_lo) * i as f64 / n as f64;
-    let k = (0..=n).min_by(|&a, &b| tip_z(at(a)).total_cmp(&tip_z(at(b)))).unwrap_or(0);
+    let k = (0..=n).map(|i| (i, tip_z(at(i)))).min_by(|a, b| a.1.total_cmp(&b.1)).map_or(0, |(i, _)| i);
     // Golden-section refinement in the bracket around the lowest sample.
     let (mut a, mut b) = (at(k.saturating_sub(1)), at((k + 1).min(n)));
     for _ in 0..60 {
@@ -683,16 +683,10 @@ fn path_stage(j: &AxisymJob, ctx: &mut Ctx, platform: &Out<Platform>, domain: &O
     })
 }
 
-/// Tool axes of every layer's path.
-pub struct LayerAxes {
-    /// Per layer, one unit axis per pose.
-    pub layers: Vec<Vec<[f64; 3]>>,
-}
-
-/// The tool axes along each layer's tour (the normals, or smoothed within the tilt) and what
+/// The tool axes along each layer's tour, one unit axis per pose (the normals, or smoothed within the tilt) and what
 /// they ask of the machine at the infill speed, before and after smoothing: the largest speed
 /// and acceleration of each axis over the layers (each layer is its own pass).
-fn axes_stage(j: &AxisymJob, ctx: &mut Ctx, tours: &[&tour::Tour], keys: &[crate::pipeline::Key]) -> Result<Out<LayerAxes>, Error> {
+fn axes_stage(j: &AxisymJob, ctx: &mut Ctx, tours: &[&tour::Tour], keys: &[crate::pipeline::Key]) -> Result<Out<Vec<Vec<[f64; 3]>>>, Error> {
     let design = ctx.design;
     let (h, feed, machine) = (j.layer_height_mm, design.speeds.infill_mm_s, &design.printer.machine);
     ctx.stage("axes", "axes", &(&j.tool_axis, h, feed, machine), keys, |_| {
@@ -702,13 +696,16 @@ fn axes_stage(j: &AxisymJob, ctx: &mut Ctx, tours: &[&tour::Tour], keys: &[crate
             let normals: Vec<[f64; 3]> = t.poses.iter().map(|p| p.normal).collect();
             let tips: Vec<[f64; 3]> = t.poses.iter().map(|p| tip(p, h).to_array()).collect();
             let smoothed = dynamics::smooth_axes(&positions, &normals, &j.tool_axis).map_err(|e| Error::stage("axes", e))?;
-            raw_all.push(dynamics::dynamics(&tips, &normals, machine, feed).map_err(|e| Error::stage("axes", e))?);
-            after_all.push(dynamics::dynamics(&tips, &smoothed.axes, machine, feed).map_err(|e| Error::stage("axes", e))?);
+            let raw = dynamics::dynamics(&tips, &normals, machine, feed).map_err(|e| Error::stage("axes", e))?;
+            // Smoothing off (the default): the axes are the normals, the same dynamics.
+            let after = if smoothed.axes == normals { raw.clone() } else { dynamics::dynamics(&tips, &smoothed.axes, machine, feed).map_err(|e| Error::stage("axes", e))? };
+            raw_all.push(raw);
+            after_all.push(after);
             tilt = tilt.max(smoothed.max_tilt_deg);
             layers.push(smoothed.axes);
         }
         let report = axes_report(&j.tool_axis, tilt, &worst(&raw_all), &worst(&after_all), feed);
-        Ok((LayerAxes { layers }, Some(report)))
+        Ok((layers, Some(report)))
     })
 }
 

@@ -38,6 +38,7 @@ pub mod jobs;
 pub mod report;
 pub mod testgen;
 pub mod thumbnail;
+pub mod volume;
 
 pub use design::Design;
 pub use pipeline::{run, RunOptions, RunOutput};

@@ -101,3 +101,40 @@ impl Volume {
         o + a * p.x + b * p.y + c * p.z
     }
 }
+
+/// A region of interest: a box in the volume frame, mm (voxel centres inside it, faces
+/// included, are in the region).
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Roi {
+    /// Smallest corner, mm.
+    pub min_mm: [f64; 3],
+    /// Largest corner, mm.
+    pub max_mm: [f64; 3],
+}
+
+impl Roi {
+    /// The whole grid of `volume`.
+    pub fn whole(volume: &Volume) -> Roi {
+        Roi { min_mm: [0.0; 3], max_mm: volume.extent_mm().to_array() }
+    }
+
+    /// The voxel index ranges `[start, end)` along i, j, k of the voxel centres inside the box,
+    /// `None` when none is (or the box is not finite).
+    pub fn voxels(&self, volume: &Volume) -> Option<[std::ops::Range<usize>; 3]> {
+        let mut out = [0..0, 0..0, 0..0];
+        for a in 0..3 {
+            let (lo, hi, s, n) = (self.min_mm[a], self.max_mm[a], volume.spacing_mm[a], volume.dims[a]);
+            if !(lo.is_finite() && hi.is_finite() && s > 0.0) || n == 0 || hi < lo {
+                return None;
+            }
+            let start = libm::ceil(lo / s - 1e-9).max(0.0);
+            let end = (libm::floor(hi / s + 1e-9) + 1.0).min(n as f64);
+            if !(end > start) {
+                return None;
+            }
+            out[a] = start as usize..end as usize;
+        }
+        Some(out)
+    }
+}

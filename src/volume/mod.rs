@@ -138,3 +138,12 @@ impl Roi {
         Some(out)
     }
 }
+
+mod histogram;
+mod isolines;
+mod sample;
+mod view;
+pub use histogram::*;
+pub use isolines::*;
+pub use sample::*;
+pub use view::*;

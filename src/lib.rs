@@ -36,6 +36,7 @@ pub mod pipeline;
 pub mod settings;
 pub mod jobs;
 pub mod report;
+pub mod scaffold;
 pub mod testgen;
 pub mod thumbnail;
 pub mod volume;

@@ -1,0 +1,32 @@
+//! The scaffold model of the CT-graded-density paper (sections 2.2.1 and 2.3.2, equations
+//! 1–4 and 7, table 1): how infill cell size, bead width and relative density relate, and how
+//! a CT value (HU) becomes a target relative density.
+//!
+//! Quantities (lengths in mm):
+//! - **ρ_s**, the *infill density* the slicer is set to: the fraction of the volume the infill
+//!   fills when every bead has the slicer's nominal width. **ρ** is a relative density in
+//!   general (1 = solid), **P = 1 − ρ** the porosity.
+//! - **L_cell** (`cell_mm`), the size of the infill's unit cell (the period of the gyroid,
+//!   the line spacing pattern of rectilinear, …). The cell stays fixed across a graded part;
+//!   density is graded by the bead width.
+//! - **E_w** (`width_mm`), the extrusion width of a bead; a bead is a *stadium*: a rectangle
+//!   `(E_w − l_h) × l_h` with half-discs of diameter `l_h` at both sides, cross-section
+//!   `l_h (E_w + (π/4 − 1) l_h)` ([`bead_area`]). Equation 1 is this area with the nominal
+//!   width `1.25 φ`, times the toolpath length per cell `k_c · m · L_cell`, over the cell's
+//!   volume per layer `L_cell² · l_h`.
+//! - **φ** (`nozzle_mm`) the nozzle diameter, **l_h** (`layer_mm`) the layer height.
+//! - **k_c**, **m** ([`Cell`], table 1): toolpath length per cell over `L_cell`, and the
+//!   number of independent toolpaths per cell in a layer.
+//!
+//! Files: [`model`] (equations 1–4 and the bead), [`calibration`] (HU → porosity, eq 7).
+
+pub mod calibration;
+pub mod model;
+
+pub use calibration::{Calibration, DEFAULT_POINTS};
+pub use model::*;
+
+/// Table 1 of the paper: the three infill types with their coefficients, for reports.
+pub fn coefficients_table() -> [(&'static str, Cell); 3] {
+    [("gyroid", GYROID), ("rectilinear", RECTILINEAR), ("3D honeycomb", HONEYCOMB_3D)]
+}

@@ -507,3 +507,92 @@ fn seeded_mutations_never_panic_and_every_error_formats() {
     // Both outcomes occur (a mutation in pixel data still reads).
     assert!(ok > 100 && err > 100, "ok {ok}, err {err}");
 }
+
+/// Explicit VR LE element writers for hand-made files.
+struct Ds(Vec<u8>);
+
+impl Ds {
+    fn el(&mut self, g: u16, e: u16, vr: &[u8; 2], v: &[u8]) -> &mut Self {
+        let mut v = v.to_vec();
+        if v.len() % 2 == 1 {
+            v.push(b' ');
+        }
+        self.0.extend_from_slice(&g.to_le_bytes());
+        self.0.extend_from_slice(&e.to_le_bytes());
+        self.0.extend_from_slice(vr);
+        if vr == b"OW" {
+            self.0.extend_from_slice(&[0, 0]);
+            self.0.extend_from_slice(&(v.len() as u32).to_le_bytes());
+        } else {
+            self.0.extend_from_slice(&(v.len() as u16).to_le_bytes());
+        }
+        self.0.extend_from_slice(&v);
+        self
+    }
+    fn us(&mut self, g: u16, e: u16, v: u16) -> &mut Self {
+        self.el(g, e, b"US", &v.to_le_bytes())
+    }
+    /// Undefined-length sequence start.
+    fn sq(&mut self, g: u16, e: u16) -> &mut Self {
+        self.0.extend_from_slice(&g.to_le_bytes());
+        self.0.extend_from_slice(&e.to_le_bytes());
+        self.0.extend_from_slice(&[b'S', b'Q', 0, 0, 0xFF, 0xFF, 0xFF, 0xFF]);
+        self
+    }
+    fn item(&mut self) -> &mut Self {
+        self.0.extend_from_slice(&[0xFE, 0xFF, 0x00, 0xE0, 0xFF, 0xFF, 0xFF, 0xFF]);
+        self
+    }
+    fn item_end(&mut self) -> &mut Self {
+        self.0.extend_from_slice(&[0xFE, 0xFF, 0x0D, 0xE0, 0, 0, 0, 0]);
+        self
+    }
+    fn sq_end(&mut self) -> &mut Self {
+        self.0.extend_from_slice(&[0xFE, 0xFF, 0xDD, 0xE0, 0, 0, 0, 0]);
+        self
+    }
+}
+
+/// An enhanced (multi-frame) CT of 3 frames of 2 rows × 3 columns: shared orientation, pixel
+/// measures and rescale; per-frame positions z = 4, 0, 2 (out of order) when `positions`.
+fn multi_frame(positions: bool) -> Vec<u8> {
+    let mut d = Ds(Vec::new());
+    d.el(0x0008, 0x0060, b"CS", b"CT").el(0x0020, 0x000D, b"UI", b"1.2.3").el(0x0020, 0x000E, b"UI", b"1.2.3.4");
+    d.us(0x0028, 0x0002, 1).el(0x0028, 0x0008, b"IS", b"3").us(0x0028, 0x0010, 2).us(0x0028, 0x0011, 3);
+    d.us(0x0028, 0x0100, 16).us(0x0028, 0x0101, 16).us(0x0028, 0x0102, 15).us(0x0028, 0x0103, 1);
+    d.sq(0x5200, 0x9229).item();
+    d.sq(0x0020, 0x9116).item().el(0x0020, 0x0037, b"DS", b"1\\0\\0\\0\\1\\0").item_end().sq_end();
+    d.sq(0x0028, 0x9110).item().el(0x0018, 0x0050, b"DS", b"2").el(0x0028, 0x0030, b"DS", b"0.5\\0.4").item_end().sq_end();
+    d.sq(0x0028, 0x9145).item().el(0x0028, 0x1052, b"DS", b"-5").el(0x0028, 0x1053, b"DS", b"2").item_end().sq_end();
+    d.item_end().sq_end();
+    if positions {
+        d.sq(0x5200, 0x9230);
+        for z in [b"1\\2\\4", b"1\\2\\0", b"1\\2\\2"] {
+            d.item().sq(0x0020, 0x9113).item().el(0x0020, 0x0032, b"DS", z).item_end().sq_end().item_end();
+        }
+        d.sq_end();
+    }
+    let px: Vec<u8> = (0..3).flat_map(|f| (0..6).map(move |n| (f * 100 + n - 50) as i16)).flat_map(|v| v.to_le_bytes()).collect();
+    d.el(0x7FE0, 0x0010, b"OW", &px);
+    let mut out = meta("1.2.840.10008.5.1.4.1.1.2.1", "1.2.3.4.5", "1.2.840.10008.1.2.1");
+    out.extend_from_slice(&d.0);
+    out
+}
+
+#[test]
+fn a_multi_frame_file_is_read_from_its_functional_groups() {
+    let got = read(&one("enhanced.dcm", multi_frame(true))).unwrap();
+    let v = &got.volume;
+    assert_eq!(v.dims, [3, 2, 3]);
+    assert_eq!(v.spacing_mm, [0.4, 0.5, 2.0]);
+    assert_eq!(v.placement.origin_mm, [1.0, 2.0, 0.0]);
+    // k = 0 is frame 2 (z 0), k = 1 frame 3 (z 2), k = 2 frame 1 (z 4).
+    for (k, f) in [(0, 1), (1, 2), (2, 0)] {
+        for n in 0..6 {
+            assert_eq!(v.values[k * 6 + n], ((f * 100 + n as i32 - 50) * 2 - 5) as f32, "k {k} n {n}");
+        }
+    }
+    assert_eq!(v.info.unit, "HU");
+    let e = read(&one("enhanced.dcm", multi_frame(false))).unwrap_err();
+    assert!(matches!(&e, Error::Unsupported { what, .. } if what.contains("multi-frame")), "{e}");
+}

@@ -238,7 +238,7 @@ fn parse_header(file: &str, bytes: &[u8]) -> Result<Header, Error> {
         let mut axes = [[0.0; 3]; 3];
         for a in 0..3 {
             let n = (d[a][0] * d[a][0] + d[a][1] * d[a][1] + d[a][2] * d[a][2]).sqrt();
-            if !(n > 0.0) {
+            if n.is_nan() || n <= 0.0 {
                 return Err(err(file, line, format!("space direction {} has zero length", a + 1)));
             }
             h.spacing[a] = n;

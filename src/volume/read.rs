@@ -38,7 +38,7 @@ pub const MAX_UNZIPPED_BYTES: u64 = 1 << 30;
 
 /// Bytes of each zip entry (or of a deflated DICOM data set) inflated by the header scan of
 /// [`estimate`]: headers sit before the pixel data and are a few KiB.
-pub const HEAD_BYTES: usize = 256 << 10;
+pub const HEAD_BYTES: usize = 64 << 10;
 
 /// Default raw voxel spacing, mm.
 pub const DEFAULT_RAW_SPACING_MM: f64 = 1.0;

@@ -8,6 +8,16 @@
 //! directions, from Image Position / Orientation (Patient)) is kept for reports and
 //! round trips; the job works in the volume frame.
 
+mod dicom;
+mod nrrd;
+mod raw;
+mod read;
+mod zip;
+
+pub use dicom::{DUPLICATE_MM, GAP_TOLERANCE, MAX_DEPTH};
+pub use nrrd::MAX_HEADER_BYTES;
+pub use read::*;
+
 use crate::geom::DVec3;
 use serde::Serialize;
 

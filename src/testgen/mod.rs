@@ -4,6 +4,7 @@
 //! and the bytes made grow linearly in `n`.
 
 pub mod design;
+pub mod foreign;
 pub mod gcode;
 pub mod lattice;
 pub mod mesh;

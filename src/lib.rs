@@ -23,6 +23,7 @@ pub mod analyze;
 pub mod axisym;
 pub mod budget;
 pub mod gcode;
+pub mod gcode_edit;
 pub mod geom;
 pub mod import;
 pub mod lattice;

@@ -5,6 +5,7 @@
 
 pub mod design;
 pub mod dicom;
+pub mod foreign;
 pub mod gcode;
 pub mod lattice;
 pub mod mesh;

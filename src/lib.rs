@@ -26,6 +26,7 @@ pub mod gcode;
 pub mod gcode_edit;
 pub mod geom;
 pub mod import;
+pub mod isosurface;
 pub mod lattice;
 pub mod machine;
 pub mod motion;

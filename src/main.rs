@@ -115,6 +115,27 @@ enum Command {
         #[arg(long, hide = true, default_value_t = 1)]
         scale: usize,
     },
+    /// Write one of a job's views (`weft jobs` lists them): a mesh view as a binary STL (the
+    /// graded job's surface model), any other as JSON with its data.
+    Inspect {
+        /// The design (JSON), or a share link / fragment.
+        design: String,
+        /// The view's id (e.g. surface, axial).
+        #[arg(long)]
+        view: String,
+        /// Which picture of the view (slice, layer…), from 1.
+        #[arg(long, default_value_t = 1)]
+        index: usize,
+        /// Input files, as for `run`.
+        #[arg(long, value_name = "[SLOT=]FILE")]
+        input: Vec<String>,
+        /// Override a design field, as for `run`.
+        #[arg(long = "set", value_name = "PATH=VALUE")]
+        set: Vec<String>,
+        /// Output file, or a folder to write <design name>-<view>.stl / .json in.
+        #[arg(long, short)]
+        out: PathBuf,
+    },
     /// Write a lattice design's printed struts as an STL (a nozzle-wide prism per strut, round-capped at joints) for other slicers.
     ExportStl {
         /// The design (JSON, a lattice job).
@@ -223,6 +244,8 @@ fn load_design(arg: &str) -> Result<Design, String> {
 /// Reads each `--input [SLOT=]FILE`, puts it in its slot of the design and in `files`.
 fn apply_inputs(design: &mut Design, inputs: &[String], files: &mut Files) -> Result<(), String> {
     let registry = Registry::builtin();
+    // Files given on this command line for each slot that takes several.
+    let mut gathered: std::collections::BTreeMap<String, Vec<String>> = std::collections::BTreeMap::new();
     for arg in inputs {
         let kind = registry.get(design.job.kind()).ok_or_else(|| format!("unknown job kind '{}'", design.job.kind()))?;
         let (slot, path) = match arg.split_once('=') {
@@ -240,11 +263,93 @@ fn apply_inputs(design: &mut Design, inputs: &[String], files: &mut Files) -> Re
                 (first.name.to_string(), PathBuf::from(arg))
             }
         };
-        let name = file_name(&path);
-        files.insert(name.clone(), read(&path)?);
-        *design = design
-            .with_slot_input(&registry, &slot, Input::File { name, embedded: None })
-            .map_err(|e| format!("--input {arg}: {e}"))?;
+        let several = kind.slots().iter().any(|s| s.name == slot && s.kind.multiple());
+        let input = if several {
+            // A folder (a DICOM series) gives every file in it, named by its path inside the
+            // folder; repeated --input SLOT=FILE gather.
+            let mut names = Vec::new();
+            if path.is_dir() {
+                for (name, file) in files_in_folder(&path)? {
+                    files.insert(name.clone(), read(&file)?);
+                    names.push(name);
+                }
+                if names.is_empty() {
+                    return Err(format!("--input {arg}: the folder has no files"));
+                }
+            } else {
+                let name = file_name(&path);
+                files.insert(name.clone(), read(&path)?);
+                names.push(name);
+            }
+            let list = gathered.entry(slot.clone()).or_default();
+            list.extend(names);
+            match list.as_slice() {
+                [one] if !path.is_dir() => Input::File { name: one.clone(), embedded: None },
+                all => Input::Files(all.to_vec()),
+            }
+        } else {
+            let name = file_name(&path);
+            files.insert(name.clone(), read(&path)?);
+            Input::File { name, embedded: None }
+        };
+        *design = design.with_slot_input(&registry, &slot, input).map_err(|e| format!("--input {arg}: {e}"))?;
+    }
+    Ok(())
+}
+
+/// The files under `folder` (depth ≤ 8, hidden ones skipped), sorted, each with its path
+/// inside the folder as its name (`/`-separated).
+fn files_in_folder(folder: &Path) -> Result<Vec<(String, PathBuf)>, String> {
+    const MAX_FILES: usize = 20_000;
+    let mut out = Vec::new();
+    let mut stack = vec![(folder.to_path_buf(), String::new(), 0usize)];
+    while let Some((dir, prefix, depth)) = stack.pop() {
+        let entries = std::fs::read_dir(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+        for entry in entries.flatten() {
+            let name = entry.file_name().to_string_lossy().into_owned();
+            if name.starts_with('.') {
+                continue;
+            }
+            let path = entry.path();
+            if path.is_dir() {
+                if depth < 8 {
+                    stack.push((path, format!("{prefix}{name}/"), depth + 1));
+                }
+            } else if path.is_file() {
+                out.push((format!("{prefix}{name}"), path));
+                if out.len() > MAX_FILES {
+                    return Err(format!("{}: more than {MAX_FILES} files; give the series' own folder", folder.display()));
+                }
+            }
+        }
+    }
+    out.sort();
+    Ok(out)
+}
+
+fn cmd_inspect(design: &str, view: &str, index: usize, inputs: &[String], set: &[String], out: PathBuf) -> Result<(), String> {
+    let mut design = load_design(design)?;
+    if !set.is_empty() {
+        design = design.with_overrides(set).map_err(|e| e.to_string())?;
+    }
+    let mut files = Files::new();
+    apply_inputs(&mut design, inputs, &mut files)?;
+    let registry = Registry::builtin();
+    let found = weft::pipeline::inspect(&registry, &mut weft::pipeline::Cache::disabled(), &design, &files, view, index.saturating_sub(1)).map_err(|e| e.to_string())?;
+    if found.shape == weft::jobs::Shape::Mesh {
+        let mesh = weft::geom::Mesh::from_triangle_floats(&found.data);
+        let path = output_path(Some(&out), &format!("{}-{view}", design.name), "stl");
+        write(&path, &weft::isosurface::write_stl(&mesh, &design.name))?;
+        errln!("{}: {} triangles", path.display(), mesh.triangles.len());
+    } else {
+        let path = output_path(Some(&out), &format!("{}-{view}", design.name), "json");
+        let mut v = serde_json::to_value(&found).map_err(|e| e.to_string())?;
+        v["data"] = serde_json::json!(found.data);
+        if !found.overlay.is_empty() {
+            v["overlay"] = serde_json::json!(found.overlay);
+        }
+        write(&path, serde_json::to_string(&v).map_err(|e| e.to_string())?.as_bytes())?;
+        errln!("{}: {} {} of {} ({} values)", path.display(), view, found.index + 1, found.count, found.data.len());
     }
     Ok(())
 }
@@ -501,6 +606,7 @@ fn main() -> ExitCode {
             let all = if lattice { Ok(String::new()) } else { weft::bench::run_all(triangles, gcode_mb) };
             all.and_then(|a| weft::bench::run_lattice().map(|l| outln!("{a}\n{l}")))
         }
+        Command::Inspect { design, view, index, input, set, out } => cmd_inspect(&design, &view, index, &input, &set, out),
         Command::ExportStl { design, out } => load_design(&design).and_then(|d| {
             let e = weft::export::lattice_stl(&d).map_err(|e| e.to_string())?;
             let out = output_path(Some(&out), &d.name, "stl");

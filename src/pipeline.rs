@@ -14,6 +14,7 @@ use crate::geom::{DVec3, Mesh, Toolpath};
 use crate::import::{self, ImportReport};
 use crate::jobs::{Inspection, Product, Registry};
 use crate::report::StageReport;
+use crate::volume;
 use serde::Serialize;
 use std::any::Any;
 use std::collections::BTreeMap;
@@ -295,6 +296,90 @@ impl<'a> Ctx<'a> {
     }
 }
 
+impl<'a> Ctx<'a> {
+    /// The bytes of a one-file `input` of `slot` (loaded, or embedded in a share link) and
+    /// the key of its content.
+    pub fn file_bytes(&self, slot: &str, input: &Input) -> Result<(std::borrow::Cow<'a, [u8]>, Key), Error> {
+        let files: &'a Files = self.files;
+        match input {
+            Input::File { name, embedded } => match (files.get(name), files.hash(name), embedded) {
+                (Some(b), Some(h), _) => Ok((std::borrow::Cow::Borrowed(b), h)),
+                (_, _, Some(e)) => {
+                    let bytes = share::unpack(e).map_err(|source| Error::Embedded { name: name.clone(), source })?;
+                    let key = Key::of_bytes(&bytes);
+                    Ok((std::borrow::Cow::Owned(bytes), key))
+                }
+                _ => Err(Error::MissingInput { name: name.clone(), slot: slot.into() }),
+            },
+            Input::Files(_) => Err(Error::NoInput(format!("the {slot} input takes one file, not several"))),
+            Input::Builtin(_) => Err(Error::NoInput(format!("the {slot} input takes a file, not a built-in shape"))),
+        }
+    }
+
+    /// The files of a volume `input` (one file: a `.zip`, NRRD, raw or single DICOM; several:
+    /// a series), with the keys of their contents.
+    fn volume_files(&self, slot: &str, input: &Input) -> Result<Vec<(String, std::borrow::Cow<'a, [u8]>, Key)>, Error> {
+        match input {
+            Input::Files(names) => {
+                let files: &'a Files = self.files;
+                let mut out = Vec::with_capacity(names.len());
+                for name in names {
+                    match (files.get(name), files.hash(name)) {
+                        (Some(b), Some(h)) => out.push((name.clone(), std::borrow::Cow::Borrowed(b), h)),
+                        _ => return Err(Error::MissingInput { name: name.clone(), slot: slot.into() }),
+                    }
+                }
+                Ok(out)
+            }
+            Input::File { name, .. } => {
+                let (bytes, key) = self.file_bytes(slot, input)?;
+                Ok(vec![(name.clone(), bytes, key)])
+            }
+            Input::Builtin(_) => Err(Error::NoInput(format!("the {slot} input takes a volume: a DICOM series, a .zip of one, NRRD or raw voxels"))),
+        }
+    }
+
+    /// The volume reader's statement of its work on `input`, before reading it.
+    pub fn volume_estimate(&self, slot: &str, input: &Input, options: &volume::Options) -> Result<Estimate, Error> {
+        let files = self.volume_files(slot, input)?;
+        let list: Vec<(&str, &[u8])> = files.iter().map(|(n, b, _)| (n.as_str(), b.as_ref())).collect();
+        let e = volume::estimate(&list, options);
+        if let Some(r) = &e.refused {
+            return Err(Error::TooBig { stage: "volume".into(), source: r.clone() });
+        }
+        Ok(e)
+    }
+
+    /// The volume of `input` (a slot's [`Input`]), read once per content and options: the
+    /// stage `volume` (cache id `volume:{slot}`), with its report.
+    pub fn volume(&mut self, slot: &str, input: &Input, options: &volume::Options) -> Result<Out<volume::Volume>, Error> {
+        let files = self.volume_files(slot, input)?;
+        let names: Vec<&str> = files.iter().map(|(n, _, _)| n.as_str()).collect();
+        let upstream: Vec<Key> = files.iter().map(|(_, _, k)| *k).collect();
+        let id = format!("volume:{slot}");
+        self.stage("volume", &id, &(&names, options), &upstream, |_| {
+            let list: Vec<(&str, &[u8])> = files.iter().map(|(n, b, _)| (n.as_str(), b.as_ref())).collect();
+            let imported = volume::read_volume(&list, options).map_err(|e| Error::stage("reading the volume", e))?;
+            let (v, r) = (&imported.volume, &imported.report);
+            let unit = v.info.unit.as_str();
+            let mut report = StageReport::new("volume", "Reading the volume", r)
+                .metric("nx", "Columns (i)", v.dims[0] as f64, "", "Voxels along a row.")
+                .metric("ny", "Rows (j)", v.dims[1] as f64, "", "Voxels down a column.")
+                .metric("nz", "Slices (k)", v.dims[2] as f64, "", "Images in the series, sorted by position along the slice normal.")
+                .metric("sx", "Spacing i", v.spacing_mm[0], "mm", "Voxel size along a row (DICOM Pixel Spacing, second value).")
+                .metric("sy", "Spacing j", v.spacing_mm[1], "mm", "Voxel size down a column (Pixel Spacing, first value).")
+                .metric("sz", "Spacing k", v.spacing_mm[2], "mm", "Distance between slice positions (measured, not Slice Thickness).")
+                .metric("min", "Lowest value", r.min as f64, unit, "The volume's smallest value after rescale.")
+                .metric("max", "Highest value", r.max as f64, unit, "The volume's largest value after rescale.")
+                .metric("files", "Files read", r.files_read as f64, "", "Files that made the volume.");
+            if !r.skipped.is_empty() {
+                report = report.metric("skipped", "Files skipped", r.skipped.len() as f64, "", "Files in the drop that are not images of the series (listed in the report's data).");
+            }
+            Ok((imported.volume, Some(report)))
+        })
+    }
+}
+
 /// Run options that are not part of the design.
 #[derive(Clone, Debug, Default)]
 pub struct RunOptions {
@@ -480,18 +565,34 @@ pub fn run_in(
     if let Some((stage, source)) = plan.refused {
         return Err(Error::TooBig { stage, source });
     }
-    let Product::Toolpath(toolpath) = kind.run(&mut ctx)?;
-    let written = write_stage(&mut ctx, &toolpath)?;
+    let (written, finished) = match kind.run(&mut ctx)? {
+        Product::Toolpath(toolpath) => (write_stage(&mut ctx, &toolpath)?, false),
+        // Finished G-code: no writer; its totals are read back below.
+        Product::Gcode(text) => (Out { value: Arc::new(Written { text: text.value.clone(), stats: GcodeStats::default() }), key: text.key }, true),
+    };
     let analysed = analyze_stage(&mut ctx, &written, options)?;
     let reports = std::mem::take(&mut ctx.reports);
+    let stats = if finished { stats_of(&analysed.report) } else { written.stats.clone() };
     let report = RunReport {
         name: design.name.clone(),
         job: design.job.kind().into(),
         stages: reports,
-        gcode: written.stats.clone(),
+        gcode: stats,
         analysis: analysed.report.clone(),
     };
     Ok(RunOutput { gcode: written.text.clone(), report, preview: analysed.preview.clone() })
+}
+
+/// Writer totals of G-code weft did not write (an edited file), as the analyzer measured them.
+fn stats_of(a: &analyze::Report) -> GcodeStats {
+    GcodeStats {
+        layers: a.layers,
+        extruded_mm: a.extruded_mm,
+        filament_mm: a.filament_mm,
+        travel_mm: a.travel_mm,
+        retractions: a.retractions,
+        estimated_time_s: a.estimated_time_s,
+    }
 }
 
 /// The run's plan (`weft run --dry-run`, the page's question before a big run): every

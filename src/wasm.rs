@@ -81,6 +81,12 @@ pub fn fill_slot(json: &str, slot: &str, names: Vec<String>) -> Result<String, J
     d.with_slot_input(&Registry::builtin(), slot, input).map(|d| d.to_json_pretty()).map_err(js_err)
 }
 
+/// A binary STL of a `mesh` view's triangles (9 floats each, mm).
+#[wasm_bindgen(js_name = meshStl)]
+pub fn mesh_stl(triangles: &[f32], name: &str) -> Vec<u8> {
+    crate::isosurface::write_stl(&crate::geom::Mesh::from_triangle_floats(triangles), name)
+}
+
 /// A share-link fragment for the design with the given files (`[{slot, name, bytes}]`);
 /// returns `{fragment, embedded: [names], missing: [names], note}`.
 #[wasm_bindgen(js_name = encodeShare)]
@@ -241,6 +247,9 @@ impl Session {
         let found = pipeline::inspect(&self.registry, &mut self.cache, &design, &self.files, view, index).map_err(js_err)?;
         let obj = to_js(&found)?;
         js_sys::Reflect::set(&obj, &"data".into(), &f32_array(&found.data)).map_err(|_| JsError::new("inspect: cannot build the answer"))?;
+        if !found.overlay.is_empty() {
+            js_sys::Reflect::set(&obj, &"overlay".into(), &f32_array(&found.overlay)).map_err(|_| JsError::new("inspect: cannot build the answer"))?;
+        }
         Ok(obj)
     }
 

@@ -89,7 +89,7 @@ impl Kind for Spiral {
 
     fn inspect(s: &SpiralJob, _ctx: &mut Ctx, view: &str, index: usize) -> Result<Inspection, Error> {
         let count = s.turns as usize;
-        Ok(Inspection { view: view.into(), shape: Shape::Lines2d, index: index.min(count - 1), count, stride: 5, data: vec![0.0, 0.0, 1.0, 1.0, 1.0], meta: serde_json::Value::Null })
+        Ok(Inspection { view: view.into(), shape: Shape::Lines2d, index: index.min(count - 1), count, stride: 5, data: vec![0.0, 0.0, 1.0, 1.0, 1.0], overlay: Vec::new(), meta: serde_json::Value::Null })
     }
 }
 

@@ -313,6 +313,9 @@ function extOf(name) {
 }
 
 function accepts(slot, name) {
+  // A volume slot takes a whole folder: DICOM files often have no extension, and files that
+  // are not part of the series are skipped (and listed) by the reader.
+  if (slot.kind === "volume") return true;
   const ext = extOf(name);
   return (slot.accept ?? []).some((a) => a.toLowerCase() === ext);
 }
@@ -777,9 +780,36 @@ function buildSlots(slots) {
       e.stopPropagation();
       card.classList.remove("over");
       dropState.reset();
-      const files = [...(e.dataTransfer?.files ?? [])];
-      if (files.length) loadIntoSlot(slot, files);
+      droppedFiles(e.dataTransfer).then((files) => { if (files.length) loadIntoSlot(slot, files); });
     });
+    if (slot.kind === "volume") {
+      // A series is usually a folder: a second picker takes one.
+      const folder = document.createElement("input");
+      folder.type = "file";
+      folder.className = "visually-hidden";
+      folder.id = `slot-${slot.name}-folder`;
+      folder.webkitdirectory = true;
+      folder.addEventListener("change", async () => {
+        const files = [...folder.files].map((f) => (f.webkitRelativePath ? new File([f], f.webkitRelativePath) : f));
+        folder.value = "";
+        if (files.length) await loadIntoSlot(slot, files);
+      });
+      const pick = document.createElement("label");
+      pick.className = "slot-drop slot-folder";
+      pick.htmlFor = folder.id;
+      pick.tabIndex = 0;
+      pick.append("or choose a ");
+      const u = document.createElement("u");
+      u.textContent = "folder";
+      pick.append(u, folder);
+      pick.addEventListener("keydown", (e) => {
+        if (e.key === "Enter" || e.key === " ") {
+          e.preventDefault();
+          folder.click();
+        }
+      });
+      drop.after(pick);
+    }
     host.append(card);
     slotCards.set(slot.name, { slot, card, fields, source, extra, list, note, input });
   }
@@ -916,7 +946,7 @@ function onSourceChange(slot, select) {
  */
 function useFiles(slot, names) {
   const had = namedFiles(getPath(state.design, slot.path)).map((f) => f.name);
-  const all = slot.multiple ? [...new Set([...had, ...names])] : [names[names.length - 1]];
+  const all = slot.kind === "volume" ? names : slot.multiple ? [...new Set([...had, ...names])] : [names[names.length - 1]];
   try {
     let next = weft.fillSlot(state.json, slot.name, all);
     // The part names the design (downloads, G-code header), unless the user named it.
@@ -941,6 +971,33 @@ function fileStem(name) {
   const base = String(name).split(/[\\/]/).pop() ?? "";
   const i = base.lastIndexOf(".");
   return (i > 0 ? base.slice(0, i) : base).replace(/[\u0000-\u001f\u007f]/g, "").trim().slice(0, 80);
+}
+
+/**
+ * The files of a drop, folders walked (names are paths inside the dropped folder, e.g.
+ * "knee/IM0001"), in name order; plain files when the browser cannot list folders.
+ */
+async function droppedFiles(dataTransfer) {
+  const items = [...(dataTransfer?.items ?? [])].map((i) => i.webkitGetAsEntry?.()).filter(Boolean);
+  if (!items.length || !items.some((e) => e.isDirectory)) return [...(dataTransfer?.files ?? [])];
+  const out = [];
+  const MAX_FILES = 20000; // a bound on what a drop may list (the reader has its own)
+  async function walk(entry, prefix, depth) {
+    if (out.length >= MAX_FILES || depth > 8) return;
+    if (entry.isFile) {
+      const file = await new Promise((resolve) => entry.file(resolve, () => resolve(null)));
+      if (file) out.push(prefix ? new File([file], `${prefix}${file.name}`) : file);
+      return;
+    }
+    const reader = entry.createReader();
+    for (;;) {
+      const batch = await new Promise((resolve) => reader.readEntries(resolve, () => resolve([])));
+      if (!batch.length) break;
+      for (const child of batch) await walk(child, `${prefix}${entry.name}/`, depth + 1);
+    }
+  }
+  for (const entry of items) await walk(entry, "", 0);
+  return out.sort((a, b) => (a.name < b.name ? -1 : a.name > b.name ? 1 : 0));
 }
 
 /** Reads files into a slot (worker first, so a bad file is refused at once), then uses them. */
@@ -969,8 +1026,8 @@ async function loadIntoSlot(slot, fileList) {
     }
   }
   if (!loaded.length) return;
-  if (!slot.multiple) {
-    // One file per slot: the one loaded replaces the others.
+  if (!slot.multiple || slot.kind === "volume") {
+    // One file (one series) per slot: what was loaded replaces the others.
     for (const f of filesOf(slot)) if (!loaded.includes(f.name)) forgetFile(f.name);
   }
   const problem = useFiles(slot, loaded);
@@ -1086,12 +1143,50 @@ function buildViews() {
     cancelButton.className = "view-cancel";
     cancelButton.textContent = "Cancel";
     cancelButton.hidden = true;
-    tools.append(drawButton, finishButton, cancelButton);
+    // A mesh view whose answer says `meta.stl` can be downloaded as an STL.
+    const stlButton = document.createElement("button");
+    stlButton.type = "button";
+    stlButton.className = "view-stl";
+    stlButton.textContent = "Download STL";
+    stlButton.hidden = true;
+    tools.append(drawButton, finishButton, cancelButton, stlButton);
     card.append(tools);
-    const v = { view, card, canvas, range, number, info, legend, tools, drawButton, finishButton, cancelButton, drawing: null, frame: null, last: null, seq: 0, timer: 0, count: 0, answers: 0, items: 0 };
+    // An image's value window (black … white): starts at the answer's meta.window, kept
+    // while the user steps through slices; drawn locally (no new request).
+    const windowBox = document.createElement("div");
+    windowBox.className = "view-window";
+    windowBox.hidden = view.shape !== "image";
+    const windowInputs = ["from", "to"].map((which) => {
+      const wrap = document.createElement("label");
+      wrap.className = "inline";
+      const input = document.createElement("input");
+      input.type = "number";
+      input.step = "any";
+      input.className = `view-window-${which}`;
+      input.setAttribute("aria-label", `${view.label ?? view.id}: window ${which}`);
+      wrap.append(which === "from" ? "window " : "to ", input);
+      windowBox.append(wrap);
+      return input;
+    });
+    const windowUnit = document.createElement("span");
+    windowUnit.className = "hint";
+    windowBox.append(windowUnit);
+    card.append(windowBox);
+    const v = { view, card, canvas, range, number, info, legend, tools, drawButton, finishButton, cancelButton, stlButton, drawing: null, frame: null, last: null, seq: 0, timer: 0, count: 0, answers: 0, items: 0, windowInputs, windowUnit, window: null };
+    for (const input of windowInputs) input.addEventListener("change", () => {
+      const [a, b] = windowInputs.map((x) => x.valueAsNumber);
+      v.window = Number.isFinite(a) && Number.isFinite(b) && b > a ? [a, b] : null;
+      redrawView(v);
+    });
     drawButton.addEventListener("click", () => { v.drawing = []; syncDrawTools(v); redrawView(v); });
     cancelButton.addEventListener("click", () => { v.drawing = null; syncDrawTools(v); redrawView(v); });
     finishButton.addEventListener("click", () => finishDrawing(v));
+    stlButton.addEventListener("click", () => {
+      if (!v.last?.data?.length) return;
+      const name = fileStem(String(state.design?.name ?? "")) || "weft";
+      const bytes = weft.meshStl(v.last.data, name);
+      download(bytes, `${name}-${view.id}.stl`, "model/stl");
+    });
     canvas.addEventListener("click", (e) => {
       if (!v.drawing || !v.frame?.toData) return;
       const r = canvas.getBoundingClientRect();
@@ -1154,8 +1249,11 @@ async function requestInspect(v) {
 /** Shows the view's draw tools for the answer's `meta.draw` (hidden without one). */
 function syncDrawTools(v) {
   const spec = v.last?.meta?.draw;
-  v.tools.hidden = !spec;
-  if (!spec) { v.drawing = null; return; }
+  const stl = v.last?.shape === "mesh" && Boolean(v.last?.meta?.stl) && v.last.data?.length > 0;
+  v.stlButton.hidden = !stl;
+  v.drawButton.hidden = !spec;
+  v.tools.hidden = !spec && !stl;
+  if (!spec) { v.drawing = null; v.finishButton.hidden = v.cancelButton.hidden = true; return; }
   const on = Array.isArray(v.drawing);
   v.drawButton.hidden = on;
   v.drawButton.textContent = spec.label ?? "Draw";
@@ -1184,6 +1282,13 @@ function finishDrawing(v) {
 
 function redrawView(v) {
   if (!v.card.isConnected) return;
+  if (v.last?.shape === "image") {
+    // The user's window, else the view's own (meta.window), shown in the inputs.
+    const win = v.window ?? (Array.isArray(v.last.meta?.window) ? v.last.meta.window : null);
+    if (win) v.windowInputs.forEach((el, i) => { if (document.activeElement !== el) el.value = String(win[i]); });
+    v.windowUnit.textContent = v.last.meta?.unit ?? "";
+    v.last.window = v.window;
+  }
   const r = drawView(v.canvas, v.last, styles);
   v.frame = r.toData ? r : null;
   // The corners drawn so far, over the view.
@@ -1203,8 +1308,12 @@ function redrawView(v) {
   // A view may name its own entries (meta.legend: feature code → words), e.g. "seed points"
   // drawn in the lattice colour; otherwise the feature's name.
   const named = v.last?.meta?.legend ?? {};
-  const entries = Object.keys(r.counts).map((code) => [styles.get(Number(code))?.color ?? "#e0b84d",
-    typeof named[code] === "string" ? named[code] : styles.get(Number(code))?.label ?? `feature ${code}`]);
+  // An image's overlay names its own lines and colours (meta.overlay_legend).
+  const overlayLegend = new Map((v.last?.meta?.overlay_legend ?? []).map((e) => [String(e.code), e]));
+  const entries = Object.keys(r.counts).map((code) => overlayLegend.has(code)
+    ? [overlayLegend.get(code).color ?? "#e0b84d", String(overlayLegend.get(code).label ?? code)]
+    : [styles.get(Number(code))?.color ?? "#e0b84d",
+      typeof named[code] === "string" ? named[code] : styles.get(Number(code))?.label ?? `feature ${code}`]);
   if (r.range) entries.push([null, `${formatNumber(r.range[0], 4)} … ${formatNumber(r.range[1], 4)}${v.last?.meta?.unit ? ` ${v.last.meta.unit}` : ""}`]);
   v.legend.replaceChildren(...entries.map(([color, text]) => {
     const el = document.createElement("span");

@@ -244,15 +244,23 @@ export function drawMesh(canvas, data, { stride = 9, color = [150, 170, 200] } =
   return { items: n, counts: {} };
 }
 
-/** A scalar image (meta {width, height, min, max, pixel_mm?}) as a grey ramp, aspect kept. */
-export function drawImage(canvas, data, meta = {}) {
+/**
+ * A scalar image as a grey ramp, drawn at its true aspect. meta: {width, height, min, max,
+ * pixel_mm: number | [x, y] (anisotropic voxels are stretched to their size in mm),
+ * window?: [lo, hi] (values mapped to black … white; outside clamped), overlay_legend?:
+ * [{code, label, color}]}. `overlay` (stride 5: x0 y0 x1 y1 code, mm from the centre of
+ * pixel (0, 0), y down the rows) is drawn on top in the legend's colours.
+ * Returns the frame (toData/toPx in the image's mm) for clicks.
+ */
+export function drawImage(canvas, data, meta = {}, overlay = null, window = null) {
   const { ctx, w, h, dpr } = setup(canvas);
   const iw = meta.width | 0;
   const ih = meta.height | 0;
   if (!data || iw <= 0 || ih <= 0 || data.length < iw * ih) return { items: 0, counts: {} };
-  let lo = Number.isFinite(meta.min) ? meta.min : Infinity;
-  let hi = Number.isFinite(meta.max) ? meta.max : -Infinity;
-  if (!Number.isFinite(meta.min) || !Number.isFinite(meta.max)) {
+  let [lo, hi] = Array.isArray(window) ? window : Array.isArray(meta.window) ? meta.window : [meta.min, meta.max];
+  if (!Number.isFinite(lo) || !Number.isFinite(hi)) {
+    lo = Infinity;
+    hi = -Infinity;
     for (let i = 0; i < iw * ih; i++) {
       if (data[i] < lo) lo = data[i];
       if (data[i] > hi) hi = data[i];
@@ -269,12 +277,32 @@ export function drawImage(canvas, data, meta = {}) {
   off.width = iw;
   off.height = ih;
   off.getContext("2d").putImageData(img, 0, 0);
+  const [px, py] = Array.isArray(meta.pixel_mm) ? meta.pixel_mm : [meta.pixel_mm, meta.pixel_mm];
+  const mmX = px > 0 ? px : 1;
+  const mmY = py > 0 ? py : mmX;
   const margin = 8 * dpr;
-  const scale = Math.min((w - 2 * margin) / iw, (h - 2 * margin) / ih);
+  // Screen pixels per mm, the image spanning iw·mmX × ih·mmY mm.
+  const scale = Math.min((w - 2 * margin) / (iw * mmX), (h - 2 * margin) / (ih * mmY));
+  const x0 = (w - iw * mmX * scale) / 2;
+  const y0 = (h - ih * mmY * scale) / 2;
   ctx.imageSmoothingEnabled = false;
-  ctx.drawImage(off, (w - iw * scale) / 2, (h - ih * scale) / 2, iw * scale, ih * scale);
-  if (meta.pixel_mm > 0) scaleBar(ctx, w, h, dpr, scale / meta.pixel_mm);
-  return { items: iw * ih, counts: {}, range: [lo, hi] };
+  ctx.drawImage(off, x0, y0, iw * mmX * scale, ih * mmY * scale);
+  // Overlay coordinates are from the centre of pixel (0, 0).
+  const toPx = (x, y) => [(x0 + (x + mmX / 2) * scale) / dpr, (y0 + (y + mmY / 2) * scale) / dpr];
+  const toData = (cx, cy) => [(cx * dpr - x0) / scale - mmX / 2, (cy * dpr - y0) / scale - mmY / 2];
+  const counts = {};
+  if (overlay?.length >= 5) {
+    const colors = new Map((meta.overlay_legend ?? []).map((e) => [Number(e.code), e.color ?? OTHER_COLOR]));
+    ctx.lineWidth = 1.5 * dpr;
+    strokeByColor(ctx, Math.floor(overlay.length / 5), (i) => colors.get(overlay[i * 5 + 4]) ?? OTHER_COLOR, (i) => {
+      const o = i * 5;
+      ctx.moveTo(x0 + (overlay[o] + mmX / 2) * scale, y0 + (overlay[o + 1] + mmY / 2) * scale);
+      ctx.lineTo(x0 + (overlay[o + 2] + mmX / 2) * scale, y0 + (overlay[o + 3] + mmY / 2) * scale);
+    });
+    for (let i = 4; i < overlay.length; i += 5) counts[overlay[i]] = (counts[overlay[i]] ?? 0) + 1;
+  }
+  if (px > 0) scaleBar(ctx, w, h, dpr, scale);
+  return { items: iw * ih, counts, range: [lo, hi], toPx, toData, dpr };
 }
 
 /**
@@ -295,7 +323,7 @@ export function drawView(canvas, answer, styles) {
     }
     case "lines3d": return drawLines3d(canvas, answer.data, { stride: answer.stride || 7, styles });
     case "mesh": return drawMesh(canvas, answer.data, { stride: answer.stride || 9 });
-    case "image": return drawImage(canvas, answer.data, answer.meta ?? {});
+    case "image": return drawImage(canvas, answer.data, answer.meta ?? {}, answer.overlay ?? null, answer.window ?? null);
     default: {
       const r = drawSegments2d(canvas, null);
       const ctx = canvas.getContext("2d");

@@ -75,9 +75,10 @@ function handle(msg) {
         const answer = plain(session.inspect(msg.design, msg.view, Math.max(0, msg.index | 0)));
         const { view, index, shape, stride, count, meta } = answer;
         const data = owned(answer.data, Float32Array);
+        const overlay = answer.overlay ? owned(answer.overlay, Float32Array) : null;
         self.postMessage({
-          type: MSG.INSPECTED, id: msg.id, view, index, shape, stride, count, data, meta, ms: performance.now() - t0,
-        }, transferList([data]));
+          type: MSG.INSPECTED, id: msg.id, view, index, shape, stride, count, data, overlay, meta, ms: performance.now() - t0,
+        }, transferList(overlay ? [data, overlay] : [data]));
         break;
       }
       case MSG.CANCEL:

@@ -28,6 +28,19 @@ impl Aabb {
 }
 
 impl Mesh {
+    /// A mesh from a triangle soup, 9 floats per triangle (a `mesh` view's data); vertices are
+    /// not welded (each triangle has its own three).
+    pub fn from_triangle_floats(data: &[f32]) -> Mesh {
+        let tris = data.len() / 9;
+        let mut m = Mesh { vertices: Vec::with_capacity(tris * 3), triangles: Vec::with_capacity(tris) };
+        for (t, c) in data.chunks_exact(9).enumerate() {
+            m.vertices.extend_from_slice(&[[c[0], c[1], c[2]], [c[3], c[4], c[5]], [c[6], c[7], c[8]]]);
+            let b = (3 * t) as u32;
+            m.triangles.push([b, b + 1, b + 2]);
+        }
+        m
+    }
+
     /// The bounding box of all vertices referenced or not; `None` for an empty mesh.
     pub fn bounds(&self) -> Option<Aabb> {
         let mut it = self.vertices.iter();

@@ -1190,6 +1190,7 @@ fn map_view(domain: &Domain, d: &uniform::Distribution, tour: Option<&tour::Tour
         count: 3 * layers,
         stride: Shape::Lines2d.stride(),
         data,
+        overlay: Vec::new(),
         meta: serde_json::json!({
             "x_label": "θ (rad)", "y_label": "u", "scale_bar": false, "caption": caption,
             "legend": legend(&[(Feature::Contour, "outline of Ω"), (Feature::Lattice, labels[step.min(1)]), (Feature::Infill, "path (geodesics)")]),
@@ -1231,7 +1232,7 @@ fn platform_view(p: &Platform, tours: &[&tour::Tour], h: f64) -> Inspection {
         }
     }
     let meta = serde_json::json!({ "legend": legend(&[(Feature::Contour, "platform (meridians, parallels)"), (Feature::Infill, "path (nozzle tip)")]) });
-    Inspection { view: "platform3d".into(), shape: Shape::Lines3d, index: 0, count: 1, stride: Shape::Lines3d.stride(), data, meta }
+    Inspection { view: "platform3d".into(), shape: Shape::Lines3d, index: 0, count: 1, stride: Shape::Lines3d.stride(), data, overlay: Vec::new(), meta }
 }
 
 /// A view's legend: feature code → what the view draws with it.

@@ -229,7 +229,7 @@ impl Kind for LatticeKind {
             }
         }
         let z = strokes.get(index).map_or(0.0, |l| l.z);
-        Ok(Inspection { view: view.into(), shape: Shape::Lines2d, index, count, stride: Shape::Lines2d.stride(), data, meta: serde_json::json!({ "z_mm": z }) })
+        Ok(Inspection { view: view.into(), shape: Shape::Lines2d, index, count, stride: Shape::Lines2d.stride(), data, overlay: Vec::new(), meta: serde_json::json!({ "z_mm": z }) })
     }
 }
 

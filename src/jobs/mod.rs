@@ -12,6 +12,7 @@
 //! ```
 
 pub mod axisymmetric;
+pub mod graded;
 pub mod lattice;
 pub mod slice;
 
@@ -142,6 +143,10 @@ pub struct Inspection {
     /// The data.
     #[serde(skip)]
     pub data: Vec<f32>,
+    /// Lines drawn over the data, `x0 y0 x1 y1 code` (stride 5) in the data's mm frame (an
+    /// image's iso-contours); `meta.overlay_legend` names each code. Usually empty.
+    #[serde(skip)]
+    pub overlay: Vec<f32>,
     /// Shape-specific facts (an image's `width` and `height`, value range, …); `legend`, an
     /// object of feature code → words, names what the view draws with each feature colour.
     pub meta: Value,
@@ -151,6 +156,9 @@ pub struct Inspection {
 pub enum Product {
     /// A toolpath (a stage output, with its key), written by the G-code stage.
     Toolpath(Out<Toolpath>),
+    /// Finished G-code (another slicer's file, edited): the writer is skipped and the
+    /// analyzer reads it as it is; the run's writer totals are the analyzer's.
+    Gcode(Out<String>),
 }
 
 /// The slice stage's report as the page shows it: the repairs made while cutting layers, each
@@ -366,7 +374,7 @@ pub struct Registry {
 impl Registry {
     /// The kinds built into weft. **Register a new kind here** (one line).
     pub fn builtin() -> Registry {
-        Registry { kinds: vec![&slice::SliceKind, &lattice::LatticeKind, &axisymmetric::AxisymKind] }
+        Registry { kinds: vec![&slice::SliceKind, &lattice::LatticeKind, &axisymmetric::AxisymKind, &graded::GradedKind] }
     }
 
     /// This registry plus `kind` (a kind defined outside the crate, e.g. in a test).

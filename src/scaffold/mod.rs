@@ -18,9 +18,11 @@
 //! - **k_c**, **m** ([`Cell`], table 1): toolpath length per cell over `L_cell`, and the
 //!   number of independent toolpaths per cell in a layer.
 //!
-//! Files: [`model`] (equations 1–4 and the bead), [`calibration`] (HU → porosity, eq 7).
+//! Files: [`model`] (equations 1–4 and the bead), [`calibration`] (HU → porosity, eq 7),
+//! [`grade`] (equation 6 applied to weft's own sliced toolpath).
 
 pub mod calibration;
+pub mod grade;
 pub mod model;
 
 pub use calibration::{Calibration, DEFAULT_POINTS};

@@ -1,0 +1,240 @@
+//! The `graded` job end to end: a CT phantom written as a DICOM series by weft's own test
+//! helpers → surface model → graded G-code, on both routes; the shipped example is the
+//! phantom; refusals keep the other inputs; the CLI reads a series folder and writes the
+//! surface STL.
+
+use std::path::PathBuf;
+use weft::design::{share, Design, Input};
+use weft::geom::DVec3;
+use weft::pipeline::{self, Files, RunOptions};
+use weft::testgen::dicom::{bone_phantom, write_series, zip_files, SeriesOptions};
+
+/// The example's phantom: 48 × 48 × 30 voxels of 1 × 1 × 2 mm.
+const DIMS: [usize; 3] = [48, 48, 30];
+const SPACING: [f64; 3] = [1.0, 1.0, 2.0];
+const EXAMPLE: &str = "examples/graded-phantom.json";
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn series() -> Vec<(String, Vec<u8>)> {
+    write_series(&bone_phantom(DIMS, SPACING), &SeriesOptions::default())
+}
+
+/// The example design as the generator makes it (the committed file must equal it).
+fn example_json() -> String {
+    let zip = zip_files(&series());
+    let mut d: serde_json::Value = serde_json::from_str(&Design::default().to_json_pretty()).unwrap();
+    d["name"] = "graded-phantom".into();
+    d["description"] = "A CT bone phantom (cortical shell, graded trabecular core, medullary canal; a 48 × 48 × 30 DICOM series of 1 × 1 × 2 mm voxels written by weft's test helpers) cropped to a 20 mm segment, surface at 350 HU with the canal filled, gyroid infill at ρ_s 47 % graded by the femur case's HU → porosity line (equation 7).".into();
+    d["job"] = serde_json::to_value(weft::jobs::graded::GradedJob::default()).unwrap();
+    d["job"]["kind"] = "graded".into();
+    d["job"]["volume"] = serde_json::json!({"file": {"name": "bone-phantom.zip", "embedded": share::pack(&zip)}});
+    d["job"]["roi"] = serde_json::json!({"min_mm": [0.0, 0.0, 20.0], "max_mm": [47.0, 47.0, 40.0]});
+    weft::jobs::Registry::builtin().get("graded").unwrap().adopted(&mut d);
+    let design = Design::from_json("example", &d.to_string()).unwrap();
+    design.to_json_pretty()
+}
+
+#[test]
+fn the_example_is_the_generated_phantom() {
+    let want = example_json();
+    let path = root().join(EXAMPLE);
+    if std::env::var_os("WEFT_BLESS").is_some() || !path.exists() {
+        std::fs::write(&path, &want).unwrap();
+    }
+    let have = std::fs::read_to_string(&path).unwrap();
+    assert!(have == want, "{EXAMPLE} differs from what the generator makes (WEFT_BLESS=1 to rewrite it)");
+}
+
+fn run(design: &Design, files: &Files) -> pipeline::RunOutput {
+    pipeline::run(design, files, &RunOptions::default(), &mut |_, _| {}).unwrap_or_else(|e| panic!("run failed: {e}"))
+}
+
+fn example() -> Design {
+    Design::from_json("example", &example_json()).unwrap()
+}
+
+/// Every `;TYPE:Internal infill` extrusion of `gcode`: (start, end, E).
+fn infill_moves(gcode: &str) -> Vec<(DVec3, DVec3, f64)> {
+    // Absolute or relative E, as the file says (M82 / M83), with G92 resets.
+    let (mut p, mut infill, mut out, mut relative, mut e_at) = (DVec3::ZERO, false, Vec::new(), false, 0.0);
+    for line in gcode.lines() {
+        if let Some(t) = line.strip_prefix(";TYPE:") {
+            infill = t == "Internal infill";
+            continue;
+        }
+        match line.split(';').next().unwrap().trim() {
+            "M82" => relative = false,
+            "M83" => relative = true,
+            l if l.starts_with("G92") => {
+                if let Some(w) = l.split_whitespace().find(|w| w.starts_with('E')) {
+                    e_at = w[1..].parse().unwrap();
+                }
+            }
+            _ => {}
+        }
+        if !(line.starts_with("G1 ") || line.starts_with("G0 ")) {
+            continue;
+        }
+        let mut q = p;
+        let mut e = None;
+        for w in line.split(';').next().unwrap().split_whitespace().skip(1) {
+            let v: f64 = w[1..].parse().unwrap_or(f64::NAN);
+            match &w[..1] {
+                "X" => q.x = v,
+                "Y" => q.y = v,
+                "Z" => q.z = v,
+                "E" => e = Some(v),
+                _ => {}
+            }
+        }
+        let e = e.map(|v| {
+            let d = if relative { v } else { v - e_at };
+            e_at = if relative { e_at + v } else { v };
+            d
+        });
+        if infill {
+            if let Some(e) = e.filter(|e| *e > 0.0) {
+                if q.truncate().distance(p.truncate()) > 0.0 {
+                    out.push((p, q, e));
+                }
+            }
+        }
+        p = q;
+    }
+    out
+}
+
+#[test]
+fn native_route_grades_every_infill_segment_by_the_field() {
+    let design = example();
+    let out = run(&design, &Files::new());
+    let stages: Vec<&str> = out.report.stages.iter().map(|s| s.stage.as_str()).collect();
+    for s in ["volume", "surface", "density", "slice", "grade"] {
+        assert!(stages.contains(&s), "no {s} stage: {stages:?}");
+    }
+    let surface: serde_json::Value = out.report.stage_data("surface").unwrap().clone();
+    assert_eq!(surface["closed"], true, "surface model not closed: {surface}");
+    let grade: serde_json::Value = out.report.stage_data("grade").unwrap().clone();
+    assert!(grade["segments"].as_u64().unwrap() > 1000, "{grade}");
+
+    // Read the G-code back: E per mm of every infill move against ρ(midpoint)/ρ_s, with ρ
+    // computed here from the phantom's own volume and the density stage's numbers.
+    let model = out.report.stage_data("density").unwrap().clone();
+    let (rho_s, rho_min, area_s) = (model["rho_s"].as_f64().unwrap(), model["rho_min"].as_f64().unwrap(), model["nominal_area_mm2"].as_f64().unwrap());
+    // Toolpath point = field point + offset; G-code point = toolpath point + the bed centre
+    // (a corner-origin printer).
+    let bed = design.printer.bed_size_mm;
+    let offset = DVec3::from_array(serde_json::from_value(grade["offset_mm"].clone()).unwrap()) + DVec3::new(bed[0] / 2.0, bed[1] / 2.0, 0.0);
+    assert_eq!(serde_json::to_value(design.printer.origin).unwrap(), "corner");
+    let volume = bone_phantom(DIMS, SPACING);
+    let cal = weft::scaffold::Calibration::default();
+    let f = design.printer.filament_diameter_mm;
+    let filament_area = std::f64::consts::PI * f * f / 4.0;
+    let k = design.material.k * design.material.extrusion_multiplier;
+    let moves = infill_moves(&out.gcode);
+    assert!(moves.len() > 1000, "{} infill moves", moves.len());
+    let (mut worst, mut lo, mut hi) = (0.0f64, f64::INFINITY, 0.0f64);
+    let mut long = 0;
+    for (a, b, e) in &moves {
+        let len = a.distance(*b);
+        if len < 0.05 {
+            continue; // E is written to 5 decimals: too few digits on tiny moves
+        }
+        if len > model["segment_mm"].as_f64().unwrap() + 1e-3 {
+            long += 1;
+        }
+        let mid = (*a + *b) * 0.5 - offset;
+        let Some(rho) = volume.sample_with(mid, |hu| cal.density(hu as f64, 0.0)) else { continue };
+        let rho = rho.max(rho_min);
+        let want = k * len * area_s * rho / rho_s / filament_area;
+        worst = worst.max((e - want).abs() / want);
+        lo = lo.min(e / len);
+        hi = hi.max(e / len);
+    }
+    assert!(worst < 0.02, "E differs from ρ/ρ_s by up to {:.2} %", worst * 100.0);
+    assert_eq!(long, 0, "infill moves longer than the grading step");
+    assert!(hi > 1.5 * lo, "the infill is not graded: E/mm from {lo} to {hi}");
+}
+
+#[test]
+fn edit_route_rewrites_only_the_infill_of_another_slicers_gcode() {
+    // A PrusaSlicer-style file of a 20 mm block, absolute E (so G92 resets are needed).
+    let mut design = example();
+    let mut files = Files::new();
+    let spec = weft::testgen::foreign::Foreign { layers: 40, relative_e: false, side_mm: 20.0, ..Default::default() };
+    let foreign = String::from_utf8(weft::testgen::foreign::generate(&spec).text).unwrap();
+    files.insert("part.gcode".into(), foreign.clone().into_bytes());
+    // Filling the G-code slot switches the route to `edit`.
+    design = design.with_slot_input(&weft::jobs::Registry::builtin(), "gcode", Input::File { name: "part.gcode".into(), embedded: None }).unwrap();
+    let out = run(&design, &files);
+    let edit: serde_json::Value = out.report.stage_data("edit").unwrap().clone();
+    assert!(edit["edited_moves"].as_u64().unwrap() > 100, "{edit}");
+    // Every line that is not an infill move is unchanged, in order (inserted G92 resets aside).
+    let keep = |t: &str| -> Vec<String> {
+        let mut infill = false;
+        t.lines()
+            .filter(|l| {
+                if let Some(ty) = l.strip_prefix(";TYPE:") {
+                    infill = ty == "Internal infill";
+                }
+                !(infill && l.starts_with("G1 ") && l.contains(" E")) && !l.starts_with("G92 E")
+            })
+            .map(str::to_string)
+            .collect()
+    };
+    assert_eq!(keep(&out.gcode), keep(&foreign), "non-infill lines changed");
+    assert_ne!(out.gcode.as_str(), foreign.as_str(), "nothing was edited");
+}
+
+#[test]
+fn a_broken_series_is_refused_by_name_and_the_design_keeps_its_inputs() {
+    let mut files = Files::new();
+    let mut names = Vec::new();
+    for (i, (name, mut bytes)) in series().into_iter().enumerate() {
+        if i == 7 {
+            bytes.truncate(bytes.len() / 2);
+        }
+        files.insert(name.clone(), bytes);
+        names.push(name);
+    }
+    let design = example().with_slot_input(&weft::jobs::Registry::builtin(), "volume", Input::Files(names.clone())).unwrap();
+    let e = pipeline::run(&design, &files, &RunOptions::default(), &mut |_, _| {}).err().expect("a truncated slice must be refused").to_string();
+    assert!(e.contains(&names[7]), "the message does not name the file: {e}");
+    // The design still names every file (nothing was dropped from it).
+    let v: serde_json::Value = serde_json::from_str(&design.to_json_pretty()).unwrap();
+    assert_eq!(v["job"]["volume"]["files"].as_array().unwrap().len(), names.len());
+}
+
+#[test]
+fn cli_reads_a_series_folder_and_writes_the_surface_stl() {
+    let dir = std::env::temp_dir().join(format!("weft-graded-{}", std::process::id()));
+    let series_dir = dir.join("phantom");
+    std::fs::create_dir_all(&series_dir).unwrap();
+    for (name, bytes) in series() {
+        std::fs::write(series_dir.join(name), bytes).unwrap();
+    }
+    let weft = env!("CARGO_BIN_EXE_weft");
+    let example_path = root().join(EXAMPLE);
+    let stl = dir.join("surface.stl");
+    let status = std::process::Command::new(weft)
+        .args(["inspect", example_path.to_str().unwrap(), "--view", "surface", "--input", &format!("volume={}", series_dir.display()), "--out", stl.to_str().unwrap()])
+        .status()
+        .unwrap();
+    assert!(status.success());
+    let bytes = std::fs::read(&stl).unwrap();
+    let imported = weft::import::read_mesh("surface.stl", &bytes, &weft::import::Options::default()).unwrap();
+    assert_eq!(imported.report.open_edges, 0, "the STL is not closed");
+    let gcode = dir.join("phantom.gcode");
+    let out = std::process::Command::new(weft)
+        .args(["run", example_path.to_str().unwrap(), "-q", "--input", &format!("volume={}", series_dir.display()), "--out", gcode.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    // The same series as files or embedded zip: the same G-code.
+    let embedded = run(&example(), &Files::new());
+    assert_eq!(std::fs::read_to_string(&gcode).unwrap(), *embedded.gcode);
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -5,7 +5,7 @@
 //! π·area / perimeter), so a hollow or thin part is not charged like its bounding box.
 //! Checked against real slices in `tests/estimates.rs`.
 
-use super::{layer_stack_len, Options, MAX_COORD_MM, MAX_LAYERS};
+use super::{layer_stack_len, InfillPattern, Options, MAX_COORD_MM, MAX_LAYERS};
 use crate::budget::Estimate;
 use crate::geom::Mesh;
 
@@ -26,6 +26,28 @@ const BYTES_PER_CROSSING: f64 = 120.0;
 const BYTES_PER_SEGMENT: f64 = 64.0;
 /// Peak bytes per triangle: the sweep's order and per-triangle bounds.
 const BYTES_PER_TRIANGLE: f64 = 24.0;
+/// Time per segment of a gyroid or 3D honeycomb curve generated over a layer's bounding box
+/// and clipped to its infill area, s (i_overlay's string clip dominates; measured in
+/// `tests/infill_patterns.rs`, `estimate_follows_the_pattern`: about 0.5 µs).
+const SECONDS_PER_CLIPPED_SEGMENT: f64 = 1.0e-6;
+/// Peak bytes per segment of one layer's generated curves: the points (8 bytes) and
+/// i_overlay's segments, graph and output while clipping.
+const BYTES_PER_CLIPPED_SEGMENT: f64 = 160.0;
+
+/// Segments per mm of a sparse pattern's curves at cell size `cell_mm`: the gyroid's
+/// bisection (at least 13 chords per cell length, and about `0.8 √(L / tolerance)`; measured
+/// for L = 0.5–20 mm in `tests/infill_patterns.rs`), the honeycomb's two per grid unit
+/// (`L / 2`), rectilinear's none beyond the one per line across the region.
+fn segments_per_mm(pattern: InfillPattern, cell_mm: f64) -> f64 {
+    match pattern {
+        InfillPattern::Rectilinear => 0.0,
+        InfillPattern::Gyroid => {
+            let tol = super::gyroid::chord_tolerance_um(cell_mm * 1000.0) / 1000.0;
+            (0.8 * (cell_mm / tol).sqrt()).max(13.0) / cell_mm
+        }
+        InfillPattern::Honeycomb3d => 4.0 / cell_mm,
+    }
+}
 
 /// What a mesh measures for the estimate.
 struct MeshStats {
@@ -116,22 +138,41 @@ pub fn estimate(mesh: &Mesh, options: &Options) -> Estimate {
     let solid_depth = (o.solid_layers as f64 * o.layer_height_mm).min(top);
     let solid_volume = if o.infill_density >= 1.0 { s.volume } else { (s.flat_area * solid_depth).min(s.volume) };
     let sparse_volume = if o.infill_density > 0.0 && o.infill_density < 1.0 { s.volume - solid_volume } else { 0.0 };
-    let infill_mm = solid_volume / (o.layer_height_mm * w) + sparse_volume * o.infill_density / (o.layer_height_mm * w);
+    // A given cell size sets the sparse fraction: k_c·m × width / L.
+    let pattern = o.infill_pattern;
+    let (fraction, cell_mm) = match o.infill_cell_mm {
+        Some(l) => ((pattern.length_per_area_factor() * w / l).min(1.0), l),
+        None => (o.infill_density, pattern.cell_mm_for(o.infill_density, w)),
+    };
+    let sparse_mm = sparse_volume * fraction / (o.layer_height_mm * w);
+    let infill_mm = solid_volume / (o.layer_height_mm * w) + sparse_mm;
     // Each infill line across the region is one segment and one connector; the connectors
     // follow the infill area's boundary, an outline of the layer's size.
     let infill_segments = if infill_mm > 0.0 { 2.0 * infill_mm / chord + 0.5 * s.crossings } else { 0.0 };
+    // Curved patterns: their chords, and the curves generated over each layer's bounding box
+    // before clipping (the box's area over the layer's).
+    let per_mm = if sparse_mm > 0.0 { segments_per_mm(pattern, cell_mm) } else { 0.0 };
+    let box_over_area = if area > 0.0 { (size[0] * size[1] / area).max(1.0) } else { 1.0 };
+    let generated = sparse_mm * per_mm * box_over_area;
+    // The largest layer's share: the whole bounding box (the curves cover it before clipping).
+    let generated_per_layer = if per_mm > 0.0 { size[0] * size[1] * fraction / w * per_mm } else { 0.0 };
+    let infill_segments = infill_segments + sparse_mm * per_mm;
     // Triangulated meshes cut two triangles per flat quad; the stitched outline keeps about
     // half of those points (collinear ones merge).
     let contour = 0.5 * s.crossings;
     let perimeter_segments = contour * o.perimeters as f64;
     let segments = perimeter_segments + infill_segments + layers;
-    let bytes = s.triangles as f64 * BYTES_PER_TRIANGLE + contour * BYTES_PER_CROSSING + segments * BYTES_PER_SEGMENT;
+    let bytes = s.triangles as f64 * BYTES_PER_TRIANGLE + contour * BYTES_PER_CROSSING + segments * BYTES_PER_SEGMENT + generated_per_layer * BYTES_PER_CLIPPED_SEGMENT;
     let outline_ops = 2.0 + o.perimeters as f64 + 2.0 * o.solid_layers as f64;
-    let seconds = contour * outline_ops * SECONDS_PER_OUTLINE_OP + segments * SECONDS_PER_SEGMENT;
+    let seconds = contour * outline_ops * SECONDS_PER_OUTLINE_OP + segments * SECONDS_PER_SEGMENT + generated * SECONDS_PER_CLIPPED_SEGMENT;
     e.quantity("layers", "Layers", layers, "")
         .quantity("contour_segments", "Outline segments", contour, "")
         .quantity("extruded_mm", "Extrusion", outline * layers * o.perimeters as f64 + infill_mm, "mm")
         .quantity("segments", "Toolpath segments", segments, "")
         .cost(bytes, seconds)
-        .budgets("use thicker layers (job.slice.layer_height_mm), less infill (job.slice.infill_density) or a smaller part")
+        .budgets(if o.infill_pattern == InfillPattern::Rectilinear && o.infill_cell_mm.is_none() {
+            "use thicker layers (job.slice.layer_height_mm), less infill (job.slice.infill_density) or a smaller part"
+        } else {
+            "use thicker layers (job.slice.layer_height_mm), less infill (job.slice.infill_density), a larger infill cell (job.slice.infill_cell_mm) or a smaller part"
+        })
 }

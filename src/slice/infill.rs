@@ -14,7 +14,11 @@
 //! are not made.
 
 use crate::geom::DVec2;
+use i_overlay::core::fill_rule::FillRule;
+use i_overlay::i_float::int::point::IntPoint;
 use i_overlay::i_shape::int::shape::IntShape;
+use i_overlay::string::clip::{ClipRule, IntClip};
+use std::collections::BTreeMap;
 
 #[derive(Clone, Copy, Debug)]
 struct Hit {
@@ -218,6 +222,86 @@ pub(crate) fn rectilinear(area: &[IntShape<i32>], spacing_um: f64, angle_rad: f6
                 .map(|p| DVec2::new((p.x * c - p.y * s) / 1000.0, (p.x * s + p.y * c) / 1000.0))
                 .collect(),
         );
+    }
+    out
+}
+
+/// Clips open polylines (µm, integer) to `area` (even–odd) with i_overlay's string clipping,
+/// re-joins the pieces the clipper splits at its graph nodes (two piece ends on one point and
+/// nothing else there), drops pieces shorter than `min_len_um` and returns them in mm.
+///
+/// The gyroid and 3D honeycomb patterns generate their curves over the area's bounding box
+/// and clip them here; the result is deterministic (pieces in the clipper's order, which is
+/// geometric).
+pub(crate) fn clip_polylines(area: &[IntShape<i32>], lines: &[Vec<IntPoint<i32>>], min_len_um: f64) -> Vec<Vec<DVec2>> {
+    if area.is_empty() || lines.is_empty() {
+        return Vec::new();
+    }
+    let rule = ClipRule { invert: false, boundary_included: false };
+    let pieces = area.clip_paths(lines, FillRule::EvenOdd, rule);
+    // Piece ends by point, in point order (no hash order reaches the output).
+    let mut ends: BTreeMap<(i32, i32), Vec<(usize, bool)>> = BTreeMap::new();
+    for (i, p) in pieces.iter().enumerate() {
+        if p.len() < 2 || p[0] == p[p.len() - 1] {
+            continue;
+        }
+        ends.entry((p[0].x, p[0].y)).or_default().push((i, false));
+        let l = p[p.len() - 1];
+        ends.entry((l.x, l.y)).or_default().push((i, true));
+    }
+    // The piece joined at the other side of an end, when exactly two ends meet there.
+    let partner = |pt: IntPoint<i32>, me: usize| -> Option<(usize, bool)> {
+        match ends.get(&(pt.x, pt.y)).map(Vec::as_slice) {
+            Some(&[a, b]) if a.0 != b.0 => Some(if a.0 == me { b } else { a }),
+            _ => None,
+        }
+    };
+    let mut used = vec![false; pieces.len()];
+    let mut out = Vec::new();
+    for start in 0..pieces.len() {
+        if used[start] || pieces[start].len() < 2 {
+            continue;
+        }
+        used[start] = true;
+        // The chain through `start`: pieces met walking back from its first point (prepended),
+        // then walking on from its last point; each with whether it is traversed reversed.
+        let mut chain: std::collections::VecDeque<(usize, bool)> = std::collections::VecDeque::from([(start, false)]);
+        for backward in [true, false] {
+            let (mut cur, mut rev) = (start, false);
+            loop {
+                let p = &pieces[cur];
+                // The free end on this side: the head when walking back, the tail walking on.
+                let at = if backward != rev { p[0] } else { p[p.len() - 1] };
+                let Some((q, at_end)) = partner(at, cur) else { break };
+                if used[q] {
+                    break;
+                }
+                used[q] = true;
+                // Walking back, `q` must run into `at` (forward when its end is there);
+                // walking on, it must run out of `at` (forward when its start is there).
+                rev = if backward { !at_end } else { at_end };
+                cur = q;
+                if backward {
+                    chain.push_front((q, rev));
+                } else {
+                    chain.push_back((q, rev));
+                }
+            }
+        }
+        let mut pts: Vec<IntPoint<i32>> = Vec::new();
+        for &(k, rev) in &chain {
+            let p = &pieces[k];
+            let seq: Box<dyn Iterator<Item = &IntPoint<i32>>> = if rev { Box::new(p.iter().rev()) } else { Box::new(p.iter()) };
+            for &q in seq {
+                if pts.last() != Some(&q) {
+                    pts.push(q);
+                }
+            }
+        }
+        let len: f64 = pts.windows(2).map(|w| DVec2::new(w[0].x as f64, w[0].y as f64).distance(DVec2::new(w[1].x as f64, w[1].y as f64))).sum();
+        if pts.len() >= 2 && len >= min_len_um {
+            out.push(pts.iter().map(|p| DVec2::new(p.x as f64, p.y as f64) / 1000.0).collect());
+        }
     }
     out
 }

@@ -12,6 +12,8 @@
 //! - `regions`: loops → polygons with holes by a NonZero union (overlapping shells merge).
 //! - `perimeters`: inward offsets for the perimeter loops and the infill area.
 //! - `infill`: rectilinear lines on a global grid, linked zig-zag along the area boundary.
+//! - `gyroid`, `honeycomb3d`: the other sparse infill patterns ([`InfillPattern`]), curves
+//!   over the area's bounding box clipped to it.
 //! - `order`: print order and seams.
 //!
 //! Layers: the first layer's top is at `first_layer_height_mm`, then every `layer_height_mm`;
@@ -19,6 +21,8 @@
 //! of the mesh.
 
 mod estimate;
+pub mod gyroid;
+pub mod honeycomb3d;
 mod infill;
 mod order;
 mod perimeters;
@@ -26,7 +30,7 @@ mod plane;
 mod regions;
 mod stitch;
 
-use crate::settings::{int, num, percent, Field};
+use crate::settings::{choice_docs, int, num, other, percent, Field, Kind};
 use crate::geom::tolerance::UNITS_PER_MM;
 use crate::geom::{DVec2, Feature, Mesh, Polygon, Toolpath, Pass};
 use i_overlay::i_shape::int::shape::{IntShape, IntShapes};
@@ -58,6 +62,67 @@ pub const DEFAULT_GAP_CLOSING_MM: f64 = 0.05;
 /// Default number of solid layers at the bottom and at the top.
 pub const DEFAULT_SOLID_LAYERS: u32 = 3;
 
+/// Largest unit cell of the sparse infill, mm ([`Options::infill_cell_mm`]).
+pub const MAX_INFILL_CELL_MM: f64 = 1000.0;
+/// Smallest unit cell of the sparse infill, mm.
+pub const MIN_INFILL_CELL_MM: f64 = 0.1;
+
+/// The sparse infill's pattern. Solid infill (skins) is always rectilinear.
+///
+/// Each is modelled as in section 2.2.1 of the CT-graded scaffolds paper: toolpath length per
+/// unit layer area `k_c · m / L` for unit cell size `L` ([`InfillPattern::length_per_area_factor`]
+/// is this implementation's `k_c · m`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum InfillPattern {
+    /// Straight lines, turned 90° every layer (`L` = √2 × the line spacing).
+    #[default]
+    Rectilinear,
+    /// Sections of the gyroid surface: wavy lines that change with height (`L`: its period).
+    Gyroid,
+    /// Sections of a truncated-octahedron tessellation: zig-zags that change with height, along
+    /// X and along Y on alternate layers (`L`: their period across the lines).
+    Honeycomb3d,
+}
+
+/// Names of the patterns as written in a design, in [`InfillPattern`] order.
+pub const INFILL_PATTERNS: &[&str] = &["rectilinear", "gyroid", "honeycomb3d"];
+
+impl InfillPattern {
+    /// Name as written in a design (`"gyroid"`).
+    pub fn label(self) -> &'static str {
+        match self {
+            InfillPattern::Rectilinear => INFILL_PATTERNS[0],
+            InfillPattern::Gyroid => INFILL_PATTERNS[1],
+            InfillPattern::Honeycomb3d => INFILL_PATTERNS[2],
+        }
+    }
+
+    /// Mean toolpath length per unit layer area times the unit cell size `L`: the paper's
+    /// `k_c · m` (table 1) as this implementation draws the pattern, measured in
+    /// `tests/infill_patterns.rs` (mean over layers for the patterns that change with height).
+    /// Rectilinear √2 = 1.4142 (table 1: 0.707 × 2, the same); gyroid 2.4586 (table 1: 2.442,
+    /// 0.7 % less); 3D honeycomb 2 + (√2 − 1)/2 = 2.2071 (table 1: 2.022; PrusaSlicer's
+    /// geometry with `L` its period across the lines gives 9 % more than the table).
+    pub fn length_per_area_factor(self) -> f64 {
+        match self {
+            InfillPattern::Rectilinear => std::f64::consts::SQRT_2,
+            InfillPattern::Gyroid => gyroid::LENGTH_PER_AREA_FACTOR,
+            InfillPattern::Honeycomb3d => honeycomb3d::LENGTH_PER_AREA_FACTOR,
+        }
+    }
+
+    /// The unit cell size, mm, at which lines `line_width_mm` wide fill the fraction `density`
+    /// of the area (length × width / area): `k_c · m · width / density`.
+    pub fn cell_mm_for(self, density: f64, line_width_mm: f64) -> f64 {
+        self.length_per_area_factor() * line_width_mm / density
+    }
+
+    fn is_default(&self) -> bool {
+        *self == InfillPattern::default()
+    }
+}
+
 /// Slicing options (the `slice` job's settings in a Design).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -78,6 +143,17 @@ pub struct Options {
     pub solid_layers: u32,
     /// Open contour ends closer than this are joined (and reported), mm. Default 0.05.
     pub gap_closing_mm: f64,
+    /// Pattern of the sparse infill. Default rectilinear (not written then, so designs without
+    /// it read and hash as before).
+    #[serde(skip_serializing_if = "InfillPattern::is_default")]
+    pub infill_pattern: InfillPattern,
+    /// Unit cell size `L` of the sparse infill, mm. `None` (the default, not written): from
+    /// `infill_density`, `L` = [`InfillPattern::cell_mm_for`] (for rectilinear the line
+    /// spacing the density gives). When set it fixes the sparse infill's density at
+    /// `k_c·m × line width / L`; `infill_density` still switches sparse infill off at 0 and
+    /// makes all infill solid at 1.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub infill_cell_mm: Option<f64>,
 }
 
 impl Default for Options {
@@ -91,6 +167,8 @@ impl Default for Options {
             infill_angle_deg: DEFAULT_INFILL_ANGLE_DEG,
             solid_layers: DEFAULT_SOLID_LAYERS,
             gap_closing_mm: DEFAULT_GAP_CLOSING_MM,
+            infill_pattern: InfillPattern::Rectilinear,
+            infill_cell_mm: None,
         }
     }
 }
@@ -177,6 +255,15 @@ pub const FIELDS: &[Field] = &[
     num("infill_angle_deg", "Slicing", "Infill angle", "°", -360.0, 360.0, 1.0, "Direction of the infill lines; every other layer turns by 90°."),
     int("solid_layers", "Slicing", "Solid layers (top and bottom)", 0.0, 1000.0, "Fully filled layers that close the part at its top and bottom."),
     num("gap_closing_mm", "Slicing", "Gap closing", "mm", 0.0, 5.0, 0.01, "Repairs small holes in a mesh: outline ends closer than this are joined."),
+    choice_docs(
+        other("infill_pattern", "Slicing", "Infill pattern", Kind::Choice, INFILL_PATTERNS, "The shape of the sparse infill inside the part (top and bottom skins stay straight lines)."),
+        &[
+            "Straight lines, crossing at 90° from layer to layer.",
+            "Wavy lines that shift with height, building a gyroid: open, even channels in every direction.",
+            "Zig-zags that shift with height, building cells like truncated octahedra.",
+        ],
+    ),
+    num("infill_cell_mm", "Slicing", "Infill cell size", "mm", MIN_INFILL_CELL_MM, MAX_INFILL_CELL_MM, 0.1, "Size of one repeat of the infill pattern; left out, it follows from the infill density."),
 ];
 
 /// Layer tops, heights and cutting heights for a mesh whose top is at `top` mm: layers are
@@ -247,6 +334,31 @@ fn bbox_mm(shape: &IntShape<i32>) -> (DVec2, DVec2) {
 
 fn to_mm_loop(c: &[i_overlay::i_float::int::point::IntPoint<i32>]) -> Vec<DVec2> {
     c.iter().map(|p| DVec2::new(p.x as f64, p.y as f64) / UNITS_PER_MM).collect()
+}
+
+/// Sparse infill of layer `layer` (cut at `slice_z` mm) in `area`: the pattern of `o` with its
+/// unit cell (given, or from the density). Rectilinear turns with the layer (`angle`); the 3D
+/// patterns keep one orientation, `infill_angle_deg − 45°` (as PrusaSlicer's gyroid: the
+/// default 45° puts their axes along X and Y), and are cut at the layer's middle.
+fn sparse_lines(o: &Options, area: &IntShapes<i32>, w_um: i32, layer: usize, slice_z: f64, angle: f64, min_len_um: f64) -> Vec<Vec<DVec2>> {
+    let pattern = o.infill_pattern;
+    let cell_um = match o.infill_cell_mm {
+        Some(l) => l * UNITS_PER_MM,
+        None => pattern.cell_mm_for(o.infill_density, w_um as f64),
+    };
+    let turn = o.infill_angle_deg.to_radians() - std::f64::consts::FRAC_PI_4;
+    match pattern {
+        InfillPattern::Rectilinear => {
+            // Without a cell size, exactly the spacing rectilinear always had.
+            let spacing = match o.infill_cell_mm {
+                None => w_um as f64 / o.infill_density,
+                Some(_) => cell_um / std::f64::consts::SQRT_2,
+            };
+            infill::rectilinear(area, spacing, angle, min_len_um)
+        }
+        InfillPattern::Gyroid => gyroid::gyroid(area, cell_um, slice_z, turn, min_len_um),
+        InfillPattern::Honeycomb3d => honeycomb3d::honeycomb3d(area, cell_um, slice_z, layer % 2 == 1, turn, min_len_um),
+    }
 }
 
 /// Slices `mesh` (already placed: its lowest point is the plate, Z = 0) into layers and fills them.
@@ -378,8 +490,7 @@ pub fn slice(mesh: &Mesh, options: &Options, progress: &mut dyn FnMut(f32)) -> R
             lines.push((Feature::SolidInfill, l));
         }
         if o.infill_density > 0.0 && !sparse.is_empty() {
-            let spacing = w_um as f64 / o.infill_density;
-            for l in infill::rectilinear(&sparse, spacing, angle, min_len_um) {
+            for l in sparse_lines(o, &sparse, w_um, i, slice_z, angle, min_len_um) {
                 lines.push((Feature::Infill, l));
             }
         }

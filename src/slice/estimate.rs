@@ -27,8 +27,8 @@ const BYTES_PER_SEGMENT: f64 = 64.0;
 /// Peak bytes per triangle: the sweep's order and per-triangle bounds.
 const BYTES_PER_TRIANGLE: f64 = 24.0;
 /// Time per segment of a gyroid or 3D honeycomb curve generated over a layer's bounding box
-/// and clipped to its infill area, s (i_overlay's string clip dominates; measured in
-/// `tests/infill_patterns.rs`, `estimate_follows_the_pattern`: about 0.5 µs).
+/// and clipped to its infill area, s: i_overlay's string clip dominates. An allowance (the
+/// order of the outline operations' cost per point), not yet measured with `slice_bench`.
 const SECONDS_PER_CLIPPED_SEGMENT: f64 = 1.0e-6;
 /// Peak bytes per segment of one layer's generated curves: the points (8 bytes) and
 /// i_overlay's segments, graph and output while clipping.

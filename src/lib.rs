@@ -25,6 +25,7 @@ pub mod budget;
 pub mod gcode;
 pub mod geom;
 pub mod import;
+pub mod isosurface;
 pub mod lattice;
 pub mod machine;
 pub mod motion;

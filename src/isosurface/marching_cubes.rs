@@ -108,7 +108,7 @@ impl Table {
         }
         let mut cases = Vec::with_capacity(256);
         let mut triangles = [0u8; 256];
-        for case in 0..256usize {
+        for (case, count) in triangles.iter_mut().enumerate() {
             let solid = |c: usize| case >> c & 1 == 1;
             // next[e] = the edge where the segment starting at edge e ends; face[e] its face.
             let mut next = [usize::MAX; 12];
@@ -142,7 +142,7 @@ impl Table {
                 let centroid = faces_used.windows(2).any(|w| w[0] == w[1]);
                 loops.push(Loop { edges, centroid });
             }
-            triangles[case] = loops.iter().map(Loop::triangles).sum::<usize>() as u8;
+            *count = loops.iter().map(Loop::triangles).sum::<usize>() as u8;
             cases.push(loops);
         }
         Table { cases, triangles }

@@ -28,10 +28,13 @@
 //! capped faces meet, the box edge is bevelled across the last voxel (the mesh has vertices
 //! only on grid edges).
 //!
-//! **Cavities.** "Reaching the boundary" counts every ROI face. A bone's medullary canal that
-//! runs out through the ROI's end faces therefore stays open (it is a tunnel, not a
-//! cavity); it is filled when the ROI ends within the bone's closed ends, or by closing it
-//! at the ends (see the report's `cavities_filled`).
+//! **Cavities.** A cavity is a region of below-isovalue voxels that cannot reach any ROI face
+//! through face-neighbouring below-isovalue voxels. A bone's medullary canal that runs out
+//! through the ROI's end faces reaches them, so it is not filled: it stays a tunnel, capped
+//! as a ring at those faces. It is filled when the ROI takes in the bone's closed ends
+//! (`ct_phantom_is_closed` in tests/isosurface.rs shows both). The fill itself can treat
+//! chosen ROI faces as closed (`cavities::fill`'s `open`), which would close such a canal
+//! as the paper does (its Figure 10b); no option exposes that yet.
 //!
 //! **Why our own implementation.** The pure-Rust crates found (`mcubes`, `marching-cubes`)
 //! polygonise cube by cube with the classic Bourke table: triangle soups, not welded, with the

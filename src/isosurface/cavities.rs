@@ -36,8 +36,8 @@ pub(super) fn fill(cells: &mut [u8], m: [usize; 3], open: [bool; 6]) -> Filled {
         let (u, v) = ((axis + 1) % 3, (axis + 2) % 3);
         (0..m[v]).flat_map(move |b| (0..m[u]).map(move |a| layer * stride[axis] + a * stride[u] + b * stride[v]))
     };
-    for axis in 0..3 {
-        for l in [0, m[axis] - 1] {
+    for (axis, &len) in m.iter().enumerate() {
+        for l in [0, len - 1] {
             layer(axis, l).for_each(|idx| cells[idx] = PAD);
         }
     }
@@ -65,8 +65,8 @@ pub(super) fn fill(cells: &mut [u8], m: [usize; 3], open: [bool; 6]) -> Filled {
             filled.voxels += 1 + flood(cells, stride, &mut stack, SOLID);
         }
     }
-    for axis in 0..3 {
-        for l in [0, m[axis] - 1] {
+    for (axis, &len) in m.iter().enumerate() {
+        for l in [0, len - 1] {
             layer(axis, l).for_each(|idx| cells[idx] = 0);
         }
     }

@@ -108,7 +108,7 @@ impl Table {
         }
         let mut cases = Vec::with_capacity(256);
         let mut triangles = [0u8; 256];
-        for case in 0..256usize {
+        for (case, count) in triangles.iter_mut().enumerate() {
             let solid = |c: usize| case >> c & 1 == 1;
             // next[e] = the edge where the segment starting at edge e ends; face[e] its face.
             let mut next = [usize::MAX; 12];
@@ -117,7 +117,7 @@ impl Table {
                 let crossed = |m: usize| solid(q[m]) != solid(q[(m + 1) % 4]);
                 for m in 0..4 {
                     if crossed(m) && solid(q[m]) {
-                        let m2 = if f % 2 == 1 { (1..4).map(|d| (m + 4 - d) % 4).find(|&m2| crossed(m2)).unwrap() } else { (1..4).map(|d| (m + d) % 4).find(|&m2| crossed(m2)).expect("crossings come in pairs") };
+                        let m2 = (1..4).map(|d| (m + d) % 4).find(|&m2| crossed(m2)).expect("crossings come in pairs");
                         let (e, e2) = (edge_between(q[m], q[(m + 1) % 4]), edge_between(q[m2], q[(m2 + 1) % 4]));
                         next[e] = e2;
                         face_of[e] = f;
@@ -142,7 +142,7 @@ impl Table {
                 let centroid = faces_used.windows(2).any(|w| w[0] == w[1]);
                 loops.push(Loop { edges, centroid });
             }
-            triangles[case] = loops.iter().map(Loop::triangles).sum::<usize>() as u8;
+            *count = loops.iter().map(Loop::triangles).sum::<usize>() as u8;
             cases.push(loops);
         }
         Table { cases, triangles }

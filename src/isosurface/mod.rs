@@ -30,11 +30,10 @@
 //!
 //! **Cavities.** A cavity is a region of below-isovalue voxels that cannot reach any ROI face
 //! through face-neighbouring below-isovalue voxels. A bone's medullary canal that runs out
-//! through the ROI's end faces reaches them, so it is not filled: it stays a tunnel, capped
-//! as a ring at those faces. It is filled when the ROI takes in the bone's closed ends
-//! (`ct_phantom_is_closed` in tests/isosurface.rs shows both). The fill itself can treat
-//! chosen ROI faces as closed (`cavities::fill`'s `open`), which would close such a canal
-//! as the paper does (its Figure 10b); no option exposes that yet.
+//! through the ROI's end faces reaches them: a tunnel in 3D, not a cavity. So after the 3D
+//! fill, the holes of each slice across k (below-isovalue regions enclosed within the slice)
+//! are filled too, which closes the canal as the paper does before slicing (its Figure 10b);
+//! both count in `cavities_filled` (`ct_phantom_is_closed` in tests/isosurface.rs).
 //!
 //! **Why our own implementation.** The pure-Rust crates found (`mcubes`, `marching-cubes`)
 //! polygonise cube by cube with the classic Bourke table: triangle soups, not welded, with the

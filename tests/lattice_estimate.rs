@@ -38,7 +38,7 @@ fn estimate_and_run(design: &Design) -> (Vec<Estimate>, Vec<f64>, f64) {
     let mut quiet = |_: &str, _: f32| {};
     let mut ctx = Ctx::new(design, &files, &mut cache, &mut quiet);
     let est = kind.estimate(&mut ctx).unwrap_or_else(|e| panic!("{}: {e}", design.name));
-    let Product::Toolpath(tp) = kind.run(&mut ctx).unwrap_or_else(|e| panic!("{}: {e}", design.name));
+    let Product::Toolpath(tp) = kind.run(&mut ctx).unwrap_or_else(|e| panic!("{}: {e}", design.name)) else { panic!("{}: a lattice job makes a toolpath", design.name) };
     let lattice = ctx.reports.iter().find(|r| r.stage == "lattice").expect("a lattice report");
     let struts: Vec<f64> = lattice.data["struts_per_layer"].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect();
     (est, struts, tp.point_count() as f64)

@@ -231,7 +231,7 @@ const VIEWS: &[ViewInfo] = &[
     ViewInfo { id: "axial", stage: "volume", label: "Axial slices", shape: Shape::Image, index_label: "Slice", doc: "The volume across k (HU), with iso-contours and the region of interest." },
     ViewInfo { id: "coronal", stage: "volume", label: "Coronal slices", shape: Shape::Image, index_label: "Slice", doc: "The volume across j (HU), with iso-contours and the region of interest." },
     ViewInfo { id: "sagittal", stage: "volume", label: "Sagittal slices", shape: Shape::Image, index_label: "Slice", doc: "The volume across i (HU), with iso-contours and the region of interest." },
-    ViewInfo { id: "density", stage: "density", label: "Target density ρ", shape: Shape::Image, index_label: "Slice", doc: "The relative density the infill is graded to (1 − P(HU), clamped to [ρ_min, 1]), axial slices of the ROI." },
+    ViewInfo { id: "density", stage: "density", label: "Target density", shape: Shape::Image, index_label: "Slice", doc: "The relative density the infill is graded to (1 − P(HU), clamped to [ρ_min, 1]), axial slices of the ROI." },
     ViewInfo { id: "surface", stage: "surface", label: "Surface model", shape: Shape::Mesh, index_label: "View", doc: "The closed mesh marching cubes extracted at the isovalue inside the ROI (volume frame, mm)." },
 ];
 

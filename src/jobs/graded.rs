@@ -582,7 +582,9 @@ fn density_report(j: &GradedJob, m: &Model, vol: &Volume, roi: &Roi) -> StageRep
         .metric("k_c", "k_c", m.cell.k_c, "", "Toolpath length in a unit cell ÷ L_cell for this pattern (table 1).")
         .metric("segment", "Grading step", m.segment_mm, "mm", "Infill segments are split to this length so the grading resolves the voxels.");
     if let Some((slope, intercept)) = m.line {
-        r = r.metric("slope", "P slope", slope, "1/HU", "Equation 7: P = slope · HU + intercept.").metric("intercept", "P intercept", intercept, "", "Equation 7's constant.");
+        r = r
+            .metric("slope", "P slope", slope * 1000.0, "per 1000 HU", "Equation 7: P = slope · HU + intercept (the femur case: −0.529 per 1000 HU).")
+            .metric("intercept", "P intercept", intercept, "", "Equation 7's constant (the femur case: 0.901867).");
     }
     // The calibration, plotted over the ROI's HU range.
     let h = volume::histogram(vol, roi, 64);
@@ -592,7 +594,7 @@ fn density_report(j: &GradedJob, m: &Model, vol: &Volume, roi: &Roi) -> StageRep
         key: "calibration".into(),
         title: "HU → porosity P and density ρ".into(),
         kind: PlotKind::Line,
-        x: Axis::new("HU", "HU"),
+        x: Axis::new("CT value", "HU"),
         y: Axis::new("P, ρ", ""),
         group: None,
         series: vec![
@@ -606,7 +608,7 @@ fn density_report(j: &GradedJob, m: &Model, vol: &Volume, roi: &Roi) -> StageRep
         key: "hu_histogram".into(),
         title: "HU in the region of interest".into(),
         kind: PlotKind::Histogram,
-        x: Axis::new("HU", "HU"),
+        x: Axis::new("CT value", "HU"),
         y: Axis::new("Voxels", ""),
         group: None,
         series: vec![Series::xy("voxels", edges(&h), h.counts.iter().map(|&c| c as f64).collect())],

@@ -120,16 +120,7 @@ pub fn gyroid(area: &[IntShape<i32>], cell_um: f64, z_mm: f64, angle_rad: f64, m
     let scale = cell_um / TAU; // µm per scaled unit
     let (sn, cs) = (libm::sin(angle_rad), libm::cos(angle_rad));
     // Bounding box of the area in the pattern frame (turned by −angle).
-    let (mut lo, mut hi) = (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY));
-    for p in area.iter().flat_map(|s| s.iter()).flat_map(|c| c.iter()) {
-        let (x, y) = (p.x as f64, p.y as f64);
-        let q = DVec2::new(x * cs + y * sn, -x * sn + y * cs);
-        lo = lo.min(q);
-        hi = hi.max(q);
-    }
-    if lo.x > hi.x {
-        return Vec::new();
-    }
+    let Some((lo, hi)) = super::infill::turned_bounds(area, sn, cs) else { return Vec::new() };
     let sec = Section::new(TAU * z_mm * 1000.0 / cell_um);
     let tol = chord_tolerance_um(cell_um) / scale;
     // Along and cross ranges of the box, in periods (one extra each side: a branch wanders

@@ -70,16 +70,7 @@ pub fn honeycomb3d(area: &[IntShape<i32>], cell_um: f64, z_mm: f64, rows: bool, 
     }
     let d = cell_um / 2.0;
     let (sn, cs) = (libm::sin(angle_rad), libm::cos(angle_rad));
-    let (mut lo, mut hi) = (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY));
-    for p in area.iter().flat_map(|s| s.iter()).flat_map(|c| c.iter()) {
-        let (x, y) = (p.x as f64, p.y as f64);
-        let q = DVec2::new(x * cs + y * sn, -x * sn + y * cs);
-        lo = lo.min(q);
-        hi = hi.max(q);
-    }
-    if lo.x > hi.x {
-        return Vec::new();
-    }
+    let Some((lo, hi)) = super::infill::turned_bounds(area, sn, cs) else { return Vec::new() };
     let o = offset(z_mm * 1000.0 / d);
     let (a_lo, a_hi, c_lo, c_hi) = if rows { (lo.x, hi.x, lo.y, hi.y) } else { (lo.y, hi.y, lo.x, hi.x) };
     let j0 = libm::floor(a_lo / d) as i64 - 1;

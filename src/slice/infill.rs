@@ -226,6 +226,19 @@ pub(crate) fn rectilinear(area: &[IntShape<i32>], spacing_um: f64, angle_rad: f6
     out
 }
 
+/// The box of `area`'s vertices in the frame turned by −`angle` (sine `sn`, cosine `cs`): the
+/// pattern's own frame, where its lines are generated before clipping. `None` for no vertices.
+pub(crate) fn turned_bounds(area: &[IntShape<i32>], sn: f64, cs: f64) -> Option<(DVec2, DVec2)> {
+    let (mut lo, mut hi) = (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY));
+    for p in area.iter().flat_map(|s| s.iter()).flat_map(|c| c.iter()) {
+        let (x, y) = (p.x as f64, p.y as f64);
+        let q = DVec2::new(x * cs + y * sn, -x * sn + y * cs);
+        lo = lo.min(q);
+        hi = hi.max(q);
+    }
+    (lo.x <= hi.x).then_some((lo, hi))
+}
+
 /// Clips open polylines (µm, integer) to `area` (even–odd) with i_overlay's string clipping,
 /// re-joins the pieces the clipper splits at its graph nodes (two piece ends on one point and
 /// nothing else there), drops pieces shorter than `min_len_um` and returns them in mm.

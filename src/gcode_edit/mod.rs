@@ -57,6 +57,7 @@ use crate::motion::lex::{self, lex_line, Command, Line, MAX_WORD_MAGNITUDE};
 use crate::motion::{Motion, Step, MOTION_EPS};
 use dialect::{Dialect, InfillTypes};
 use rewrite::{find_word, write_number, Found, Style};
+use crate::scaffold::{max_bead_area, width_of_area};
 use serde::{Deserialize, Serialize};
 
 /// Infill density the file was sliced with: the paper's femur case (table 3), 47 %.
@@ -92,16 +93,9 @@ pub const MAX_TYPES_SEEN: usize = 32;
 /// style file with 40 % infill moves: see the `edits_a_50_mb_file` test's printout).
 pub const SECONDS_PER_BYTE: f64 = 1.3e-8;
 
-/// What to do with a move over the flow or width limit.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Limit {
-    /// Count it ([`EditReport::over_flow`], [`EditReport::over_width`]).
-    #[default]
-    Warn,
-    /// Count it and reduce its E so both limits hold.
-    Clamp,
-}
+/// What to do with a move over the flow or width limit: count it ([`EditReport::over_flow`],
+/// [`EditReport::over_width`]), or also reduce its E so both limits hold.
+pub use crate::scaffold::Limit;
 
 /// Editing options.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -146,22 +140,7 @@ impl Default for Options {
     }
 }
 
-/// One layer's edited infill.
-#[derive(Clone, Debug, Default, PartialEq, Serialize)]
-pub struct LayerStat {
-    /// Z of its infill moves, mm.
-    pub z_mm: f64,
-    /// Edited infill moves.
-    pub moves: usize,
-    /// Their length, mm.
-    pub length_mm: f64,
-    /// Length-weighted mean of the target ρ (the field's value, before clamping).
-    pub target_mean: f64,
-    /// Length-weighted mean of the achieved ρ: ρ_s · E_new / E_old as printed.
-    pub achieved_mean: f64,
-    /// Length-weighted mean of |achieved − target|.
-    pub mean_abs_error: f64,
-}
+pub use crate::scaffold::LayerStat;
 
 /// What an edit did.
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]
@@ -478,7 +457,6 @@ pub fn edit(name: &str, gcode: &[u8], density: &dyn Fn(DVec3) -> Option<f64>, op
     let o = options;
     let types = InfillTypes::new(&o.infill_types);
     let area_f = std::f64::consts::PI * o.filament_mm * o.filament_mm / 4.0;
-    let quarter = std::f64::consts::FRAC_PI_4 - 1.0;
     let translation = DVec3::from(o.translation_mm);
 
     let mut out: Vec<u8> = Vec::with_capacity(gcode.len() + gcode.len() / 16 + 4096);
@@ -600,11 +578,11 @@ pub fn edit(name: &str, gcode: &[u8], density: &dyn Fn(DVec3) -> Option<f64>, op
                         let lh = lh_stated.or(lh_step).unwrap_or(DEFAULT_LAYER_HEIGHT_MM);
                         let area = d_new * es.modes.unit * area_f / mv.len;
                         let over_flow = area * mv.v > o.q_max_mm3_s * (1.0 + 1e-9);
-                        let over_width = area / lh - quarter * lh > o.width_max_mm * (1.0 + 1e-9);
+                        let over_width = width_of_area(area, lh) > o.width_max_mm * (1.0 + 1e-9);
                         r.over_flow += usize::from(over_flow);
                         r.over_width += usize::from(over_width);
                         if o.limit == Limit::Clamp && (over_flow || over_width) {
-                            let area_max = (o.q_max_mm3_s / mv.v).min(lh * (o.width_max_mm + quarter * lh)).max(0.0);
+                            let area_max = max_bead_area(o.q_max_mm3_s, mv.v, o.width_max_mm, lh);
                             d_new = d_new.min(area_max * mv.len / area_f / es.modes.unit);
                         }
                         let e_prev_out = if drift && !rel { e_out } else { e_before };

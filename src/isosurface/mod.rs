@@ -55,6 +55,7 @@ use crate::budget::{Estimate, OverBudget};
 use crate::geom::Mesh;
 use crate::volume::{Roi, Volume};
 use marching_cubes::{Grid, Table, EDGE_MARGIN, SOLID};
+use crate::settings::{int, num, other, Field, Kind as FieldKind};
 use serde::{Deserialize, Serialize};
 
 /// Default isovalue, HU: the paper's threshold for bone (its §3, after the literature's HU
@@ -437,3 +438,10 @@ pub fn write_stl(mesh: &Mesh, name: &str) -> Vec<u8> {
     out[..80].copy_from_slice(&header);
     out
 }
+
+/// Form rows of [`Options`] (paths relative to it).
+pub const FIELDS: &[Field] = &[
+    num("iso", "Surface model", "Isovalue", "HU", -100000.0, 100000.0, 1.0, "The boundary of the tissue: voxels at or above it are solid (the paper's bone threshold: 350 HU)."),
+    other("fill_cavities", "Surface model", "Fill cavities", FieldKind::Bool, &[], "Close voids inside the solid (the medullary canal) so the part is one solid."),
+    int("smoothing_iterations", "Surface model", "Smoothing", 0.0, 200.0, "Taubin smoothing passes over the mesh (0: the raw marching-cubes surface)."),
+];

@@ -25,7 +25,7 @@ use crate::geom::{DVec3, Mesh};
 use crate::isosurface;
 use crate::pipeline::{Ctx, Error, Out};
 use crate::report::{Axis, Column, Plot, PlotKind, Row as TableRow, Series, StageReport, Table};
-use crate::scaffold::{self, grade, Calibration, Cell};
+use crate::scaffold::{self, grade, Calibration, Cell, LayerStat, Limit};
 use crate::settings::{choice_docs, mount, num, other, percent, points, vec3, when, Field, Kind as FieldKind, Problem, Row};
 use crate::slice::{self, InfillPattern};
 use crate::volume::{self, Axis as SliceAxis, Roi, Volume};
@@ -92,7 +92,7 @@ pub struct DensitySpec {
     /// Volumetric flow limit Q_max, mm³/s.
     pub q_max_mm3_s: f64,
     /// Over a limit: warn or clamp.
-    pub limit: grade::Limit,
+    pub limit: Limit,
     /// Longest infill segment after splitting, mm (0: the smallest voxel spacing).
     pub segment_mm: f64,
 }
@@ -104,7 +104,7 @@ impl Default for DensitySpec {
             min_width_mm: DEFAULT_MIN_WIDTH_MM,
             max_width_mm: DEFAULT_MAX_WIDTH_MM,
             q_max_mm3_s: gcode_edit::DEFAULT_Q_MAX_MM3_S,
-            limit: grade::Limit::Warn,
+            limit: Limit::Warn,
             segment_mm: 0.0,
         }
     }
@@ -254,23 +254,6 @@ const JOB_FIELDS: &[Field] = &[
     when(vec3("alignment.translation_mm", "Route", "Translation v⃗", "mm", -100000.0, 100000.0, 0.01, "G-code point = volume point + v⃗ (alignment 'manual')."), "alignment.mode", "manual"),
 ];
 
-/// How to read `.raw` voxels (a header-less volume).
-const RAW_FIELDS: &[Field] = &[
-    vec3("dims", "Raw volume", "Voxels", "", 0.0, 100000.0, 1.0, "A .raw file's size in voxels along i, j, k (0 0 0 when no .raw file is used)."),
-    vec3("spacing_mm", "Raw volume", "Voxel size", "mm", 0.0, 1000.0, 0.001, "A .raw file's voxel spacing along i, j, k."),
-    other("voxel", "Raw volume", "Voxel type", FieldKind::Choice, &["u8", "i8", "u16", "i16", "u32", "i32", "f32", "f64"], "How each voxel of a .raw file is stored."),
-    other("big_endian", "Raw volume", "Big-endian", FieldKind::Bool, &[], "The .raw file stores the most significant byte first."),
-    num("slope", "Raw volume", "Rescale slope", "", -1e9, 1e9, 0.001, "Value = stored × slope + intercept (1 and 0 keep the stored values)."),
-    num("intercept", "Raw volume", "Rescale intercept", "", -1e9, 1e9, 1.0, "Added after the slope (e.g. −1024 for CT stored as unsigned)."),
-];
-
-/// The surface model.
-const SURFACE_FIELDS: &[Field] = &[
-    num("iso", "Surface model", "Isovalue", "HU", -100000.0, 100000.0, 1.0, "The boundary of the tissue: voxels at or above it are solid (the paper's bone threshold: 350 HU)."),
-    other("fill_cavities", "Surface model", "Fill cavities", FieldKind::Bool, &[], "Close voids inside the solid (the medullary canal) so the part is one solid."),
-    crate::settings::int("smoothing_iterations", "Surface model", "Smoothing", 0.0, 200.0, "Taubin smoothing passes over the mesh (0: the raw marching-cubes surface)."),
-];
-
 const ROI_FIELDS: &[Field] = &[
     Field { default: Some("{\"min_mm\":[0,0,0],\"max_mm\":[50,50,50]}"), ..other("", "Region of interest", "Crop to a box", FieldKind::Section, &[], "Use only the voxels inside a box (volume frame, mm); off: the whole volume.") },
     vec3("min_mm", "Region of interest", "From", "mm", -100000.0, 100000.0, 0.1, "The ROI box's smallest corner in the volume frame (first voxel centre at 0)."),
@@ -300,9 +283,9 @@ impl Kind for GradedKind {
 
     fn fields() -> Vec<Row> {
         let mut rows = mount("job", JOB_FIELDS);
-        rows.extend(mount("job.raw", RAW_FIELDS));
+        rows.extend(mount("job.raw", volume::RAW_FIELDS));
         rows.extend(mount("job.roi", ROI_FIELDS));
-        rows.extend(mount("job.surface", SURFACE_FIELDS));
+        rows.extend(mount("job.surface", isosurface::FIELDS));
         rows.extend(mount("job.density", DENSITY_FIELDS));
         rows.extend(mount("job.slice", slice::FIELDS));
         rows
@@ -380,7 +363,7 @@ impl Kind for GradedKind {
             Route::Edit => {
                 let input = j.gcode.as_ref().ok_or_else(|| Error::NoInput("route 'edit' needs another slicer's G-code: load it, or pass --input gcode=FILE".into()))?;
                 let (bytes, _) = ctx.file_bytes("gcode", input)?;
-                let e = gcode_edit::estimate(bytes.len(), &edit_options(j, ctx.design, &vol, [0.0; 3]));
+                let e = gcode_edit::estimate(bytes.len(), &edit_options(j, ctx.design, [0.0; 3]));
                 // The analyzer reads about one segment per 30 bytes of G-code.
                 let segments = bytes.len() as f64 / 30.0;
                 out.push(e.quantity("segments", "Moves (about)", segments, ""));
@@ -696,8 +679,8 @@ fn grade_report(r: &grade::GradeReport) -> StageReport {
 }
 
 /// Per-layer target and achieved ρ: a plot along Z and a table.
-fn layer_plots(s: &mut StageReport, layers: &[grade::LayerStat]) {
-    let used: Vec<&grade::LayerStat> = layers.iter().filter(|l| l.segments > 0).collect();
+fn layer_plots(s: &mut StageReport, layers: &[LayerStat]) {
+    let used: Vec<&LayerStat> = layers.iter().filter(|l| l.moves > 0).collect();
     let z: Vec<f64> = used.iter().map(|l| l.z_mm).collect();
     let n: f64 = used.iter().map(|l| l.length_mm).sum();
     let err = if n > 0.0 { used.iter().map(|l| l.mean_abs_error * l.length_mm).sum::<f64>() / n } else { 0.0 };
@@ -729,22 +712,19 @@ fn layer_plots(s: &mut StageReport, layers: &[grade::LayerStat]) {
         columns: vec![col("Z", "mm"), col("Segments", ""), col("Length", "mm"), col("Target ρ", ""), col("Achieved ρ", ""), col("Mean |error|", "")],
         rows: used
             .iter()
-            .map(|l| TableRow { group_index: None, cells: vec![l.z_mm.into(), l.segments.into(), l.length_mm.into(), l.target_mean.into(), l.achieved_mean.into(), l.mean_abs_error.into()] })
+            .map(|l| TableRow { group_index: None, cells: vec![l.z_mm.into(), l.moves.into(), l.length_mm.into(), l.target_mean.into(), l.achieved_mean.into(), l.mean_abs_error.into()] })
             .collect(),
     });
 }
 
-fn edit_options(j: &GradedJob, design: &Design, _vol: &Volume, translation: [f64; 3]) -> gcode_edit::Options {
+fn edit_options(j: &GradedJob, design: &Design, translation: [f64; 3]) -> gcode_edit::Options {
     let cell = cell_of(j.slice.infill_pattern);
     let cell_mm = scaffold::cell_size_for_density(cell, j.gcode_rho_s, design.printer.nozzle_diameter_mm, j.slice.layer_height_mm);
     gcode_edit::Options {
         rho_s: j.gcode_rho_s,
         rho_min: scaffold::density_at_width(cell, cell_mm, j.density.min_width_mm, j.slice.layer_height_mm).clamp(0.0, 1.0),
         rho_max: 1.0,
-        limit: match j.density.limit {
-            grade::Limit::Warn => gcode_edit::Limit::Warn,
-            grade::Limit::Clamp => gcode_edit::Limit::Clamp,
-        },
+        limit: j.density.limit,
         q_max_mm3_s: j.density.q_max_mm3_s,
         width_max_mm: j.density.max_width_mm,
         filament_mm: design.printer.filament_diameter_mm,
@@ -770,7 +750,7 @@ fn edit(j: &GradedJob, ctx: &mut Ctx, vol: &Out<Volume>, surface: &Out<isosurfac
             DVec3::new(pc.x - mc.x, pc.y - mc.y, -model.min.z)
         }
     };
-    let options = edit_options(j, ctx.design, vol, (-v).to_array());
+    let options = edit_options(j, ctx.design, (-v).to_array());
     let parts = (format!("{options:?}"), &j.density.calibration);
     let text = ctx.stage("edit", "edit", &parts, &[key, vol.key], |progress| {
         let cal = &j.density.calibration;
@@ -790,12 +770,7 @@ fn edit(j: &GradedJob, ctx: &mut Ctx, vol: &Out<Volume>, surface: &Out<isosurfac
             .metric("over_width", "Over E_w,max", r.over_width as f64, "", "Moves whose bead would be wider than E_w,max.")
             .metric("resets", "G92 lines added", r.resets_inserted as f64, "", "Absolute-E files: one 'G92 E…' after each run of edited moves keeps every other line's E valid and unchanged.")
             .metric("saved", "Material saved", saved * 100.0, "%", "Infill material saved against the file as sliced (negative: more material).");
-        let layers: Vec<grade::LayerStat> = r
-            .layers
-            .iter()
-            .map(|l| grade::LayerStat { z_mm: l.z_mm, segments: l.moves, length_mm: l.length_mm, target_mean: l.target_mean, achieved_mean: l.achieved_mean, mean_abs_error: l.mean_abs_error })
-            .collect();
-        layer_plots(&mut report, &layers);
+        layer_plots(&mut report, &r.layers);
         let text = String::from_utf8(out.text).map_err(|_| Error::NoInput(format!("{name}: the edited G-code is not UTF-8 text")))?;
         Ok((text, Some(report)))
     })?;

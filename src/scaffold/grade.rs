@@ -19,16 +19,7 @@ use serde::{Deserialize, Serialize};
 /// Most infill segments after splitting.
 pub const MAX_SEGMENTS: usize = 50_000_000;
 
-/// What to do with a segment over the flow or width limit.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Limit {
-    /// Count it in the report, write it as graded.
-    #[default]
-    Warn,
-    /// Count it and reduce its flow to the limit.
-    Clamp,
-}
+pub use super::{LayerStat, Limit};
 
 /// Grading options (all set by the job from the design and the paper's equations).
 #[derive(Clone, Debug, PartialEq)]
@@ -49,23 +40,6 @@ pub struct Options {
     pub limit: Limit,
     /// Infill feed, mm/s (for the flow check).
     pub feed_mm_s: f64,
-}
-
-/// One layer's grading.
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
-pub struct LayerStat {
-    /// Layer top, mm.
-    pub z_mm: f64,
-    /// Infill segments graded.
-    pub segments: usize,
-    /// Their length, mm.
-    pub length_mm: f64,
-    /// Length-weighted mean target ρ.
-    pub target_mean: f64,
-    /// Length-weighted mean achieved ρ.
-    pub achieved_mean: f64,
-    /// Length-weighted mean |achieved − target|.
-    pub mean_abs_error: f64,
 }
 
 /// What grading did.
@@ -148,11 +122,7 @@ pub fn grade(toolpath: &Toolpath, density: &dyn Fn(DVec3) -> Option<f64>, option
     let n = out.passes.len().max(1);
     for (li, pass) in out.passes.iter_mut().enumerate() {
         let h = pass.height;
-        let area_limit = {
-            let by_flow = o.q_max_mm3_s / o.feed_mm_s;
-            let by_width = super::bead_area(o.width_max_mm, h);
-            by_flow.min(by_width)
-        };
+        let area_limit = super::max_bead_area(o.q_max_mm3_s, o.feed_mm_s, o.width_max_mm, h);
         let mut stat = LayerStat { z_mm: pass.z, ..Default::default() };
         for path in pass.paths.iter_mut().filter(|p| p.feature == Feature::Infill) {
             let points = split(&path.points, o.segment_mm);
@@ -194,7 +164,7 @@ pub fn grade(toolpath: &Toolpath, density: &dyn Fn(DVec3) -> Option<f64>, option
                 // The target along the segment, not only at its midpoint.
                 let along = mean_along(a, b, o.segment_mm / 4.0, density).unwrap_or(target).max(o.rho_min).min(1.0);
                 let achieved = o.rho_s * area / o.nominal_area_mm2;
-                stat.segments += 1;
+                stat.moves += 1;
                 stat.length_mm += len;
                 stat.target_mean += along * len;
                 stat.achieved_mean += achieved * len;
@@ -208,7 +178,7 @@ pub fn grade(toolpath: &Toolpath, density: &dyn Fn(DVec3) -> Option<f64>, option
             data.tool_axis = None;
             data.dwell_s = None;
         }
-        report.segments += stat.segments;
+        report.segments += stat.moves;
         if stat.length_mm > 0.0 {
             stat.target_mean /= stat.length_mm;
             stat.achieved_mean /= stat.length_mm;

@@ -28,6 +28,43 @@ pub mod model;
 pub use calibration::{Calibration, DEFAULT_POINTS};
 pub use model::*;
 
+use serde::{Deserialize, Serialize};
+
+/// What to do with a graded bead over the flow or width limit (both routes: weft's own
+/// infill, [`grade`], and another slicer's, `crate::gcode_edit`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Limit {
+    /// Count it in the report, write it as graded.
+    #[default]
+    Warn,
+    /// Count it and reduce its flow to the limit.
+    Clamp,
+}
+
+/// The largest bead cross-section within both limits, mm²: the volumetric flow `q_max_mm3_s`
+/// at `feed_mm_s`, and the stadium bead of width `width_max_mm` at `layer_mm`.
+pub fn max_bead_area(q_max_mm3_s: f64, feed_mm_s: f64, width_max_mm: f64, layer_mm: f64) -> f64 {
+    (q_max_mm3_s / feed_mm_s).min(bead_area(width_max_mm, layer_mm)).max(0.0)
+}
+
+/// One layer of graded infill, measured the same way on both routes.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct LayerStat {
+    /// Z of its infill moves (the layer top), mm.
+    pub z_mm: f64,
+    /// Infill moves graded (weft's own: segments after splitting).
+    pub moves: usize,
+    /// Their length, mm.
+    pub length_mm: f64,
+    /// Length-weighted mean of the target ρ.
+    pub target_mean: f64,
+    /// Length-weighted mean of the achieved ρ: ρ_s · (bead or E as written) / nominal.
+    pub achieved_mean: f64,
+    /// Length-weighted mean of |achieved − target|.
+    pub mean_abs_error: f64,
+}
+
 /// Table 1 of the paper: the three infill types with their coefficients, for reports.
 pub fn coefficients_table() -> [(&'static str, Cell); 3] {
     [("gyroid", GYROID), ("rectilinear", RECTILINEAR), ("3D honeycomb", HONEYCOMB_3D)]

@@ -17,6 +17,7 @@
 
 use super::{dicom, nrrd, raw, zip, Volume};
 use crate::budget::{Estimate, OverBudget};
+use crate::settings::{num, other, vec3, Field, Kind as FieldKind};
 use serde::{Deserialize, Serialize};
 
 /// Most voxels a volume may have: 512³ = 134,217,728 (a full 512×512 CT series of 512
@@ -495,3 +496,13 @@ fn finish(file: &str, imported: &mut Imported) -> Result<(), Error> {
     imported.report.slice_gap_mm = if imported.report.slice_gap_mm > 0.0 { imported.report.slice_gap_mm } else { v.spacing_mm[2] };
     Ok(())
 }
+
+/// Form rows of [`RawLayout`] (paths relative to it): how to read `.raw` voxels.
+pub const RAW_FIELDS: &[Field] = &[
+    vec3("dims", "Raw volume", "Voxels", "", 0.0, 100000.0, 1.0, "A .raw file's size in voxels along i, j, k (0 0 0 when no .raw file is used)."),
+    vec3("spacing_mm", "Raw volume", "Voxel size", "mm", 0.0, 1000.0, 0.001, "A .raw file's voxel spacing along i, j, k."),
+    other("voxel", "Raw volume", "Voxel type", FieldKind::Choice, &["u8", "i8", "u16", "i16", "u32", "i32", "f32", "f64"], "How each voxel of a .raw file is stored."),
+    other("big_endian", "Raw volume", "Big-endian", FieldKind::Bool, &[], "The .raw file stores the most significant byte first."),
+    num("slope", "Raw volume", "Rescale slope", "", -1e9, 1e9, 0.001, "Value = stored × slope + intercept (1 and 0 keep the stored values)."),
+    num("intercept", "Raw volume", "Rescale intercept", "", -1e9, 1e9, 1.0, "Added after the slope (e.g. −1024 for CT stored as unsigned)."),
+];

@@ -622,8 +622,9 @@ fn plan(kind: &dyn crate::jobs::JobKind, ctx: &mut Ctx) -> Result<Plan, Error> {
     Ok(Plan::new(stages))
 }
 
-/// The printer, material, speeds and name: what the writer reads of the design.
-fn writer_options(design: &Design) -> gcode::Options {
+/// The printer, material, speeds and name: what the writer reads of the design (also for
+/// a job that writes a toolpath itself, e.g. to compare routes).
+pub fn writer_options(design: &Design) -> gcode::Options {
     gcode::Options {
         printer: design.printer.clone(),
         material: design.material.clone(),

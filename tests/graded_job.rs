@@ -160,6 +160,35 @@ fn native_route_grades_every_infill_segment_by_the_field() {
 }
 
 #[test]
+fn native_and_edit_routes_are_compared_on_the_same_toolpath() {
+    // Rectilinear lines cross the phantom's shell and core in one move: graded whole (the
+    // paper's route) their density is the midpoint's all along; split, it follows the field.
+    let mut design = example();
+    design.job.value["slice"]["infill_pattern"] = "rectilinear".into();
+    let out = run(&design, &Files::new());
+    let grade: serde_json::Value = out.report.stage_data("grade").unwrap().clone();
+    let compare: serde_json::Value = out.report.stage_data("compare").unwrap().clone();
+    let metric = |stage: &str, key: &str| out.report.stages.iter().find(|s| s.stage == stage).unwrap().metrics.iter().find(|m| m.key == key).unwrap().value;
+    let (native, edit) = (metric("compare", "native_error"), metric("compare", "edit_error"));
+    assert_eq!(native, metric("grade", "mean_abs_error"), "the comparison's native error is the grade stage's");
+    assert!(native < 0.01, "native error {native}");
+    assert!(edit > 5.0 * native, "edit route error {edit} against native {native}");
+    // Every infill move of the ungraded toolpath is edited once: the grade stage's segments
+    // before splitting.
+    let whole = grade["segments"].as_u64().unwrap() - grade["split_added"].as_u64().unwrap();
+    assert_eq!(compare["edited_moves"].as_u64().unwrap(), whole, "{compare}");
+    // Both routes measured on the same layers.
+    let z = |k: &str| compare[k].as_array().unwrap().iter().filter(|l| l["moves"].as_u64().unwrap() > 0).map(|l| (l["z_mm"].as_f64().unwrap() * 1000.0).round() as i64).collect::<Vec<_>>();
+    assert_eq!(z("native"), z("edit"));
+
+    // Off: no comparison stage, the same G-code.
+    design.job.value["compare_edit"] = false.into();
+    let off = run(&design, &Files::new());
+    assert!(off.report.stage_data("compare").is_none());
+    assert_eq!(off.gcode, out.gcode);
+}
+
+#[test]
 fn edit_route_rewrites_only_the_infill_of_another_slicers_gcode() {
     // A PrusaSlicer-style file of a 20 mm block, absolute E (so G92 resets are needed).
     let mut design = example();

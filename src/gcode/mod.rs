@@ -20,7 +20,7 @@ mod writer;
 
 pub use poses::POSES_CSV_HEADER;
 pub use template::{expand as expand_template, MAX_EXPANDED_BYTES, MAX_TEMPLATE_BYTES, PLACEHOLDERS};
-pub use writer::equation4_e;
+pub use writer::{bed_offset, equation4_e};
 
 /// G-code dialects.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]

@@ -149,8 +149,8 @@ fn fan_pwm(percent: f64) -> u64 {
     if v.is_finite() { v as u64 } else { 0 }
 }
 
-/// Offset from model to printer coordinates.
-fn bed_offset(options: &Options) -> DVec3 {
+/// Offset from model to printer coordinates: printer point = model point + this.
+pub fn bed_offset(options: &Options) -> DVec3 {
     let bed = options.printer.bed_size_mm;
     match options.printer.origin {
         Origin::Corner => DVec3::new(bed[0] / 2.0, bed[1] / 2.0, 0.0),

@@ -57,7 +57,7 @@ use crate::motion::lex::{self, lex_line, Command, Line, MAX_WORD_MAGNITUDE};
 use crate::motion::{Motion, Step, MOTION_EPS};
 use dialect::{Dialect, InfillTypes};
 use rewrite::{find_word, write_number, Found, Style};
-use crate::scaffold::{max_bead_area, width_of_area};
+use crate::scaffold::{max_bead_area, mean_along, width_of_area};
 use serde::{Deserialize, Serialize};
 
 /// Infill density the file was sliced with: the paper's femur case (table 3), 47 %.
@@ -72,6 +72,10 @@ pub const DEFAULT_FILAMENT_MM: f64 = 1.75;
 pub const DEFAULT_RHO_MIN: f64 = 0.235;
 /// Ceiling of the target density: solid.
 pub const DEFAULT_RHO_MAX: f64 = 1.0;
+/// Sampling step of the field along a move for the report's target ρ, mm (a quarter of the
+/// femur case's 0.98 mm pixel). The edit itself reads the field at the midpoint only (the
+/// paper's rule); the report measures how far that is from the field along the move.
+pub const DEFAULT_TARGET_STEP_MM: f64 = 0.25;
 /// Widest bead, mm: E_w,max = 3 × the 0.4 mm nozzle (equation 3).
 pub const DEFAULT_WIDTH_MAX_MM: f64 = 1.2;
 /// Feature names treated as infill by default: PrusaSlicer's `;TYPE:Internal infill`,
@@ -122,6 +126,9 @@ pub struct Options {
     /// comments while the file has no marker (Slic3r). Exact, ignoring ASCII case. Default
     /// [`DEFAULT_INFILL_TYPES`].
     pub infill_types: Vec<String>,
+    /// Sampling step of the report's target ρ along each move, mm. Default
+    /// [`DEFAULT_TARGET_STEP_MM`].
+    pub target_step_mm: f64,
 }
 
 impl Default for Options {
@@ -136,6 +143,7 @@ impl Default for Options {
             filament_mm: DEFAULT_FILAMENT_MM,
             translation_mm: [0.0; 3],
             infill_types: DEFAULT_INFILL_TYPES.iter().map(|s| s.to_string()).collect(),
+            target_step_mm: DEFAULT_TARGET_STEP_MM,
         }
     }
 }
@@ -297,6 +305,9 @@ fn validate(o: &Options) -> Result<(), Error> {
     }
     if let Some(&t) = o.translation_mm.iter().find(|t| !(t.is_finite() && t.abs() <= MAX_WORD_MAGNITUDE)) {
         return bad("translation_mm", t, "each component must be a finite number of mm");
+    }
+    if !(o.target_step_mm >= 0.001 && o.target_step_mm.is_finite()) {
+        return bad("target_step_mm", o.target_step_mm, "the report's sampling step must be at least 0.001 mm");
     }
     if InfillTypes::new(&o.infill_types).is_empty() {
         return Err(Error::BadOption { option: "infill_types", value: format!("{:?}", o.infill_types), problem: "name at least one feature (\"Internal infill\", \"FILL\")".into() });
@@ -612,11 +623,14 @@ pub fn edit(name: &str, gcode: &[u8], density: &dyn Fn(DVec3) -> Option<f64>, op
                             layers.push(LayerAcc { z, moves: 0, len: 0.0, target: 0.0, achieved: 0.0, error: 0.0 });
                         }
                         if let Some(a) = layers.last_mut() {
+                            // The target along the whole move, as weft's own grading measures it.
+                            let from = DVec3::from(mv.from) + translation;
+                            let along = mean_along(from, DVec3::from(mv.to) + translation, o.target_step_mm, density).unwrap_or(t).clamp(o.rho_min, o.rho_max);
                             a.moves += 1;
                             a.len += mv.len;
-                            a.target += mv.len * t;
+                            a.target += mv.len * along;
                             a.achieved += mv.len * achieved;
-                            a.error += mv.len * (achieved - t).abs();
+                            a.error += mv.len * (achieved - along).abs();
                         }
                         if printed != v {
                             edited = Some(d_printed * es.modes.unit);

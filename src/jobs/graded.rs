@@ -150,6 +150,18 @@ pub struct GradedJob {
     /// Where the other slicer's part sits over the volume (edit route).
     #[serde(default)]
     pub alignment: Alignment,
+    /// Native route: also grade the same sliced toolpath the paper's way (its G-code written
+    /// ungraded, then each infill move's E rewritten by the field at its midpoint) and report
+    /// both routes' per-layer error.
+    #[serde(default = "default_compare")]
+    pub compare_edit: bool,
+}
+
+/// Whether the native route compares itself with the edit route by default.
+pub const DEFAULT_COMPARE_EDIT: bool = true;
+
+fn default_compare() -> bool {
+    DEFAULT_COMPARE_EDIT
 }
 
 fn default_levels() -> [f64; 3] {
@@ -192,6 +204,7 @@ impl Default for GradedJob {
             gcode_rho_s: DEFAULT_RHO_S,
             gcode_infill_types: default_infill_types(),
             alignment: Alignment::default(),
+            compare_edit: DEFAULT_COMPARE_EDIT,
         }
     }
 }
@@ -224,6 +237,7 @@ const STAGES: &[StageInfo] = &[
     StageInfo { name: "density", label: "Mapping HU to density" },
     StageInfo { name: "slice", label: "Slicing the surface model" },
     StageInfo { name: "grade", label: "Grading the infill" },
+    StageInfo { name: "compare", label: "Native against the edit route" },
     StageInfo { name: "edit", label: "Editing the G-code's infill" },
 ];
 
@@ -251,6 +265,7 @@ const JOB_FIELDS: &[Field] = &[
         "route",
         "edit",
     ),
+    when(other("compare_edit", "Route", "Compare with the edit route", FieldKind::Bool, &[], "Also grade the same toolpath the paper's way (whole moves, E by the field at their midpoint) and plot both routes' error per layer."), "route", "native"),
     when(vec3("alignment.translation_mm", "Route", "Translation v⃗", "mm", -100000.0, 100000.0, 0.01, "G-code point = volume point + v⃗ (alignment 'manual')."), "alignment.mode", "manual"),
 ];
 
@@ -350,7 +365,8 @@ impl Kind for GradedKind {
                 let model = Model::of(j, ctx.design, &vol)?;
                 let s = slice::estimate(&mesh, &slice_options(j, &model));
                 let infill_mm = surface.report.volume_mm3 * model.cell.k_c * model.cell.m / model.cell_mm / j.slice.layer_height_mm;
-                let segments = s.get("segments") + infill_mm / model.segment_mm;
+                let sliced_moves = s.get("segments");
+                let segments = sliced_moves + infill_mm / model.segment_mm;
                 out.push(s);
                 out.push(Estimate::new("grade").quantity("segments", "Toolpath segments", segments, "").cost(segments * 120.0, segments * 2e-7).limit(
                     "infill segments after splitting",
@@ -359,11 +375,21 @@ impl Kind for GradedKind {
                     "",
                     "raise the grading step (job.density.segment_mm)",
                 ));
+                if j.compare_edit {
+                    // The ungraded G-code (about 30 bytes per move) and its edited copy.
+                    let bytes = (sliced_moves * 30.0) as usize;
+                    let mut e = gcode_edit::estimate(bytes, &edit_options(j, ctx.design, [0.0; 3], model.segment_mm));
+                    e.stage = "compare";
+                    if let Some(r) = e.refused.as_mut() {
+                        r.fix = "turn off 'Compare with the edit route' (job.compare_edit)".into();
+                    }
+                    out.push(e);
+                }
             }
             Route::Edit => {
                 let input = j.gcode.as_ref().ok_or_else(|| Error::NoInput("route 'edit' needs another slicer's G-code: load it, or pass --input gcode=FILE".into()))?;
                 let (bytes, _) = ctx.file_bytes("gcode", input)?;
-                let e = gcode_edit::estimate(bytes.len(), &edit_options(j, ctx.design, [0.0; 3]));
+                let e = gcode_edit::estimate(bytes.len(), &edit_options(j, ctx.design, [0.0; 3], 1.0));
                 // The analyzer reads about one segment per 30 bytes of G-code.
                 let segments = bytes.len() as f64 / 30.0;
                 out.push(e.quantity("segments", "Moves (about)", segments, ""));
@@ -524,8 +550,7 @@ impl Model {
         let cell = cell_of(pattern);
         let cell_mm = scaffold::cell_size_for_density(cell, rho_s, nozzle, layer);
         let rho_min = scaffold::density_at_width(cell, cell_mm, j.density.min_width_mm, layer).clamp(0.0, 1.0);
-        let smallest_voxel = vol.spacing_mm.iter().copied().fold(f64::INFINITY, f64::min);
-        let segment_mm = if j.density.segment_mm > 0.0 { j.density.segment_mm } else { smallest_voxel.clamp(0.05, 100.0) };
+        let segment_mm = grading_step(j, vol);
         Ok(Model {
             pattern,
             cell,
@@ -540,6 +565,12 @@ impl Model {
             line: j.density.calibration.line(),
         })
     }
+}
+
+/// The grading step, mm: the design's, else the smallest voxel spacing.
+fn grading_step(j: &GradedJob, vol: &Volume) -> f64 {
+    let smallest_voxel = vol.spacing_mm.iter().copied().fold(f64::INFINITY, f64::min);
+    if j.density.segment_mm > 0.0 { j.density.segment_mm } else { smallest_voxel.clamp(0.05, 100.0) }
 }
 
 /// The density stage: the model's numbers, the calibration and ρ over the solid voxels.
@@ -658,7 +689,67 @@ fn native(j: &GradedJob, ctx: &mut Ctx, vol: &Out<Volume>, surface: &Out<isosurf
         let report = grade_report(&out.report);
         Ok((out.toolpath, Some(report)))
     })?;
+    if j.compare_edit {
+        compare(j, ctx, vol, &sliced, model, &g, offset)?;
+    }
     Ok(Product::Toolpath(graded))
+}
+
+/// The paper's route on the same toolpath: `sliced` written as G-code without grading, its
+/// infill moves' E rewritten by the field at their midpoints ([`gcode_edit`]); both routes'
+/// per-layer error, measured the same way ([`scaffold::mean_along`]), in one plot.
+fn compare(j: &GradedJob, ctx: &mut Ctx, vol: &Out<Volume>, sliced: &Out<crate::geom::Toolpath>, model: &Model, g: &grade::Options, offset: DVec3) -> Result<(), Error> {
+    let native_layers: Vec<LayerStat> = ctx.reports.iter().find(|r| r.stage == "grade").and_then(|r| serde_json::from_value::<grade::GradeReport>(r.data.clone()).ok()).map(|r| r.layers).unwrap_or_default();
+    let design = ctx.design;
+    let writer = crate::pipeline::writer_options(design);
+    // G-code point = volume point + placement offset + the bed's origin offset.
+    let to_volume = -(offset + crate::gcode::bed_offset(&writer));
+    let options = gcode_edit::Options {
+        rho_s: model.rho_s,
+        rho_min: model.rho_min,
+        translation_mm: to_volume.to_array(),
+        ..edit_options(j, design, [0.0; 3], model.segment_mm)
+    };
+    let parts = (format!("{g:?}"), format!("{options:?}"), &j.density.calibration, &design.printer, &design.material, &design.speeds);
+    ctx.stage("compare", "compare", &parts, &[sliced.key, vol.key], |progress| {
+        let written = crate::gcode::write_gcode(sliced, &writer).map_err(|e| Error::stage("writing the comparison's G-code", e))?;
+        progress(0.3);
+        let cal = &j.density.calibration;
+        let rho = |p: DVec3| vol.sample_with(p, |hu| cal.density(hu as f64, 0.0));
+        let edited = gcode_edit::edit("compare.gcode", written.text.as_bytes(), &rho, &options, &mut |x| progress(0.3 + 0.7 * x)).map_err(|e| Error::stage("editing the comparison's G-code", e))?;
+        let edit_layers = edited.report.layers;
+        let mean = |ls: &[LayerStat]| {
+            let n: f64 = ls.iter().map(|l| l.length_mm).sum();
+            if n > 0.0 { ls.iter().map(|l| l.mean_abs_error * l.length_mm).sum::<f64>() / n } else { 0.0 }
+        };
+        let (e_native, e_edit) = (mean(&native_layers), mean(&edit_layers));
+        let used = |ls: &[LayerStat]| ls.iter().filter(|l| l.moves > 0).map(|l| (l.z_mm, l.mean_abs_error)).unzip::<f64, f64, Vec<f64>, Vec<f64>>();
+        let ((zn, en), (ze, ee)) = (used(&native_layers), used(&edit_layers));
+        let mut report = StageReport::new("compare", "Native against the edit route", &CompareReport { native: native_layers.clone(), edit: edit_layers.clone(), edited_moves: edited.report.edited_moves })
+            .metric("native_error", "Native: mean |achieved − target| ρ", e_native, "", "weft's own grading: segments split to the grading step, each graded by the field at its midpoint.")
+            .metric("edit_error", "Edit route: mean |achieved − target| ρ", e_edit, "", "The paper's route on the same toolpath: whole moves, each graded by the field at its midpoint.")
+            .metric("error_ratio", "Edit ÷ native error", if e_native > 0.0 { e_edit / e_native } else { 0.0 }, "×", "How many times further from the field the edit route's infill is (0 when native is exact).")
+            .metric("edit_moves", "Edited moves", edited.report.edited_moves as f64, "", "Infill moves the edit route rewrote (native splits them into more, shorter segments).");
+        report.plots.push(Plot {
+            key: "error_per_layer".into(),
+            title: "Density error per layer: native against edit".into(),
+            kind: PlotKind::Line,
+            x: Axis::new("Z", "mm"),
+            y: Axis::new("Mean |achieved − target| ρ", ""),
+            group: None,
+            series: vec![Series::xy("native (split)", zn, en), Series::xy("edit (whole moves)", ze, ee)],
+        });
+        Ok(((), Some(report)))
+    })?;
+    Ok(())
+}
+
+/// Both routes' per-layer density on one toolpath.
+#[derive(Serialize)]
+struct CompareReport {
+    native: Vec<LayerStat>,
+    edit: Vec<LayerStat>,
+    edited_moves: usize,
 }
 
 fn grade_report(r: &grade::GradeReport) -> StageReport {
@@ -717,7 +808,8 @@ fn layer_plots(s: &mut StageReport, layers: &[LayerStat]) {
     });
 }
 
-fn edit_options(j: &GradedJob, design: &Design, translation: [f64; 3]) -> gcode_edit::Options {
+/// The edit route's options; its report samples the target every quarter `step_mm`.
+fn edit_options(j: &GradedJob, design: &Design, translation: [f64; 3], step_mm: f64) -> gcode_edit::Options {
     let cell = cell_of(j.slice.infill_pattern);
     let cell_mm = scaffold::cell_size_for_density(cell, j.gcode_rho_s, design.printer.nozzle_diameter_mm, j.slice.layer_height_mm);
     gcode_edit::Options {
@@ -730,6 +822,7 @@ fn edit_options(j: &GradedJob, design: &Design, translation: [f64; 3]) -> gcode_
         filament_mm: design.printer.filament_diameter_mm,
         translation_mm: translation,
         infill_types: j.gcode_infill_types.clone(),
+        target_step_mm: step_mm / 4.0,
     }
 }
 
@@ -750,7 +843,7 @@ fn edit(j: &GradedJob, ctx: &mut Ctx, vol: &Out<Volume>, surface: &Out<isosurfac
             DVec3::new(pc.x - mc.x, pc.y - mc.y, -model.min.z)
         }
     };
-    let options = edit_options(j, ctx.design, (-v).to_array());
+    let options = edit_options(j, ctx.design, (-v).to_array(), grading_step(j, vol));
     let parts = (format!("{options:?}"), &j.density.calibration);
     let text = ctx.stage("edit", "edit", &parts, &[key, vol.key], |progress| {
         let cal = &j.density.calibration;

@@ -162,7 +162,7 @@ pub fn grade(toolpath: &Toolpath, density: &dyn Fn(DVec3) -> Option<f64>, option
                 report.infill_mm3 += area * len;
                 report.uniform_mm3 += o.nominal_area_mm2 * len;
                 // The target along the segment, not only at its midpoint.
-                let along = mean_along(a, b, o.segment_mm / 4.0, density).unwrap_or(target).max(o.rho_min).min(1.0);
+                let along = super::mean_along(a, b, o.segment_mm / 4.0, density).unwrap_or(target).max(o.rho_min).min(1.0);
                 let achieved = o.rho_s * area / o.nominal_area_mm2;
                 stat.moves += 1;
                 stat.length_mm += len;
@@ -203,18 +203,4 @@ fn split(points: &[DVec3], max: f64) -> Vec<DVec3> {
         }
     }
     out
-}
-
-/// The mean of `density` along `a`–`b`, sampled at the centres of pieces no longer than
-/// `step`; `None` when no sample is inside the field.
-fn mean_along(a: DVec3, b: DVec3, step: f64, density: &dyn Fn(DVec3) -> Option<f64>) -> Option<f64> {
-    let pieces = (libm::ceil(a.distance(b) / step).max(1.0) as usize).min(64);
-    let (mut sum, mut n) = (0.0, 0usize);
-    for k in 0..pieces {
-        if let Some(r) = density(a.lerp(b, (k as f64 + 0.5) / pieces as f64)) {
-            sum += r;
-            n += 1;
-        }
-    }
-    (n > 0).then(|| sum / n as f64)
 }

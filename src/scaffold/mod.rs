@@ -28,6 +28,7 @@ pub mod model;
 pub use calibration::{Calibration, DEFAULT_POINTS};
 pub use model::*;
 
+use crate::geom::DVec3;
 use serde::{Deserialize, Serialize};
 
 /// What to do with a graded bead over the flow or width limit (both routes: weft's own
@@ -68,4 +69,19 @@ pub struct LayerStat {
 /// Table 1 of the paper: the three infill types with their coefficients, for reports.
 pub fn coefficients_table() -> [(&'static str, Cell); 3] {
     [("gyroid", GYROID), ("rectilinear", RECTILINEAR), ("3D honeycomb", HONEYCOMB_3D)]
+}
+
+/// The mean of `density` along `a`–`b`, sampled at the centres of pieces no longer than
+/// `step` (at most 256 samples); `None` when no sample is inside the field. Both routes
+/// measure a move's target ρ with it, so their per-layer errors compare.
+pub fn mean_along(a: DVec3, b: DVec3, step: f64, density: &dyn Fn(DVec3) -> Option<f64>) -> Option<f64> {
+    let pieces = (libm::ceil(a.distance(b) / step).max(1.0) as usize).min(256);
+    let (mut sum, mut n) = (0.0, 0usize);
+    for k in 0..pieces {
+        if let Some(r) = density(a.lerp(b, (k as f64 + 0.5) / pieces as f64)) {
+            sum += r;
+            n += 1;
+        }
+    }
+    (n > 0).then(|| sum / n as f64)
 }

@@ -34,16 +34,17 @@ export async function gradedChecks({ baseUrl, weftBin = process.env.WEFT_BIN, ch
       await waitResult(page, before, `running ${EXAMPLE}`, jobTimeout);
       const report = await page.evaluate(() => window.weft.result?.report ?? null);
       const stage = (name) => report?.stages?.find((s) => s.stage === name);
-      for (const s of ["volume", "surface", "density", "slice", "grade"]) if (!stage(s)) throw new Error(`no ${s} stage in the report (${(report?.stages ?? []).map((x) => x.stage)})`);
+      for (const s of ["volume", "surface", "density", "slice", "grade", "compare"]) if (!stage(s)) throw new Error(`no ${s} stage in the report (${(report?.stages ?? []).map((x) => x.stage)})`);
       if (stage("surface").data.closed !== true) throw new Error(`surface not closed: ${JSON.stringify(stage("surface").data)}`);
       const drawn = await page.evaluate(() => {
         const card = (s) => document.querySelector(`#report .stage-card[data-stage="${s}"]`);
         const plots = (s) => [...(card(s)?.querySelectorAll("svg[data-plot-kind]") ?? [])].map((p) => p.dataset.plotKind);
         const metric = (s, key) => card(s)?.querySelector(`.metrics [data-key="${key}"] dd`)?.textContent ?? null;
-        return { density: plots("density"), grade: plots("grade"), rhoMin: metric("density", "rho_min"), cell: metric("density", "cell"), saved: metric("grade", "saved") };
+        return { density: plots("density"), grade: plots("grade"), compare: plots("compare"), editError: metric("compare", "edit_error"), rhoMin: metric("density", "rho_min"), cell: metric("density", "cell"), saved: metric("grade", "saved") };
       });
       if (!drawn.density.includes("histogram") || drawn.density.filter((k) => k === "line").length < 2) throw new Error(`density card plots: ${drawn.density}`);
       if (!drawn.grade.includes("line")) throw new Error(`grade card plots: ${drawn.grade}`);
+      if (!drawn.compare.includes("line") || !drawn.editError) throw new Error(`compare card: ${JSON.stringify(drawn)}`);
       if (!drawn.rhoMin || !drawn.cell) throw new Error(`density metrics: ${JSON.stringify(drawn)}`);
       for (const id of ["axial", "coronal", "sagittal", "density", "surface"]) {
         await page.waitForFunction((v) => window.weft.views.find((x) => x.id === v)?.answers > 0, id, { timeout: jobTimeout }).catch(() => {});

@@ -189,6 +189,41 @@ fn native_and_edit_routes_are_compared_on_the_same_toolpath() {
 }
 
 #[test]
+fn graded_cells_keep_beads_printable_where_the_fixed_cell_clamps() {
+    let fixed = example();
+    let mut graded = example();
+    graded.job.value["density"]["cell_sizing"] = "graded".into();
+    let (a, b) = (run(&fixed, &Files::new()), run(&graded, &Files::new()));
+    let cells: serde_json::Value = b.report.stage_data("cells").expect("a cells stage").clone();
+    assert!(cells["larger"].as_u64().unwrap() > 0, "{cells}");
+    assert!(a.report.stage_data("cells").is_none());
+    // Fewer segments raised to ρ_min (a bead below E_w,min) with re-sized cells.
+    let share = |o: &pipeline::RunOutput| {
+        let g = o.report.stage_data("grade").unwrap();
+        g["clamped_low"].as_f64().unwrap() / g["segments"].as_f64().unwrap()
+    };
+    assert!(share(&b) < 0.9 * share(&a), "clamped share {} (graded cells) against {} (fixed)", share(&b), share(&a));
+    // Read back: every infill bead of both is within [E_w,min, E_w,max].
+    let d = graded.printer.filament_diameter_mm;
+    let k = graded.material.k * graded.material.extrusion_multiplier;
+    for (name, out) in [("fixed", &a), ("graded", &b)] {
+        let (mut lo, mut hi) = (f64::INFINITY, 0.0f64);
+        for (p, q, e) in infill_moves(&out.gcode) {
+            let len = p.distance(q);
+            if len < 0.2 {
+                continue; // E has 5 decimals
+            }
+            let area = e / k * std::f64::consts::PI * d * d / 4.0 / len;
+            let w = weft::scaffold::width_of_area(area, 0.2);
+            (lo, hi) = (lo.min(w), hi.max(w));
+        }
+        assert!(lo > 0.2 * 0.97 && hi < 1.2 * 1.03, "{name}: beads from {lo} to {hi} mm");
+    }
+    // The re-sized core has larger cells: less infill path in it.
+    assert_ne!(a.gcode, b.gcode);
+}
+
+#[test]
 fn edit_route_rewrites_only_the_infill_of_another_slicers_gcode() {
     // A PrusaSlicer-style file of a 20 mm block, absolute E (so G92 resets are needed).
     let mut design = example();

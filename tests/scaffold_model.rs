@@ -169,3 +169,42 @@ fn calibration_problems_are_each_listed() {
     assert!(Calibration { points: vec![] }.porosity(7.0).is_nan());
     assert_eq!(Calibration { points: vec![[3.0, 0.25]] }.porosity(7.0), 0.25);
 }
+
+#[test]
+fn cells_are_resized_only_where_the_bead_would_leave_its_range() {
+    // A density ramp along x from 0.05 to 1.0 over 60 mm; femur-case gyroid (L_s at ρ_s 0.47).
+    let (nozzle, layer) = (0.4, 0.2);
+    let reference = cell_size_for_density(GYROID, 0.47, nozzle, layer);
+    let o = cells::Options { cell: GYROID, reference_mm: reference, width_min_mm: 0.2, width_max_mm: 0.6, layer_mm: layer, max_ratio: 3.0 };
+    let ramp = |p: weft::geom::DVec3| Some(0.05 + 0.95 * (p.x / 60.0).clamp(0.0, 1.0));
+    let bounds = weft::geom::Aabb { min: weft::geom::DVec3::ZERO, max: weft::geom::DVec3::new(60.0, 4.0, 4.0) };
+    let sized = cells::size_cells(&bounds, &ramp, &o).unwrap();
+    let (r, f) = (&sized.report, &sized.field);
+    assert!(r.smaller > 0 && r.larger > 0, "{r:?}");
+    assert_eq!(r.sampled, r.nodes);
+    // Every node: its bead at its cell is in range (up to the size bound), and a node keeps
+    // L_s exactly when its bead at L_s is in range.
+    let mut kept = 0;
+    for (n, &l) in f.cell_mm.iter().enumerate() {
+        let i = n % f.dims[0];
+        let x = f.origin_mm[0] + i as f64 * f.step_mm;
+        // The node's density: the mean of the ramp over its 3 samples in x (the ramp is linear
+        // inside [0, 60]).
+        let xs = [x - f.step_mm / 3.0, x, x + f.step_mm / 3.0];
+        let rho = xs.iter().map(|&x| ramp(weft::geom::DVec3::new(x, 0.0, 0.0)).unwrap()).sum::<f64>() / 3.0;
+        let at_ref = width_for_density(GYROID, reference, rho, layer);
+        if (0.2..=0.6).contains(&at_ref) {
+            assert_eq!(l, reference, "node {n} (ρ {rho}) re-sized although its bead {at_ref} mm is printable");
+            kept += 1;
+        } else {
+            let w = width_for_density(GYROID, l, rho, layer);
+            let bounded = close(l, reference * 3.0, 1e-9) || close(l, reference / 3.0, 1e-9);
+            assert!(bounded || close(w, 0.2, 1e-9) || close(w, 0.6, 1e-9), "node {n} (ρ {rho}): cell {l} mm gives a {w} mm bead");
+            assert!(bounded || (if at_ref > 0.6 { l < reference } else { l > reference }));
+        }
+    }
+    assert!(kept > 0);
+    assert_eq!(r.smaller + r.larger + kept, r.nodes);
+    // The field is the nodes' values between them.
+    assert!(close(f.at(weft::geom::DVec3::new(f.origin_mm[0], 0.0, 0.0)), f.cell_mm[0], 1e-12));
+}

@@ -24,6 +24,7 @@ use crate::gcode_edit;
 use crate::geom::{DVec3, Mesh};
 use crate::isosurface;
 use crate::pipeline::{Ctx, Error, Out};
+use std::sync::Arc;
 use crate::report::{Axis, Column, Plot, PlotKind, Row as TableRow, Series, StageReport, Table};
 use crate::scaffold::{self, grade, Calibration, Cell, LayerStat, Limit};
 use crate::settings::{choice_docs, mount, num, other, percent, points, vec3, when, Field, Kind as FieldKind, Problem, Row};
@@ -95,6 +96,22 @@ pub struct DensitySpec {
     pub limit: Limit,
     /// Longest infill segment after splitting, mm (0: the smallest voxel spacing).
     pub segment_mm: f64,
+    /// Keep the cell (the paper) or re-size it where the bead would leave [E_w,min, E_w,max].
+    pub cell_sizing: CellSizing,
+    /// Largest ratio of a re-sized cell to L_s, either way.
+    pub max_cell_ratio: f64,
+}
+
+/// How the infill cell follows the density.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum CellSizing {
+    /// One cell L_s everywhere; density by the bead width alone (the paper).
+    #[default]
+    Fixed,
+    /// The cell shrinks or grows where the bead would be wider than E_w,max or narrower than
+    /// E_w,min ([`scaffold::cells`]; gyroid only).
+    Graded,
 }
 
 impl Default for DensitySpec {
@@ -106,6 +123,8 @@ impl Default for DensitySpec {
             q_max_mm3_s: gcode_edit::DEFAULT_Q_MAX_MM3_S,
             limit: Limit::Warn,
             segment_mm: 0.0,
+            cell_sizing: CellSizing::Fixed,
+            max_cell_ratio: scaffold::cells::DEFAULT_MAX_RATIO,
         }
     }
 }
@@ -235,6 +254,7 @@ const STAGES: &[StageInfo] = &[
     StageInfo { name: "volume", label: "Reading the volume" },
     StageInfo { name: "surface", label: "Extracting the surface model" },
     StageInfo { name: "density", label: "Mapping HU to density" },
+    StageInfo { name: "cells", label: "Sizing the cells" },
     StageInfo { name: "slice", label: "Slicing the surface model" },
     StageInfo { name: "grade", label: "Grading the infill" },
     StageInfo { name: "compare", label: "Native against the edit route" },
@@ -285,6 +305,11 @@ const DENSITY_FIELDS: &[Field] = &[
         &["Count it in the report and print it as graded.", "Count it and reduce its flow to the limit."],
     ),
     num("segment_mm", "Density", "Grading step", "mm", 0.0, 100.0, 0.1, "Longest infill segment after splitting (0: the smallest voxel spacing), so the grading resolves the voxels."),
+    choice_docs(
+        other("cell_sizing", "Density", "Cell size", FieldKind::Choice, &["fixed", "graded"], "Keep one gyroid cell everywhere, or re-size it where the bead would leave its printable range."),
+        &["One cell L_s; density by the bead width alone (the paper: beads clamp at E_w,min and E_w,max).", "Smaller cells where the bead would be wider than E_w,max, larger where narrower than E_w,min (gyroid)."],
+    ),
+    when(num("max_cell_ratio", "Density", "Cell size range", "×", 1.0, 10.0, 0.1, "A re-sized cell stays within L_s ÷ this and L_s × this."), "cell_sizing", "graded"),
 ];
 
 impl Kind for GradedKind {
@@ -318,6 +343,12 @@ impl Kind for GradedKind {
             if (0..3).any(|a| !(r.max_mm[a] > r.min_mm[a])) {
                 out.push(Problem { path: "job.roi".into(), message: "each 'to' corner value must be larger than its 'from' value".into() });
             }
+        }
+        if j.density.cell_sizing == CellSizing::Graded && (j.route != Route::Native || j.slice.infill_pattern != InfillPattern::Gyroid) {
+            out.push(Problem { path: "job.density.cell_sizing".into(), message: "a graded cell size needs route 'native' and the gyroid pattern (job.slice.infill_pattern); or set it to 'fixed'".into() });
+        }
+        if !(j.density.max_cell_ratio >= 1.0 && j.density.max_cell_ratio <= 10.0) {
+            out.push(Problem { path: "job.density.max_cell_ratio".into(), message: "the cell size range must be between 1 and 10".into() });
         }
         if j.route == Route::Edit && j.gcode.is_none() {
             out.push(Problem { path: "job.gcode".into(), message: "route 'edit' rewrites another slicer's G-code: load it (its drop zone, or --input gcode=FILE), or pick route 'native'".into() });
@@ -365,6 +396,11 @@ impl Kind for GradedKind {
                 let model = Model::of(j, ctx.design, &vol)?;
                 let s = slice::estimate(&mesh, &slice_options(j, &model));
                 let infill_mm = surface.report.volume_mm3 * model.cell.k_c * model.cell.m / model.cell_mm / j.slice.layer_height_mm;
+                if j.density.cell_sizing == CellSizing::Graded {
+                    if let Some(b) = mesh.bounds() {
+                        out.push(scaffold::cells::estimate(&b, &cells_options(j, &model)));
+                    }
+                }
                 let sliced_moves = s.get("segments");
                 let segments = sliced_moves + infill_mm / model.segment_mm;
                 out.push(s);
@@ -659,10 +695,30 @@ fn placed(mesh: &Mesh) -> (Mesh, DVec3) {
 }
 
 fn native(j: &GradedJob, ctx: &mut Ctx, vol: &Out<Volume>, surface: &Out<isosurface::Surface>, model: &Out<Model>) -> Result<Product, Error> {
-    let options = slice_options(j, model);
+    let mut options = slice_options(j, model);
     let (mesh, offset) = placed(&surface.mesh);
     super::part_fits(ctx.design, &mesh)?;
-    let sliced = ctx.stage("slice", "slice", &options, &[surface.key], |progress| {
+    let cal = &j.density.calibration;
+    // Unclamped: grading raises targets below ρ_min itself and counts them (the paper's pseudocode).
+    let rho = |p: DVec3| vol.sample_with(p - offset, |hu| cal.density(hu as f64, 0.0));
+    let mut slice_upstream = vec![surface.key];
+    let cells = match j.density.cell_sizing {
+        CellSizing::Fixed => None,
+        CellSizing::Graded => {
+            let bounds = mesh.bounds().ok_or_else(|| Error::NoInput("the surface model is empty: lower the isovalue or widen the ROI".into()))?;
+            let o = cells_options(j, model);
+            let parts = (format!("{o:?}"), cal, offset.to_array());
+            let cells = ctx.stage("cells", "cells", &parts, &[surface.key, vol.key], |_| {
+                let sized = scaffold::cells::size_cells(&bounds, &rho, &o).map_err(|e| Error::stage("sizing the cells", e))?;
+                let report = cells_report(&sized.report, &o);
+                Ok((Arc::new(sized.field), Some(report)))
+            })?;
+            options.infill_cell_field = Some(cells.value.as_ref().clone());
+            slice_upstream.push(cells.key);
+            Some(cells)
+        }
+    };
+    let sliced = ctx.stage("slice", "slice", &options, &slice_upstream, |progress| {
         let sliced = slice::slice(&mesh, &options, progress).map_err(|e| Error::stage("slicing", e))?;
         let report = super::slice_report(&sliced.report, "Slicing the surface model");
         Ok((sliced.toolpath, Some(report)))
@@ -681,18 +737,53 @@ fn native(j: &GradedJob, ctx: &mut Ctx, vol: &Out<Volume>, surface: &Out<isosurf
     };
     let parts = (format!("{g:?}"), &j.density.calibration);
     let graded = ctx.stage("grade", "grade", &parts, &[sliced.key, vol.key], |progress| {
-        let cal = &j.density.calibration;
-        // Unclamped: grading raises targets below ρ_min itself and counts them (the paper's pseudocode).
-        let rho = |p: DVec3| vol.sample_with(p - offset, |hu| cal.density(hu as f64, 0.0));
-        let mut out = grade::grade(&sliced, &rho, &g, progress).map_err(|e| Error::stage("grading", e))?;
+        let ratio = cells.as_ref().map(|c| move |p: DVec3| c.at(p) / c.reference_mm);
+        let mut out = grade::grade(&sliced, &rho, ratio.as_ref().map(|f| f as &dyn Fn(DVec3) -> f64), &g, progress).map_err(|e| Error::stage("grading", e))?;
         out.report.offset_mm = offset.to_array();
         let report = grade_report(&out.report);
         Ok((out.toolpath, Some(report)))
     })?;
-    if j.compare_edit {
+    // The edit route cannot know a re-sized cell: compared only with one cell everywhere.
+    if j.compare_edit && cells.is_none() {
         compare(j, ctx, vol, &sliced, model, &g, offset)?;
     }
     Ok(Product::Toolpath(graded))
+}
+
+fn cells_options(j: &GradedJob, m: &Model) -> scaffold::cells::Options {
+    scaffold::cells::Options {
+        cell: m.cell,
+        reference_mm: m.cell_mm,
+        width_min_mm: j.density.min_width_mm,
+        width_max_mm: j.density.max_width_mm,
+        layer_mm: m.layer_mm,
+        max_ratio: j.density.max_cell_ratio,
+    }
+}
+
+fn cells_report(r: &scaffold::cells::CellsReport, o: &scaffold::cells::Options) -> StageReport {
+    let mut s = StageReport::new("cells", "Sizing the cells", r)
+        .metric("nodes", "Cell-size nodes", r.nodes as f64, "", "Nodes of the cell-size grid (one per L_s over the part); the size is trilinear between them.")
+        .metric("sampled", "Nodes in the volume", r.sampled as f64, "", "Nodes with CT density around them.")
+        .metric("smaller", "Cells made smaller", r.smaller as f64, "", "Density above what E_w,max gives at L_s: a smaller cell reaches it with a printable bead.")
+        .metric("larger", "Cells made larger", r.larger as f64, "", "Density below what E_w,min gives at L_s: a larger cell reaches it with a bead that holds.")
+        .metric("still_out", "Still out of range", r.still_out_of_range as f64, "", "Re-sized cells whose bead is outside [E_w,min, E_w,max] even at the size bound (the grading clamps them).")
+        .metric("min_cell", "Smallest cell", r.min_cell_mm, "mm", "The smallest cell written.")
+        .metric("max_cell", "Largest cell", r.max_cell_mm, "mm", "The largest cell written.")
+        .metric("reference", "L_s", o.reference_mm, "mm", "The uniform cell (equation 1 at ρ_s), kept where the bead is printable.");
+    let col = |label: &str, unit: &str| Column { label: label.into(), unit: unit.into() };
+    s.tables.push(Table {
+        key: "resized".into(),
+        title: format!("Re-sized cells (the first {} of {})", r.resized.len(), r.smaller + r.larger),
+        group: None,
+        columns: vec![col("x", "mm"), col("y", "mm"), col("z", "mm"), col("ρ", ""), col("Bead at L_s", "mm"), col("Cell", "mm"), col("Bead", "mm")],
+        rows: r
+            .resized
+            .iter()
+            .map(|c| TableRow { group_index: None, cells: vec![c.centre_mm[0].into(), c.centre_mm[1].into(), c.centre_mm[2].into(), c.rho.into(), c.width_at_reference_mm.into(), c.cell_mm.into(), c.width_mm.into()] })
+            .collect(),
+    });
+    s
 }
 
 /// The paper's route on the same toolpath: `sliced` written as G-code without grading, its

@@ -106,8 +106,10 @@ fn infill_segments(t: &Toolpath) -> usize {
 }
 
 /// Grades the infill of `toolpath` by `density` (ρ at a point of the toolpath's frame, `None`
-/// outside the field).
-pub fn grade(toolpath: &Toolpath, density: &dyn Fn(DVec3) -> Option<f64>, options: &Options, progress: &mut dyn FnMut(f32)) -> Result<Graded, Error> {
+/// outside the field). `cell_ratio`, when the infill's cell varies ([`super::cells`]), is
+/// `L(p) / L_s`: the bead then is `A_s · (ρ / ρ_s) · L(p) / L_s` (equation 1 in the local cell)
+/// and the floor `ρ_min · L_s / L(p)` (`E_w,min` in that cell).
+pub fn grade(toolpath: &Toolpath, density: &dyn Fn(DVec3) -> Option<f64>, cell_ratio: Option<&dyn Fn(DVec3) -> f64>, options: &Options, progress: &mut dyn FnMut(f32)) -> Result<Graded, Error> {
     let o = options;
     let ok = |x: f64| x.is_finite() && x > 0.0;
     if !(ok(o.rho_s) && o.rho_s <= 1.0 && o.rho_min.is_finite() && (0.0..=1.0).contains(&o.rho_min) && ok(o.nominal_area_mm2) && ok(o.segment_mm) && ok(o.q_max_mm3_s) && ok(o.width_max_mm) && ok(o.feed_mm_s)) {
@@ -139,13 +141,15 @@ pub fn grade(toolpath: &Toolpath, density: &dyn Fn(DVec3) -> Option<f64>, option
                         o.rho_s
                     }
                 };
+                let ratio = cell_ratio.map_or(1.0, |f| f(mid));
+                let rho_min = o.rho_min / ratio;
                 let mut rho = target;
-                if rho < o.rho_min {
-                    rho = o.rho_min;
+                if rho < rho_min {
+                    rho = rho_min;
                     report.clamped_low += 1;
                 }
                 let rho = rho.min(1.0);
-                let mut area = o.nominal_area_mm2 * rho / o.rho_s;
+                let mut area = o.nominal_area_mm2 * ratio * rho / o.rho_s;
                 let width = super::width_of_area(area, h);
                 if area * o.feed_mm_s > o.q_max_mm3_s * (1.0 + 1e-12) {
                     report.over_flow += 1;
@@ -160,10 +164,10 @@ pub fn grade(toolpath: &Toolpath, density: &dyn Fn(DVec3) -> Option<f64>, option
                 report.max_width_mm = report.max_width_mm.max(super::width_of_area(area, h));
                 report.max_flow_mm3_s = report.max_flow_mm3_s.max(area * o.feed_mm_s);
                 report.infill_mm3 += area * len;
-                report.uniform_mm3 += o.nominal_area_mm2 * len;
+                report.uniform_mm3 += o.nominal_area_mm2 * ratio * len;
                 // The target along the segment, not only at its midpoint.
-                let along = super::mean_along(a, b, o.segment_mm / 4.0, density).unwrap_or(target).max(o.rho_min).min(1.0);
-                let achieved = o.rho_s * area / o.nominal_area_mm2;
+                let along = super::mean_along(a, b, o.segment_mm / 4.0, density).unwrap_or(target).max(rho_min).min(1.0);
+                let achieved = o.rho_s * area / (o.nominal_area_mm2 * ratio);
                 stat.moves += 1;
                 stat.length_mm += len;
                 stat.target_mean += along * len;

@@ -19,9 +19,11 @@
 //!   number of independent toolpaths per cell in a layer.
 //!
 //! Files: [`model`] (equations 1–4 and the bead), [`calibration`] (HU → porosity, eq 7),
-//! [`grade`] (equation 6 applied to weft's own sliced toolpath).
+//! [`grade`] (equation 6 applied to weft's own sliced toolpath), [`cells`] (beyond the paper:
+//! the cell re-sized where the bead would leave its printable range).
 
 pub mod calibration;
+pub mod cells;
 pub mod grade;
 pub mod model;
 

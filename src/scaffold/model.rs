@@ -91,6 +91,13 @@ pub fn width_for_density(cell: Cell, cell_mm: f64, rho: f64, layer_mm: f64) -> f
     rho * cell_mm / (cell.k_c * cell.m) - ROUNDING * layer_mm
 }
 
+/// The cell size at which beads of width `width_mm` give relative density `rho` (inverse of
+/// [`density_at_width`] in the cell): `k_c m (E_w + (π/4 − 1) l_h) / ρ`, mm. Equation 4 is this
+/// without the rounding term.
+pub fn cell_size_at_width(cell: Cell, width_mm: f64, rho: f64, layer_mm: f64) -> f64 {
+    cell.k_c * cell.m * (width_mm + ROUNDING * layer_mm) / rho
+}
+
 /// Cross-section of a stadium bead of width `width_mm` and height `layer_mm`:
 /// `l_h (E_w + (π/4 − 1) l_h)`, mm².
 pub fn bead_area(width_mm: f64, layer_mm: f64) -> f64 {

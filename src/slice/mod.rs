@@ -22,6 +22,7 @@
 
 mod estimate;
 pub mod gyroid;
+pub mod gyroid_graded;
 pub mod honeycomb3d;
 mod infill;
 mod order;
@@ -154,6 +155,10 @@ pub struct Options {
     /// makes all infill solid at 1.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub infill_cell_mm: Option<f64>,
+    /// A cell size that varies over the part (gyroid only; set by a job, never read from a
+    /// design): replaces `infill_cell_mm` where present ([`gyroid_graded`]).
+    #[serde(skip)]
+    pub infill_cell_field: Option<std::sync::Arc<gyroid_graded::CellField>>,
 }
 
 impl Default for Options {
@@ -169,6 +174,7 @@ impl Default for Options {
             gap_closing_mm: DEFAULT_GAP_CLOSING_MM,
             infill_pattern: InfillPattern::Rectilinear,
             infill_cell_mm: None,
+            infill_cell_field: None,
         }
     }
 }
@@ -356,7 +362,10 @@ fn sparse_lines(o: &Options, area: &IntShapes<i32>, w_um: i32, layer: usize, sli
             };
             infill::rectilinear(area, spacing, angle, min_len_um)
         }
-        InfillPattern::Gyroid => gyroid::gyroid(area, cell_um, slice_z, turn, min_len_um),
+        InfillPattern::Gyroid => match &o.infill_cell_field {
+            Some(field) => gyroid_graded::gyroid_graded(area, field, slice_z, turn, min_len_um),
+            None => gyroid::gyroid(area, cell_um, slice_z, turn, min_len_um),
+        },
         InfillPattern::Honeycomb3d => honeycomb3d::honeycomb3d(area, cell_um, slice_z, layer % 2 == 1, turn, min_len_um),
     }
 }

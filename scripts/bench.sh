@@ -9,8 +9,11 @@
 #            --scaling` case at 1×, 4×, 16× in a fresh worker each, then natively; one table)
 #        BENCH_PAIRING_ONLY=1 scripts/bench.sh   (only exact vs heuristic odd-node pairing:
 #            `weft bench --pairing` cases in the worker, then natively; one table)
+#        BENCH_GRADED_ONLY=1 scripts/bench.sh    (only the graded job, issue 11: a 182 × 197 ×
+#            107 DICOM series loaded + its surface, a 50 MB G-code edited; worker, then
+#            `weft bench --graded`; BENCH_GRADED=0 leaves it out of the full run)
 # The wasm is built with the cargo feature `bench` (the benchmark exports the worker calls:
-# benchMeshStl, benchDesign, benchAnalyze, BenchLattice, benchPairingCases, BenchPairing, benchScalingCases, BenchScaling) into its own directory, default
+# benchMeshStl, benchDesign, benchAnalyze, BenchLattice, benchPairingCases, BenchPairing, benchScalingCases, BenchScaling, BenchGraded) into its own directory, default
 # <target dir>/pkg-bench (WEFT_PKG_DIR overrides), which tests/e2e/bench.mjs serves as /pkg/;
 # the production ./pkg (scripts/build-www.sh without features) is left as it is.
 set -euo pipefail

@@ -104,6 +104,10 @@ enum Command {
         /// time and peak memory, with the growth exponent of each.
         #[arg(long)]
         scaling: bool,
+        /// Run only the graded job's benchmark (issue 11): a 182 × 197 × 107 DICOM series
+        /// loaded and its surface extracted; a 50 MB PrusaSlicer-style G-code edited.
+        #[arg(long)]
+        graded: bool,
         /// Run only these designs, each timed stage by stage (best of 3 runs, no cache): e.g.
         /// the axisymmetric examples.
         #[arg(long, num_args = 1..)]
@@ -591,6 +595,7 @@ fn main() -> ExitCode {
         Command::Bench { scaling: true, .. } => scaling_bench(),
         Command::Bench { design, .. } if !design.is_empty() => design_bench(&design),
         Command::Bench { pairing: true, .. } => weft::bench::pairing::run_all().map(|t| outln!("{t}")),
+        Command::Bench { graded: true, .. } => weft::bench::graded::run_graded().map(|t| outln!("{t}")),
         Command::Bench { triangles, gcode_mb, lattice, cache, .. } => {
             if cache {
                 return match weft::bench::run_cache(triangles) {

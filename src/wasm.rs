@@ -360,7 +360,7 @@ pub fn pattern_thumbnail(pattern_json: &str, size_mm: f64, seed: u64) -> Result<
 }
 
 /// Benchmark workloads (`benchMeshStl`, `benchDesign`, `benchAnalyze`, `BenchLattice`,
-/// `benchScalingCases`, `BenchScaling`), built only with `--features bench` (the benchmark page's wasm), so
+/// `benchScalingCases`, `BenchScaling`, `BenchGraded`), built only with `--features bench` (the benchmark page's wasm), so
 /// the production module does not carry them.
 #[cfg(feature = "bench")]
 mod bench_exports {
@@ -438,6 +438,69 @@ mod bench_exports {
         /// Runs `paths::optimise` once; returns the pairing's numbers as JSON.
         pub fn run(&self) -> Result<String, JsError> {
             self.0.run().map(|s| s.to_json()).map_err(js_err)
+        }
+    }
+
+    /// Benchmark workload of the graded job (`src/bench/graded.rs`, the same as `weft bench
+    /// --graded`): the DICOM series and the G-code handed to a `Session` file by file, as the
+    /// page does for a dropped folder, and the designs that use them. Made in a worker that is
+    /// then terminated, so making it does not count in the timed worker's memory.
+    #[wasm_bindgen]
+    pub struct BenchGraded(crate::bench::graded::Workload);
+
+    impl Default for BenchGraded {
+        fn default() -> Self {
+            Self::new()
+        }
+    }
+
+    #[wasm_bindgen]
+    impl BenchGraded {
+        /// The paper's CT size (182 × 197 × 107) and a 50 MB PrusaSlicer-style G-code.
+        #[wasm_bindgen(constructor)]
+        pub fn new() -> BenchGraded {
+            BenchGraded(crate::bench::graded::Workload::paper())
+        }
+
+        /// The series' file names (`bone-phantom/slice-0000.dcm`, …), in order.
+        #[wasm_bindgen(js_name = seriesNames)]
+        pub fn series_names(&self) -> Vec<String> {
+            self.0.series.iter().map(|(n, _)| n.clone()).collect()
+        }
+
+        /// The bytes of series file `i`.
+        #[wasm_bindgen(js_name = seriesFile)]
+        pub fn series_file(&self, i: usize) -> Result<Vec<u8>, JsError> {
+            self.0.series.get(i).map(|(_, b)| b.clone()).ok_or_else(|| JsError::new("no such series file"))
+        }
+
+        /// The G-code's file name (the edit design's `job.gcode`).
+        #[wasm_bindgen(js_name = gcodeName)]
+        pub fn gcode_name(&self) -> String {
+            crate::bench::graded::GCODE_NAME.into()
+        }
+
+        /// The G-code's bytes.
+        pub fn gcode(&self) -> Vec<u8> {
+            self.0.gcode.clone()
+        }
+
+        /// Route `native` over the whole volume (its `surface` view), JSON.
+        #[wasm_bindgen(js_name = surfaceDesign)]
+        pub fn surface_design(&self) -> String {
+            self.0.surface_design.to_json_pretty()
+        }
+
+        /// Route `edit` (series + G-code, manual alignment), JSON.
+        #[wasm_bindgen(js_name = editDesign)]
+        pub fn edit_design(&self) -> String {
+            self.0.edit_design.to_json_pretty()
+        }
+
+        /// Bytes of the volume as the reader holds it (f32 voxels).
+        #[wasm_bindgen(js_name = volumeBytes)]
+        pub fn volume_bytes(&self) -> f64 {
+            self.0.volume_bytes as f64
         }
     }
 

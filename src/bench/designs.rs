@@ -5,7 +5,7 @@
 //! axisymmetric examples: the paper's Ω1–Ω3).
 
 use crate::design::Design;
-use crate::pipeline::{self, Cache, Files, RunOptions};
+use crate::pipeline::{self, Cache, Files, RunOptions, RunOutput};
 use crate::jobs::Registry;
 use std::time::Instant;
 
@@ -22,32 +22,40 @@ pub struct DesignTiming {
     pub runs_s: Vec<f64>,
 }
 
+/// One run of `design` through `cache`: (total s, (stage, s) in run order, the output). A
+/// stage's time runs from its first progress report to the next stage's (the last one to the
+/// end); a stage reported twice (estimated, then reused from the cache) is summed.
+pub fn timed_run(registry: &Registry, cache: &mut Cache, design: &Design, files: &Files, options: &RunOptions) -> Result<(f64, Vec<(String, f64)>, RunOutput), String> {
+    let start = Instant::now();
+    let mut marks: Vec<(String, f64)> = Vec::new();
+    let mut progress = |stage: &str, _: f32| {
+        if marks.last().map(|m| m.0.as_str()) != Some(stage) {
+            marks.push((stage.to_string(), start.elapsed().as_secs_f64()));
+        }
+    };
+    let output = pipeline::run_in(registry, cache, design, files, options, &mut progress).map_err(|e| format!("{}: {e}", design.name))?;
+    let total = start.elapsed().as_secs_f64();
+    let mut stages: Vec<(String, f64)> = Vec::new();
+    for (i, (name, t)) in marks.iter().enumerate() {
+        let end = marks.get(i + 1).map_or(total, |m| m.1);
+        match stages.iter_mut().find(|s| &s.0 == name) {
+            Some(s) => s.1 += end - t,
+            None => stages.push((name.clone(), end - t)),
+        }
+    }
+    Ok((total, stages, output))
+}
+
 /// Runs `design` `repeats` times (no cache) and keeps the fastest run's stage times.
 pub fn time_design(design: &Design, repeats: usize) -> Result<DesignTiming, String> {
     let files = Files::default();
+    let registry = Registry::builtin();
     let mut best: Option<(f64, Vec<(String, f64)>)> = None;
     let mut runs = Vec::new();
     for _ in 0..repeats.max(1) {
-        let start = Instant::now();
-        let mut marks: Vec<(String, f64)> = Vec::new();
-        let mut progress = |stage: &str, _: f32| {
-            if marks.last().map(|m| m.0.as_str()) != Some(stage) {
-                marks.push((stage.to_string(), start.elapsed().as_secs_f64()));
-            }
-        };
         let mut cache = Cache::disabled();
-        pipeline::run_in(&Registry::builtin(), &mut cache, design, &files, &RunOptions::default(), &mut progress).map_err(|e| format!("{}: {e}", design.name))?;
-        let total = start.elapsed().as_secs_f64();
+        let (total, stages, _) = timed_run(&registry, &mut cache, design, &files, &RunOptions::default())?;
         runs.push(total);
-        // A stage's time: from its first report to the next stage's (the last one to the end).
-        let mut stages: Vec<(String, f64)> = Vec::new();
-        for (i, (name, t)) in marks.iter().enumerate() {
-            let end = marks.get(i + 1).map_or(total, |m| m.1);
-            match stages.iter_mut().find(|s| &s.0 == name) {
-                Some(s) => s.1 += end - t,
-                None => stages.push((name.clone(), end - t)),
-            }
-        }
         if best.as_ref().is_none_or(|b| total < b.0) {
             best = Some((total, stages));
         }

@@ -33,6 +33,7 @@ pub fn repeat_to(seed: &str, bytes: usize) -> String {
 }
 
 pub mod designs;
+pub mod graded;
 pub mod pairing;
 pub mod scaling;
 
@@ -157,13 +158,18 @@ mod native {
         Some(kb / 1024.0)
     }
 
-    /// Peak resident set size since the start or the last [`reset_peak_rss`], MB (Linux).
-    fn peak_rss_mb() -> Option<f64> {
+    /// Peak resident set size since the start or the last [`reset_peak_rss`], MiB (Linux).
+    pub(super) fn peak_rss_mb() -> Option<f64> {
         status_mb("VmHWM:")
     }
 
+    /// Resident set size now, MiB (Linux).
+    pub(super) fn rss_mb() -> Option<f64> {
+        status_mb("VmRSS:")
+    }
+
     /// Resets the peak RSS to the current RSS (Linux `clear_refs` 5); false when not possible.
-    fn reset_peak_rss() -> bool {
+    pub(super) fn reset_peak_rss() -> bool {
         std::fs::write("/proc/self/clear_refs", "5").is_ok()
     }
 

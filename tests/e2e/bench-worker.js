@@ -39,14 +39,46 @@
 //       the input (not timed), run() is timed `repeats` times (default 3, best counts) with
 //       performance.now(). wasm memory never shrinks, so the page uses a fresh worker per
 //       case×scale and reports run − init as the case's peak memory.
+//   { cmd: "graded-inputs" }        → { type: "graded-inputs", ms, inputs: { files: [{ name,
+//       bytes }], gcode: { name, bytes }, designs: { surface, edit }, volumeBytes } }: the
+//       graded workload (new BenchGraded(), src/bench/graded.rs), its buffers transferred; the
+//       page keeps it and hands a copy to each graded case's fresh worker.
+//   { cmd: "graded-surface", inputs, repeats } → { type: "graded-surface", passes: [{
+//       addFileMs, estimateMs, viewMs, addFileMs2, volumeMs, surfaceMs, triangles }], memory:
+//       { init, afterAddFile, afterSurface, end } }: what the page does with a dropped series:
+//       Session.addFile("volume", path, bytes) per file, Session.estimate(design) (runDesign
+//       asks it first; it reads the volume and makes the surface), inspect(design, "surface",
+//       0) (the surface view); then, in a new Session, the stages apart: inspect "axial" (the
+//       volume stage), inspect "surface" (the surface stage). Memory: first pass, page path.
+//   { cmd: "graded-edit", inputs, repeats } → { type: "graded-edit", passes: [{ addSeriesMs,
+//       addGcodeMs, runMs, stages: [{ stage, ms }], edited }], marks: [{ stage, memory }],
+//       memory: { init, afterSeries, afterGcode, afterRun, end } }: the series and the G-code
+//       added (addFile analyses the G-code), then Session.run(edit design) timed per stage;
+//       `marks` holds wasm memory at each stage's first progress report (first pass).
 // Run the job in a fresh worker (the page does) so the STL generation does not count in the
 // job's linear memory.
-import init, { BenchLattice, BenchPairing, BenchScaling, benchPairingCases, Session, benchAnalyze, benchDesign, benchMeshStl, benchScalingCases } from "../../pkg/weft.js";
+import init, { BenchGraded, BenchLattice, BenchPairing, BenchScaling, benchPairingCases, Session, benchAnalyze, benchDesign, benchMeshStl, benchScalingCases } from "../../pkg/weft.js";
 import { plain } from "../../www/protocol.js"; // reports as objects (JSON text before wasm API v2)
 
 const ready = init();
 
 const MB = 1e6;
+
+/** Marks `{ stage, t }` of one run (a stage's first progress report) → `[{ stage, ms }]`: a
+ *  stage runs until the next stage's first report (the last one until `total`); a stage
+ *  reported twice (estimated, then reused from the cache) is summed (src/bench/designs.rs
+ *  `timed_run`). */
+function stageTimes(marks, total) {
+  const stages = [];
+  marks.forEach((m, k) => {
+    const ms = (k + 1 < marks.length ? marks[k + 1].t : total) - m.t;
+    const s = stages.find((x) => x.stage === m.stage);
+    if (s) s.ms += ms;
+    else stages.push({ stage: m.stage, ms });
+  });
+  return stages;
+}
+
 let resume = null; // the memory step waits for the page's { cmd: "continue", measured }
 
 self.onmessage = async ({ data }) => {
@@ -119,18 +151,96 @@ self.onmessage = async ({ data }) => {
           const total = performance.now() - t0;
           session.free();
           runs.push(total);
-          const stages = [];
-          marks.forEach((m, k) => {
-            const ms = (k + 1 < marks.length ? marks[k + 1].t : total) - m.t;
-            const s = stages.find((x) => x.stage === m.stage);
-            if (s) s.ms += ms;
-            else stages.push({ stage: m.stage, ms });
-          });
+          const stages = stageTimes(marks, total);
           if (!best || total < best.total) best = { total, stages };
         }
         rows.push({ name: d.name, runs, stages: best.stages });
       }
       self.postMessage({ type: "designs", rows, memory: mem() });
+      return;
+    }
+    if (data.cmd === "graded-inputs") {
+      const t = performance.now();
+      const b = new BenchGraded();
+      const files = b.seriesNames().map((name, i) => ({ name, bytes: b.seriesFile(i).buffer }));
+      const gcode = { name: b.gcodeName(), bytes: b.gcode().buffer };
+      const inputs = { files, gcode, designs: { surface: b.surfaceDesign(), edit: b.editDesign() }, volumeBytes: b.volumeBytes() };
+      b.free();
+      const ms = performance.now() - t;
+      self.postMessage({ type: "graded-inputs", ms, inputs }, [...files.map((f) => f.bytes), gcode.bytes]);
+      return;
+    }
+    if (data.cmd === "graded-surface") {
+      const { files, designs } = data.inputs;
+      // One addFile per file, as the page does for a dropped folder (each copied into wasm).
+      const load = (session) => {
+        const t = performance.now();
+        for (const f of files) session.addFile("volume", f.name, new Uint8Array(f.bytes));
+        return performance.now() - t;
+      };
+      const passes = [];
+      let memory = null;
+      for (let i = 0; i < (data.repeats ?? 3); i++) {
+        // The page's path: after a drop it asks Session.estimate first (for a graded job that
+        // reads the volume and makes the surface, kept for the run), then shows the views.
+        const m = { init: mem() };
+        let session = new Session();
+        const addFileMs = load(session);
+        m.afterAddFile = mem();
+        let t = performance.now();
+        session.estimate(designs.surface);
+        const estimateMs = performance.now() - t;
+        t = performance.now();
+        const surface = session.inspect(designs.surface, "surface", 0);
+        const viewMs = performance.now() - t;
+        m.afterSurface = mem();
+        session.free();
+        // The two stages apart, in a new Session: a slice view needs only the volume stage.
+        session = new Session();
+        const addFileMs2 = load(session);
+        t = performance.now();
+        session.inspect(designs.surface, "axial", 0);
+        const volumeMs = performance.now() - t;
+        t = performance.now();
+        session.inspect(designs.surface, "surface", 0);
+        const surfaceMs = performance.now() - t;
+        session.free();
+        passes.push({ addFileMs, estimateMs, viewMs, addFileMs2, volumeMs, surfaceMs, triangles: surface.data.length / 9 });
+        memory ??= m;
+      }
+      self.postMessage({ type: "graded-surface", passes, memory: { ...memory, end: mem() } });
+      return;
+    }
+    if (data.cmd === "graded-edit") {
+      const { files, gcode, designs } = data.inputs;
+      const passes = [];
+      let memory = null;
+      let firstMarks = null;
+      for (let i = 0; i < (data.repeats ?? 3); i++) {
+        const m = { init: mem() };
+        const session = new Session();
+        let t = performance.now();
+        for (const f of files) session.addFile("volume", f.name, new Uint8Array(f.bytes));
+        const addSeriesMs = performance.now() - t;
+        m.afterSeries = mem();
+        t = performance.now();
+        session.addFile("gcode", gcode.name, new Uint8Array(gcode.bytes));
+        const addGcodeMs = performance.now() - t;
+        m.afterGcode = mem();
+        const marks = [];
+        const t0 = performance.now();
+        const report = plain(session.run(designs.edit, (stage) => {
+          if (marks.length === 0 || marks[marks.length - 1].stage !== stage) marks.push({ stage, t: performance.now() - t0, memory: mem() });
+        }));
+        const runMs = performance.now() - t0;
+        m.afterRun = mem();
+        session.free();
+        const edited = report.stages.find((s) => s.stage === "edit")?.metrics.find((x) => x.key === "edited")?.value;
+        passes.push({ addSeriesMs, addGcodeMs, runMs, stages: stageTimes(marks, runMs), edited });
+        memory ??= m;
+        firstMarks ??= marks.map(({ stage, memory }) => ({ stage, memory }));
+      }
+      self.postMessage({ type: "graded-edit", passes, marks: firstMarks, memory: { ...memory, end: mem() } });
       return;
     }
     if (data.cmd === "lattice") {

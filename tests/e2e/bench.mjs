@@ -27,6 +27,11 @@
 //   BENCH_CACHE=0   skip those steps in the full run
 //   BENCH_BIG_TRIANGLES  triangles of the big-input memory step, tried in order until one
 //                   works (default 4000000,3000000,2000000,1000000; 4M ≈ 200 MB of STL)
+//   BENCH_GRADED_ONLY=1  only the graded job's benchmark (issue 11, src/bench/graded.rs): a
+//                   182 × 197 × 107 DICOM series loaded and its surface extracted; a 50 MB
+//                   G-code edited; each case in a fresh worker (BENCH_REPEATS passes, best
+//                   counts), then natively (`weft bench --graded`)
+//   BENCH_GRADED=0  skip the graded benchmark in the full run
 import { execFileSync } from "node:child_process";
 import { existsSync, readFileSync, writeFileSync } from "node:fs";
 import { basename, join, resolve } from "node:path";
@@ -44,6 +49,8 @@ const REPEATS = Number(process.env.BENCH_REPEATS ?? 3);
 const CACHE_ONLY = process.env.BENCH_CACHE_ONLY === "1";
 const SCALING_ONLY = process.env.BENCH_SCALING_ONLY === "1";
 const PAIRING_ONLY = process.env.BENCH_PAIRING_ONLY === "1";
+const GRADED_ONLY = process.env.BENCH_GRADED_ONLY === "1";
+const GRADED = GRADED_ONLY || process.env.BENCH_GRADED !== "0";
 const DESIGNS = (process.env.BENCH_DESIGNS ?? "").split(",").map((s) => s.trim()).filter((s) => s !== "");
 const SCALING_CASES = process.env.BENCH_SCALING_CASES ? process.env.BENCH_SCALING_CASES.split(",") : null;
 const SCALES = [1, 4, 16]; // src/bench/scaling.rs SCALES
@@ -257,6 +264,7 @@ async function runBrowser() {
     if (CACHE_ONLY) return { version, ...(await cacheSteps(page, renderers)) };
     if (SCALING_ONLY) return { version, scaling: await scalingSteps(page) };
     if (PAIRING_ONLY) return { version, pairing: await workerStep(page, { cmd: "pairing" }, "pairing") };
+    if (GRADED_ONLY) return { version, graded: await gradedSteps(page) };
     if (DESIGNS.length) {
       const designs = DESIGNS.map((file) => ({ name: basename(file, ".json"), json: readFileSync(resolve(ROOT, file), "utf8") }));
       return { version, designs: await workerStep(page, { cmd: "designs", designs, repeats: REPEATS }, "designs") };
@@ -326,41 +334,54 @@ async function runBrowser() {
     const rendererPeakMiB = Math.max(0, ...pids.map((p) => after[p]?.hwm ?? 0));
     const rendererBeforeMiB = Math.max(0, ...pids.map((p) => before[p]?.rss ?? 0));
     const cache = CACHE ? await cacheSteps(page, renderers) : {};
+    const graded = GRADED ? await gradedSteps(page) : null;
     if (errors.length) log(`page errors: ${errors.join(" | ")}`);
-    return { version, lattice, gen, result, rendererPeakMiB, rendererBeforeMiB, peakReset, ...cache };
+    return { version, lattice, gen, result, rendererPeakMiB, rendererBeforeMiB, peakReset, ...cache, graded };
   } finally {
     await browser.close();
     await server.close();
   }
 }
 
-/** Generates the benchmark STL in a worker that is then terminated; keeps it as window.__stl. */
-async function genStl(page, triangles) {
-  return page.evaluate(async (triangles) => {
+/** Runs `msg` in a worker that is then terminated (so making an input does not count in a
+ *  timed worker's memory) and keeps its answer's `field` in the page as window[global];
+ *  resolves with the rest of the answer and `size`, the kept ArrayBuffer's byteLength. */
+async function keepInPage(page, msg, type, global, field) {
+  return page.evaluate(async ({ msg, type, global, field }) => {
     const w = new Worker("/tests/e2e/bench-worker.js", { type: "module" });
     try {
-      const msg = await new Promise((ok, fail) => {
+      const data = await new Promise((ok, fail) => {
         w.onmessage = ({ data }) => ok(data);
         w.onerror = (e) => fail(new Error(e.message || "worker failed to start"));
-        w.postMessage({ cmd: "stl", triangles });
+        w.postMessage(msg);
       });
-      if (msg.type !== "stl") throw new Error(msg.message ?? "no STL");
-      window.__stl = msg.bytes;
-      return { bytes: msg.bytes.byteLength, ms: msg.ms };
+      if (data.type !== type) throw new Error(data.message ?? `no ${type}`);
+      window[global] = data[field];
+      const size = data[field]?.byteLength;
+      delete data[field];
+      return { ...data, size };
     } finally {
       w.terminate();
     }
-  }, triangles);
+  }, { msg, type, global, field });
 }
 
-/** Posts `msg` (with window.__stl as `stl`, transferred) to a fresh worker; resolves with its
+/** Generates the benchmark STL in a worker that is then terminated; keeps it as window.__stl. */
+async function genStl(page, triangles) {
+  const r = await keepInPage(page, { cmd: "stl", triangles }, "stl", "__stl", "bytes");
+  return { bytes: r.size, ms: r.ms };
+}
+
+/** Posts `msg` (with window.__stl as `stl`, transferred; with window[attach] as `inputs`,
+ *  copied, so the page keeps it for the next worker) to a fresh worker; resolves with its
  *  answer, `{ type: "error", message }` included (a worker crash becomes one too). */
-async function inWorker(page, msg, timeout = TIMEOUT) {
-  return page.evaluate(async ({ msg, timeout }) => {
+async function inWorker(page, msg, timeout = TIMEOUT, attach = null) {
+  return page.evaluate(async ({ msg, timeout, attach }) => {
     const w = new Worker("/tests/e2e/bench-worker.js", { type: "module" });
     const stl = window.__stl;
     window.__stl = null;
     if (stl) msg.stl = stl;
+    if (attach) msg.inputs = window[attach];
     try {
       return await new Promise((ok) => {
         const timer = setTimeout(() => ok({ type: "error", message: `no answer within ${timeout / 1000} s` }), timeout);
@@ -391,7 +412,7 @@ async function inWorker(page, msg, timeout = TIMEOUT) {
     } finally {
       w.terminate();
     }
-  }, { msg, timeout });
+  }, { msg, timeout, attach });
 }
 
 /** The stage-cache step and the big-input memory step (each in fresh workers). */
@@ -457,6 +478,102 @@ function cacheReport(browserRun, nativeCache) {
       out.push(`| ${b.triangles} | ${f((b.stlBytes ?? 0) / MB, 1)} | **failed**: \`${msg}\` | | | | | | ${b.memory ? f(b.memory / MiB, 0) : "?"} (at failure) | | | ${f(b.rendererPeakMiB, 0)} |`);
     }
   }
+  out.push("");
+  return out.join("\n");
+}
+
+/** The graded job's two cases (src/bench/graded.rs), each in a fresh worker (fresh wasm
+ *  memory, so each case's peak is its own); the inputs are made once in another worker. */
+async function gradedSteps(page) {
+  log("graded: making the series and the G-code in a worker (BenchGraded, not timed)");
+  const gen = await keepInPage(page, { cmd: "graded-inputs" }, "graded-inputs", "__graded", "inputs");
+  const info = await page.evaluate(() => {
+    const g = window.__graded;
+    return { files: g.files.length, seriesBytes: g.files.reduce((a, f) => a + f.bytes.byteLength, 0), gcodeBytes: g.gcode.bytes.byteLength, volumeBytes: g.volumeBytes };
+  });
+  const out = { genMs: gen.ms, ...info };
+  for (const [key, cmd] of [["surface", "graded-surface"], ["edit", "graded-edit"]]) {
+    log(`graded: ${cmd} in a fresh worker (${REPEATS} passes)`);
+    const r = await inWorker(page, { cmd, repeats: REPEATS }, TIMEOUT, "__graded");
+    if (r.type !== cmd) throw new Error(`${cmd}: ${r.message}`);
+    out[key] = r;
+  }
+  await page.evaluate(() => { window.__graded = null; });
+  return out;
+}
+
+/** `weft bench --graded`: { text, rows: { surface: { step: s }, edit: { step: s } }, peaks MB }. */
+function runNativeGraded() {
+  if (!WEFT_BIN) return null;
+  log(`native: ${WEFT_BIN} bench --graded`);
+  const text = execFileSync(WEFT_BIN, ["bench", "--graded"], { cwd: ROOT, encoding: "utf8", maxBuffer: 1 << 24, timeout: TIMEOUT });
+  const rows = { surface: {}, edit: {} };
+  for (const m of text.matchAll(/^\| (surface|edit) \| ([^|]+?) \| ([\d.]+) \|/gm)) rows[m[1]][m[2].replaceAll("**", "").replace(/ \(.*\)$/, "")] = Number(m[3]);
+  const peaks = text.match(/surface ([\d.]+) MB, edit ([\d.]+) MB/);
+  return { text, rows, peakMB: peaks ? { surface: Number(peaks[1]), edit: Number(peaks[2]) } : null, edited: Number(text.match(/edit: (\d+) moves edited/)?.[1]), triangles: Number(text.match(/surface: (\d+) triangles/)?.[1]) };
+}
+
+function gradedReport(browserRun, native) {
+  const g = browserRun.graded;
+  const n = native?.rows ?? { surface: {}, edit: {} };
+  const out = [];
+  const s = (ms) => f(ms / 1000);
+  const ratio = (w, x) => (x ? `${f(w / 1000 / x, 2)}×` : "?");
+  const met = (ok) => (ok ? "yes" : "**no**");
+  out.push(`## CT-graded scaffolds (issue 11): load a 182 × 197 × 107 series and extract the surface; edit a 50 MB G-code`);
+  out.push("");
+  out.push(`Browser: Chromium ${browserRun.version}, module Web Worker, wasm; a fresh worker per case and a new \`Session\` per pass (best of ${REPEATS} passes by total; that pass's split shown). ` +
+    `Inputs (src/bench/graded.rs, made by \`BenchGraded\` in a worker that is then terminated, ${f(g.genMs / 1000, 1)} s, and copied into each case's worker; not timed, not counted): ${g.files} DICOM files, ${f(g.seriesBytes / MB, 1)} MB (an f32 volume of ${f(g.volumeBytes / MB, 1)} MB); a PrusaSlicer-style G-code of ${f(g.gcodeBytes / MB, 1)} MB. ` +
+    "Native: `weft bench --graded` (the same inputs through the same pipeline calls, best of 3). Seconds.");
+  out.push("");
+  out.push("| case | step | worker s | native s | worker ÷ native |");
+  out.push("|---|---|---|---|---|");
+  const sp = g.surface.passes;
+  const sTotal = (p) => p.addFileMs + p.estimateMs + p.viewMs;
+  const sb = sp.reduce((a, p) => (sTotal(p) < sTotal(a) ? p : a));
+  const sRow = (label, ms, key, bold = "") => out.push(`| | ${label} | ${bold}${s(ms)}${bold} | ${bold}${f(n.surface[key])}${bold} | ${bold}${ratio(ms, n.surface[key])}${bold} |`);
+  out.push(`| series → surface, as the page goes after a drop | \`addFile("volume", path, bytes)\` × ${g.files} | ${s(sb.addFileMs)} | ${f(n.surface.addFile)} | ${ratio(sb.addFileMs, n.surface.addFile)} |`);
+  sRow("`estimate(design)` (runDesign asks it first: reads the volume, counts the surface's triangles, extracts it, estimates the slicing)", sb.estimateMs, "estimate");
+  sRow(`surface view (\`inspect(design, "surface", 0)\`, from the cache: ${sb.triangles} triangles copied out${native?.triangles && native.triangles !== sb.triangles ? `; native ${native.triangles}!` : ""})`, sb.viewMs, "surface view");
+  sRow("**addFile + estimate + view**", sTotal(sb), "addFile + estimate + view", "**");
+  out.push(`| series → surface, the stages apart (a new Session) | volume stage (\`inspect(design, "axial", 0)\`) | ${s(sb.volumeMs)} | ${f(n.surface["volume stage"])} | ${ratio(sb.volumeMs, n.surface["volume stage"])} |`);
+  sRow(`surface stage (\`inspect(design, "surface", 0)\`)`, sb.surfaceMs, "surface stage");
+  n.surface.apart = n.surface.addFile + n.surface["volume stage"] + n.surface["surface stage"];
+  sRow("addFile + volume + surface", sb.addFileMs2 + sb.volumeMs + sb.surfaceMs, "apart");
+  const ep = g.edit.passes;
+  const eTotal = (p) => p.addSeriesMs + p.addGcodeMs + p.runMs;
+  const eb = ep.reduce((a, p) => (eTotal(p) < eTotal(a) ? p : a));
+  const stage = (p, name) => p.stages.find((x) => x.stage === name)?.ms;
+  out.push(`| edit | \`addFile\`: series × ${g.files} + G-code (its analysis, as on the page) | ${s(eb.addSeriesMs + eb.addGcodeMs)} (G-code ${s(eb.addGcodeMs)}) | ${f(n.edit.addFile)} | ${ratio(eb.addSeriesMs + eb.addGcodeMs, n.edit.addFile)} |`);
+  for (const st of eb.stages) {
+    const label = st.stage === "volume" ? "volume (and the plan's surface estimate: classify, fill, count)" : st.stage === "edit" ? `**edit stage** (${eb.edited} moves edited${native?.edited && native.edited !== eb.edited ? `; native ${native.edited}!` : ""})` : st.stage === "analyze" ? "analyze (with preview, as Session.run)" : st.stage;
+    const bold = st.stage === "edit" ? "**" : "";
+    out.push(`| | ${label} | ${bold}${s(st.ms)}${bold} | ${bold}${f(n.edit[st.stage])}${bold} | ${ratio(st.ms, n.edit[st.stage])} |`);
+  }
+  out.push(`| | **Session.run** (all stages) | **${s(eb.runMs)}** | **${f(n.edit.run)}** | **${ratio(eb.runMs, n.edit.run)}** |`);
+  out.push(`| | **addFile + run** | **${s(eTotal(eb))}** | **${f(n.edit["addFile + run"])}** | **${ratio(eTotal(eb), n.edit["addFile + run"])}** |`);
+  out.push("");
+  const editMs = stage(eb, "edit");
+  out.push(`Targets (worker): load + surface ${s(sTotal(sb))} s < 3 s (addFile + estimate + view): ${met(sTotal(sb) < 3000)}; edit ${s(editMs)} s < 3 s: ${met(editMs < 3000)} (the whole run with its analysis ${s(eb.runMs)} s, with the G-code's addFile ${s(eTotal(eb))} s). ` +
+    `Worker passes (s): surface ${sp.map((p) => s(sTotal(p))).join(", ")}; edit stage ${ep.map((p) => s(stage(p, "edit"))).join(", ")}; edit addFile + run ${ep.map((p) => s(eTotal(p))).join(", ")}.`);
+  out.push("");
+  // Memory: wasm memory.buffer.byteLength only grows, so a reading is the peak so far.
+  const tS = 3 * g.volumeBytes;
+  const tE = 3 * g.volumeBytes + g.gcodeBytes;
+  const ms = g.surface.memory;
+  const me = g.edit.memory;
+  const marks = g.edit.marks;
+  const lastEdit = marks.map((m) => m.stage).lastIndexOf("edit");
+  const throughEdit = lastEdit >= 0 && lastEdit + 1 < marks.length ? marks[lastEdit + 1].memory : me.afterRun;
+  const mb = (b) => f(b / MB, 1);
+  out.push("Worker memory: wasm linear memory (`memory.buffer.byteLength`, MB = 10⁶ bytes; it only grows, so a reading is the peak so far), first pass of each case's fresh worker. Target: 3 × the volume's bytes (+ the G-code's).");
+  out.push("");
+  out.push("| case | at init | after addFile | peak of the target's work | target | peak ÷ target | met | end of the case | native peak RSS above the pass's start |");
+  out.push("|---|---|---|---|---|---|---|---|---|");
+  out.push(`| series → surface | ${mb(ms.init)} | ${mb(ms.afterAddFile)} | ${mb(ms.afterSurface)} (after the surface) | ${mb(tS)} | ${f(ms.afterSurface / tS, 2)} | ${met(ms.afterSurface < tS)} | ${mb(ms.end)} | ${native?.peakMB ? f(native.peakMB.surface, 1) : "?"} |`);
+  out.push(`| edit | ${mb(me.init)} | ${mb(me.afterGcode)} | ${mb(throughEdit)} (through the edit stage) | ${mb(tE)} | ${f(throughEdit / tE, 2)} | ${met(throughEdit < tE)} | ${mb(me.afterRun)} after the run (analysis with preview) | ${native?.peakMB ? f(native.peakMB.edit, 1) : "?"} (whole pass) |`);
+  out.push("");
+  out.push(`Edit run, wasm MB at each stage's first progress report: ${marks.map((m) => `${m.stage} ${mb(m.memory)}`).join(" → ")} → end ${mb(me.afterRun)}.`);
   out.push("");
   return out.join("\n");
 }
@@ -553,6 +670,15 @@ if (DESIGNS.length) {
   console.log(`Load average (1, 5, 15 min): ${loadBefore} at the start, ${loadBrowser} after the worker runs, ${loadNative} after the native run.`);
   process.exit(0);
 }
+if (GRADED_ONLY) {
+  const loadBrowser = readFileSync("/proc/loadavg", "utf8").split(" ").slice(0, 3).join(" ");
+  const native = runNativeGraded();
+  const loadNative = readFileSync("/proc/loadavg", "utf8").split(" ").slice(0, 3).join(" ");
+  console.log(gradedReport(browserRun, native));
+  console.log(`Load average (1, 5, 15 min): ${loadBefore} at the start, ${loadBrowser} after the worker runs, ${loadNative} after the native run.`);
+  if (native) console.log("\n<details><summary>weft bench --graded output</summary>\n\n" + native.text.trim() + "\n\n</details>");
+  process.exit(0);
+}
 if (PAIRING_ONLY) {
   const loadBrowser = readFileSync("/proc/loadavg", "utf8").split(" ").slice(0, 3).join(" ");
   const native = WEFT_BIN ? execFileSync(WEFT_BIN, ["bench", "--pairing"], { encoding: "utf8", maxBuffer: 1 << 24 }) : "";
@@ -640,6 +766,7 @@ out.push("");
 console.log(out.join("\n"));
 console.log(latticeOut.join("\n"));
 if (CACHE) console.log(cacheReport(browserRun, nativeCache));
+if (GRADED) console.log(gradedReport(browserRun, runNativeGraded()));
 if (native) {
   console.log("\n<details><summary>weft bench output</summary>\n\n" + native.text.trim() + "\n\n</details>");
 }

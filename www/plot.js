@@ -30,13 +30,14 @@ export function axisTitle(axis) {
   return axis.unit ? `${label}${label ? " " : ""}(${axis.unit})` : label;
 }
 
-/** A number for people: grouped thousands, at most `digits` decimals. */
+/** A number for people: grouped thousands, at most `digits` decimals (more below 0.1, so a
+ * small value keeps two significant digits instead of showing as 0). */
 export function formatNumber(v, digits = 3) {
   if (typeof v !== "number") return v === undefined || v === null ? "–" : String(v);
   if (!Number.isFinite(v)) return "–";
   const a = Math.abs(v);
   if (a !== 0 && (a >= 1e9 || a < 1e-4)) return v.toExponential(2);
-  const d = a >= 1000 ? 0 : a >= 100 ? Math.min(digits, 1) : a >= 10 ? Math.min(digits, 2) : digits;
+  const d = a >= 1000 ? 0 : a >= 100 ? Math.min(digits, 1) : a >= 10 ? Math.min(digits, 2) : a > 0 && a < 0.1 ? Math.max(digits, Math.ceil(-Math.log10(a)) + 1) : digits;
   return v.toLocaleString("en-US", { maximumFractionDigits: d, minimumFractionDigits: 0 });
 }
 

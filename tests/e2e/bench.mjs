@@ -651,41 +651,31 @@ function pairingReport(browserRun, nativeText) {
 // ---------------------------------------------------------------------------------------
 // Report
 // ---------------------------------------------------------------------------------------
-const loadBefore = readFileSync("/proc/loadavg", "utf8").split(" ").slice(0, 3).join(" ");
+const loadAverage = () => readFileSync("/proc/loadavg", "utf8").split(" ").slice(0, 3).join(" ");
+const loadBefore = loadAverage();
 const browserRun = await runBrowser();
-if (SCALING_ONLY) {
-  const loadBrowser = readFileSync("/proc/loadavg", "utf8").split(" ").slice(0, 3).join(" ");
-  const native = runNativeScaling();
-  const loadNative = readFileSync("/proc/loadavg", "utf8").split(" ").slice(0, 3).join(" ");
-  console.log(scalingReport(browserRun, native));
+/** Prints a case's report: the worker's numbers, then the native run made right after (so
+ * the ratios come from one run), the load average around both, and the native output. */
+function reportAndExit(runNative, report, details) {
+  const loadBrowser = loadAverage();
+  const native = runNative();
+  const loadNative = loadAverage();
+  console.log(report(browserRun, native));
   console.log(`Load average (1, 5, 15 min): ${loadBefore} at the start, ${loadBrowser} after the worker runs, ${loadNative} after the native run.`);
-  if (native) console.log("\n<details><summary>weft bench --scaling output</summary>\n\n```text\n" + native.text.trim() + "\n```\n\n</details>");
+  if (native && details) console.log(details(native));
   process.exit(0);
+}
+if (SCALING_ONLY) {
+  reportAndExit(runNativeScaling, scalingReport, (native) => "\n<details><summary>weft bench --scaling output</summary>\n\n```text\n" + native.text.trim() + "\n```\n\n</details>");
 }
 if (DESIGNS.length) {
-  const loadBrowser = readFileSync("/proc/loadavg", "utf8").split(" ").slice(0, 3).join(" ");
-  const native = WEFT_BIN ? execFileSync(WEFT_BIN, ["bench", "--design", ...DESIGNS.map((d) => resolve(ROOT, d))], { encoding: "utf8", maxBuffer: 1 << 24 }) : "";
-  const loadNative = readFileSync("/proc/loadavg", "utf8").split(" ").slice(0, 3).join(" ");
-  console.log(designsReport(browserRun, native));
-  console.log(`Load average (1, 5, 15 min): ${loadBefore} at the start, ${loadBrowser} after the worker runs, ${loadNative} after the native run.`);
-  process.exit(0);
+  reportAndExit(() => (WEFT_BIN ? execFileSync(WEFT_BIN, ["bench", "--design", ...DESIGNS.map((d) => resolve(ROOT, d))], { encoding: "utf8", maxBuffer: 1 << 24 }) : ""), designsReport);
 }
 if (GRADED_ONLY) {
-  const loadBrowser = readFileSync("/proc/loadavg", "utf8").split(" ").slice(0, 3).join(" ");
-  const native = runNativeGraded();
-  const loadNative = readFileSync("/proc/loadavg", "utf8").split(" ").slice(0, 3).join(" ");
-  console.log(gradedReport(browserRun, native));
-  console.log(`Load average (1, 5, 15 min): ${loadBefore} at the start, ${loadBrowser} after the worker runs, ${loadNative} after the native run.`);
-  if (native) console.log("\n<details><summary>weft bench --graded output</summary>\n\n" + native.text.trim() + "\n\n</details>");
-  process.exit(0);
+  reportAndExit(runNativeGraded, gradedReport, (native) => "\n<details><summary>weft bench --graded output</summary>\n\n" + native.text.trim() + "\n\n</details>");
 }
 if (PAIRING_ONLY) {
-  const loadBrowser = readFileSync("/proc/loadavg", "utf8").split(" ").slice(0, 3).join(" ");
-  const native = WEFT_BIN ? execFileSync(WEFT_BIN, ["bench", "--pairing"], { encoding: "utf8", maxBuffer: 1 << 24 }) : "";
-  const loadNative = readFileSync("/proc/loadavg", "utf8").split(" ").slice(0, 3).join(" ");
-  console.log(pairingReport(browserRun, native));
-  console.log(`Load average (1, 5, 15 min): ${loadBefore} at the start, ${loadBrowser} after the worker runs, ${loadNative} after the native run.`);
-  process.exit(0);
+  reportAndExit(() => (WEFT_BIN ? execFileSync(WEFT_BIN, ["bench", "--pairing"], { encoding: "utf8", maxBuffer: 1 << 24 }) : ""), pairingReport);
 }
 const nativeCache = runNativeCache();
 if (CACHE_ONLY) {

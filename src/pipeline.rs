@@ -135,7 +135,7 @@ impl Cache {
     }
 
     /// No caching: every stage runs once and nothing is kept after the run (the CLI, one run);
-    /// only imported meshes are kept, between the run's estimate and its stages.
+    /// only what the estimate makes and the run reads again is kept ([`Ctx::stage_kept`]).
     pub fn disabled() -> Cache {
         Cache::default()
     }
@@ -199,6 +199,27 @@ impl<'a> Ctx<'a> {
         P: Serialize + ?Sized,
         F: FnOnce(&mut dyn FnMut(f32)) -> Result<(T, Option<StageReport>), Error>,
     {
+        self.run_stage(name, id, parts, upstream, f, false)
+    }
+
+    /// [`Ctx::stage`] for an output the job's estimate makes and its run reads again (an
+    /// imported mesh, a volume, a surface model): kept even by a disabled cache, so a
+    /// one-shot run (the CLI) does not make it twice.
+    pub fn stage_kept<T, P, F>(&mut self, name: &str, id: &str, parts: &P, upstream: &[Key], f: F) -> Result<Out<T>, Error>
+    where
+        T: Any + Send + Sync,
+        P: Serialize + ?Sized,
+        F: FnOnce(&mut dyn FnMut(f32)) -> Result<(T, Option<StageReport>), Error>,
+    {
+        self.run_stage(name, id, parts, upstream, f, true)
+    }
+
+    fn run_stage<T, P, F>(&mut self, name: &str, id: &str, parts: &P, upstream: &[Key], f: F, keep: bool) -> Result<Out<T>, Error>
+    where
+        T: Any + Send + Sync,
+        P: Serialize + ?Sized,
+        F: FnOnce(&mut dyn FnMut(f32)) -> Result<(T, Option<StageReport>), Error>,
+    {
         let key = Key::of(id, &parts, upstream);
         if let Some(e) = self.cache.entries.get(id) {
             if e.key == key {
@@ -226,9 +247,7 @@ impl<'a> Ctx<'a> {
             self.reports.push(r.clone());
             self.reported.push(id.to_string());
         }
-        // A disabled cache still keeps imported meshes for the run: the estimate made before
-        // the run imports them, and the run must not parse them again.
-        if self.cache.enabled || id.starts_with("import:") {
+        if self.cache.enabled || keep {
             self.cache.entries.insert(id.to_string(), Entry { key, value: value.clone(), report });
         }
         Ok(Out { value, key })
@@ -284,15 +303,23 @@ impl<'a> Ctx<'a> {
         };
         let files = self.files;
         let id = if place { format!("import:{slot}") } else { format!("import-in-place:{slot}") };
-        self.stage("import", &id, &parts, &upstream, |_| {
-            let (mesh, report) = load_input(slot, input, files, place)?;
-            let stage = report.as_ref().map(|r| {
-                StageReport::new("import", "Reading the mesh", r)
-                    .metric("triangles", "Triangles", r.triangles as f64, "", "Facets in the mesh after repairs.")
-                    .metric("open_edges", "Open edges", r.open_edges as f64, "", "Edges with one facet: holes in the surface (0 for a closed, printable mesh).")
-            });
-            Ok((mesh, stage))
-        })
+        let keep = place; // the placed mesh is what the estimate and the run both read
+        self.run_stage(
+            "import",
+            &id,
+            &parts,
+            &upstream,
+            |_| {
+                let (mesh, report) = load_input(slot, input, files, place)?;
+                let stage = report.as_ref().map(|r| {
+                    StageReport::new("import", "Reading the mesh", r)
+                        .metric("triangles", "Triangles", r.triangles as f64, "", "Facets in the mesh after repairs.")
+                        .metric("open_edges", "Open edges", r.open_edges as f64, "", "Edges with one facet: holes in the surface (0 for a closed, printable mesh).")
+                });
+                Ok((mesh, stage))
+            },
+            keep,
+        )
     }
 }
 
@@ -357,7 +384,7 @@ impl<'a> Ctx<'a> {
         let names: Vec<&str> = files.iter().map(|(n, _, _)| n.as_str()).collect();
         let upstream: Vec<Key> = files.iter().map(|(_, _, k)| *k).collect();
         let id = format!("volume:{slot}");
-        self.stage("volume", &id, &(&names, options), &upstream, |_| {
+        self.stage_kept("volume", &id, &(&names, options), &upstream, |_| {
             let list: Vec<(&str, &[u8])> = files.iter().map(|(n, b, _)| (n.as_str(), b.as_ref())).collect();
             let imported = volume::read_volume(&list, options).map_err(|e| Error::stage("reading the volume", e))?;
             let (v, r) = (&imported.volume, &imported.report);

@@ -224,6 +224,24 @@ fn graded_cells_keep_beads_printable_where_the_fixed_cell_clamps() {
 }
 
 #[test]
+fn a_one_shot_run_reads_the_volume_and_extracts_the_surface_once() {
+    // The estimate before the run makes both; a disabled cache (the CLI) keeps them for it.
+    let mut starts: Vec<String> = Vec::new();
+    let mut last = String::new();
+    // A stage that runs reports 0 first; one reused from the cache reports only 1.
+    pipeline::run(&example(), &Files::new(), &RunOptions::default(), &mut |stage, x| {
+        if stage != last && x == 0.0 {
+            starts.push(stage.to_string());
+        }
+        last = stage.to_string();
+    })
+    .unwrap();
+    for s in ["volume", "surface"] {
+        assert_eq!(starts.iter().filter(|x| *x == s).count(), 1, "{s} started {:?}", starts);
+    }
+}
+
+#[test]
 fn edit_route_rewrites_only_the_infill_of_another_slicers_gcode() {
     // A PrusaSlicer-style file of a 20 mm block, absolute E (so G92 resets are needed).
     let mut design = example();

@@ -529,7 +529,8 @@ fn roi_of(j: &GradedJob, vol: &Volume) -> Roi {
 
 fn surface_stage(j: &GradedJob, ctx: &mut Ctx, vol: &Out<Volume>) -> Result<Out<isosurface::Surface>, Error> {
     let roi = roi_of(j, vol);
-    ctx.stage("surface", "surface", &(&j.surface, &roi), &[vol.key], |progress| {
+    // Kept: the estimate makes the surface model (to bound the slicing) and the run reads it.
+    ctx.stage_kept("surface", "surface", &(&j.surface, &roi), &[vol.key], |progress| {
         let s = isosurface::extract(vol, &roi, &j.surface, progress).map_err(|e| Error::stage("surface model", e))?;
         let r = &s.report;
         let report = StageReport::new("surface", "Extracting the surface model", r)

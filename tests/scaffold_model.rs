@@ -208,3 +208,22 @@ fn cells_are_resized_only_where_the_bead_would_leave_its_range() {
     // The field is the nodes' values between them.
     assert!(close(f.at(weft::geom::DVec3::new(f.origin_mm[0], 0.0, 0.0)), f.cell_mm[0], 1e-12));
 }
+
+#[test]
+fn cell_sizing_refuses_a_part_whose_graded_gyroid_is_too_much_work() {
+    let o = cells::Options { cell: GYROID, reference_mm: 2.4, width_min_mm: 0.2, width_max_mm: 1.2, layer_mm: 0.05, max_ratio: 10.0 };
+    let bounds = weft::geom::Aabb { min: weft::geom::DVec3::ZERO, max: weft::geom::DVec3::new(200.0, 200.0, 300.0) };
+    let called = std::cell::Cell::new(0usize);
+    let field = |_: weft::geom::DVec3| {
+        called.set(called.get() + 1);
+        Some(0.5)
+    };
+    match cells::size_cells(&bounds, &field, &o) {
+        Err(cells::Error::TooBig(r)) => assert!(r.fix.contains("max_cell_ratio"), "{r}"),
+        other => panic!("not refused: {:?}", other.map(|s| s.report)),
+    }
+    assert_eq!(called.get(), 0, "the field was sampled before the refusal");
+    // The phantom-sized part is well inside.
+    let small = weft::geom::Aabb { min: weft::geom::DVec3::ZERO, max: weft::geom::DVec3::new(40.0, 40.0, 20.0) };
+    assert!(cells::estimate(&small, &cells::Options { layer_mm: 0.2, max_ratio: 3.0, ..o }).refused.is_none());
+}

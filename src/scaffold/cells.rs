@@ -104,13 +104,24 @@ fn dims(bounds: &Aabb, step: f64) -> [usize; 3] {
     [e.x, e.y, e.z].map(|x| (libm::ceil((x / step).max(0.0)) as usize).saturating_add(1))
 }
 
-/// The work of sizing over `bounds`: nodes, 27 samples each.
+/// Most samples of the traced gyroid over all layers (the slicing this sizing leads to).
+pub const MAX_TRACE_SAMPLES: f64 = 5e9;
+
+/// The work of sizing over `bounds` (nodes, 27 samples each) and of tracing the graded gyroid
+/// it leads to in every layer ([`crate::slice::gyroid_graded`]: a grid of `L_min / 24` over
+/// the layer's box, at most its sample limit per layer; about 30 ns per sample).
 pub fn estimate(bounds: &Aabb, options: &Options) -> Estimate {
     let n = dims(bounds, options.reference_mm.max(1e-3)).iter().map(|&d| d as f64).product::<f64>();
+    let e = bounds.max - bounds.min;
+    let h = (options.reference_mm / options.max_ratio.max(1.0) / crate::slice::gyroid_graded::STEPS_PER_CELL).max(1e-4);
+    let per_layer = ((e.x / h + 3.0) * (e.y / h + 3.0)).min(crate::slice::gyroid_graded::MAX_SAMPLES as f64);
+    let samples = per_layer * (e.z / options.layer_mm.max(1e-3)).max(1.0);
     Estimate::new("cells")
         .quantity("nodes", "Cell-size nodes", n, "")
+        .quantity("trace_samples", "Gyroid samples (slicing)", samples, "")
         .limit("cell-size nodes", n, MAX_NODES as f64, "", "a larger infill cell (lower ρ_s) or a smaller part")
-        .cost(n * 40.0, n * 27.0 * 2e-8)
+        .limit("samples of the graded gyroid", samples, MAX_TRACE_SAMPLES, "", "crop the ROI, raise the layer height, or narrow the cell size range (job.density.max_cell_ratio)")
+        .cost(n * 40.0 + per_layer * 24.0, n * 27.0 * 2e-8 + samples * 3e-8)
 }
 
 /// Sizes the cells over `bounds` by `density` (ρ at a point of the toolpath's frame, `None`

@@ -411,7 +411,7 @@ impl Kind for GradedKind {
                     "",
                     "raise the grading step (job.density.segment_mm)",
                 ));
-                if j.compare_edit {
+                if j.compare_edit && j.density.cell_sizing == CellSizing::Fixed {
                     // The ungraded G-code (about 30 bytes per move) and its edited copy.
                     let bytes = (sliced_moves * 30.0) as usize;
                     let mut e = gcode_edit::estimate(bytes, &edit_options(j, ctx.design, [0.0; 3], model.segment_mm));

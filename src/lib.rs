@@ -33,6 +33,7 @@ pub mod motion;
 pub mod nonplanar;
 pub mod paths;
 pub mod slice;
+pub mod source;
 pub mod design;
 pub mod pipeline;
 pub mod settings;

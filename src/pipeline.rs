@@ -15,23 +15,74 @@ use crate::import::{self, ImportReport};
 use crate::jobs::{Inspection, Product, Registry};
 use crate::report::StageReport;
 use crate::volume;
+use crate::source::ByteSource;
 use serde::Serialize;
 use std::any::Any;
 use std::collections::BTreeMap;
 use std::sync::Arc;
 
+/// Where a file's bytes are.
+#[derive(Clone)]
+enum Content {
+    /// In memory.
+    Bytes(Arc<Vec<u8>>),
+    /// Outside the core (the browser's blob store), read in ranges when a stage needs it.
+    Far(Arc<dyn ByteSource>),
+}
+
+impl std::fmt::Debug for Content {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Content::Bytes(b) => write!(f, "Bytes({} bytes)", b.len()),
+            Content::Far(s) => write!(f, "Far({} bytes)", s.len()),
+        }
+    }
+}
+
 /// A loaded file and the hash of its bytes (computed once, for cache keys).
 #[derive(Clone, Debug)]
 struct FileEntry {
-    bytes: Arc<Vec<u8>>,
+    content: Content,
     hash: Key,
 }
 
 /// Files available to a run, by name (uploaded on the page, `--input` on the CLI). Each is
-/// stored once and hashed once; stages parse them lazily through [`Ctx::mesh`].
+/// stored once and hashed once; stages parse them lazily through [`Ctx::mesh`]. A file may
+/// stay outside the core ([`Files::insert_source`]): stages that read line by line stream it
+/// ([`Ctx::file_source`]), the others read it whole when they run.
 #[derive(Clone, Debug, Default)]
 pub struct Files {
     map: BTreeMap<String, FileEntry>,
+}
+
+/// A loaded file's bytes for a stage: in memory (borrowed, or unpacked from a share link), or
+/// read in ranges from outside the core.
+pub enum FileSource<'a> {
+    /// In memory.
+    Bytes(std::borrow::Cow<'a, [u8]>),
+    /// Outside the core.
+    Far(Arc<dyn ByteSource>),
+}
+
+impl ByteSource for FileSource<'_> {
+    fn len(&self) -> usize {
+        match self {
+            FileSource::Bytes(b) => b.len(),
+            FileSource::Far(s) => s.len(),
+        }
+    }
+    fn read_at(&self, offset: usize, buf: &mut [u8]) -> Result<(), String> {
+        match self {
+            FileSource::Bytes(b) => b.read_at(offset, buf),
+            FileSource::Far(s) => s.read_at(offset, buf),
+        }
+    }
+    fn as_slice(&self) -> Option<&[u8]> {
+        match self {
+            FileSource::Bytes(b) => Some(b),
+            FileSource::Far(s) => s.as_slice(),
+        }
+    }
 }
 
 impl Files {
@@ -43,7 +94,15 @@ impl Files {
     /// Adds (or replaces) `name`.
     pub fn insert(&mut self, name: String, bytes: Vec<u8>) {
         let hash = Key::of_bytes(&bytes);
-        self.map.insert(name, FileEntry { bytes: Arc::new(bytes), hash });
+        self.map.insert(name, FileEntry { content: Content::Bytes(Arc::new(bytes)), hash });
+    }
+
+    /// Adds (or replaces) `name`, whose bytes stay in `source` (read once now, in pieces, to
+    /// hash them; the message says why they could not be read).
+    pub fn insert_source(&mut self, name: String, source: Arc<dyn ByteSource>) -> Result<(), String> {
+        let hash = Key::of_source(&*source)?;
+        self.map.insert(name, FileEntry { content: Content::Far(source), hash });
+        Ok(())
     }
 
     /// Removes `name`; whether it was there.
@@ -51,9 +110,30 @@ impl Files {
         self.map.remove(name).is_some()
     }
 
-    /// The bytes of `name`.
+    /// The bytes of `name`, when they are in memory.
     pub fn get(&self, name: &str) -> Option<&[u8]> {
-        self.map.get(name).map(|e| e.bytes.as_slice())
+        self.map.get(name).and_then(|e| match &e.content {
+            Content::Bytes(b) => Some(b.as_slice()),
+            Content::Far(_) => None,
+        })
+    }
+
+    /// The bytes of `name`, wherever they are.
+    pub fn source(&self, name: &str) -> Option<FileSource<'_>> {
+        self.map.get(name).map(|e| match &e.content {
+            Content::Bytes(b) => FileSource::Bytes(std::borrow::Cow::Borrowed(b.as_slice())),
+            Content::Far(s) => FileSource::Far(s.clone()),
+        })
+    }
+
+    /// All the bytes of `name`: borrowed when in memory, read when not.
+    fn whole(&self, name: &str) -> Option<Result<std::borrow::Cow<'_, [u8]>, Error>> {
+        self.map.get(name).map(|e| match &e.content {
+            Content::Bytes(b) => Ok(std::borrow::Cow::Borrowed(b.as_slice())),
+            Content::Far(s) => crate::source::read_all(&**s)
+                .map(|b| std::borrow::Cow::Owned(b.into_owned()))
+                .map_err(|message| Error::Unreadable { name: name.to_string(), message }),
+        })
     }
 
     /// Whether `name` is loaded.
@@ -79,20 +159,31 @@ impl Key {
     /// Hash of `bytes` (two independent 64-bit multiply–rotate streams, 8 bytes at a time;
     /// deterministic on every target, fast enough for 200 MB inputs).
     pub fn of_bytes(bytes: &[u8]) -> Key {
-        const K1: u64 = 0x9E37_79B9_7F4A_7C15;
-        const K2: u64 = 0xC2B2_AE3D_27D4_EB4F;
-        let (mut a, mut b) = (0x243F_6A88_85A3_08D3u64 ^ bytes.len() as u64, 0x1319_8A2E_0370_7344u64);
-        let mut chunks = bytes.chunks_exact(8);
-        for c in &mut chunks {
-            let w = u64::from_le_bytes([c[0], c[1], c[2], c[3], c[4], c[5], c[6], c[7]]);
-            a = (a ^ w).wrapping_mul(K1).rotate_left(29);
-            b = (b ^ w.rotate_left(17)).wrapping_mul(K2).rotate_left(31);
+        let mut h = Hasher::new(bytes.len());
+        h.words(bytes);
+        h.finish(&bytes[bytes.len() / 8 * 8..])
+    }
+
+    /// [`Key::of_bytes`] of a source's bytes, read in pieces (the same key as in memory).
+    pub fn of_source(source: &dyn ByteSource) -> Result<Key, String> {
+        if let Some(all) = source.as_slice() {
+            return Ok(Key::of_bytes(all));
         }
-        for &byte in chunks.remainder() {
-            a = (a ^ byte as u64).wrapping_mul(K1).rotate_left(29);
-            b = (b ^ byte as u64).wrapping_mul(K2).rotate_left(31);
+        let len = source.len();
+        let mut h = Hasher::new(len);
+        // A multiple of 8, so every piece but the last is whole words.
+        let mut buf = vec![0u8; crate::source::CHUNK_BYTES.min(len)];
+        let mut offset = 0;
+        while offset < len {
+            let n = buf.len().min(len - offset);
+            source.read_at(offset, &mut buf[..n])?;
+            offset += n;
+            h.words(&buf[..n]);
+            if offset == len {
+                return Ok(h.finish(&buf[n / 8 * 8..n]));
+            }
         }
-        Key(fmix(a ^ b.rotate_left(32)), fmix(b ^ a))
+        Ok(h.finish(&[]))
     }
 
     /// Hash of a stage name, its design parts (as JSON) and its upstream keys.
@@ -105,6 +196,39 @@ impl Key {
             bytes.extend(k.1.to_le_bytes());
         }
         Key::of_bytes(&bytes)
+    }
+}
+
+/// Two independent 64-bit multiply–rotate streams, 8 bytes at a time.
+struct Hasher {
+    a: u64,
+    b: u64,
+}
+
+impl Hasher {
+    const K1: u64 = 0x9E37_79B9_7F4A_7C15;
+    const K2: u64 = 0xC2B2_AE3D_27D4_EB4F;
+
+    fn new(len: usize) -> Hasher {
+        Hasher { a: 0x243F_6A88_85A3_08D3u64 ^ len as u64, b: 0x1319_8A2E_0370_7344u64 }
+    }
+
+    /// The whole words of `bytes` (a trailing part of under 8 bytes is left for `finish`).
+    fn words(&mut self, bytes: &[u8]) {
+        for c in bytes.chunks_exact(8) {
+            let w = u64::from_le_bytes([c[0], c[1], c[2], c[3], c[4], c[5], c[6], c[7]]);
+            self.a = (self.a ^ w).wrapping_mul(Self::K1).rotate_left(29);
+            self.b = (self.b ^ w.rotate_left(17)).wrapping_mul(Self::K2).rotate_left(31);
+        }
+    }
+
+    fn finish(mut self, tail: &[u8]) -> Key {
+        for &byte in tail {
+            self.a = (self.a ^ byte as u64).wrapping_mul(Self::K1).rotate_left(29);
+            self.b = (self.b ^ byte as u64).wrapping_mul(Self::K2).rotate_left(31);
+        }
+        let (a, b) = (self.a, self.b);
+        Key(fmix(a ^ b.rotate_left(32)), fmix(b ^ a))
     }
 }
 
@@ -257,16 +381,12 @@ impl<'a> Ctx<'a> {
     /// refused over the importer's limits. A built-in shape costs nothing worth stating.
     pub fn import_estimate(&self, slot: &str, input: &Input) -> Result<Estimate, Error> {
         let Input::File { name, embedded } = input else { return Ok(Estimate::new("import")) };
-        let unpacked;
-        let bytes: &[u8] = match (self.files.get(name), embedded) {
-            (Some(b), _) => b,
-            (None, Some(e)) => {
-                unpacked = share::unpack(e).map_err(|source| Error::Embedded { name: name.clone(), source })?;
-                &unpacked
-            }
+        let bytes = match (self.files.whole(name), embedded) {
+            (Some(b), _) => b?,
+            (None, Some(e)) => std::borrow::Cow::Owned(share::unpack(e).map_err(|source| Error::Embedded { name: name.clone(), source })?),
             (None, None) => return Err(Error::MissingInput { name: name.clone(), slot: slot.into() }),
         };
-        let e = import::estimate(name, bytes)?;
+        let e = import::estimate(name, &bytes)?;
         e.check(name)?;
         // Reading and cleaning: 1 µs per triangle (binary STL and 3MF, measured at 2M
         // triangles), 2 µs for text formats.
@@ -329,8 +449,8 @@ impl<'a> Ctx<'a> {
     pub fn file_bytes(&self, slot: &str, input: &Input) -> Result<(std::borrow::Cow<'a, [u8]>, Key), Error> {
         let files: &'a Files = self.files;
         match input {
-            Input::File { name, embedded } => match (files.get(name), files.hash(name), embedded) {
-                (Some(b), Some(h), _) => Ok((std::borrow::Cow::Borrowed(b), h)),
+            Input::File { name, embedded } => match (files.whole(name), files.hash(name), embedded) {
+                (Some(b), Some(h), _) => Ok((b?, h)),
                 (_, _, Some(e)) => {
                     let bytes = share::unpack(e).map_err(|source| Error::Embedded { name: name.clone(), source })?;
                     let key = Key::of_bytes(&bytes);
@@ -343,6 +463,19 @@ impl<'a> Ctx<'a> {
         }
     }
 
+    /// A one-file `input` of `slot` for a stage that reads it line by line (it may stay
+    /// outside the core: nothing is read here), and the key of its content.
+    pub fn file_source(&self, slot: &str, input: &Input) -> Result<(FileSource<'a>, Key), Error> {
+        let files: &'a Files = self.files;
+        if let Input::File { name, .. } = input {
+            if let (Some(source), Some(h)) = (files.source(name), files.hash(name)) {
+                return Ok((source, h));
+            }
+        }
+        let (bytes, key) = self.file_bytes(slot, input)?;
+        Ok((FileSource::Bytes(bytes), key))
+    }
+
     /// The files of a volume `input` (one file: a `.zip`, NRRD, raw or single DICOM; several:
     /// a series), with the keys of their contents.
     fn volume_files(&self, slot: &str, input: &Input) -> Result<Vec<(String, std::borrow::Cow<'a, [u8]>, Key)>, Error> {
@@ -351,8 +484,8 @@ impl<'a> Ctx<'a> {
                 let files: &'a Files = self.files;
                 let mut out = Vec::with_capacity(names.len());
                 for name in names {
-                    match (files.get(name), files.hash(name)) {
-                        (Some(b), Some(h)) => out.push((name.clone(), std::borrow::Cow::Borrowed(b), h)),
+                    match (files.whole(name), files.hash(name)) {
+                        (Some(b), Some(h)) => out.push((name.clone(), b?, h)),
                         _ => return Err(Error::MissingInput { name: name.clone(), slot: slot.into() }),
                     }
                 }
@@ -464,6 +597,14 @@ pub enum Error {
         /// The slot.
         slot: String,
     },
+    /// A loaded file kept outside the core could not be read any more.
+    #[error("{name} could not be read ({message}); load it again")]
+    Unreadable {
+        /// The file's name.
+        name: String,
+        /// Why, as the browser said.
+        message: String,
+    },
     /// The copy of a file inside the design (put there by a share link) is damaged.
     #[error("the copy of {name} inside the design is damaged (the link it came with was cut short or changed while copying); load {name} itself, or ask for the link again")]
     Embedded {
@@ -535,16 +676,12 @@ fn load_input(slot: &str, input: &Input, files: &Files, place: bool) -> Result<(
     let (mut mesh, report) = match input {
         Input::Builtin(shape) => (shape.mesh(), None),
         Input::File { name, embedded } => {
-            let unpacked;
-            let bytes: &[u8] = match (files.get(name), embedded) {
-                (Some(b), _) => b,
-                (None, Some(e)) => {
-                    unpacked = share::unpack(e).map_err(|source| Error::Embedded { name: name.clone(), source })?;
-                    &unpacked
-                }
+            let bytes = match (files.whole(name), embedded) {
+                (Some(b), _) => b?,
+                (None, Some(e)) => std::borrow::Cow::Owned(share::unpack(e).map_err(|source| Error::Embedded { name: name.clone(), source })?),
                 (None, None) => return Err(Error::MissingInput { name: name.clone(), slot: slot.into() }),
             };
-            let imported = import::read_mesh(name, bytes, &import::Options::default())?;
+            let imported = import::read_mesh(name, &bytes, &import::Options::default())?;
             (imported.mesh, Some(imported.report))
         }
         Input::Files(_) => return Err(Error::NoInput(format!("the {slot} input takes one mesh file, not several"))),

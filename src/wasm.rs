@@ -11,7 +11,9 @@ use crate::analyze::{self, Preview};
 use crate::design::{schema, share, Design, Input};
 
 use crate::jobs::{Registry, SlotKind};
+use crate::gcode_edit;
 use crate::pipeline::{self, Cache, Files, RunOptions};
+use crate::source::ByteSource;
 use serde::Serialize;
 use std::sync::Arc;
 use wasm_bindgen::prelude::*;
@@ -122,6 +124,41 @@ struct Loaded {
     report: serde_json::Value,
 }
 
+/// A `Blob` read in ranges with `FileReaderSync` (synchronous, which the worker's synchronous
+/// calls need; workers only). A dropped file's bytes stay in the browser's blob store.
+struct BlobSource {
+    blob: web_sys::Blob,
+    reader: web_sys::FileReaderSync,
+    len: usize,
+}
+
+fn js_message(v: JsValue) -> String {
+    v.dyn_ref::<js_sys::Error>().map(|e| String::from(e.message())).or_else(|| v.as_string()).unwrap_or_else(|| "the browser refused".into())
+}
+
+impl BlobSource {
+    fn new(blob: web_sys::Blob) -> Result<BlobSource, JsError> {
+        let reader = web_sys::FileReaderSync::new().map_err(|e| JsError::new(&format!("files cannot be read here ({}): weft reads them in its worker", js_message(e))))?;
+        let len = blob.size() as usize;
+        Ok(BlobSource { blob, reader, len })
+    }
+}
+
+impl ByteSource for BlobSource {
+    fn len(&self) -> usize {
+        self.len
+    }
+    fn read_at(&self, offset: usize, buf: &mut [u8]) -> Result<(), String> {
+        let part = self.blob.slice_with_f64_and_f64(offset as f64, (offset + buf.len()) as f64).map_err(js_message)?;
+        let bytes = js_sys::Uint8Array::new(&self.reader.read_as_array_buffer(&part).map_err(js_message)?.into());
+        if bytes.length() as usize != buf.len() {
+            return Err(format!("{} bytes came back where {} were asked for", bytes.length(), buf.len()));
+        }
+        bytes.copy_to(buf);
+        Ok(())
+    }
+}
+
 /// State held by the worker: loaded files, the stage cache and the last result.
 #[wasm_bindgen]
 pub struct Session {
@@ -162,21 +199,50 @@ impl Session {
         }
     }
 
-    /// Keeps a file for `slot` and reads it now with the slot kind's reader, so a bad file is
-    /// reported at once (a mesh is imported into the stage cache: the run does not read it
-    /// again). Returns `{slot, name, kind, summary, report}`.
+    /// Keeps a file for `slot` (its bytes copied into the session) and reads it now with the
+    /// slot kind's reader, so a bad file is reported at once (a mesh is imported into the stage
+    /// cache: the run does not read it again). Returns `{slot, name, kind, summary, report}`.
     #[wasm_bindgen(js_name = addFile)]
     pub fn add_file(&mut self, slot: &str, name: &str, bytes: Vec<u8>) -> Result<JsValue, JsError> {
-        let kind = self
-            .registry
+        let kind = self.slot_kind(slot)?;
+        self.files.insert(name.to_string(), bytes);
+        self.check_loaded(slot, name, kind)
+    }
+
+    /// Keeps a dropped file (a `Blob`, as the page has it) for `slot`, as
+    /// [`Session::add_file`] does. Volumes and G-code stay in the browser's blob store and are
+    /// read in pieces when a stage needs them (a 50 MB G-code is edited without a copy of it
+    /// in wasm memory); meshes and wireframes are read in now.
+    #[wasm_bindgen(js_name = addBlob)]
+    pub fn add_blob(&mut self, slot: &str, name: &str, blob: web_sys::Blob) -> Result<JsValue, JsError> {
+        let kind = self.slot_kind(slot)?;
+        let source = BlobSource::new(blob)?;
+        match kind {
+            SlotKind::Volume | SlotKind::Gcode => {
+                self.files.insert_source(name.to_string(), Arc::new(source)).map_err(|m| JsError::new(&format!("{name} could not be read ({m}); load it again")))?;
+                self.check_loaded(slot, name, kind)
+            }
+            SlotKind::Mesh | SlotKind::Meshes | SlotKind::Frame => {
+                let mut bytes = vec![0u8; source.len];
+                source.read_at(0, &mut bytes).map_err(|m| JsError::new(&format!("{name} could not be read ({m}); load it again")))?;
+                self.add_file(slot, name, bytes)
+            }
+        }
+    }
+
+    fn slot_kind(&self, slot: &str) -> Result<SlotKind, JsError> {
+        self.registry
             .kinds()
             .iter()
             .flat_map(|k| k.slots())
             .find(|s| s.name == slot)
             .map(|s| s.kind)
-            .ok_or_else(|| JsError::new(&format!("no job kind has an input slot '{slot}'")))?;
-        let size = bytes.len();
-        self.files.insert(name.to_string(), bytes);
+            .ok_or_else(|| JsError::new(&format!("no job kind has an input slot '{slot}'")))
+    }
+
+    /// Reads a just-loaded file with its slot kind's reader; forgets it if it is refused.
+    fn check_loaded(&mut self, slot: &str, name: &str, kind: SlotKind) -> Result<JsValue, JsError> {
+        let size = self.files.source(name).map_or(0, |s| s.len());
         let (summary, report) = match kind {
             SlotKind::Mesh | SlotKind::Meshes => {
                 let design = Design::default();
@@ -197,9 +263,16 @@ impl Session {
                 }
             }
             SlotKind::Gcode => {
-                let a = analyze::analyze(name, self.files.get(name).unwrap_or_default(), &analyze::Options::default());
-                match a {
-                    Ok(a) => (format!("{} layers, {:.0} mm extruded", a.report.layers, a.report.extruded_mm), serde_json::to_value(&a.report).unwrap_or_default()),
+                // Every line read as G-code (in pieces when the file stays outside), the part's box.
+                let read = match self.files.source(name) {
+                    Some(source) => gcode_edit::printed_bounds(name, &source),
+                    None => Err(gcode_edit::Error::Read { file: name.into(), message: "not loaded".into() }),
+                };
+                match read {
+                    Ok(b) => {
+                        let d = b.max - b.min;
+                        (format!("{:.1} MB of G-code, printing {:.1} × {:.1} × {:.1} mm", size as f64 / 1e6, d.x, d.y, d.z), serde_json::Value::Null)
+                    }
                     Err(e) => {
                         self.files.remove(name);
                         return Err(js_err(e));

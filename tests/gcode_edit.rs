@@ -33,7 +33,7 @@ fn linear(p: DVec3) -> Option<f64> {
 }
 
 fn run(name: &str, text: &[u8], field: &dyn Fn(DVec3) -> Option<f64>, o: &Options) -> Edited {
-    edit(name, text, field, o, &mut |_| {}).unwrap_or_else(|e| panic!("{name}: {e}"))
+    edit(name, &text, field, o, &mut |_| {}).unwrap_or_else(|e| panic!("{name}: {e}"))
 }
 
 fn lines(text: &[u8]) -> Vec<&[u8]> {
@@ -327,7 +327,7 @@ fn refusals_are_typed() {
     let g = generate(&spec(Slicer::PrusaSlicer, true));
     let field = |_: DVec3| Some(0.5);
     let o = Options::default();
-    let err = |text: &[u8], o: &Options| edit("bad.gcode", text, &field, o, &mut |_| {}).err().expect("refused");
+    let err = |text: &[u8], o: &Options| edit("bad.gcode", &text, &field, o, &mut |_| {}).err().expect("refused");
     let mut bin = g.text.clone();
     let at = bin.iter().enumerate().filter(|(_, &b)| b == b'\n').nth(4).unwrap().0 + 1;
     bin.insert(at + 2, 0);
@@ -351,7 +351,7 @@ fn refusals_are_typed() {
     assert_eq!(e.stage, "edit");
     let e = estimate(50 << 20, &o);
     assert!(e.check().is_ok() && e.bytes >= (50 << 20) as f64);
-    assert!(matches!(printed_bounds("empty", b"G1 X5\n"), Err(Error::NoExtrusion { .. })));
+    assert!(matches!(printed_bounds("empty", &&b"G1 X5\n"[..]), Err(Error::NoExtrusion { .. })));
 }
 
 #[test]
@@ -438,4 +438,51 @@ fn edits_a_50_mb_file() {
     assert_eq!(out.report.infill_moves, g.infill.len());
     assert!(out.text.len() as f64 <= g.text.len() as f64 * 1.02);
     assert!(calls >= 10);
+
+    // The same file read in 4 MiB pieces (as the page reads a dropped file it keeps outside
+    // wasm memory): the same bytes out, the same report, the same box.
+    let far = Far(&g.text);
+    let pieces = edit("big.gcode", &far, &linear, &Options::default(), &mut |_| {}).unwrap();
+    assert!(far.reads.get() >= 12, "read in pieces: {}", far.reads.get());
+    assert!(pieces.text == out.text, "the edit read in pieces differs");
+    assert_eq!(pieces.report, out.report);
+    assert_eq!(printed_bounds("big.gcode", &far).unwrap(), printed_bounds("big.gcode", &g.text).unwrap());
 }
+
+/// A file not in memory: read in ranges, counting the reads; `gone_after` reads fail after
+/// that many (a file deleted after it was dropped).
+struct Far<'a> {
+    bytes: &'a [u8],
+    reads: std::cell::Cell<usize>,
+    gone_after: usize,
+}
+
+#[allow(non_snake_case)]
+fn Far(bytes: &[u8]) -> Far<'_> {
+    Far { bytes, reads: Default::default(), gone_after: usize::MAX }
+}
+
+impl weft::source::ByteSource for Far<'_> {
+    fn len(&self) -> usize {
+        self.bytes.len()
+    }
+    fn read_at(&self, offset: usize, buf: &mut [u8]) -> Result<(), String> {
+        self.reads.set(self.reads.get() + 1);
+        if self.reads.get() > self.gone_after {
+            return Err("NotFoundError: the file was removed".into());
+        }
+        buf.copy_from_slice(&self.bytes[offset..offset + buf.len()]);
+        Ok(())
+    }
+}
+
+#[test]
+fn a_file_that_cannot_be_read_any_more_is_named() {
+    let g = generate(&spec(Slicer::PrusaSlicer, false));
+    let gone = Far { gone_after: 0, ..Far(&g.text) };
+    match edit("moved.gcode", &gone, &linear, &Options::default(), &mut |_| {}) {
+        Err(e @ Error::Read { .. }) => assert!(e.to_string().contains("moved.gcode") && e.to_string().contains("load it again"), "{e}"),
+        other => panic!("{:?}", other.map(|o| o.report)),
+    }
+}
+

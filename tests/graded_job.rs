@@ -271,6 +271,64 @@ fn edit_route_rewrites_only_the_infill_of_another_slicers_gcode() {
     assert_ne!(out.gcode.as_str(), foreign.as_str(), "nothing was edited");
 }
 
+/// A loaded file kept outside the core (the page's dropped `File`), read in ranges; reads fail
+/// once `gone` is set (the file was deleted after it was dropped).
+struct Far {
+    bytes: Vec<u8>,
+    reads: std::sync::atomic::AtomicUsize,
+    gone: std::sync::atomic::AtomicBool,
+}
+
+impl weft::source::ByteSource for Far {
+    fn len(&self) -> usize {
+        self.bytes.len()
+    }
+    fn read_at(&self, offset: usize, buf: &mut [u8]) -> Result<(), String> {
+        use std::sync::atomic::Ordering::Relaxed;
+        if self.gone.load(Relaxed) {
+            return Err("NotFoundError".into());
+        }
+        self.reads.fetch_add(1, Relaxed);
+        buf.copy_from_slice(&self.bytes[offset..offset + buf.len()]);
+        Ok(())
+    }
+}
+
+#[test]
+fn files_kept_outside_give_the_same_gcode_and_a_gone_one_is_named() {
+    use std::sync::atomic::Ordering::Relaxed;
+    // A G-code over one read piece (4 MiB), so the edit reads it in several.
+    let foreign = weft::testgen::foreign::sized(weft::testgen::foreign::Slicer::PrusaSlicer, false, 9 << 20).text;
+    let input = Input::File { name: "part.gcode".into(), embedded: None };
+    let design = example().with_slot_input(&weft::jobs::Registry::builtin(), "gcode", input).unwrap();
+    let names: Vec<String> = series().into_iter().map(|(n, _)| n).collect();
+    let design = design.with_slot_input(&weft::jobs::Registry::builtin(), "volume", Input::Files(names)).unwrap();
+
+    let mut inside = Files::new();
+    let mut outside = Files::new();
+    let mut far = Vec::new();
+    for (name, bytes) in series().into_iter().chain([("part.gcode".to_string(), foreign.clone())]) {
+        inside.insert(name.clone(), bytes.clone());
+        let f = std::sync::Arc::new(Far { bytes, reads: Default::default(), gone: Default::default() });
+        outside.insert_source(name, f.clone()).unwrap();
+        far.push(f);
+    }
+    assert!(outside.get("part.gcode").is_none(), "the G-code is not in memory");
+    let a = run(&design, &inside);
+    let b = run(&design, &outside);
+    assert!(a.gcode == b.gcode, "a G-code read in pieces edits differently");
+    assert!(far.last().unwrap().reads.load(Relaxed) >= 2 * 3, "hashed and edited in pieces");
+    assert_eq!(a.report.stage_data("edit"), b.report.stage_data("edit"));
+
+    // Deleted after loading: the run names the file and says what to do.
+    far.last().unwrap().gone.store(true, Relaxed);
+    let e = pipeline::run(&design, &outside, &RunOptions::default(), &mut |_, _| {}).err().expect("an unreadable file is refused").to_string();
+    assert!(e.contains("part.gcode") && e.contains("load it again"), "{e}");
+    far[3].gone.store(true, Relaxed);
+    let e = pipeline::run(&design, &outside, &RunOptions::default(), &mut |_, _| {}).err().expect("an unreadable slice is refused").to_string();
+    assert!(e.contains(&series()[3].0) && e.contains("load it again"), "{e}");
+}
+
 #[test]
 fn a_broken_series_is_refused_by_name_and_the_design_keeps_its_inputs() {
     let mut files = Files::new();

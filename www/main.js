@@ -42,8 +42,9 @@ const state = {
   undo: [],
   redo: [],
   /**
-   * Loaded files: name → {slot, name, bytes: ArrayBuffer, info}. The page's one copy (kept
-   * for worker restarts and share links); the worker gets a transferred copy.
+   * Loaded files: name → {slot, name, blob: Blob, info}. The dropped File itself (its bytes
+   * stay in the browser's blob store, on disk for a dropped file): the worker gets the same
+   * Blob (no copy) and reads volumes and G-code from it in pieces; share links read it.
    */
   files: new Map(),
   /**
@@ -859,7 +860,7 @@ function renderSlots() {
       name.textContent = f.name;
       const summary = document.createElement("span");
       summary.className = "file-summary";
-      summary.textContent = f.info?.summary ?? formatBytes(f.bytes.byteLength);
+      summary.textContent = f.info?.summary ?? formatBytes(f.blob.size);
       const remove = document.createElement("button");
       remove.type = "button";
       remove.className = "remove";
@@ -1013,10 +1014,9 @@ async function loadIntoSlot(slot, fileList) {
   for (const file of files) {
     const token = jobs.begin(`reading ${file.name}`);
     try {
-      const bytes = await file.arrayBuffer();
-      // Transfer a copy; keep ours for worker restarts and share links.
-      const res = await workers.request({ type: MSG.LOAD, slot: slot.name, name: file.name, bytes: bytes.slice(0) });
-      state.files.set(file.name, { slot: slot.name, name: file.name, bytes, info: res.info ?? {} });
+      // The File goes to the worker as a Blob handle: its bytes are not copied here.
+      const res = await workers.request({ type: MSG.LOAD, slot: slot.name, name: file.name, blob: file });
+      state.files.set(file.name, { slot: slot.name, name: file.name, blob: file, info: res.info ?? {} });
       filesChanged();
       loaded.push(file.name);
     } catch (err) {
@@ -1446,9 +1446,9 @@ const workers = {
     w.onmessageerror = () => {
       if (w === this.worker) this.crashed("a message could not be read");
     };
-    // Give the new worker every file the page holds, in its slot (copies: the page keeps its own).
+    // Give the new worker every file the page holds, in its slot (Blob handles, not copies).
     for (const f of state.files.values()) {
-      this.request({ type: MSG.LOAD, slot: f.slot, name: f.name, bytes: f.bytes.slice(0) }).catch(() => {});
+      this.request({ type: MSG.LOAD, slot: f.slot, name: f.name, blob: f.blob }).catch(() => {});
     }
   },
 
@@ -1938,7 +1938,13 @@ function download(data, name, type) {
 
 async function share() {
   // Every loaded file with its slot; Rust keeps the ones the design names, small ones inside.
-  const files = [...state.files.values()].map((f) => ({ slot: f.slot, name: f.name, bytes: new Uint8Array(f.bytes) }));
+  let files;
+  try {
+    files = await Promise.all([...state.files.values()].map(async (f) => ({ slot: f.slot, name: f.name, bytes: new Uint8Array(await f.blob.arrayBuffer()) })));
+  } catch (err) {
+    showError(`Could not read a loaded file for the link (${messageOf(err)}); load it again.`);
+    return;
+  }
   let res;
   try {
     res = plain(weft.encodeShare(state.json, files));

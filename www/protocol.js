@@ -70,7 +70,9 @@ export const PREVIEW_BUFFERS = Object.freeze({
  * @property {number} id
  * @property {string} slot     input slot name of the job kind (schema.job_kinds[].slots[].name)
  * @property {string} name     file name, e.g. "part.stl"
- * @property {ArrayBuffer} bytes  transferred (the page keeps its own copy for restarts and links)
+ * @property {Blob} [blob]    the dropped file (a handle, not a copy: volumes and G-code are read
+ *                            from it in pieces, meshes read in whole); or
+ * @property {ArrayBuffer} [bytes]  transferred bytes (benchmarks, tests)
  */
 /**
  * @typedef {Object} UnloadRequest

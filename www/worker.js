@@ -40,7 +40,10 @@ function handle(msg) {
   try {
     switch (msg.type) {
       case MSG.LOAD: {
-        const info = plain(session.addFile(msg.slot, msg.name, new Uint8Array(msg.bytes)));
+        // A Blob (a dropped file) stays where it is and is read in pieces; bytes are copied in.
+        const info = plain(msg.blob
+          ? session.addBlob(msg.slot, msg.name, msg.blob)
+          : session.addFile(msg.slot, msg.name, new Uint8Array(msg.bytes)));
         self.postMessage({ type: MSG.LOADED, id: msg.id, slot: msg.slot, name: msg.name, info });
         break;
       }

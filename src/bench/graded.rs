@@ -108,8 +108,8 @@ mod native {
     /// Passes per case; the fastest counts (the machine may be shared).
     const REPEATS: usize = 3;
 
-    /// The series (and the G-code) copied into `Files`, as `Session.addFile` copies each
-    /// file into wasm memory; with the G-code, its analysis too (what `addFile` reports).
+    /// The series (and the G-code) in `Files`, as `Session.addBlob` keeps each dropped file;
+    /// with the G-code, its check on loading too (every line read, the printed part's box).
     fn load(w: &Workload, with_gcode: bool) -> Result<Files, String> {
         let mut files = Files::new();
         for (name, bytes) in &w.series {
@@ -117,7 +117,7 @@ mod native {
         }
         if with_gcode {
             files.insert(GCODE_NAME.into(), w.gcode.clone());
-            crate::analyze::analyze(GCODE_NAME, files.get(GCODE_NAME).unwrap_or_default(), &Default::default()).map_err(|e| e.to_string())?;
+            crate::gcode_edit::printed_bounds(GCODE_NAME, &w.gcode.as_slice()).map_err(|e| e.to_string())?;
         }
         Ok(files)
     }

@@ -52,6 +52,7 @@ pub mod dialect;
 pub mod rewrite;
 
 use crate::budget::{Estimate, OverBudget, MAX_STAGE_BYTES};
+use crate::source::{for_each_line_chunk, ByteSource, ChunkError};
 use crate::geom::{Aabb, DVec3};
 use crate::motion::lex::{self, lex_line, Command, Line, MAX_WORD_MAGNITUDE};
 use crate::motion::{Motion, Step, MOTION_EPS};
@@ -206,6 +207,14 @@ pub struct Edited {
 /// Why a file could not be edited.
 #[derive(Debug, thiserror::Error, Clone, PartialEq)]
 pub enum Error {
+    /// The file could not be read (moved or deleted since it was loaded).
+    #[error("{file} could not be read ({message}); load it again")]
+    Read {
+        /// File name.
+        file: String,
+        /// Why, as the browser or the system said.
+        message: String,
+    },
     /// Binary data, not G-code.
     #[error("{file}: line {line} has a byte that is not text; this is not a G-code file (export G-code as plain text, not binary G-code)")]
     NotText {
@@ -334,15 +343,17 @@ pub fn estimate(gcode_len: usize, options: &Options) -> Estimate {
         .budgets(fix)
 }
 
-/// Calls `f` for every line of `gcode` with its 1-based number, its byte offset, the whole
-/// line (with its newline) and its lexed content; maps the lexer's refusals to [`Error`].
-fn for_each_line<'a>(name: &str, gcode: &'a [u8], mut f: impl FnMut(usize, usize, &'a [u8], &'a [u8], &Line<'a>) -> Result<(), Error>) -> Result<usize, Error> {
+/// Calls `f` for every line of `gcode` (a piece of the file that ends at a line end, after
+/// `lines_before` lines) with its 1-based number in the file, its byte offset in the piece, the
+/// whole line (with its newline) and its lexed content; maps the lexer's refusals to [`Error`].
+/// Returns the number of the piece's last line.
+fn for_each_line<'a>(name: &str, gcode: &'a [u8], lines_before: usize, mut f: impl FnMut(usize, usize, &'a [u8], &'a [u8], &Line<'a>) -> Result<(), Error>) -> Result<usize, Error> {
     if let Some(offset) = lex::first_binary_byte(gcode) {
-        let line = 1 + gcode[..offset].iter().filter(|&&b| b == b'\n').count();
+        let line = lines_before + 1 + gcode[..offset].iter().filter(|&&b| b == b'\n').count();
         return Err(Error::NotText { file: name.to_string(), line });
     }
     let mut start = 0;
-    let mut line_no = 0;
+    let mut line_no = lines_before;
     while start < gcode.len() {
         let end = memchr::memchr(b'\n', &gcode[start..]).map_or(gcode.len(), |p| start + p + 1);
         line_no += 1;
@@ -375,15 +386,19 @@ fn grow(b: &mut Option<(DVec3, DVec3)>, m: &Motion, mv: &crate::motion::Move) {
 /// printed part, for aligning the density field to it automatically. One pass, nothing
 /// allocated per line. Errors: [`Error::NotText`], [`Error::Malformed`],
 /// [`Error::LineTooLong`], [`Error::NoExtrusion`].
-pub fn printed_bounds(name: &str, gcode: &[u8]) -> Result<Aabb, Error> {
+pub fn printed_bounds(name: &str, gcode: &dyn ByteSource) -> Result<Aabb, Error> {
     let mut m = Motion::default();
     let mut b = None;
-    for_each_line(name, gcode, |_, _, _, _, l| {
-        if let Step::Move(mv) = m.line(l.cmd, &l.words, false) {
-            if mv.de > 0.0 && mv.moves() {
-                grow(&mut b, &m, &mv);
+    let mut lines = 0;
+    pieces(name, gcode, &mut |piece| {
+        lines = for_each_line(name, piece, lines, |_, _, _, _, l| {
+            if let Step::Move(mv) = m.line(l.cmd, &l.words, false) {
+                if mv.de > 0.0 && mv.moves() {
+                    grow(&mut b, &m, &mv);
+                }
             }
-        }
+            Ok(())
+        })?;
         Ok(())
     })?;
     let (min, max) = b.ok_or_else(|| Error::NoExtrusion { file: name.to_string() })?;
@@ -432,13 +447,13 @@ impl Modes {
 }
 
 /// The input's E state in the file's own units.
-struct EState<'a> {
+struct EState {
     modes: Modes,
     /// E position as the input's lines set it, file units.
     e: f64,
     /// The line that last set `e` absolutely (an absolute E word or a G92 E), whose number
-    /// a reset copies verbatim.
-    e_line: Option<&'a [u8]>,
+    /// a reset copies verbatim (a copy: the piece it was read from may be gone).
+    e_line: Option<Vec<u8>>,
 }
 
 /// Running sums of one layer.
@@ -461,18 +476,17 @@ struct LayerAcc {
 /// or out-of-range word → [`Error::Malformed`]; a line over [`MAX_LINE_BYTES`] →
 /// [`Error::LineTooLong`]; an infill line with a checksum → [`Error::Checksum`]; no infill
 /// move → [`Error::NoInfill`] with the feature names the file has.
-pub fn edit(name: &str, gcode: &[u8], density: &dyn Fn(DVec3) -> Option<f64>, options: &Options, progress: &mut dyn FnMut(f32)) -> Result<Edited, Error> {
+pub fn edit(name: &str, gcode: &dyn ByteSource, density: &dyn Fn(DVec3) -> Option<f64>, options: &Options, progress: &mut dyn FnMut(f32)) -> Result<Edited, Error> {
     validate(options)?;
-    let est = estimate(gcode.len(), options);
+    let total = gcode.len();
+    let est = estimate(total, options);
     est.check().map_err(Error::TooBig)?;
     let o = options;
     let types = InfillTypes::new(&o.infill_types);
     let area_f = std::f64::consts::PI * o.filament_mm * o.filament_mm / 4.0;
     let translation = DVec3::from(o.translation_mm);
 
-    let mut out: Vec<u8> = Vec::with_capacity(gcode.len() + gcode.len() / 16 + 4096);
-    // Input bytes before this offset are in `out`; the rest is copied when a line changes.
-    let mut copied = 0usize;
+    let mut out: Vec<u8> = Vec::with_capacity(total + total / 16 + 4096);
     let max_out = MAX_STAGE_BYTES as usize;
     let mut scratch = Vec::with_capacity(32);
     let mut num = Vec::with_capacity(32);
@@ -483,7 +497,7 @@ pub fn edit(name: &str, gcode: &[u8], density: &dyn Fn(DVec3) -> Option<f64>, op
     let mut dialect = Dialect::Unknown;
     // Feature state: whether the current `;TYPE:` is infill (None before any marker).
     let mut type_infill: Option<bool> = None;
-    let mut types_seen: Vec<&[u8]> = Vec::new();
+    let mut types_seen: Vec<Vec<u8>> = Vec::new();
     // Layer height: stated by a comment, or the last Z step between extruding moves.
     let mut lh_stated: Option<f64> = None;
     let mut lh_step: Option<f64> = None;
@@ -499,212 +513,222 @@ pub fn edit(name: &str, gcode: &[u8], density: &dyn Fn(DVec3) -> Option<f64>, op
     let mut next_progress = 0usize;
     const PROGRESS_STEP: usize = 4 << 20;
 
-    let lines = for_each_line(name, gcode, |line_no, offset, full, content, l| {
-        if offset >= next_progress {
-            progress(offset as f32 / gcode.len().max(1) as f32);
-            next_progress = offset + PROGRESS_STEP;
-        }
-        if let Some(c) = l.comment {
-            if line_no <= dialect::HEADER_LINES && dialect == Dialect::Unknown {
-                dialect = dialect::detect(c).unwrap_or(Dialect::Unknown);
+    let mut lines = 0;
+    // Bytes of the pieces before the current one.
+    let mut base = 0usize;
+    pieces(name, gcode, &mut |gcode| {
+        // Bytes of this piece before this offset are in `out`; the rest is copied when a line changes.
+        let mut copied = 0usize;
+        lines = for_each_line(name, gcode, lines, |line_no, offset, full, content, l| {
+            if base + offset >= next_progress {
+                progress((base + offset) as f32 / total.max(1) as f32);
+                next_progress = base + offset + PROGRESS_STEP;
             }
-            if let Some(t) = dialect::type_marker(c) {
-                type_infill = Some(types.matches(t));
-                note_type(&mut types_seen, t);
-            } else if let Some(h) = dialect::layer_height(c) {
-                lh_stated = Some(h);
-            }
-        }
-        let rel = es.modes.relative();
-        let e_before = es.e;
-        let e_word = l.words.get(b'E');
-        let step = m.line(l.cmd, &l.words, false);
-        let eol = &full[content.len()..];
-        let mut edited: Option<f64> = None;
-        if let (Step::Move(mv), Some(v)) = (&step, e_word) {
-            if rel {
-                n_rel += 1;
-            } else {
-                n_abs += 1;
-            }
-            let extruding = mv.de > 0.0 && mv.moves();
-            if extruding {
-                grow(&mut bounds, &m, mv);
-                let z = mv.to[2];
-                match z_extruding {
-                    Some(z0) if z > z0 + 1e-6 => lh_step = Some(z - z0),
-                    None if z > 0.0 => lh_step = Some(z),
-                    _ => {}
+            if let Some(c) = l.comment {
+                if line_no <= dialect::HEADER_LINES && dialect == Dialect::Unknown {
+                    dialect = dialect::detect(c).unwrap_or(Dialect::Unknown);
                 }
-                z_extruding = Some(z);
-            }
-            let (dx, dy) = (mv.to[0] - mv.from[0], mv.to[1] - mv.from[1]);
-            let xy = dx * dx + dy * dy > MOTION_EPS * MOTION_EPS;
-            let infill = mv.de > 0.0 && xy && match type_infill {
-                Some(b) => b,
-                None => l.comment.is_some_and(|c| {
-                    let d = dialect::line_description(c);
-                    note_type(&mut types_seen, d);
-                    types.matches(d)
-                }),
-            };
-            // Where the E word is, and the file's number style (learnt from the first moves
-            // and every infill move; other lines need no search).
-            let found = if infill || n_rel + n_abs <= STYLE_MOVES { find_word(content, b'E') } else { Found { word: None, checksum: false } };
-            let word = found.word;
-            if let Some(w) = &word {
-                style.learn(w);
-            }
-            if infill {
-                r.infill_moves += 1;
-                let vol = mv.de * area_f;
-                r.infill_before_mm3 += vol;
-                let mid = (DVec3::from(mv.from) + DVec3::from(mv.to)) * 0.5 + translation;
-                let target = if mv.use_pts { None } else { density(mid).filter(|t| t.is_finite()) };
-                match (mv.use_pts, target, word) {
-                    (true, _, _) => {
-                        r.arcs_unchanged += 1;
-                        r.infill_after_mm3 += vol;
-                    }
-                    (false, None, _) | (false, _, None) => {
-                        r.outside_field += 1;
-                        r.infill_after_mm3 += vol;
-                    }
-                    (false, Some(t), Some(w)) => {
-                        if found.checksum {
-                            return Err(Error::Checksum { file: name.to_string(), line: line_no });
-                        }
-                        let rho = if t < o.rho_min {
-                            r.clamped_low += 1;
-                            o.rho_min
-                        } else if t > o.rho_max {
-                            r.clamped_high += 1;
-                            o.rho_max
-                        } else {
-                            t
-                        };
-                        let d_old = if rel { v } else { v - e_before };
-                        let mut d_new = d_old * (rho / o.rho_s);
-                        // Limits, in mm: bead area and its flow at this feed.
-                        let lh = lh_stated.or(lh_step).unwrap_or(DEFAULT_LAYER_HEIGHT_MM);
-                        let area = d_new * es.modes.unit * area_f / mv.len;
-                        let over_flow = area * mv.v > o.q_max_mm3_s * (1.0 + 1e-9);
-                        let over_width = width_of_area(area, lh) > o.width_max_mm * (1.0 + 1e-9);
-                        r.over_flow += usize::from(over_flow);
-                        r.over_width += usize::from(over_width);
-                        if o.limit == Limit::Clamp && (over_flow || over_width) {
-                            let area_max = max_bead_area(o.q_max_mm3_s, mv.v, o.width_max_mm, lh);
-                            d_new = d_new.min(area_max * mv.len / area_f / es.modes.unit);
-                        }
-                        let e_prev_out = if drift && !rel { e_out } else { e_before };
-                        let value = if rel { d_new } else { e_prev_out + d_new };
-                        num.clear();
-                        let printed = write_number(&mut num, &mut scratch, value, style);
-                        if !(printed.abs() <= MAX_WORD_MAGNITUDE) {
-                            return Err(Error::Malformed {
-                                file: name.to_string(),
-                                line: line_no,
-                                problem: format!("the edited E would be {}, beyond the {MAX_WORD_MAGNITUDE:.0} a G-code number may have (check rho_s)", String::from_utf8_lossy(&num)),
-                            });
-                        }
-                        let d_printed = if rel { printed } else { printed - e_prev_out };
-                        if rel {
-                            drift |= printed != v;
-                        } else {
-                            drift = printed != v;
-                            e_out = printed;
-                        }
-                        r.edited_moves += 1;
-                        r.infill_after_mm3 += d_printed * es.modes.unit * area_f;
-                        // Layer statistics on the printed numbers.
-                        let achieved = if d_old > 0.0 { o.rho_s * d_printed / d_old } else { 0.0 };
-                        let z = mv.to[2];
-                        if layers.last().is_none_or(|a| (a.z - z).abs() > 1e-6) {
-                            layers.push(LayerAcc { z, moves: 0, len: 0.0, target: 0.0, achieved: 0.0, error: 0.0 });
-                        }
-                        if let Some(a) = layers.last_mut() {
-                            // The target along the whole move, as weft's own grading measures it.
-                            let from = DVec3::from(mv.from) + translation;
-                            let along = mean_along(from, DVec3::from(mv.to) + translation, o.target_step_mm, density).unwrap_or(t).clamp(o.rho_min, o.rho_max);
-                            a.moves += 1;
-                            a.len += mv.len;
-                            a.target += mv.len * along;
-                            a.achieved += mv.len * achieved;
-                            a.error += mv.len * (achieved - along).abs();
-                        }
-                        if printed != v {
-                            edited = Some(d_printed * es.modes.unit);
-                            // Unchanged lines before this one go out as one slice.
-                            out.extend_from_slice(&gcode[copied..offset]);
-                            out.extend_from_slice(&content[..w.start]);
-                            out.extend_from_slice(&num);
-                            out.extend_from_slice(&content[w.end..]);
-                            out.extend_from_slice(eol);
-                            copied = offset + full.len();
-                        } else {
-                            edited = Some(mv.de);
-                        }
-                    }
+                if let Some(t) = dialect::type_marker(c) {
+                    type_infill = Some(types.matches(t));
+                    note_type(&mut types_seen, t);
+                } else if let Some(h) = dialect::layer_height(c) {
+                    lh_stated = Some(h);
                 }
             }
-        }
-        // Net E before and after (high-water marks, as the analyzer counts filament).
-        if let Step::Move(mv) = &step {
-            net_before += mv.de;
-            hwm_before = hwm_before.max(net_before);
-            net_after += edited.unwrap_or(mv.de);
-            hwm_after = hwm_after.max(net_after);
-        }
-        if edited.is_none() {
-            // A command line after edits: bring the printer's E back to the input's before a
-            // line that reads it (an absolute-E line, or a switch to absolute E).
-            if drift && l.cmd != Command::None {
-                let mut after = es.modes;
-                after.command(l.cmd);
-                if l.cmd == Command::G(92, 0) && l.words.get(b'E').is_some() {
-                    drift = false;
-                } else if !rel || !after.relative() {
-                    out.extend_from_slice(&gcode[copied..offset]);
-                    copied = offset;
-                    out.extend_from_slice(b"G92 E");
-                    match es.e_line.and_then(|line| find_word(line, b'E').word.map(|w| &line[w.start..w.end])) {
-                        Some(t) => out.extend_from_slice(t),
-                        None => {
-                            write_number(&mut out, &mut scratch, es.e, style);
+            let rel = es.modes.relative();
+            let e_before = es.e;
+            let e_word = l.words.get(b'E');
+            let step = m.line(l.cmd, &l.words, false);
+            let eol = &full[content.len()..];
+            let mut edited: Option<f64> = None;
+            if let (Step::Move(mv), Some(v)) = (&step, e_word) {
+                if rel {
+                    n_rel += 1;
+                } else {
+                    n_abs += 1;
+                }
+                let extruding = mv.de > 0.0 && mv.moves();
+                if extruding {
+                    grow(&mut bounds, &m, mv);
+                    let z = mv.to[2];
+                    match z_extruding {
+                        Some(z0) if z > z0 + 1e-6 => lh_step = Some(z - z0),
+                        None if z > 0.0 => lh_step = Some(z),
+                        _ => {}
+                    }
+                    z_extruding = Some(z);
+                }
+                let (dx, dy) = (mv.to[0] - mv.from[0], mv.to[1] - mv.from[1]);
+                let xy = dx * dx + dy * dy > MOTION_EPS * MOTION_EPS;
+                let infill = mv.de > 0.0 && xy && match type_infill {
+                    Some(b) => b,
+                    None => l.comment.is_some_and(|c| {
+                        let d = dialect::line_description(c);
+                        note_type(&mut types_seen, d);
+                        types.matches(d)
+                    }),
+                };
+                // Where the E word is, and the file's number style (learnt from the first moves
+                // and every infill move; other lines need no search).
+                let found = if infill || n_rel + n_abs <= STYLE_MOVES { find_word(content, b'E') } else { Found { word: None, checksum: false } };
+                let word = found.word;
+                if let Some(w) = &word {
+                    style.learn(w);
+                }
+                if infill {
+                    r.infill_moves += 1;
+                    let vol = mv.de * area_f;
+                    r.infill_before_mm3 += vol;
+                    let mid = (DVec3::from(mv.from) + DVec3::from(mv.to)) * 0.5 + translation;
+                    let target = if mv.use_pts { None } else { density(mid).filter(|t| t.is_finite()) };
+                    match (mv.use_pts, target, word) {
+                        (true, _, _) => {
+                            r.arcs_unchanged += 1;
+                            r.infill_after_mm3 += vol;
+                        }
+                        (false, None, _) | (false, _, None) => {
+                            r.outside_field += 1;
+                            r.infill_after_mm3 += vol;
+                        }
+                        (false, Some(t), Some(w)) => {
+                            if found.checksum {
+                                return Err(Error::Checksum { file: name.to_string(), line: line_no });
+                            }
+                            let rho = if t < o.rho_min {
+                                r.clamped_low += 1;
+                                o.rho_min
+                            } else if t > o.rho_max {
+                                r.clamped_high += 1;
+                                o.rho_max
+                            } else {
+                                t
+                            };
+                            let d_old = if rel { v } else { v - e_before };
+                            let mut d_new = d_old * (rho / o.rho_s);
+                            // Limits, in mm: bead area and its flow at this feed.
+                            let lh = lh_stated.or(lh_step).unwrap_or(DEFAULT_LAYER_HEIGHT_MM);
+                            let area = d_new * es.modes.unit * area_f / mv.len;
+                            let over_flow = area * mv.v > o.q_max_mm3_s * (1.0 + 1e-9);
+                            let over_width = width_of_area(area, lh) > o.width_max_mm * (1.0 + 1e-9);
+                            r.over_flow += usize::from(over_flow);
+                            r.over_width += usize::from(over_width);
+                            if o.limit == Limit::Clamp && (over_flow || over_width) {
+                                let area_max = max_bead_area(o.q_max_mm3_s, mv.v, o.width_max_mm, lh);
+                                d_new = d_new.min(area_max * mv.len / area_f / es.modes.unit);
+                            }
+                            let e_prev_out = if drift && !rel { e_out } else { e_before };
+                            let value = if rel { d_new } else { e_prev_out + d_new };
+                            num.clear();
+                            let printed = write_number(&mut num, &mut scratch, value, style);
+                            if !(printed.abs() <= MAX_WORD_MAGNITUDE) {
+                                return Err(Error::Malformed {
+                                    file: name.to_string(),
+                                    line: line_no,
+                                    problem: format!("the edited E would be {}, beyond the {MAX_WORD_MAGNITUDE:.0} a G-code number may have (check rho_s)", String::from_utf8_lossy(&num)),
+                                });
+                            }
+                            let d_printed = if rel { printed } else { printed - e_prev_out };
+                            if rel {
+                                drift |= printed != v;
+                            } else {
+                                drift = printed != v;
+                                e_out = printed;
+                            }
+                            r.edited_moves += 1;
+                            r.infill_after_mm3 += d_printed * es.modes.unit * area_f;
+                            // Layer statistics on the printed numbers.
+                            let achieved = if d_old > 0.0 { o.rho_s * d_printed / d_old } else { 0.0 };
+                            let z = mv.to[2];
+                            if layers.last().is_none_or(|a| (a.z - z).abs() > 1e-6) {
+                                layers.push(LayerAcc { z, moves: 0, len: 0.0, target: 0.0, achieved: 0.0, error: 0.0 });
+                            }
+                            if let Some(a) = layers.last_mut() {
+                                // The target along the whole move, as weft's own grading measures it.
+                                let from = DVec3::from(mv.from) + translation;
+                                let along = mean_along(from, DVec3::from(mv.to) + translation, o.target_step_mm, density).unwrap_or(t).clamp(o.rho_min, o.rho_max);
+                                a.moves += 1;
+                                a.len += mv.len;
+                                a.target += mv.len * along;
+                                a.achieved += mv.len * achieved;
+                                a.error += mv.len * (achieved - along).abs();
+                            }
+                            if printed != v {
+                                edited = Some(d_printed * es.modes.unit);
+                                // Unchanged lines before this one go out as one slice.
+                                out.extend_from_slice(&gcode[copied..offset]);
+                                out.extend_from_slice(&content[..w.start]);
+                                out.extend_from_slice(&num);
+                                out.extend_from_slice(&content[w.end..]);
+                                out.extend_from_slice(eol);
+                                copied = offset + full.len();
+                            } else {
+                                edited = Some(mv.de);
+                            }
                         }
                     }
-                    out.extend_from_slice(if eol.is_empty() { b"\n" } else { eol });
-                    r.resets_inserted += 1;
-                    drift = false;
                 }
             }
-        }
-        // The input's E state after this line.
-        es.modes.command(l.cmd);
-        if l.cmd == Command::G(92, 0) {
-            if let Some(v) = l.words.get(b'E') {
-                es.e = v;
-                es.e_line = Some(content);
+            // Net E before and after (high-water marks, as the analyzer counts filament).
+            if let Step::Move(mv) = &step {
+                net_before += mv.de;
+                hwm_before = hwm_before.max(net_before);
+                net_after += edited.unwrap_or(mv.de);
+                hwm_after = hwm_after.max(net_after);
             }
-        } else if let (Step::Move(_), Some(v)) = (&step, e_word) {
-            if rel {
-                es.e += v;
-                es.e_line = None;
-            } else {
-                es.e = v;
-                es.e_line = Some(content);
+            if edited.is_none() {
+                // A command line after edits: bring the printer's E back to the input's before a
+                // line that reads it (an absolute-E line, or a switch to absolute E).
+                if drift && l.cmd != Command::None {
+                    let mut after = es.modes;
+                    after.command(l.cmd);
+                    if l.cmd == Command::G(92, 0) && l.words.get(b'E').is_some() {
+                        drift = false;
+                    } else if !rel || !after.relative() {
+                        out.extend_from_slice(&gcode[copied..offset]);
+                        copied = offset;
+                        out.extend_from_slice(b"G92 E");
+                        match es.e_line.as_deref().and_then(|line| find_word(line, b'E').word.map(|w| &line[w.start..w.end])) {
+                            Some(t) => out.extend_from_slice(t),
+                            None => {
+                                write_number(&mut out, &mut scratch, es.e, style);
+                            }
+                        }
+                        out.extend_from_slice(if eol.is_empty() { b"\n" } else { eol });
+                        r.resets_inserted += 1;
+                        drift = false;
+                    }
+                }
             }
-        }
-        let written = out.len() + offset.saturating_sub(copied);
-        if written > max_out {
-            return Err(Error::TooBig(OverBudget {
-                what: "the edited G-code".into(),
-                value: written as f64,
-                limit: max_out as f64,
-                unit: "bytes",
-                fix: "edit a smaller G-code file".into(),
-            }));
-        }
+            // The input's E state after this line.
+            es.modes.command(l.cmd);
+            if l.cmd == Command::G(92, 0) {
+                if let Some(v) = l.words.get(b'E') {
+                    es.e = v;
+                    set_line(&mut es.e_line, content);
+                }
+            } else if let (Step::Move(_), Some(v)) = (&step, e_word) {
+                if rel {
+                    es.e += v;
+                    es.e_line = None;
+                } else {
+                    es.e = v;
+                    set_line(&mut es.e_line, content);
+                }
+            }
+            let written = out.len() + offset.saturating_sub(copied);
+            if written > max_out {
+                return Err(Error::TooBig(OverBudget {
+                    what: "the edited G-code".into(),
+                    value: written as f64,
+                    limit: max_out as f64,
+                    unit: "bytes",
+                    fix: "edit a smaller G-code file".into(),
+                }));
+            }
+            Ok(())
+        })?;
+        out.extend_from_slice(&gcode[copied..]);
+        base += gcode.len();
         Ok(())
     })?;
     if r.infill_moves == 0 {
@@ -739,14 +763,33 @@ pub fn edit(name: &str, gcode: &[u8], density: &dyn Fn(DVec3) -> Option<f64>, op
         r.bounds_min = lo.to_array();
         r.bounds_max = hi.to_array();
     }
-    out.extend_from_slice(&gcode[copied..]);
     progress(1.0);
     Ok(Edited { text: out, report: r })
 }
 
 /// Adds a feature name to the list of those seen (once, at most [`MAX_TYPES_SEEN`]).
-fn note_type<'a>(seen: &mut Vec<&'a [u8]>, name: &'a [u8]) {
-    if !name.is_empty() && seen.len() < MAX_TYPES_SEEN && !seen.iter().any(|s| *s == name) {
-        seen.push(name);
+fn note_type(seen: &mut Vec<Vec<u8>>, name: &[u8]) {
+    if !name.is_empty() && seen.len() < MAX_TYPES_SEEN && !seen.iter().any(|s| s == name) {
+        seen.push(name.to_vec());
     }
+}
+
+/// Keeps a copy of `line` in `slot`, reusing its allocation.
+fn set_line(slot: &mut Option<Vec<u8>>, line: &[u8]) {
+    let v = slot.get_or_insert_with(Vec::new);
+    v.clear();
+    v.extend_from_slice(line);
+}
+
+/// Longest piece read at once from a source not in memory: above [`MAX_LINE_BYTES`], so a
+/// line split across pieces is one already refused as too long.
+const PIECE_BYTES: usize = crate::source::CHUNK_BYTES;
+const _: () = assert!(PIECE_BYTES > MAX_LINE_BYTES);
+
+/// `f` over `gcode` in pieces ending at line ends (one piece when it is in memory).
+fn pieces(name: &str, gcode: &dyn ByteSource, f: &mut dyn FnMut(&[u8]) -> Result<(), Error>) -> Result<(), Error> {
+    for_each_line_chunk(gcode, PIECE_BYTES, f).map_err(|e| match e {
+        ChunkError::Read(message) => Error::Read { file: name.to_string(), message },
+        ChunkError::Stopped(e) => e,
+    })
 }

@@ -67,43 +67,25 @@ impl Calibration {
     /// Porosity at `value`: piecewise linear through the points, extrapolated beyond them
     /// with the end segments' slopes. One point gives its porosity everywhere; no points, a
     /// non-finite value or a segment of two equal values give NaN (see [`Calibration::problems`]).
+    /// For many values, make the [`Curve`] once.
     pub fn porosity(&self, value: f64) -> f64 {
-        let pts = &self.points;
-        if pts.len() == 1 {
-            return pts[0][1];
-        }
-        if pts.len() < 2 || !value.is_finite() {
-            return f64::NAN;
-        }
-        // Nearest point at or below the value, nearest above it (first of equals, so the
-        // result does not depend on the order the points are given in beyond ties).
-        let (mut below, mut above): (Option<[f64; 2]>, Option<[f64; 2]>) = (None, None);
-        for &p in pts {
-            if p[0] <= value {
-                if below.is_none_or(|b| p[0] > b[0]) {
-                    below = Some(p);
-                }
-            } else if above.is_none_or(|a| p[0] < a[0]) {
-                above = Some(p);
-            }
-        }
-        let (a, b) = match (below, above) {
-            (Some(a), Some(b)) => (a, b),
-            // Below every point: the two lowest; above every point: the two highest.
-            (None, Some(lowest)) => (lowest, extreme(pts, lowest, true)),
-            (Some(highest), None) => (extreme(pts, highest, false), highest),
-            (None, None) => return f64::NAN,
-        };
-        if a[0] == b[0] {
-            return f64::NAN;
-        }
-        a[1] + (b[1] - a[1]) * (value - a[0]) / (b[0] - a[0])
+        self.curve().porosity(value)
     }
 
     /// Relative density `1 − P(value)` clamped to `[rho_min, 1]` (`rho_min` above 1 gives 1; a
     /// NaN porosity gives `rho_min`, the safe printable minimum).
     pub fn density(&self, value: f64, rho_min: f64) -> f64 {
-        (1.0 - self.porosity(value)).max(rho_min).min(1.0)
+        self.curve().density(value, rho_min)
+    }
+
+    /// The map prepared for millions of calls (a volume's voxels, a G-code's moves): the points
+    /// sorted once.
+    pub fn curve(&self) -> Curve {
+        let mut pts = self.points.clone();
+        // By value (stable: of equal values the first given is kept, whatever the order).
+        pts.sort_by(|a, b| a[0].total_cmp(&b[0]));
+        pts.dedup_by(|later, first| later[0] == first[0]);
+        Curve { pts, single: (self.points.len() == 1).then(|| self.points[0][1]) }
     }
 
     /// `(slope, intercept)` of `P = slope · value + intercept` when there are exactly 2 usable
@@ -121,15 +103,35 @@ impl Calibration {
     }
 }
 
-/// The point next to `end` on its side: the second lowest (`low`) or second highest value.
-fn extreme(pts: &[[f64; 2]], end: [f64; 2], low: bool) -> [f64; 2] {
-    let mut best: Option<[f64; 2]> = None;
-    for &p in pts {
-        let beyond = if low { p[0] > end[0] } else { p[0] < end[0] };
-        if beyond && best.is_none_or(|b| if low { p[0] < b[0] } else { p[0] > b[0] }) {
-            best = Some(p);
+/// A [`Calibration`] ready for evaluation: its points sorted by value, one per value.
+#[derive(Clone, Debug)]
+pub struct Curve {
+    pts: Vec<[f64; 2]>,
+    /// The porosity of a one-point calibration (everywhere).
+    single: Option<f64>,
+}
+
+impl Curve {
+    /// See [`Calibration::porosity`].
+    #[inline]
+    pub fn porosity(&self, value: f64) -> f64 {
+        if let Some(p) = self.single {
+            return p;
         }
+        let pts = self.pts.as_slice();
+        if pts.len() < 2 || !value.is_finite() {
+            return f64::NAN;
+        }
+        // The segment around the value; beyond the ends, the end segment (two points, the
+        // usual case, have one).
+        let i = if pts.len() == 2 { 1 } else { pts.partition_point(|p| p[0] <= value).clamp(1, pts.len() - 1) };
+        let (a, b) = (pts[i - 1], pts[i]);
+        a[1] + (b[1] - a[1]) * (value - a[0]) / (b[0] - a[0])
     }
-    // All values equal: no second point; a zero-width segment gives NaN.
-    best.unwrap_or(end)
+
+    /// See [`Calibration::density`].
+    #[inline]
+    pub fn density(&self, value: f64, rho_min: f64) -> f64 {
+        (1.0 - self.porosity(value)).max(rho_min).min(1.0)
+    }
 }

@@ -27,7 +27,7 @@ pub mod cells;
 pub mod grade;
 pub mod model;
 
-pub use calibration::{Calibration, DEFAULT_POINTS};
+pub use calibration::{Calibration, Curve, DEFAULT_POINTS};
 pub use model::*;
 
 use crate::geom::DVec3;

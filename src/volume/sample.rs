@@ -28,7 +28,13 @@ impl Volume {
 
     /// Same as [`Volume::sample`] with `f` applied to the 8 corner values before interpolating
     /// (used to interpolate ρ = f(HU) as the paper does: the ρ field is interpolated, not HU).
+    /// For many points, a [`Sampler`] keeps the last cell's mapped corners.
     pub fn sample_with(&self, p: DVec3, f: impl Fn(f32) -> f64) -> Option<f64> {
+        Sampler::new(self, f).sample(p)
+    }
+
+    /// The cell of `p`: its first voxel's index and the weights along each axis.
+    fn locate(&self, p: DVec3) -> Option<(usize, [f64; 3])> {
         // A volume whose values do not match its dims is malformed: answer None, never panic.
         if self.is_empty() || self.values.len() < self.len() {
             return None;
@@ -45,28 +51,59 @@ impl Volume {
             if n == 1 {
                 continue; // base 0, weight 0: constant along this axis
             }
+            // 0 ≤ u ≤ n − 1: floor is the integer part (a cast, exact) and round (half away
+            // from zero) the floor plus one from a fraction of ½ (u − floor(u) is exact) — the
+            // same numbers as f64::floor / f64::round, without a libm call per axis per sample.
             let mut u = (p[a] / s).min((n - 1) as f64);
-            let r = libm::round(u);
+            let f = (u as usize) as f64;
+            let r = if u - f >= 0.5 { f + 1.0 } else { f };
             if (u - r).abs() < SNAP_VOXELS {
                 u = r;
             }
             // The last cell is [n-2, n-1], so u = n-1 has weight 1 on the last voxel.
-            let i0 = (libm::floor(u) as usize).min(n - 2);
+            let i0 = (u as usize).min(n - 2);
             base[a] = i0;
             t[a] = u - i0 as f64;
         }
-        // Neighbour offsets; 0 along single-voxel axes (their weight is 0 anyway).
-        let step = [usize::from(self.dims[0] > 1), usize::from(self.dims[1] > 1), usize::from(self.dims[2] > 1)];
-        let corner = |di: usize, dj: usize, dk: usize| {
-            f(self.at(base[0] + di * step[0], base[1] + dj * step[1], base[2] + dk * step[2]))
-        };
-        // (1 − t)·a + t·b: exact at t = 0 and t = 1.
+        Some((self.index(base[0], base[1], base[2]), t))
+    }
+}
+
+/// Trilinear samples of `f(value)` ([`Volume::sample_with`]) at many points: consecutive points
+/// in the same cell (a move sampled every quarter voxel) map its 8 corners once. The same
+/// numbers as [`Volume::sample_with`], bit for bit.
+pub struct Sampler<'v, F> {
+    vol: &'v Volume,
+    f: F,
+    /// The last cell's first voxel (`usize::MAX`: none yet) and its mapped corners.
+    last: std::cell::Cell<(usize, [f64; 8])>,
+}
+
+impl<'v, F: Fn(f32) -> f64> Sampler<'v, F> {
+    /// Samples of `vol` mapped by `f`.
+    pub fn new(vol: &'v Volume, f: F) -> Self {
+        Sampler { vol, f, last: std::cell::Cell::new((usize::MAX, [0.0; 8])) }
+    }
+
+    /// The value at `p` (see [`Volume::sample_with`]).
+    pub fn sample(&self, p: DVec3) -> Option<f64> {
+        let v = self.vol;
+        let (origin, [tx, ty, tz]) = v.locate(p)?;
+        let (cached, mut c) = self.last.get();
+        if cached != origin {
+            // Neighbour offsets in the value array; 0 along single-voxel axes (weight 0 there).
+            let d = [usize::from(v.dims[0] > 1), v.dims[0] * usize::from(v.dims[1] > 1), v.dims[0] * v.dims[1] * usize::from(v.dims[2] > 1)];
+            for (n, c) in c.iter_mut().enumerate() {
+                *c = (self.f)(v.values[origin + (n & 1) * d[0] + (n >> 1 & 1) * d[1] + (n >> 2) * d[2]]);
+            }
+            self.last.set((origin, c));
+        }
+        // (1 − t)·a + t·b: exact at t = 0 and t = 1. Corner n is (n & 1, n >> 1 & 1, n >> 2).
         let lerp = |a: f64, b: f64, t: f64| (1.0 - t) * a + t * b;
-        let [tx, ty, tz] = t;
-        let c00 = lerp(corner(0, 0, 0), corner(1, 0, 0), tx);
-        let c10 = lerp(corner(0, 1, 0), corner(1, 1, 0), tx);
-        let c01 = lerp(corner(0, 0, 1), corner(1, 0, 1), tx);
-        let c11 = lerp(corner(0, 1, 1), corner(1, 1, 1), tx);
+        let c00 = lerp(c[0], c[1], tx);
+        let c10 = lerp(c[2], c[3], tx);
+        let c01 = lerp(c[4], c[5], tx);
+        let c11 = lerp(c[6], c[7], tx);
         let c0 = lerp(c00, c10, ty);
         let c1 = lerp(c01, c11, ty);
         Some(lerp(c0, c1, tz))

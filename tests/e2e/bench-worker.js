@@ -46,14 +46,15 @@
 //   { cmd: "graded-surface", inputs, repeats } → { type: "graded-surface", passes: [{
 //       addFileMs, estimateMs, viewMs, addFileMs2, volumeMs, surfaceMs, triangles }], memory:
 //       { init, afterAddFile, afterSurface, end } }: what the page does with a dropped series:
-//       Session.addFile("volume", path, bytes) per file, Session.estimate(design) (runDesign
+//       Session.addBlob("volume", path, blob) per file, Session.estimate(design) (runDesign
 //       asks it first; it reads the volume and makes the surface), inspect(design, "surface",
 //       0) (the surface view); then, in a new Session, the stages apart: inspect "axial" (the
 //       volume stage), inspect "surface" (the surface stage). Memory: first pass, page path.
 //   { cmd: "graded-edit", inputs, repeats } → { type: "graded-edit", passes: [{ addSeriesMs,
 //       addGcodeMs, runMs, stages: [{ stage, ms }], edited }], marks: [{ stage, memory }],
 //       memory: { init, afterSeries, afterGcode, afterRun, end } }: the series and the G-code
-//       added (addFile analyses the G-code), then Session.run(edit design) timed per stage;
+//       added as Blobs, as the page adds dropped files (addBlob reads every G-code line, in
+//       pieces), then Session.run(edit design) timed per stage;
 //       `marks` holds wasm memory at each stage's first progress report (first pass).
 // Run the job in a fresh worker (the page does) so the STL generation does not count in the
 // job's linear memory.
@@ -172,10 +173,12 @@ self.onmessage = async ({ data }) => {
     }
     if (data.cmd === "graded-surface") {
       const { files, designs } = data.inputs;
-      // One addFile per file, as the page does for a dropped folder (each copied into wasm).
+      // As the page does for a dropped folder: one addBlob per file (the page hands the worker
+      // each dropped File; its bytes stay in the blob store and are read when the volume is).
+      const blobs = files.map((f) => ({ name: f.name, blob: new Blob([f.bytes]) }));
       const load = (session) => {
         const t = performance.now();
-        for (const f of files) session.addFile("volume", f.name, new Uint8Array(f.bytes));
+        for (const f of blobs) session.addBlob("volume", f.name, f.blob);
         return performance.now() - t;
       };
       const passes = [];
@@ -213,6 +216,9 @@ self.onmessage = async ({ data }) => {
     }
     if (data.cmd === "graded-edit") {
       const { files, gcode, designs } = data.inputs;
+      // Blobs, as the page holds dropped files (made once, outside the timed passes).
+      const blobs = files.map((f) => ({ name: f.name, blob: new Blob([f.bytes]) }));
+      const gcodeBlob = new Blob([gcode.bytes]);
       const passes = [];
       let memory = null;
       let firstMarks = null;
@@ -220,11 +226,11 @@ self.onmessage = async ({ data }) => {
         const m = { init: mem() };
         const session = new Session();
         let t = performance.now();
-        for (const f of files) session.addFile("volume", f.name, new Uint8Array(f.bytes));
+        for (const f of blobs) session.addBlob("volume", f.name, f.blob);
         const addSeriesMs = performance.now() - t;
         m.afterSeries = mem();
         t = performance.now();
-        session.addFile("gcode", gcode.name, new Uint8Array(gcode.bytes));
+        session.addBlob("gcode", gcode.name, gcodeBlob);
         const addGcodeMs = performance.now() - t;
         m.afterGcode = mem();
         const marks = [];

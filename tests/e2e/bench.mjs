@@ -532,7 +532,7 @@ function gradedReport(browserRun, native) {
   const sTotal = (p) => p.addFileMs + p.estimateMs + p.viewMs;
   const sb = sp.reduce((a, p) => (sTotal(p) < sTotal(a) ? p : a));
   const sRow = (label, ms, key, bold = "") => out.push(`| | ${label} | ${bold}${s(ms)}${bold} | ${bold}${f(n.surface[key])}${bold} | ${bold}${ratio(ms, n.surface[key])}${bold} |`);
-  out.push(`| series → surface, as the page goes after a drop | \`addFile("volume", path, bytes)\` × ${g.files} | ${s(sb.addFileMs)} | ${f(n.surface.addFile)} | ${ratio(sb.addFileMs, n.surface.addFile)} |`);
+  out.push(`| series → surface, as the page goes after a drop | \`addBlob("volume", path, blob)\` × ${g.files} | ${s(sb.addFileMs)} | ${f(n.surface.addFile)} | ${ratio(sb.addFileMs, n.surface.addFile)} |`);
   sRow("`estimate(design)` (runDesign asks it first: reads the volume, counts the surface's triangles, extracts it, estimates the slicing)", sb.estimateMs, "estimate");
   sRow(`surface view (\`inspect(design, "surface", 0)\`, from the cache: ${sb.triangles} triangles copied out${native?.triangles && native.triangles !== sb.triangles ? `; native ${native.triangles}!` : ""})`, sb.viewMs, "surface view");
   sRow("**addFile + estimate + view**", sTotal(sb), "addFile + estimate + view", "**");
@@ -544,7 +544,7 @@ function gradedReport(browserRun, native) {
   const eTotal = (p) => p.addSeriesMs + p.addGcodeMs + p.runMs;
   const eb = ep.reduce((a, p) => (eTotal(p) < eTotal(a) ? p : a));
   const stage = (p, name) => p.stages.find((x) => x.stage === name)?.ms;
-  out.push(`| edit | \`addFile\`: series × ${g.files} + G-code (its analysis, as on the page) | ${s(eb.addSeriesMs + eb.addGcodeMs)} (G-code ${s(eb.addGcodeMs)}) | ${f(n.edit.addFile)} | ${ratio(eb.addSeriesMs + eb.addGcodeMs, n.edit.addFile)} |`);
+  out.push(`| edit | \`addBlob\`: series × ${g.files} + G-code (every line read in pieces, the part's box, as on the page) | ${s(eb.addSeriesMs + eb.addGcodeMs)} (G-code ${s(eb.addGcodeMs)}) | ${f(n.edit.addFile)} | ${ratio(eb.addSeriesMs + eb.addGcodeMs, n.edit.addFile)} |`);
   for (const st of eb.stages) {
     const label = st.stage === "volume" ? "volume (and the plan's surface estimate: classify, fill, count)" : st.stage === "edit" ? `**edit stage** (${eb.edited} moves edited${native?.edited && native.edited !== eb.edited ? `; native ${native.edited}!` : ""})` : st.stage === "analyze" ? "analyze (with preview, as Session.run)" : st.stage;
     const bold = st.stage === "edit" ? "**" : "";

@@ -1,5 +1,5 @@
 // A JavaScript stand-in for pkg/weft.js with the wasm API v2 contract (designSchema object,
-// Session.addFile(slot, …), run → RunReport with stage plots, inspect, previewAxis,
+// Session.addFile(slot, …) / addBlob, run → RunReport with stage plots, inspect, previewAxis,
 // previewSegmentMove …). Lets the page be tested without the Rust build:
 //
 //   WEFT_PKG_DIR=tests/e2e/mock-pkg node tests/e2e/ui-mock.mjs
@@ -150,6 +150,11 @@ export class Session {
     if (/corrupt/.test(name)) throw new Error(`${name}: line 4: a vertex needs 3 numbers`);
     this.files.set(name, bytes);
     return { slot, name, kind: "mesh", summary: `${Math.floor(bytes.length / 50)} triangles, 20 × 20 × 20 mm`, report: { triangles: 12 } };
+  }
+
+  /** As the real Session: a dropped File (Blob); the mock reads it whole. */
+  addBlob(slot, name, blob) {
+    return this.addFile(slot, name, new Uint8Array(new FileReaderSync().readAsArrayBuffer(blob)));
   }
 
   removeFile(name) {

@@ -447,20 +447,7 @@ impl<'a> Ctx<'a> {
     /// The bytes of a one-file `input` of `slot` (loaded, or embedded in a share link) and
     /// the key of its content.
     pub fn file_bytes(&self, slot: &str, input: &Input) -> Result<(std::borrow::Cow<'a, [u8]>, Key), Error> {
-        let files: &'a Files = self.files;
-        match input {
-            Input::File { name, embedded } => match (files.whole(name), files.hash(name), embedded) {
-                (Some(b), Some(h), _) => Ok((b?, h)),
-                (_, _, Some(e)) => {
-                    let bytes = share::unpack(e).map_err(|source| Error::Embedded { name: name.clone(), source })?;
-                    let key = Key::of_bytes(&bytes);
-                    Ok((std::borrow::Cow::Owned(bytes), key))
-                }
-                _ => Err(Error::MissingInput { name: name.clone(), slot: slot.into() }),
-            },
-            Input::Files(_) => Err(Error::NoInput(format!("the {slot} input takes one file, not several"))),
-            Input::Builtin(_) => Err(Error::NoInput(format!("the {slot} input takes a file, not a built-in shape"))),
-        }
+        file_bytes_in(self.files, slot, input)
     }
 
     /// A one-file `input` of `slot` for a stage that reads it line by line (it may stay
@@ -476,34 +463,56 @@ impl<'a> Ctx<'a> {
         Ok((FileSource::Bytes(bytes), key))
     }
 
-    /// The files of a volume `input` (one file: a `.zip`, NRRD, raw or single DICOM; several:
-    /// a series), with the keys of their contents.
-    fn volume_files(&self, slot: &str, input: &Input) -> Result<Vec<(String, std::borrow::Cow<'a, [u8]>, Key)>, Error> {
+    /// The names and content keys of a volume `input`'s files, reading none that is loaded.
+    fn volume_keys(&self, slot: &str, input: &Input) -> Result<Vec<(String, Key)>, Error> {
         match input {
-            Input::Files(names) => {
-                let files: &'a Files = self.files;
-                let mut out = Vec::with_capacity(names.len());
-                for name in names {
-                    match (files.whole(name), files.hash(name)) {
-                        (Some(b), Some(h)) => out.push((name.clone(), b?, h)),
-                        _ => return Err(Error::MissingInput { name: name.clone(), slot: slot.into() }),
-                    }
-                }
-                Ok(out)
-            }
-            Input::File { name, .. } => {
-                let (bytes, key) = self.file_bytes(slot, input)?;
-                Ok(vec![(name.clone(), bytes, key)])
-            }
+            Input::Files(names) => names
+                .iter()
+                .map(|name| self.files.hash(name).map(|h| (name.clone(), h)).ok_or_else(|| Error::MissingInput { name: name.clone(), slot: slot.into() }))
+                .collect(),
+            Input::File { name, .. } => match self.files.hash(name) {
+                Some(h) => Ok(vec![(name.clone(), h)]),
+                None => Ok(vec![(name.clone(), self.file_bytes(slot, input)?.1)]),
+            },
             Input::Builtin(_) => Err(Error::NoInput(format!("the {slot} input takes a volume: a DICOM series, a .zip of one, NRRD or raw voxels"))),
         }
     }
 
-    /// The volume reader's statement of its work on `input`, before reading it.
-    pub fn volume_estimate(&self, slot: &str, input: &Input, options: &volume::Options) -> Result<Estimate, Error> {
-        let files = self.volume_files(slot, input)?;
-        let list: Vec<(&str, &[u8])> = files.iter().map(|(n, b, _)| (n.as_str(), b.as_ref())).collect();
-        let e = volume::estimate(&list, options);
+    /// A value made from `parts` and `upstream` keys, kept in the cache under `id` without a
+    /// stage of its own (no progress, no report): a statement a plan makes again and again
+    /// that costs a read of every file (a volume's estimate).
+    fn memo<T, P>(&mut self, id: &str, parts: &P, upstream: &[Key], f: impl FnOnce() -> Result<T, Error>) -> Result<T, Error>
+    where
+        T: Any + Send + Sync + Clone,
+        P: Serialize + ?Sized,
+    {
+        let key = Key::of(id, &parts, upstream);
+        if let Some(e) = self.cache.entries.get(id) {
+            if e.key == key {
+                if let Ok(v) = e.value.clone().downcast::<T>() {
+                    return Ok((*v).clone());
+                }
+            }
+        }
+        let v = f()?;
+        if self.cache.enabled {
+            self.cache.entries.insert(id.to_string(), Entry { key, value: Arc::new(v.clone()), report: None });
+        }
+        Ok(v)
+    }
+
+    /// The volume reader's statement of its work on `input`, before reading it (the files are
+    /// read once per content: the statement is kept).
+    pub fn volume_estimate(&mut self, slot: &str, input: &Input, options: &volume::Options) -> Result<Estimate, Error> {
+        let keys = self.volume_keys(slot, input)?;
+        let upstream: Vec<Key> = keys.iter().map(|(_, k)| *k).collect();
+        let names: Vec<&str> = keys.iter().map(|(n, _)| n.as_str()).collect();
+        let files = self.files;
+        let e = self.memo(&format!("volume-estimate:{slot}"), &(&names, options), &upstream, || {
+            let files = volume_files(files, slot, input)?;
+            let list: Vec<(&str, &[u8])> = files.iter().map(|(n, b, _)| (n.as_str(), b.as_ref())).collect();
+            Ok(volume::estimate(&list, options))
+        })?;
         if let Some(r) = &e.refused {
             return Err(Error::TooBig { stage: "volume".into(), source: r.clone() });
         }
@@ -513,11 +522,14 @@ impl<'a> Ctx<'a> {
     /// The volume of `input` (a slot's [`Input`]), read once per content and options: the
     /// stage `volume` (cache id `volume:{slot}`), with its report.
     pub fn volume(&mut self, slot: &str, input: &Input, options: &volume::Options) -> Result<Out<volume::Volume>, Error> {
-        let files = self.volume_files(slot, input)?;
-        let names: Vec<&str> = files.iter().map(|(n, _, _)| n.as_str()).collect();
-        let upstream: Vec<Key> = files.iter().map(|(_, _, k)| *k).collect();
+        // Keys first: a file kept outside the core is read only when the volume is made.
+        let keys = self.volume_keys(slot, input)?;
+        let names: Vec<&str> = keys.iter().map(|(n, _)| n.as_str()).collect();
+        let upstream: Vec<Key> = keys.iter().map(|(_, k)| *k).collect();
         let id = format!("volume:{slot}");
+        let all = self.files;
         self.stage_kept("volume", &id, &(&names, options), &upstream, |_| {
+            let files = volume_files(all, slot, input)?;
             let list: Vec<(&str, &[u8])> = files.iter().map(|(n, b, _)| (n.as_str(), b.as_ref())).collect();
             let imported = volume::read_volume(&list, options).map_err(|e| Error::stage("reading the volume", e))?;
             let (v, r) = (&imported.volume, &imported.report);
@@ -537,6 +549,45 @@ impl<'a> Ctx<'a> {
             }
             Ok((imported.volume, Some(report)))
         })
+    }
+}
+
+/// [`Ctx::file_bytes`] over `files`.
+fn file_bytes_in<'f>(files: &'f Files, slot: &str, input: &Input) -> Result<(std::borrow::Cow<'f, [u8]>, Key), Error> {
+    match input {
+        Input::File { name, embedded } => match (files.whole(name), files.hash(name), embedded) {
+            (Some(b), Some(h), _) => Ok((b?, h)),
+            (_, _, Some(e)) => {
+                let bytes = share::unpack(e).map_err(|source| Error::Embedded { name: name.clone(), source })?;
+                let key = Key::of_bytes(&bytes);
+                Ok((std::borrow::Cow::Owned(bytes), key))
+            }
+            _ => Err(Error::MissingInput { name: name.clone(), slot: slot.into() }),
+        },
+        Input::Files(_) => Err(Error::NoInput(format!("the {slot} input takes one file, not several"))),
+        Input::Builtin(_) => Err(Error::NoInput(format!("the {slot} input takes a file, not a built-in shape"))),
+    }
+}
+
+/// The files of a volume `input` (one file: a `.zip`, NRRD, raw or single DICOM; several: a
+/// series), read, with the keys of their contents.
+fn volume_files<'f>(files: &'f Files, slot: &str, input: &Input) -> Result<Vec<(String, std::borrow::Cow<'f, [u8]>, Key)>, Error> {
+    match input {
+        Input::Files(names) => {
+            let mut out = Vec::with_capacity(names.len());
+            for name in names {
+                match (files.whole(name), files.hash(name)) {
+                    (Some(b), Some(h)) => out.push((name.clone(), b?, h)),
+                    _ => return Err(Error::MissingInput { name: name.clone(), slot: slot.into() }),
+                }
+            }
+            Ok(out)
+        }
+        Input::File { name, .. } => {
+            let (bytes, key) = file_bytes_in(files, slot, input)?;
+            Ok(vec![(name.clone(), bytes, key)])
+        }
+        Input::Builtin(_) => Err(Error::NoInput(format!("the {slot} input takes a volume: a DICOM series, a .zip of one, NRRD or raw voxels"))),
     }
 }
 

@@ -320,6 +320,17 @@ fn files_kept_outside_give_the_same_gcode_and_a_gone_one_is_named() {
     assert!(far.last().unwrap().reads.load(Relaxed) >= 2 * 3, "hashed and edited in pieces");
     assert_eq!(a.report.stage_data("edit"), b.report.stage_data("edit"));
 
+    // A session re-running the same design reads no slice again: the volume, its estimate and
+    // the keys come from the cache and the hashes made on loading.
+    let registry = weft::jobs::Registry::builtin();
+    let mut cache = weft::pipeline::Cache::new();
+    let opts = RunOptions::default();
+    pipeline::run_in(&registry, &mut cache, &design, &outside, &opts, &mut |_, _| {}).unwrap();
+    let reads = far[3].reads.load(Relaxed);
+    pipeline::estimate(&registry, &mut cache, &design, &outside).unwrap();
+    pipeline::run_in(&registry, &mut cache, &design, &outside, &opts, &mut |_, _| {}).unwrap();
+    assert_eq!(far[3].reads.load(Relaxed), reads, "a cached volume read its slices again");
+
     // Deleted after loading: the run names the file and says what to do.
     far.last().unwrap().gone.store(true, Relaxed);
     let e = pipeline::run(&design, &outside, &RunOptions::default(), &mut |_, _| {}).err().expect("an unreadable file is refused").to_string();

@@ -271,7 +271,8 @@ impl Session {
                 match read {
                     Ok(b) => {
                         let d = b.max - b.min;
-                        (format!("{:.1} MB of G-code, printing {:.1} × {:.1} × {:.1} mm", size as f64 / 1e6, d.x, d.y, d.z), serde_json::Value::Null)
+                        let amount = if size >= 1_000_000 { format!("{:.1} MB", size as f64 / 1e6) } else { format!("{:.1} kB", size as f64 / 1e3) };
+                        (format!("{amount} of G-code, printing {:.1} × {:.1} × {:.1} mm", d.x, d.y, d.z), serde_json::Value::Null)
                     }
                     Err(e) => {
                         self.files.remove(name);

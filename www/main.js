@@ -861,6 +861,7 @@ function renderSlots() {
       const summary = document.createElement("span");
       summary.className = "file-summary";
       summary.textContent = f.info?.summary ?? formatBytes(f.blob.size);
+      summary.title = summary.textContent;
       const remove = document.createElement("button");
       remove.type = "button";
       remove.className = "remove";

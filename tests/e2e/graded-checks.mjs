@@ -127,7 +127,7 @@ export async function gradedChecks({ baseUrl, weftBin = process.env.WEFT_BIN, ch
         return { edited: edit?.edited_moves, infill: edit?.infill_moves, shown: metric("edited"), slot };
       });
       if (!(got.edited > 100) || got.edited > got.infill || !got.shown) throw new Error(`edit card: ${JSON.stringify(got)}`);
-      if (!/MB of G-code, printing 20\.\d × 20\.\d/.test(got.slot)) throw new Error(`the slot's summary reads "${got.slot}"`);
+      if (!/\d kB of G-code, printing 20\.\d × 20\.\d/.test(got.slot)) throw new Error(`the slot's summary reads "${got.slot}"`);
       const text = (await downloadGcode(page, join(outDir, "graded-edited.gcode"))).bytes.toString("utf8");
       if (weftBin) {
         const designPath = join(outDir, "graded-edit.design.json");
@@ -136,7 +136,14 @@ export async function gradedChecks({ baseUrl, weftBin = process.env.WEFT_BIN, ch
         execFileSync(weftBin, ["run", designPath, "--input", `gcode=${gcodePath}`, "--out", cli, "-q"]);
         if (readFileSync(cli, "utf8") !== text) throw new Error("the page's edited G-code differs from the CLI's");
       }
-      return `${got.edited} of ${got.infill} infill moves edited; slot: ${got.slot.trim().slice(0, 80)}${weftBin ? "; same bytes as the CLI" : ""}`;
+      for (const [w, h, name] of [[1280, 800, "graded-edit-desktop.png"], [390, 844, "graded-edit-phone.png"]]) {
+        await page.setViewportSize({ width: w, height: h });
+        await page.waitForTimeout(300);
+        await page.screenshot({ path: join(outDir, name), fullPage: w < 500 });
+      }
+      await page.setViewportSize({ width: 1400, height: 900 });
+      const summary = (await page.textContent('.slot[data-slot="gcode"] li[data-file="foreign-prusa.gcode"] .file-summary').catch(() => null)) ?? got.slot;
+      return `${got.edited} of ${got.infill} infill moves edited; slot: ${summary.trim().slice(0, 80)}${weftBin ? "; same bytes as the CLI" : ""}`;
     });
 
     await check(n++, "graded: a .zip series dropped on the volume slot is used; a truncated DICOM file is refused naming it and the design keeps its settings", async () => {

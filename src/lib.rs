@@ -48,5 +48,6 @@ pub use design::Design;
 pub use pipeline::{run, RunOptions, RunOutput};
 pub mod bench;
 pub mod export;
+pub mod foam;
 #[cfg(target_arch = "wasm32")]
 mod wasm;

@@ -1,0 +1,11 @@
+//! Viscous-thread-printed foams graded between regions (Nakura, Sarkar, Revier, Emery, Lipton,
+//! *An interpolative slicing algorithm for continuously graded stiffness in viscous thread
+//! printed foams*): the weighting functions of a transition between two regions
+//! ([`weight`], appendix A) and the printing numbers of one piece of toolpath ([`vtp`],
+//! section 3.2.4). The job kind `foam` builds on these (issue 12).
+
+pub mod vtp;
+pub mod weight;
+
+pub use vtp::{Pair, Piece, Process};
+pub use weight::Weighting;

@@ -1,0 +1,126 @@
+//! The foam job's model (issue 12, the VTP paper): the weighting functions of appendix A (ends,
+//! midpoint, monotone, the cubic's C¹ ends, the logarithmic fit's V* ends as the paper states
+//! them), their parameter checks and design form, and the printing numbers of section 3.2.4
+//! (constant extrusion at every V*, the nozzle height, refusals).
+
+use weft::foam::{Pair, Process, Weighting};
+
+const CLEAN: [Weighting; 6] = [
+    Weighting::Linear,
+    Weighting::Cubic { slope: 0.0 },
+    Weighting::Cubic { slope: 1.0 },
+    Weighting::Cubic { slope: 1.5 },
+    Weighting::CubeRoot,
+    Weighting::Sinusoidal,
+];
+
+fn grid() -> impl Iterator<Item = f64> {
+    (0..=1000).map(|i| -0.5 + i as f64 / 1000.0)
+}
+
+#[test]
+fn every_clean_function_meets_0_and_1_passes_a_half_at_0_and_rises() {
+    for w in CLEAN {
+        assert!(w.inside(-0.5).abs() < 1e-12 && (w.inside(0.5) - 1.0).abs() < 1e-12, "{w:?} ends {} {}", w.inside(-0.5), w.inside(0.5));
+        assert!((w.inside(0.0) - 0.5).abs() < 1e-15, "{w:?} at 0: {}", w.inside(0.0));
+        let mut last = f64::NEG_INFINITY;
+        for x in grid() {
+            let v = w.weight(x);
+            assert!(v >= last - 1e-15 && (0.0..=1.0).contains(&v), "{w:?} at {x}: {v} after {last}");
+            last = v;
+        }
+        // Clamped outside the transition, continuous at its ends.
+        assert_eq!((w.weight(-0.7), w.weight(-0.5), w.weight(0.5), w.weight(3.0)), (0.0, 0.0, 1.0, 1.0));
+        assert!((w.weight(0.5 - 1e-9) - 1.0).abs() < 1e-6 && w.weight(-0.5 + 1e-9) < 1e-6, "{w:?} not C⁰ at the ends");
+    }
+}
+
+#[test]
+fn the_cubic_has_its_slope_at_0_and_smooth_ends_at_one_and_a_half() {
+    let d = |w: Weighting, x: f64| (w.inside(x + 1e-6) - w.inside(x - 1e-6)) / 2e-6;
+    for s in [0.0, 0.7, 1.0, 1.5] {
+        assert!((d(Weighting::Cubic { slope: s }, 0.0) - s).abs() < 1e-6, "slope {s}");
+    }
+    let c1 = Weighting::Cubic { slope: 1.5 };
+    assert!(d(c1, 0.5 - 1e-6).abs() < 1e-4 && d(c1, -0.5 + 1e-6).abs() < 1e-4, "s = 1.5 ends: {} {}", d(c1, 0.5 - 1e-6), d(c1, -0.5 + 1e-6));
+    assert!((d(Weighting::Sinusoidal, 0.5 - 1e-6)).abs() < 1e-4, "the sinusoid's ends are flat");
+    assert!(!Weighting::Cubic { slope: 1.6 }.problems().is_empty() && !Weighting::Cubic { slope: -0.1 }.problems().is_empty());
+    assert!(Weighting::Cubic { slope: 1.5 }.problems().is_empty());
+}
+
+#[test]
+fn the_logarithmic_fit_rises_and_misses_its_ends_by_the_papers_numbers() {
+    let w = Weighting::logarithmic();
+    assert!(w.problems().is_empty());
+    let mut last = f64::NEG_INFINITY;
+    for x in grid() {
+        let v = w.inside(x);
+        assert!(v > last, "not rising at {x}");
+        last = v;
+    }
+    // The dogbone's transition, V* 0.15 → 0.4: the paper's 0.1415 and 0.3795 just inside.
+    let (j, k) = (Pair { v_star: 0.15, h_star: 10.0 }, Pair { v_star: 0.4, h_star: 10.0 });
+    let left = j.lerp(k, w.inside(-0.5)).v_star;
+    let right = j.lerp(k, w.inside(0.5)).v_star;
+    assert!((left - 0.1415).abs() < 5e-4 && (right - 0.3795).abs() < 5e-4, "V* at the ends {left:.4} {right:.4}");
+    // Outside, the regions' own pairs (the jump the paper reports).
+    assert_eq!((j.lerp(k, w.weight(-0.5)).v_star, j.lerp(k, w.weight(0.5)).v_star), (0.15, 0.4));
+    // Refusals name the parameter.
+    let bad = |f: f64, b: f64, intercept: f64| Weighting::Logarithmic { slope: 23.91, intercept, f, b }.problems().join("; ");
+    assert!(bad(0.0, -3.11, 13.26).contains("F is 0"));
+    assert!(bad(4.79, 0.0, 13.26).contains("b is 0"));
+    assert!(bad(4.79, -3.11, 10.0).contains("must stay above 0"), "{}", bad(4.79, -3.11, 10.0));
+}
+
+#[test]
+fn a_zero_length_transition_is_a_step() {
+    let w = Weighting::Linear;
+    assert_eq!(w.weight(Weighting::x(-0.01, 0.0)), 0.0);
+    assert_eq!(w.weight(Weighting::x(0.01, 0.0)), 1.0);
+    assert_eq!(w.weight(Weighting::x(0.0, 0.0)), 0.5);
+    assert_eq!(w.weight(Weighting::x(10.0, 40.0)), 0.75);
+}
+
+#[test]
+fn weightings_read_from_a_design_take_the_papers_defaults() {
+    let cubic: Weighting = serde_json::from_str(r#"{"kind": "cubic"}"#).unwrap();
+    assert_eq!(cubic, Weighting::Cubic { slope: 1.5 });
+    let log: Weighting = serde_json::from_str(r#"{"kind": "logarithmic", "b": -3.0}"#).unwrap();
+    assert_eq!(log, Weighting::Logarithmic { slope: 23.91, intercept: 13.26, f: 4.79, b: -3.0 });
+    assert!(serde_json::from_str::<Weighting>(r#"{"kind": "linear", "slope": 2}"#).is_err(), "an unknown field is refused");
+    assert!(serde_json::from_str::<Weighting>(r#"{"kind": "quadratic"}"#).is_err());
+    let back: Weighting = serde_json::from_str(&serde_json::to_string(&Weighting::CubeRoot).unwrap()).unwrap();
+    assert_eq!(back, Weighting::CubeRoot);
+}
+
+#[test]
+fn every_v_star_extrudes_at_the_same_rate_and_lower_v_star_lays_more_per_mm() {
+    let p = Process { nozzle_mm: 0.8, die_swell: 1.2, filament_mm: 1.75, feed_mm_s: 0.5 };
+    assert!(p.problems().is_empty());
+    let (a_t, a_f) = (std::f64::consts::PI * 0.96 * 0.96 / 4.0, std::f64::consts::PI * 1.75 * 1.75 / 4.0);
+    let mut last_per_mm = f64::INFINITY;
+    for v in [0.15, 0.2, 0.275, 0.4, 1.0] {
+        let piece = p.piece(Pair { v_star: v, h_star: 20.0 }, 0.5, 0.6);
+        // ΔE = L·A_t/(V*·A_f), f = V*·C·A_f/A_t: filament per second = C at every V*.
+        assert!((piece.e_mm - 0.5 * a_t / (v * a_f)).abs() < 1e-12);
+        assert!((piece.speed_mm_s - v * 0.5 * a_f / a_t).abs() < 1e-12);
+        assert!((piece.e_mm / 0.5 * piece.speed_mm_s - 0.5).abs() < 1e-12, "constant extrusion at V* {v}");
+        // The thread leaves at C·A_f/A_t; the nozzle moves V* times as fast.
+        assert!((piece.speed_mm_s / (0.5 * a_f / a_t) - v).abs() < 1e-12);
+        assert!(piece.e_mm / 0.5 < last_per_mm);
+        last_per_mm = piece.e_mm / 0.5;
+        // H = α·d_n·H*, raised from the layer's z by H − l_h.
+        assert!((piece.z_offset_mm - (1.2 * 0.8 * 20.0 - 0.6)).abs() < 1e-12);
+    }
+}
+
+#[test]
+fn bad_processes_and_pairs_are_refused_with_the_fix() {
+    let p = Process { nozzle_mm: 0.8, die_swell: 1.0, filament_mm: 1.75, feed_mm_s: 0.5 };
+    let low = p.pair_problems("heel.stl", Pair { v_star: 0.2, h_star: 0.5 }, 0.6).join("; ");
+    assert!(low.contains("heel.stl") && low.contains("raise H* to at least 0.750"), "{low}");
+    assert!(p.pair_problems("neck", Pair { v_star: 0.0, h_star: 10.0 }, 0.6).join("").contains("V* is 0"));
+    assert!(p.pair_problems("neck", Pair { v_star: 0.3, h_star: 10.0 }, 0.6).is_empty());
+    let bad = Process { die_swell: 0.0, feed_mm_s: f64::NAN, ..p }.problems().join("; ");
+    assert!(bad.contains("die swell") && bad.contains("feed speed C"), "{bad}");
+}

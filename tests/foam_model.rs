@@ -124,3 +124,34 @@ fn bad_processes_and_pairs_are_refused_with_the_fix() {
     let bad = Process { die_swell: 0.0, feed_mm_s: f64::NAN, ..p }.problems().join("; ");
     assert!(bad.contains("die swell") && bad.contains("feed speed C"), "{bad}");
 }
+
+#[test]
+fn a_point_takes_its_regions_pair_or_the_transitions_blend_by_its_side() {
+    use weft::foam::{pair_at, Transition};
+    // The dogbone: Ω0 (V* 0.15) | Ω1 (V* 0.4), a 40 mm transition across the boundary at x = 0.
+    let pairs = [Pair { v_star: 0.15, h_star: 12.0 }, Pair { v_star: 0.4, h_star: 8.0 }];
+    let lin = [Transition { from: 0, to: 1, length_mm: 40.0, weighting: Weighting::Linear }];
+    // A point at position s along the neck: in Ω0 for s < 0, distance |s| from the boundary.
+    let at = |s: f64, t: &[Transition]| pair_at(usize::from(s >= 0.0), &[s.abs()], t, &pairs);
+    assert_eq!(at(-25.0, &lin), pairs[0]);
+    assert_eq!(at(30.0, &lin), pairs[1]);
+    let mid = at(-10.0, &lin);
+    assert!((mid.v_star - (0.15 + 0.25 * 0.25)).abs() < 1e-12 && (mid.h_star - (12.0 - 4.0 * 0.25)).abs() < 1e-12, "{mid:?}");
+    assert!((at(10.0, &lin).v_star - (0.15 + 0.25 * 0.75)).abs() < 1e-12);
+    // Continuous across the boundary, and linear along the neck.
+    assert!((at(-1e-9, &lin).v_star - at(1e-9, &lin).v_star).abs() < 1e-9);
+    // The orientation matters for the logarithm: reversed, the curve mirrors.
+    let log = [Transition { weighting: Weighting::logarithmic(), ..lin[0] }];
+    let rev = [Transition { from: 1, to: 0, ..log[0] }];
+    let l = Weighting::logarithmic();
+    let (a, b) = (at(-15.0, &log).v_star, at(-15.0, &rev).v_star);
+    assert!((a - (0.15 + 0.25 * l.inside(-0.375))).abs() < 1e-12, "Ω0 → Ω1: x = −0.375");
+    assert!((b - (0.4 - 0.25 * l.inside(0.375))).abs() < 1e-12, "Ω1 → Ω0: the same point has x = +0.375");
+    assert!((a - b).abs() > 0.01, "the orientation changed nothing: {a} {b}");
+    // A zero-length transition: the regions meet in a step (the hinge cube).
+    let step = [Transition { length_mm: 0.0, ..lin[0] }];
+    assert_eq!((at(-0.01, &step), at(0.01, &step)), (pairs[0], pairs[1]));
+    // A transition the point's region is not part of is skipped.
+    let other = [Transition { from: 2, to: 3, length_mm: 40.0, weighting: Weighting::Linear }];
+    assert_eq!(pair_at(0, &[1.0], &other, &pairs), pairs[0]);
+}

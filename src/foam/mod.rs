@@ -1,11 +1,14 @@
 //! Viscous-thread-printed foams graded between regions (Nakura, Sarkar, Revier, Emery, Lipton,
 //! *An interpolative slicing algorithm for continuously graded stiffness in viscous thread
 //! printed foams*): the weighting functions of a transition between two regions
-//! ([`weight`], appendix A) and the printing numbers of one piece of toolpath ([`vtp`],
-//! section 3.2.4). The job kind `foam` builds on these (issue 12).
+//! ([`weight`], appendix A), a point's pair from its region and its distances to the shared
+//! boundaries ([`blend`], Algorithm 2) and the printing numbers of one piece of toolpath
+//! ([`vtp`], section 3.2.4). The job kind `foam` builds on these (issue 12).
 
+pub mod blend;
 pub mod vtp;
 pub mod weight;
 
+pub use blend::{pair_at, Transition};
 pub use vtp::{Pair, Piece, Process};
 pub use weight::Weighting;

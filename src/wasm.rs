@@ -217,6 +217,12 @@ impl Session {
     pub fn add_blob(&mut self, slot: &str, name: &str, blob: web_sys::Blob) -> Result<JsValue, JsError> {
         let kind = self.slot_kind(slot)?;
         let source = BlobSource::new(blob)?;
+        // Over the editor's limit: refused before the file is read (hashing would read it all).
+        if kind == SlotKind::Gcode {
+            if let Some(r) = gcode_edit::estimate(source.len, &gcode_edit::Options::default()).refused {
+                return Err(JsError::new(&format!("{name}: {r}")));
+            }
+        }
         match kind {
             SlotKind::Volume | SlotKind::Gcode => {
                 self.files.insert_source(name.to_string(), Arc::new(source)).map_err(|m| JsError::new(&format!("{name} could not be read ({m}); load it again")))?;

@@ -641,7 +641,9 @@ fn density_report(j: &GradedJob, m: &Model, vol: &Volume, roi: &Roi) -> StageRep
     }
     // The calibration, plotted over the ROI's HU range.
     let h = volume::histogram(vol, roi, 64);
-    let (lo, hi) = (h.min.min(cal.points.first().map_or(h.min, |p| p[0])), h.max.max(cal.points.last().map_or(h.max, |p| p[0])));
+    // The points may be given in any order: the range covers all of them.
+    let (lo, hi) = cal.points.iter().fold((h.min, h.max), |(lo, hi), p| (lo.min(p[0]), hi.max(p[0])));
+    let curve = cal.curve();
     let xs: Vec<f64> = (0..=40).map(|i| lo + (hi - lo) * i as f64 / 40.0).collect();
     r.plots.push(Plot {
         key: "calibration".into(),
@@ -651,8 +653,8 @@ fn density_report(j: &GradedJob, m: &Model, vol: &Volume, roi: &Roi) -> StageRep
         y: Axis::new("P, ρ", ""),
         group: None,
         series: vec![
-            Series::xy("P (equation 7)", xs.clone(), xs.iter().map(|&x| cal.porosity(x)).collect()),
-            Series::xy("ρ = 1 − P, clamped", xs.clone(), xs.iter().map(|&x| cal.density(x, m.rho_min)).collect()),
+            Series::xy("P (equation 7)", xs.clone(), xs.iter().map(|&x| curve.porosity(x)).collect()),
+            Series::xy("ρ = 1 − P, clamped", xs.clone(), xs.iter().map(|&x| curve.density(x, m.rho_min)).collect()),
             Series::hline("ρ_min", m.rho_min),
         ],
     });

@@ -410,7 +410,18 @@ impl<'a> Ctx<'a> {
         self.mesh_placed(slot, input, false)
     }
 
+    /// Mesh `item` of a slot holding several (foam regions), in its file's own coordinates:
+    /// each item is cached on its own.
+    pub fn mesh_item(&mut self, slot: &str, item: usize, input: &Input) -> Result<Out<Mesh>, Error> {
+        self.mesh_placed_as(slot, &format!("import-item:{slot}:{item}"), input, false)
+    }
+
     fn mesh_placed(&mut self, slot: &str, input: &Input, place: bool) -> Result<Out<Mesh>, Error> {
+        let id = if place { format!("import:{slot}") } else { format!("import-in-place:{slot}") };
+        self.mesh_placed_as(slot, &id, input, place)
+    }
+
+    fn mesh_placed_as(&mut self, slot: &str, id: &str, input: &Input, place: bool) -> Result<Out<Mesh>, Error> {
         // A loaded file is keyed by its content; a built-in shape or an embedded file by the
         // input itself. Missing files and several-file inputs are refused by `load_input`.
         let file = match input {
@@ -422,11 +433,10 @@ impl<'a> Ctx<'a> {
             None => (serde_json::to_value(input).unwrap_or_default(), Vec::new()),
         };
         let files = self.files;
-        let id = if place { format!("import:{slot}") } else { format!("import-in-place:{slot}") };
         let keep = place; // the placed mesh is what the estimate and the run both read
         self.run_stage(
             "import",
-            &id,
+            id,
             &parts,
             &upstream,
             |_| {

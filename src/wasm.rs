@@ -371,6 +371,16 @@ impl Session {
     pub fn preview_flow(&self) -> js_sys::Float32Array {
         f32_array(&self.preview.flow)
     }
+    /// Filament per mm of each segment (ΔE / length), mm/mm.
+    #[wasm_bindgen(js_name = previewEPerMm)]
+    pub fn preview_e_per_mm(&self) -> js_sys::Float32Array {
+        f32_array(&self.preview.e_per_mm)
+    }
+    /// Feed rate per segment, mm/s.
+    #[wasm_bindgen(js_name = previewSpeed)]
+    pub fn preview_speed(&self) -> js_sys::Float32Array {
+        f32_array(&self.preview.speed)
+    }
     /// Width per segment, mm.
     #[wasm_bindgen(js_name = previewWidth)]
     pub fn preview_width(&self) -> js_sys::Float32Array {

@@ -1060,7 +1060,18 @@ function removeFromSlot(slot, name) {
   const named = namedFiles(value).map((f) => f.name);
   if (named.includes(name)) {
     let next;
-    if (slot.multiple) next = { files: named.filter((n) => n !== name) };
+    const rest = named.filter((n) => n !== name);
+    if (slot.multiple && rest.length) {
+      // The slot's own rule applies to what is left (a foam keeps one V*/H* row per region).
+      try {
+        setDesign(weft.fillSlot(state.json, slot.name, rest));
+      } catch (err) {
+        showNotice(`${name} was removed; the design still names it (${messageOf(err)}).`);
+      }
+      renderSlots();
+      return;
+    }
+    if (slot.multiple) next = { files: rest };
     else {
       const fallback = getPath(defaults, slot.path);
       next = fallback && !namedFiles(fallback).length ? fallback : schema.builtin_shapes[0]?.value ?? null;

@@ -44,7 +44,9 @@ export function formatNumber(v, digits = 3) {
 /** Round tick values covering [lo, hi] (about `count` of them) and their step. */
 export function ticks(lo, hi, count) {
   const span = hi - lo;
-  if (!(span > 0) || !Number.isFinite(span)) return { values: [lo], step: 1 };
+  // A span within rounding of the values (a constant that interpolation left 1 ulp off) has
+  // no ticks between: one value, as for a flat line.
+  if (!(span > 0) || !Number.isFinite(span) || span <= Math.max(Math.abs(lo), Math.abs(hi)) * 1e-9) return { values: [lo], step: 1 };
   const raw = span / count;
   const p = 10 ** Math.floor(Math.log10(raw));
   const step = [1, 2, 2.5, 5, 10].map((k) => k * p).find((v) => v >= raw) ?? raw;
@@ -143,7 +145,9 @@ function renderXY(host, plot, series) {
   if (!Number.isFinite(x0)) { x0 = 0; x1 = 1; }
   if (!Number.isFinite(y0)) { y0 = 0; y1 = 1; }
   if (x1 === x0) { x0 -= 0.5; x1 += 0.5; }
-  const pad = y1 > y0 ? (y1 - y0) * 0.08 : Math.max(Math.abs(y1) * 0.05, 1e-3);
+  // A flat line (or one flat within rounding) gets a band around it.
+  const flat = !(y1 - y0 > Math.max(Math.abs(y0), Math.abs(y1)) * 1e-9);
+  const pad = flat ? Math.max(Math.abs(y1) * 0.05, 1e-3) : (y1 - y0) * 0.08;
   const histogram = lines.some((s) => s.kind === "histogram");
   y0 = histogram && y0 >= 0 ? 0 : y0 - pad;
   y1 += pad;

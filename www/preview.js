@@ -28,6 +28,13 @@ const AXIS_COLOR = 0xf2f2f2;
 const START_SIZE_PX = 7;
 
 /** 256-entry "turbo"-like ramp (blue → green → yellow → red), sRGB bytes. */
+/** Colour modes drawn on the colour ramp: preview buffer, legend label and unit. */
+const RAMP_MODES = {
+  flow: { key: "flow", label: "flow", unit: "mm³/s", title: "volumetric flow, mm³/s" },
+  e_per_mm: { key: "ePerMm", label: "ΔE/mm", unit: "mm/mm", title: "filament fed per mm of travel (ΔE ÷ length), mm/mm" },
+  speed: { key: "speed", label: "speed", unit: "mm/s", title: "feed rate, mm/s (for a VTP foam: V* × the thread's speed)" },
+};
+
 const RAMP = buildRamp();
 
 /**
@@ -420,6 +427,7 @@ export class Preview {
     this.data = data;
     this.featureCounts = null;
     this.flowRange = null;
+    this.ranges = new Map();
     this.first = 0;
     this.drawn = { extrusion: 0, travel: 0 };
 
@@ -773,11 +781,12 @@ export class Preview {
         const c = this.featureRgb[d.feature[i]] ?? UNKNOWN_COLOR;
         put(i, c[0], c[1], c[2]);
       }
-    } else if (mode === "flow" && d.flow.length >= segments) {
-      const [lo, hi] = this.getFlowRange();
+    } else if (RAMP_MODES[mode] && d[RAMP_MODES[mode].key]?.length >= segments) {
+      const values = d[RAMP_MODES[mode].key];
+      const [lo, hi] = this.getRange(mode);
       const scale = hi > lo ? 255 / (hi - lo) : 0;
       for (let i = 0; i < segments; i++) {
-        const k = Math.max(0, Math.min(255, Math.round((d.flow[i] - lo) * scale))) * 3;
+        const k = Math.max(0, Math.min(255, Math.round((values[i] - lo) * scale))) * 3;
         put(i, RAMP[k], RAMP[k + 1], RAMP[k + 2]);
       }
     } else if (mode === "path" && d.path.length >= segments) {
@@ -792,6 +801,23 @@ export class Preview {
       out.fill(200);
     }
     return out;
+  }
+
+  /** [lo, hi] of a ramp mode's values over the whole print. */
+  getRange(mode) {
+    if (mode === "flow") return this.getFlowRange();
+    if (this.ranges.has(mode)) return this.ranges.get(mode);
+    const values = this.data[RAMP_MODES[mode].key] ?? [];
+    let lo = Infinity;
+    let hi = -Infinity;
+    for (let i = 0; i < values.length; i++) {
+      const f = values[i];
+      if (f < lo) lo = f;
+      if (f > hi) hi = f;
+    }
+    if (!(lo <= hi)) lo = hi = 0;
+    this.ranges.set(mode, [lo, hi]);
+    return [lo, hi];
   }
 
   getFlowRange() {
@@ -833,8 +859,9 @@ export class Preview {
       let unknown = 0;
       for (let code = 0; code < 256; code++) if (!this.featureRgb[code]) unknown += counts[code];
       if (unknown > 0) legend.append(item(UNKNOWN_COLOR, "unknown"));
-    } else if (mode === "flow") {
-      const [lo, hi] = this.getFlowRange();
+    } else if (RAMP_MODES[mode]) {
+      const { label, unit, title } = RAMP_MODES[mode];
+      const [lo, hi] = this.getRange(mode);
       const bar = document.createElement("span");
       bar.className = "ramp";
       const stops = [];
@@ -843,15 +870,15 @@ export class Preview {
         stops.push(`rgb(${RAMP[j]},${RAMP[j + 1]},${RAMP[j + 2]})`);
       }
       bar.style.background = `linear-gradient(to right, ${stops.join(",")})`;
-      const text = (v) => `${v.toFixed(v < 10 ? 2 : 1)}`;
+      const text = (v) => `${v.toFixed(v < 1 ? 3 : v < 10 ? 2 : 1)}`;
       const low = document.createElement("span");
       low.textContent = text(lo);
       const high = document.createElement("span");
-      high.textContent = `${text(hi)} mm³/s`;
+      high.textContent = `${text(hi)} ${unit}`;
       const wrap = document.createElement("span");
       wrap.className = "legend-item flow-legend";
-      wrap.title = "volumetric flow, mm³/s";
-      wrap.append("flow ", low, bar, high);
+      wrap.title = title;
+      wrap.append(`${label} `, low, bar, high);
       legend.append(wrap);
     } else {
       const paths = this.data.path.length ? this.data.path[this.data.path.length - 1] + 1 : 0;

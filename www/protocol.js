@@ -53,6 +53,8 @@ export const PREVIEW_BUFFERS = Object.freeze({
   feature: ["previewFeature", Uint8Array],
   path: ["previewPath", Uint32Array],
   flow: ["previewFlow", Float32Array],
+  ePerMm: ["previewEPerMm", Float32Array],
+  speed: ["previewSpeed", Float32Array],
   width: ["previewWidth", Float32Array],
   layerStart: ["previewLayerStart", Uint32Array],
   travel: ["previewTravel", Float32Array],
@@ -152,6 +154,8 @@ export const PREVIEW_BUFFERS = Object.freeze({
  * @property {Uint8Array} feature       per segment feature code (schema.features)
  * @property {Uint32Array} path         per segment path index
  * @property {Float32Array} flow        per segment volumetric flow, mm³/s
+ * @property {Float32Array} [ePerMm]    per segment filament per mm (ΔE / length), mm/mm
+ * @property {Float32Array} [speed]     per segment feed rate, mm/s
  * @property {Float32Array} width       per segment width, mm
  * @property {Uint32Array} layerStart   first segment of each layer + final entry = segment count
  * @property {Float32Array} travel      travel segments, 6 floats each

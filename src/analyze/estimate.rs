@@ -32,9 +32,9 @@ pub struct Estimate {
 }
 
 /// Preview bytes per segment: the largest kind (an extrusion segment with a tool axis: 6
-/// positions, feature, path, flow, width, move index, 3 axis floats), twice over because the
-/// buffers grow by doubling.
-const PREVIEW_SEGMENT_BYTES: usize = 2 * (6 * 4 + 1 + 4 + 4 + 4 + 4 + 3 * 4);
+/// positions, feature, path, flow, ΔE per mm, speed, width, move index, 3 axis floats), twice
+/// over because the buffers grow by doubling.
+const PREVIEW_SEGMENT_BYTES: usize = 2 * (6 * 4 + 1 + 4 + 4 + 4 + 4 + 4 + 4 + 3 * 4);
 /// Bytes per layer: its record while reading (about 56 bytes, doubled) and its report, plus the
 /// preview's three per-layer entries (doubled).
 const LAYER_BYTES: usize = 2 * 56 + size_of::<LayerReport>() + 2 * 12;

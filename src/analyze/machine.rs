@@ -32,6 +32,9 @@ pub(crate) struct Machine<'o> {
     e_high: f64,
     retracted: bool,
     in_run: bool,
+    /// The run going on when the layer changed, not broken since: it continues in the new
+    /// layer (a spiral vase, a VTP foam's endless thread) and counts once in the total.
+    run_across_layers: bool,
     layer_pending: bool,
     seen_layer_comment: bool,
     merge_first: bool,
@@ -81,6 +84,7 @@ impl<'o> Machine<'o> {
             e_high: 0.0,
             retracted: false,
             in_run: false,
+            run_across_layers: false,
             layer_pending: false,
             seen_layer_comment: false,
             merge_first: false,
@@ -130,6 +134,7 @@ impl<'o> Machine<'o> {
             }
             Step::Home => {
                 self.in_run = false;
+                self.run_across_layers = false;
                 true
             }
             Step::None => l.cmd == Command::G(92, 0),
@@ -236,6 +241,7 @@ impl<'o> Machine<'o> {
             self.retracted = true;
         }
         self.in_run = false;
+        self.run_across_layers = false;
     }
 
     /// Bookkeeping of a move [`Motion`] has timed: net E, extrusion or travel, retraction.
@@ -255,6 +261,7 @@ impl<'o> Machine<'o> {
                 self.retract();
             }
             self.in_run = false;
+            self.run_across_layers = false;
             if self.preview.is_some() {
                 let mut va = if self.fk { self.last_view } else { p0 };
                 let n_pts = if use_pts { self.m.arc_pts.len() } else { 1 };
@@ -303,7 +310,9 @@ impl<'o> Machine<'o> {
         let n_pts = if use_pts { self.m.arc_pts.len() } else { 1 };
         self.admit(n_pts, true)?;
         if !self.in_run {
-            self.paths_total += 1;
+            if !std::mem::take(&mut self.run_across_layers) {
+                self.paths_total += 1;
+            }
             self.layer_paths.push((0.0, 0));
             self.in_run = true;
         }
@@ -331,6 +340,8 @@ impl<'o> Machine<'o> {
                 pv.feature.push(self.feature);
                 pv.path.push(path_index);
                 pv.flow.push(flow as f32);
+                pv.e_per_mm.push(if seg_len > 0.0 { (share / seg_len) as f32 } else { 0.0 });
+                pv.speed.push(v as f32);
                 pv.width.push(w as f32);
                 pv.segment_move.push(self.moves);
                 if let Some(n) = self.axis {
@@ -366,6 +377,7 @@ impl<'o> Machine<'o> {
             pv.layer_travel_start.push(if first { 0 } else { self.travel_segs_at_ext as u32 });
             pv.layer_z.push(z as f32);
         }
+        self.run_across_layers = self.in_run;
         self.in_run = false;
     }
 

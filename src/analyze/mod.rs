@@ -135,6 +135,10 @@ pub struct Preview {
     pub path: Vec<u32>,
     /// Per extrusion segment: volumetric flow, mm³/s.
     pub flow: Vec<f32>,
+    /// Per extrusion segment: filament fed per mm of the segment, mm/mm (ΔE / length).
+    pub e_per_mm: Vec<f32>,
+    /// Per extrusion segment: feed rate, mm/s.
+    pub speed: Vec<f32>,
     /// Per extrusion segment: width, mm.
     pub width: Vec<f32>,
     /// First extrusion segment of each layer; one more entry than layers (the end).

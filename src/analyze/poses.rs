@@ -55,6 +55,8 @@ pub(crate) fn run(file: &str, bytes: &[u8], options: &Options) -> Result<Analysi
                     pv.feature.push(255);
                     pv.path.push(paths.len().saturating_sub(1) as u32);
                     pv.flow.push(0.0);
+                    pv.e_per_mm.push(0.0);
+                    pv.speed.push(0.0);
                     pv.width.push(options.default_line_width_mm as f32);
                     pv.axis.extend_from_slice(&[vals[3] as f32, vals[4] as f32, vals[5] as f32]);
                     pv.segment_move.push(row);

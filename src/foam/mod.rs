@@ -3,9 +3,16 @@
 //! printed foams*): the weighting functions of a transition between two regions
 //! ([`weight`], appendix A), a point's pair from its region and its distances to the shared
 //! boundaries ([`blend`], Algorithm 2) and the printing numbers of one piece of toolpath
-//! ([`vtp`], section 3.2.4). The job kind `foam` builds on these (issue 12).
+//! ([`vtp`], section 3.2.4). The job kind `foam` (`crate::jobs::foam`) runs them as stages:
+//! [`regions`] (parry3d-f64 solids, shared boundaries, the paper's region rules), the
+//! foundation's slicer on the union, [`raster`] (one continuous path per layer), [`field`]
+//! (π along the path with few queries); [`models`] builds the examples' regions.
 
 pub mod blend;
+pub mod raster;
+pub mod field;
+pub mod models;
+pub mod regions;
 pub mod vtp;
 pub mod weight;
 

@@ -25,7 +25,9 @@ pub struct Pair {
 impl Pair {
     /// `self·(1 − w) + other·w` (equation 1).
     pub fn lerp(self, other: Pair, w: f64) -> Pair {
-        Pair { v_star: self.v_star * (1.0 - w) + other.v_star * w, h_star: self.h_star * (1.0 - w) + other.h_star * w }
+        // Equal ends stay exact (a constant H* prints at one height, not 1 ulp off).
+        let mix = |a: f64, b: f64| if a == b { a } else { a * (1.0 - w) + b * w };
+        Pair { v_star: mix(self.v_star, other.v_star), h_star: mix(self.h_star, other.h_star) }
     }
 }
 

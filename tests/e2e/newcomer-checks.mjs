@@ -236,6 +236,8 @@ export async function newcomerChecks({ base, check, newPage, outDir, first, cube
       })));
       if (groups.length < 2) throw new Error(`examples in ${groups.length} group(s)`);
       const items = groups.flatMap((g) => g.items);
+      // Thumbnails load lazily: bring each into view as a reader scrolling the gallery would.
+      for (const img of await page.$$("#gallery img")) await img.scrollIntoViewIfNeeded();
       await page.waitForFunction(() => [...document.querySelectorAll("#gallery img")].every((i) => i.complete), null, { timeout: 10000 });
       const noThumb = await page.$$eval("#gallery .example", (bs) => bs.filter((b) => !(b.querySelector("img")?.naturalWidth > 0)).map((b) => b.dataset.file));
       if (noThumb.length) throw new Error(`examples without a thumbnail: ${noThumb.join(", ")}`);

@@ -70,6 +70,11 @@ pub struct Estimate {
     /// Why it would be refused: the first budget or count limit exceeded.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub refused: Option<OverBudget>,
+    /// What makes this stage's output smaller, as [`Estimate::budgets`] was told: the plan
+    /// gives it to the writer's and the analyzer's refusals of the job's last stage's output,
+    /// so they name the job's own settings.
+    #[serde(skip)]
+    pub smaller: Option<String>,
 }
 
 /// A budget or limit a stage would exceed.
@@ -91,7 +96,7 @@ pub struct OverBudget {
 impl Estimate {
     /// An estimate of `stage` with no work yet.
     pub fn new(stage: &'static str) -> Estimate {
-        Estimate { stage, quantities: Vec::new(), bytes: 0.0, seconds: 0.0, refused: None }
+        Estimate { stage, quantities: Vec::new(), bytes: 0.0, seconds: 0.0, refused: None, smaller: None }
     }
 
     /// Adds a count.
@@ -123,8 +128,9 @@ impl Estimate {
 
     /// Applies the shared memory and time budgets (after the stage's own count limits, which
     /// name a more specific fix); `fix` says what makes the stage smaller.
-    pub fn budgets(self, fix: &str) -> Estimate {
+    pub fn budgets(mut self, fix: &str) -> Estimate {
         let (bytes, seconds) = (self.bytes, self.seconds);
+        self.smaller = Some(fix.to_string());
         self.limit("its peak memory", bytes, MAX_STAGE_BYTES, "bytes", fix).limit("its time", seconds, MAX_STAGE_SECONDS, "s", fix)
     }
 

@@ -838,9 +838,15 @@ fn plan(kind: &dyn crate::jobs::JobKind, ctx: &mut Ctx) -> Result<Plan, Error> {
     let mut stages = kind.estimate(ctx)?;
     if stages.iter().all(|e| e.refused.is_none()) {
         let segments = stages.last().map_or(0.0, |e| e.get("segments"));
-        let writer = gcode::estimate(segments, &writer_options(ctx.design));
+        let mut writer = gcode::estimate(segments, &writer_options(ctx.design));
         let layers = stages.iter().map(|e| e.get("layers")).fold(0.0, f64::max);
-        let analyzer = analyze::plan(segments, layers, &analyzer_options(ctx.design, &RunOptions { collect_preview: true }));
+        let mut analyzer = analyze::plan(segments, layers, &analyzer_options(ctx.design, &RunOptions { collect_preview: true }));
+        // Their size is the job's toolpath: what shrinks it is the job's own fix.
+        if let Some(fix) = stages.last().and_then(|e| e.smaller.clone()) {
+            for r in [&mut writer.refused, &mut analyzer.refused].into_iter().flatten() {
+                r.fix = fix.clone();
+            }
+        }
         stages.push(writer);
         stages.push(analyzer);
     }

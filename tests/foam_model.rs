@@ -127,12 +127,12 @@ fn bad_processes_and_pairs_are_refused_with_the_fix() {
 
 #[test]
 fn a_point_takes_its_regions_pair_or_the_transitions_blend_by_its_side() {
-    use weft::foam::{pair_at, Transition};
+    use weft::foam::{pair_at, Junction, Transition};
     // The dogbone: Ω0 (V* 0.15) | Ω1 (V* 0.4), a 40 mm transition across the boundary at x = 0.
     let pairs = [Pair { v_star: 0.15, h_star: 12.0 }, Pair { v_star: 0.4, h_star: 8.0 }];
     let lin = [Transition { from: 0, to: 1, length_mm: 40.0, weighting: Weighting::Linear }];
     // A point at position s along the neck: in Ω0 for s < 0, distance |s| from the boundary.
-    let at = |s: f64, t: &[Transition]| pair_at(usize::from(s >= 0.0), &[s.abs()], t, &pairs);
+    let at = |s: f64, t: &[Transition]| pair_at(usize::from(s >= 0.0), &[s.abs()], t, &pairs, Junction::Blend);
     assert_eq!(at(-25.0, &lin), pairs[0]);
     assert_eq!(at(30.0, &lin), pairs[1]);
     let mid = at(-10.0, &lin);
@@ -153,5 +153,83 @@ fn a_point_takes_its_regions_pair_or_the_transitions_blend_by_its_side() {
     assert_eq!((at(-0.01, &step), at(0.01, &step)), (pairs[0], pairs[1]));
     // A transition the point's region is not part of is skipped.
     let other = [Transition { from: 2, to: 3, length_mm: 40.0, weighting: Weighting::Linear }];
-    assert_eq!(pair_at(0, &[1.0], &other, &pairs), pairs[0]);
+    assert_eq!(pair_at(0, &[1.0], &other, &pairs, Junction::Blend), pairs[0]);
+}
+
+#[test]
+fn near_two_boundaries_the_distance_blend_is_continuous_where_the_nearest_rule_jumps() {
+    use weft::foam::{pair_at, Junction, Transition};
+    // Region 0 (V* 0.15) meets region 1 (V* 0.4) across the plane x = 0 and region 2 (V* 0.3)
+    // across y = 0, a quarter space {x < 0, y < 0}; 20 mm linear transitions.
+    let pairs = [Pair { v_star: 0.15, h_star: 8.0 }, Pair { v_star: 0.4, h_star: 8.0 }, Pair { v_star: 0.3, h_star: 6.0 }];
+    let t = [
+        Transition { from: 0, to: 1, length_mm: 20.0, weighting: Weighting::Linear },
+        Transition { from: 0, to: 2, length_mm: 20.0, weighting: Weighting::Linear },
+    ];
+    let at = |x: f64, y: f64, j: Junction| pair_at(0, &[x.abs(), y.abs()], &t, &pairs, j);
+    // Along a line at 45° across the bisector x = y, 1 µm steps: the largest change of V*.
+    let worst = |j: Junction| {
+        let mut last = at(-3.0, -9.0, j).v_star;
+        let mut worst = 0.0f64;
+        for i in 1..=6000 {
+            let s = i as f64 * 1e-3;
+            let v = at(-3.0 - s, -9.0 + s, j).v_star;
+            worst = worst.max((v - last).abs());
+            last = v;
+        }
+        worst
+    };
+    let (blend, nearest) = (worst(Junction::Blend), worst(Junction::Nearest));
+    // The nearest rule jumps from the x-blend to the y-blend at x = y = −6 (w = 0.2: 0.15 +
+    // 0.25·0.2 against 0.15 + 0.15·0.2, 0.02); the blend changes by at most its slope × 1.4 µm.
+    assert!((nearest - 0.02).abs() < 1e-5, "nearest jumps by {nearest}");
+    assert!(blend < 1e-4, "the blend changes by {blend} in one step");
+    // On one boundary both sides see that boundary's blend; with one transition in reach the
+    // blend is the paper's π exactly; H* equal on both sides stays exact.
+    let on = at(0.0, -5.0, Junction::Blend);
+    assert_eq!(on.v_star, pairs[0].lerp(pairs[1], 0.5).v_star);
+    assert_eq!(at(-5.0, -15.0, Junction::Blend), pairs[0].lerp(pairs[1], 0.25));
+    let both = pair_at(0, &[4.0, 4.0], &t, &[pairs[0], pairs[1], Pair { h_star: 8.0, ..pairs[2] }], Junction::Blend);
+    assert_eq!(both.h_star, 8.0);
+    // Out of reach of both: the region's own pair.
+    assert_eq!(at(-12.0, -30.0, Junction::Blend), pairs[0]);
+}
+
+#[test]
+fn the_linear_modulus_weighting_meets_its_ends_and_keeps_the_calibrated_modulus_linear() {
+    use weft::foam::stiffness::Calibration;
+    let c = Calibration::default();
+    let (j, k) = (Pair { v_star: 0.15, h_star: 8.0 }, Pair { v_star: 0.4, h_star: 8.0 });
+    let exact = Weighting::LinearModulus { ratio: c.ratio(0.15, 0.4) };
+    let log = Weighting::logarithmic();
+    assert!(exact.problems().is_empty());
+    assert!(exact.inside(-0.5).abs() < 1e-15 && (exact.inside(0.5 - 1e-12) - 1.0).abs() < 1e-9);
+    let (e0, e1) = (c.modulus_kpa(0.15), c.modulus_kpa(0.4));
+    // The modulus the calibration predicts at each x: linear for the exact weighting; the
+    // paper's fitted logarithm is off by up to this much (kPa).
+    let mut last = -1.0;
+    let (mut off_exact, mut off_log) = (0.0f64, 0.0f64);
+    for i in 0..=1000 {
+        let x = -0.5 + i as f64 / 1000.0;
+        let want = e0 + (e1 - e0) * (x + 0.5);
+        let w = exact.weight(x);
+        assert!(w >= last, "not monotone at {x}");
+        last = w;
+        off_exact = off_exact.max((c.modulus_kpa(j.lerp(k, w).v_star) - want).abs());
+        if x.abs() < 0.5 {
+            off_log = off_log.max((c.modulus_kpa(j.lerp(k, log.inside(x)).v_star) - want).abs());
+        }
+    }
+    assert!(off_exact < 1e-9, "exact: {off_exact} kPa off the line");
+    // The fitted line 23.91x + 13.26 is not the line between the fit's own ends (22.69 and
+    // 1.01 kPa): the paper's function misses it by up to 2.5 kPa (at the stiff end, where its
+    // V* 0.1415 predicts 25.2 kPa against 22.7), and V* jumps at both ends.
+    assert!(off_log > 2.4 && off_log < 2.6, "the paper's logarithm is off by {off_log} kPa");
+    // Equal moduli: the plain linear weight.
+    let flat = Weighting::LinearModulus { ratio: 1.0 };
+    assert_eq!(flat.inside(0.25), 0.75);
+    assert!(!Weighting::LinearModulus { ratio: -1.0 }.problems().is_empty());
+    let read: Weighting = serde_json::from_str(r#"{"kind": "linear_modulus"}"#).unwrap();
+    assert!(matches!(read, Weighting::LinearModulus { .. }));
+    assert_eq!(serde_json::to_string(&read).unwrap(), r#"{"kind":"linear_modulus"}"#, "the ratio is the job's, not the design's");
 }

@@ -7,7 +7,7 @@
 //! step, and queries parry only when the bound falls within the region's reach (half its
 //! longest transition, at least 0): far from every boundary the pair is the region's own.
 
-use super::blend::{pair_at, Transition};
+use super::blend::{pair_at, Junction, Transition};
 use super::regions::Regions;
 use super::vtp::Pair;
 use crate::geom::DVec3;
@@ -21,12 +21,14 @@ pub struct Field<'a> {
     pairs: Vec<Pair>,
     /// Per region: half of its longest transition, mm.
     reach: Vec<f64>,
+    junction: Junction,
 }
 
 impl<'a> Field<'a> {
     /// A field over `regions` with a pair per region and `transitions` between regions that
-    /// share a boundary (others are left out: the job refuses them with their names first).
-    pub fn new(regions: &'a Regions, pairs: Vec<Pair>, transitions: &[Transition]) -> Field<'a> {
+    /// share a boundary (others are left out: the job refuses them with their names first);
+    /// `junction` joins the transitions in reach of one point.
+    pub fn new(regions: &'a Regions, pairs: Vec<Pair>, transitions: &[Transition], junction: Junction) -> Field<'a> {
         let mut kept = Vec::new();
         let mut boundary_of = Vec::new();
         let mut reach = vec![0.0f64; regions.regions.len()];
@@ -39,7 +41,7 @@ impl<'a> Field<'a> {
                 }
             }
         }
-        Field { regions, transitions: kept, boundary_of, pairs, reach }
+        Field { regions, transitions: kept, boundary_of, pairs, reach, junction }
     }
 
     /// π at `p` in region `region` (computed exactly), and the distance to the nearest
@@ -49,13 +51,18 @@ impl<'a> Field<'a> {
         let at: Vec<f64> = bounds.iter().map(|b| if b.other(region).is_some() { b.distance(p) } else { f64::INFINITY }).collect();
         let nearest = at.iter().copied().fold(f64::INFINITY, f64::min);
         let distances: Vec<f64> = self.boundary_of.iter().map(|&b| at[b]).collect();
-        (pair_at(region, &distances, &self.transitions, &self.pairs), nearest)
+        (pair_at(region, &distances, &self.transitions, &self.pairs, self.junction), nearest)
     }
 
-    /// π at `p` and its region (every query made).
-    pub fn at(&self, p: DVec3) -> (Pair, usize) {
-        let r = self.regions.locate(p, 0);
-        (self.pair_in(p, r).0, r)
+    /// Region `r`'s own pair.
+    pub fn pair(&self, r: usize) -> Pair {
+        self.pairs[r]
+    }
+
+    /// π at `p` when it lies in the foam (within ε of a region), every query made.
+    pub fn inside(&self, p: DVec3) -> Option<Pair> {
+        let (r, d) = self.regions.locate_signed(p, 0);
+        (d <= self.regions.epsilon_mm).then(|| self.pair_in(p, r).0)
     }
 
     /// A walker along one path (a layer), starting with no knowledge.

@@ -6,16 +6,19 @@
 //! ([`vtp`], section 3.2.4). The job kind `foam` (`crate::jobs::foam`) runs them as stages:
 //! [`regions`] (parry3d-f64 solids, shared boundaries, the paper's region rules), the
 //! foundation's slicer on the union, [`raster`] (one continuous path per layer), [`field`]
-//! (π along the path with few queries); [`models`] builds the examples' regions.
+//! (π along the path with few queries); [`models`] builds the examples' regions. Beyond the
+//! paper: [`stiffness`] turns a target modulus into V*, and [`blend`] joins several
+//! transitions where regions meet along lines.
 
 pub mod blend;
 pub mod raster;
 pub mod field;
 pub mod models;
 pub mod regions;
+pub mod stiffness;
 pub mod vtp;
 pub mod weight;
 
-pub use blend::{pair_at, Transition};
+pub use blend::{pair_at, Junction, Transition};
 pub use vtp::{Pair, Piece, Process};
 pub use weight::Weighting;

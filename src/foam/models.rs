@@ -47,7 +47,22 @@ pub enum Model {
         /// Size of both together, X Y Z.
         size_mm: [f64; 3],
     },
+    /// A disc cut into equal sectors, one region each, all meeting along the axis (beyond the
+    /// paper: every region touches two others, and three or more meet along a line).
+    Sectors {
+        /// Number of sectors, 3 to 8.
+        count: usize,
+        /// Radius.
+        radius_mm: f64,
+        /// Thickness.
+        thickness_mm: f64,
+    },
 }
+
+/// Most sectors of [`Model::Sectors`] (the most regions a foam has).
+pub const MAX_SECTORS: usize = 8;
+/// Segments of the circle of [`Model::Sectors`] (at least; a multiple of the count).
+pub const SECTOR_CIRCLE_SEGMENTS: usize = 48;
 
 impl Default for Model {
     fn default() -> Self {
@@ -58,12 +73,13 @@ impl Default for Model {
 /// Form rows (paths relative to the model).
 pub const FIELDS: &[crate::settings::Field] = &[
     crate::settings::choice_docs(
-        crate::settings::other("kind", "Model", "Shape", crate::settings::Kind::Choice, &["dogbone", "hinge_cube", "insole", "blocks"], "Region meshes made by weft instead of loaded files."),
+        crate::settings::other("kind", "Model", "Shape", crate::settings::Kind::Choice, &["dogbone", "hinge_cube", "insole", "blocks", "sectors"], "Region meshes made by weft instead of loaded files."),
         &[
             "A dogbone split at the middle of its neck: two regions (the paper's test piece).",
             "A cube's net: six stiff panels joined by soft hinge strips (two regions).",
             "An insole: heel and ball in one region, the rest in another.",
             "Two blocks side by side along X (the benchmark's foam).",
+            "A disc cut into sectors that all meet at its centre (needs several neighbours).",
         ],
     ),
     crate::settings::num("neck_length_mm", "Model", "Neck length", "mm", 1.0, 1000.0, 1.0, "Length of the dogbone's narrow middle."),
@@ -74,6 +90,8 @@ pub const FIELDS: &[crate::settings::Field] = &[
     crate::settings::num("panel_mm", "Model", "Panel size", "mm", 1.0, 500.0, 1.0, "Edge of each square panel of the cube's net."),
     crate::settings::num("hinge_mm", "Model", "Hinge width", "mm", 0.1, 100.0, 0.5, "Width of the soft strip between two panels."),
     crate::settings::num("length_mm", "Model", "Insole length", "mm", 50.0, 500.0, 1.0, "Heel to toe."),
+    crate::settings::int("count", "Model", "Sectors", 3.0, MAX_SECTORS as f64, "How many regions the disc is cut into."),
+    crate::settings::num("radius_mm", "Model", "Disc radius", "mm", 1.0, 500.0, 1.0, "Radius of the disc."),
     crate::settings::vec3("size_mm", "Model", "Blocks size", "mm", 0.5, 1000.0, 1.0, "Both blocks together; they meet at the middle of X."),
 ];
 
@@ -107,6 +125,13 @@ pub fn problems(model: &Model) -> Vec<String> {
             for (n, v) in ["X", "Y", "Z"].iter().zip(size_mm) {
                 positive(&format!("the size along {n}"), v, &mut out);
             }
+        }
+        Model::Sectors { count, radius_mm, thickness_mm } => {
+            if !(3..=MAX_SECTORS).contains(&count) {
+                out.push(format!("{count} sectors: cut the disc into 3 to {MAX_SECTORS}"));
+            }
+            positive("the radius", radius_mm, &mut out);
+            positive("the thickness", thickness_mm, &mut out);
         }
     }
     out
@@ -158,6 +183,24 @@ pub fn build(model: &Model) -> Vec<(String, Mesh)> {
         Model::Blocks { size_mm: [x, y, z] } => {
             let rect = |x0: f64, x1: f64| vec![DVec2::new(x0, -y / 2.0), DVec2::new(x1, -y / 2.0), DVec2::new(x1, y / 2.0), DVec2::new(x0, y / 2.0)];
             vec![("block A".into(), prisms(&[rect(-x / 2.0, 0.0)], z)), ("block B".into(), prisms(&[rect(0.0, x / 2.0)], z))]
+        }
+        Model::Sectors { count, radius_mm: r, thickness_mm: t } => {
+            // The circle's points are made once, so that neighbours share their cut exactly;
+            // the first cut points along +Y.
+            let count = count.clamp(1, MAX_SECTORS);
+            let per = SECTOR_CIRCLE_SEGMENTS.div_ceil(count).max(2);
+            let n = per * count;
+            let at = |k: usize| {
+                let a = std::f64::consts::FRAC_PI_2 + std::f64::consts::TAU * (k % n) as f64 / n as f64;
+                DVec2::new(r * libm::cos(a), r * libm::sin(a))
+            };
+            (0..count)
+                .map(|i| {
+                    let mut ring = vec![DVec2::ZERO];
+                    ring.extend((i * per..=(i + 1) * per).map(at));
+                    (format!("sector {}", i + 1), prisms(&[ring], t))
+                })
+                .collect()
         }
     }
 }

@@ -210,6 +210,12 @@ impl Regions {
     /// The region holding `p`: `hint` first (the previous point's), then the others; a point in
     /// none (on a boundary, or just outside after rounding) goes to the least signed distance.
     pub fn locate(&self, p: DVec3, hint: usize) -> usize {
+        self.locate_signed(p, hint).0
+    }
+
+    /// [`Regions::locate`] and the signed distance to that region (negative inside; for a
+    /// point inside, only its sign is certain: the search stops at the first solid holding it).
+    pub fn locate_signed(&self, p: DVec3, hint: usize) -> (usize, f64) {
         let order = std::iter::once(hint).chain((0..self.regions.len()).filter(|&r| r != hint));
         let mut best = (f64::INFINITY, hint);
         for r in order {
@@ -219,13 +225,13 @@ impl Regions {
             }
             let d = region.signed_distance(p);
             if d < 0.0 {
-                return r;
+                return (r, d);
             }
             if d < best.0 {
                 best = (d, r);
             }
         }
-        best.1
+        (best.1, best.0)
     }
 
     /// Names of regions.

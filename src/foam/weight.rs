@@ -54,7 +54,20 @@ pub enum Weighting {
     CubeRoot,
     /// `w = sin(πx)/2 + ½` (equation 6): C¹ at the ends.
     Sinusoidal,
+    /// Beyond the paper: `w = ln(1 + (r − 1)(x + ½)) / ln r`, the weight at which the modulus
+    /// (by a [`crate::foam::stiffness::Calibration`]) falls or rises linearly from one region's
+    /// to the other's, r being their ratio. What the fitted logarithm aims at, but exact at both
+    /// ends (w = 0 and 1) for any two regions; linear when r = 1.
+    LinearModulus {
+        /// `E(to) / E(from)`, set by the job from the regions' V* and the calibration (not part
+        /// of the design); default [`DEFAULT_MODULUS_RATIO`].
+        #[serde(skip)]
+        ratio: f64,
+    },
 }
+
+/// The modulus ratio of the paper's sweep, V* 0.15 → 0.4: `e^{−3.11}`.
+pub const DEFAULT_MODULUS_RATIO: f64 = 0.044_600_955_340_274_535;
 
 /// The design's form of a weighting: `{"kind": …}` with the kind's own parameters only (a
 /// parameter of another kind is refused rather than ignored: serde's tagged enums would drop it
@@ -90,7 +103,8 @@ impl<'de> Deserialize<'de> for Weighting {
             ),
             "cube_root" => (Weighting::CubeRoot, &[]),
             "sinusoidal" => (Weighting::Sinusoidal, &[]),
-            other => return Err(D::Error::unknown_variant(other, &["linear", "cubic", "logarithmic", "cube_root", "sinusoidal"])),
+            "linear_modulus" => (Weighting::LinearModulus { ratio: DEFAULT_MODULUS_RATIO }, &[]),
+            other => return Err(D::Error::unknown_variant(other, &["linear", "cubic", "logarithmic", "cube_root", "sinusoidal", "linear_modulus"])),
         };
         match given(allowed).as_slice() {
             [] => Ok(w),
@@ -124,6 +138,13 @@ impl Weighting {
             Weighting::Logarithmic { slope, intercept, f, b } => libm::log((intercept - slope * x) / f) / b + 0.5,
             Weighting::CubeRoot => libm::cbrt(x / 4.0) + 0.5,
             Weighting::Sinusoidal => libm::sin(std::f64::consts::PI * x) / 2.0 + 0.5,
+            Weighting::LinearModulus { ratio } => {
+                if (ratio - 1.0).abs() < 1e-9 {
+                    x + 0.5
+                } else {
+                    libm::log1p((ratio - 1.0) * (x + 0.5)) / libm::log(ratio)
+                }
+            }
         }
     }
 
@@ -149,6 +170,9 @@ impl Weighting {
                         out.push(format!("the modulus line {slope}·x + {intercept} reaches {lo:.3} within the transition: it must stay above 0 over x in [−½, ½] (raise the intercept above {:.3})", slope.abs() / 2.0));
                     }
                 }
+            }
+            Weighting::LinearModulus { ratio } if !(ratio.is_finite() && ratio > 0.0) => {
+                out.push(format!("the ratio of the two regions' moduli is {ratio}: check the modulus calibration (its F and b)"))
             }
             _ => {}
         }

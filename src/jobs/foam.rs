@@ -7,8 +7,13 @@
 //! where the last ended, [`foam::raster`]), `grade` (pieces of the set length, each with the
 //! pair π of its end point, [`foam::field`], and the VTP numbers of section 3.2.4).
 //!
-//! The report draws the weighting functions, and V*, H* and ΔE/mm along a probe line (the
-//! paper's Fig. 6); views show the shared boundaries and each layer's path.
+//! The report draws the weighting functions, and V*, H*, ΔE/mm and the predicted modulus along
+//! a probe line (the paper's Fig. 6); views show the shared boundaries and each layer's path.
+//!
+//! Beyond the paper: a region's V* may be set by a target modulus through the calibration of
+//! [`foam::stiffness`]; a transition may keep the modulus linear exactly
+//! ([`Weighting::LinearModulus`]); with several neighbours allowed, a point near several
+//! boundaries blends them by distance ([`foam::blend`]).
 
 use super::{Inspection, Kind, Product, Shape, Slot, SlotKind, StageInfo, ViewInfo};
 use crate::budget::Estimate;
@@ -17,11 +22,12 @@ use crate::foam::field::Field;
 use crate::foam::models::{self, Model};
 use crate::foam::raster;
 use crate::foam::regions::{self, Regions};
-use crate::foam::{Pair, Process, Transition, Weighting};
+use crate::foam::stiffness::Calibration;
+use crate::foam::{Junction, Pair, Process, Transition, Weighting};
 use crate::geom::{DVec2, DVec3, Feature, Mesh, Pass, PassKind, Path, PointData, PointFlow, Polygon, Toolpath};
 use crate::pipeline::{Ctx, Error, Out};
 use crate::report::{Axis, Metric, Plot, PlotKind, Series, StageReport};
-use crate::settings::{mount, num, other, percent, Field as Row0, Kind as FieldKind, Problem, Row};
+use crate::settings::{mount, num, other, percent, when, Field as Row0, Kind as FieldKind, Problem, Row};
 use crate::slice;
 use serde::{Deserialize, Serialize};
 
@@ -31,6 +37,9 @@ pub const MAX_REGIONS: usize = 8;
 pub const MAX_TRANSITIONS: usize = 8;
 /// Default V* of a new region (the middle of the paper's 0.15–0.4).
 pub const DEFAULT_V_STAR: f64 = 0.25;
+/// Default target modulus of a region set by its stiffness, kPa (inside the paper's
+/// calibration, 1.01–22.68 kPa).
+pub const DEFAULT_MODULUS_KPA: f64 = 5.0;
 /// Default H* of a region: the nozzle 8 swollen thread diameters above the layer.
 pub const DEFAULT_H_STAR: f64 = 8.0;
 /// Default layer height, mm.
@@ -46,14 +55,56 @@ pub const MAX_PIECES: f64 = 20e6;
 /// Points along the probe line.
 pub const PROBE_SAMPLES: usize = 241;
 
+/// What sets a region's V*.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SetBy {
+    /// V* itself.
+    #[default]
+    VStar,
+    /// A target modulus, through the calibration (beyond the paper).
+    Modulus,
+}
+
 /// A region's pair, by its place in the regions list.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct RegionSpec {
+    /// What sets V*: `v_star`, or `modulus_kpa` through the calibration (the other is unused).
+    #[serde(default)]
+    pub set_by: SetBy,
     /// V* = nozzle speed ÷ speed of the thread leaving the nozzle.
+    #[serde(default = "default_v_star")]
     pub v_star: f64,
+    /// Target compressive modulus, kPa (when set by the modulus).
+    #[serde(default = "default_modulus")]
+    pub modulus_kpa: f64,
     /// H* = nozzle height ÷ (die swell × nozzle diameter).
     pub h_star: f64,
+}
+
+fn default_v_star() -> f64 {
+    DEFAULT_V_STAR
+}
+
+fn default_modulus() -> f64 {
+    DEFAULT_MODULUS_KPA
+}
+
+impl RegionSpec {
+    /// A region set by its V*.
+    pub fn new(v_star: f64, h_star: f64) -> RegionSpec {
+        RegionSpec { set_by: SetBy::VStar, v_star, modulus_kpa: DEFAULT_MODULUS_KPA, h_star }
+    }
+
+    /// Its pair: V* given, or the calibration's V* of its modulus.
+    pub fn pair(&self, c: &Calibration) -> Pair {
+        let v_star = match self.set_by {
+            SetBy::VStar => self.v_star,
+            SetBy::Modulus => c.v_star(self.modulus_kpa),
+        };
+        Pair { v_star, h_star: self.h_star }
+    }
 }
 
 /// A transition between two regions (numbered from 1, as the form shows them).
@@ -91,6 +142,10 @@ pub struct Options {
     pub feed_mm_s: f64,
     /// Let a region share boundaries with several others (beyond the paper).
     pub many_neighbours: bool,
+    /// How a point near several boundaries of its region takes its pair.
+    pub junction: Junction,
+    /// The modulus of the foam against V* (regions set by a modulus, the predicted modulus).
+    pub calibration: Calibration,
     /// Axis of the probe line (through the middle of the part).
     pub probe_axis: ProbeAxis,
 }
@@ -119,6 +174,8 @@ impl Default for Options {
             piece_mm: DEFAULT_PIECE_MM,
             feed_mm_s: DEFAULT_FEED_MM_S,
             many_neighbours: false,
+            junction: Junction::Blend,
+            calibration: Calibration::default(),
             probe_axis: ProbeAxis::X,
         }
     }
@@ -146,7 +203,7 @@ pub struct FoamJob {
 }
 
 fn default_regions() -> Vec<RegionSpec> {
-    vec![RegionSpec { v_star: 0.15, h_star: DEFAULT_H_STAR }, RegionSpec { v_star: 0.4, h_star: DEFAULT_H_STAR }]
+    vec![RegionSpec::new(0.15, DEFAULT_H_STAR), RegionSpec::new(0.4, DEFAULT_H_STAR)]
 }
 
 fn default_transitions() -> Vec<TransitionSpec> {
@@ -193,11 +250,25 @@ const OPTION_FIELDS: &[Row0] = &[
     percent(num("inset", "Foam", "Turns inside the outline", "", 0.0, 1.0, 0.05, "How far inside the outline the path turns, in line spacings (50 %: half a spacing).")),
     num("piece_mm", "Foam", "Piece length", "mm", 0.01, 100.0, 0.05, "The path is cut into pieces this long; each gets the V* and H* of its end."),
     num("feed_mm_s", "Foam", "Filament feed C", "mm/s", 0.01, 100.0, 0.1, "Filament fed into the extruder per second, the same everywhere (constant extrusion)."),
-    other("many_neighbours", "Foam", "Several neighbours", FieldKind::Bool, &[], "Let a region touch several others (the paper allows one); a point blends with its nearest boundary."),
+    other("many_neighbours", "Foam", "Several neighbours", FieldKind::Bool, &[], "Let a region touch several others (the paper allows one)."),
+    when(
+        crate::settings::choice_docs(
+            other("junction", "Foam", "Near several boundaries", FieldKind::Choice, &["blend", "nearest"], "How a point within reach of several transitions of its region takes V* and H*."),
+            &["Average the transitions' blends, weighted by closeness: no jumps where boundaries meet.", "Take the nearest boundary's blend only: jumps where the nearest changes."],
+        ),
+        "many_neighbours",
+        "true",
+    ),
+    num("calibration.f_kpa", "Stiffness", "Modulus fit F", "kPa", 1e-6, 1e6, 0.01, "F of the modulus measured along a linear V* sweep, E = F·e^(b·u) (the paper's 4.79)."),
+    num("calibration.b", "Stiffness", "Modulus fit b", "", -100.0, 100.0, 0.01, "b of that fit; u runs from −½ at the sweep's first V* to ½ at its last (the paper's −3.11)."),
+    num("calibration.v_star_from", "Stiffness", "Sweep from V*", "", 0.01, 10.0, 0.01, "V* where the measured sweep started (the paper's 0.15)."),
+    num("calibration.v_star_to", "Stiffness", "Sweep to V*", "", 0.01, 10.0, 0.01, "V* where it ended (the paper's 0.4); moduli outside the sweep are refused."),
     other("probe_axis", "Probe", "Probe line along", FieldKind::Choice, &["x", "y", "z"], "The report plots V*, H* and ΔE/mm along this axis through the middle of the part."),
 ];
 
 const REGION_V: [&str; MAX_REGIONS] = ["Region 1: V*", "Region 2: V*", "Region 3: V*", "Region 4: V*", "Region 5: V*", "Region 6: V*", "Region 7: V*", "Region 8: V*"];
+const REGION_SET: [&str; MAX_REGIONS] = ["Region 1: set by", "Region 2: set by", "Region 3: set by", "Region 4: set by", "Region 5: set by", "Region 6: set by", "Region 7: set by", "Region 8: set by"];
+const REGION_E: [&str; MAX_REGIONS] = ["Region 1: modulus", "Region 2: modulus", "Region 3: modulus", "Region 4: modulus", "Region 5: modulus", "Region 6: modulus", "Region 7: modulus", "Region 8: modulus"];
 const REGION_H: [&str; MAX_REGIONS] = ["Region 1: H*", "Region 2: H*", "Region 3: H*", "Region 4: H*", "Region 5: H*", "Region 6: H*", "Region 7: H*", "Region 8: H*"];
 const T_FROM: [&str; MAX_TRANSITIONS] = ["Transition 1: from region", "Transition 2: from region", "Transition 3: from region", "Transition 4: from region", "Transition 5: from region", "Transition 6: from region", "Transition 7: from region", "Transition 8: from region"];
 
@@ -206,7 +277,12 @@ fn indexed_rows() -> Vec<Row> {
     let mut rows = Vec::new();
     for i in 0..MAX_REGIONS {
         let f = [
-            num("v_star", "Regions", REGION_V[i], "", 0.01, 10.0, 0.01, "Nozzle speed ÷ thread speed: lower lays more coils per mm (denser, stiffer foam); the paper prints 0.15–0.4."),
+            crate::settings::choice_docs(
+                other("set_by", "Regions", REGION_SET[i], FieldKind::Choice, &["v_star", "modulus"], "Give the region's V* directly, or the stiffness it should have."),
+                &["V* as given.", "The V* whose foam has this modulus, by the calibration under Stiffness."],
+            ),
+            when(num("v_star", "Regions", REGION_V[i], "", 0.01, 10.0, 0.01, "Nozzle speed ÷ thread speed: lower lays more coils per mm (denser, stiffer foam); the paper prints 0.15–0.4."), "set_by", "v_star"),
+            when(num("modulus_kpa", "Regions", REGION_E[i], "kPa", 1e-6, 1e6, 0.1, "Target compressive modulus; weft picks the V* that prints it (the paper's TPU: 1.01 to 22.68 kPa)."), "set_by", "modulus"),
             num("h_star", "Regions", REGION_H[i], "", 0.1, 100.0, 0.5, "Nozzle height in swollen thread diameters: higher gives wider coils."),
         ];
         rows.extend(mount(&format!("job.regions.{i}"), &f));
@@ -217,13 +293,14 @@ fn indexed_rows() -> Vec<Row> {
             num("to", "Transitions", "to region", "", 1.0, MAX_REGIONS as f64, 1.0, "The region where the weight is 1."),
             num("length_mm", "Transitions", "length", "mm", 0.0, 10000.0, 0.5, "Width of the blend, centred on the shared boundary (0: a sharp step)."),
             crate::settings::choice_docs(
-                other("weighting.kind", "Transitions", "weighting", FieldKind::Choice, &["linear", "cubic", "logarithmic", "cube_root", "sinusoidal"], "How V* and H* blend across the transition."),
+                other("weighting.kind", "Transitions", "weighting", FieldKind::Choice, &["linear", "cubic", "logarithmic", "cube_root", "sinusoidal", "linear_modulus"], "How V* and H* blend across the transition."),
                 &[
                     "w = x + ½: V* and H* change at a constant rate.",
                     "w = 4(1 − s)x³ + s·x + ½: slope s at the boundary (1.5: smooth ends).",
-                    "The paper's fit: the foam's modulus, not V*, changes linearly.",
+                    "The paper's fit: the foam's modulus, not V*, changes linearly (it misses the ends a little).",
                     "w = ∛(x/4) + ½: steep at the boundary, flat at the ends.",
                     "w = sin(πx)/2 + ½: smooth at both ends.",
+                    "The modulus changes linearly from region to region by the calibration, exact at both ends.",
                 ],
             ),
             num("weighting.slope", "Transitions", "slope", "", -1000.0, 1000.0, 0.01, "Cubic: slope at the boundary (0 to 1.5). Logarithmic: slope of the modulus line E(x)."),
@@ -263,8 +340,26 @@ fn source_regions(j: &FoamJob) -> Option<usize> {
     }
 }
 
+/// Each region's pair (V* given, or by the calibration from its modulus).
+fn pairs(j: &FoamJob) -> Vec<Pair> {
+    j.regions.iter().map(|r| r.pair(&j.foam.calibration)).collect()
+}
+
+/// The transitions with regions from 0; a linear-modulus weighting takes the ratio of its
+/// regions' moduli by the calibration.
 fn transitions(j: &FoamJob) -> Vec<Transition> {
-    j.transitions.iter().map(|t| Transition { from: t.from.saturating_sub(1), to: t.to.saturating_sub(1), length_mm: t.length_mm, weighting: t.weighting }).collect()
+    let pairs = pairs(j);
+    let v = |r: usize| pairs.get(r.wrapping_sub(1)).map_or(f64::NAN, |p| p.v_star);
+    j.transitions
+        .iter()
+        .map(|t| {
+            let weighting = match t.weighting {
+                Weighting::LinearModulus { .. } => Weighting::LinearModulus { ratio: j.foam.calibration.ratio(v(t.from), v(t.to)) },
+                w => w,
+            };
+            Transition { from: t.from.saturating_sub(1), to: t.to.saturating_sub(1), length_mm: t.length_mm, weighting }
+        })
+        .collect()
 }
 
 impl Kind for FoamKind {
@@ -323,8 +418,21 @@ impl Kind for FoamKind {
                 });
             }
         }
+        let c = &j.foam.calibration;
+        let calibration = c.problems();
+        for message in &calibration {
+            out.push(Problem { path: "job.foam.calibration".into(), message: message.clone() });
+        }
         for (i, r) in j.regions.iter().enumerate() {
-            for message in p.pair_problems(&format!("region {}", i + 1), Pair { v_star: r.v_star, h_star: r.h_star }, j.foam.layer_height_mm) {
+            if r.set_by == SetBy::Modulus {
+                if let Some(message) = c.modulus_problem(r.modulus_kpa).filter(|_| calibration.is_empty()) {
+                    out.push(Problem { path: format!("job.regions.{i}.modulus_kpa"), message: format!("region {}: {message}", i + 1) });
+                    continue;
+                } else if !calibration.is_empty() {
+                    continue;
+                }
+            }
+            for message in p.pair_problems(&format!("region {}", i + 1), r.pair(c), j.foam.layer_height_mm) {
                 out.push(Problem { path: format!("job.regions.{i}"), message });
             }
         }
@@ -360,19 +468,18 @@ impl Kind for FoamKind {
         if slot == "regions" {
             j.model = None;
             let n = mesh_names(&j).len().min(MAX_REGIONS);
-            j.regions.resize(n, RegionSpec { v_star: DEFAULT_V_STAR, h_star: DEFAULT_H_STAR });
+            j.regions.resize(n, RegionSpec::new(DEFAULT_V_STAR, DEFAULT_H_STAR));
             j.transitions.retain(|t| t.from >= 1 && t.to >= 1 && t.from <= n && t.to <= n);
         }
         j
     }
 
     fn estimate(j: &FoamJob, ctx: &mut Ctx) -> Result<Vec<Estimate>, Error> {
-        let meshes = region_meshes(j, ctx)?;
-        let triangles: usize = meshes.iter().map(|m| m.1.triangles.len()).sum();
+        let placed = placed_stage(j, ctx)?;
+        let triangles = placed.union.triangles.len();
         let regions = Estimate::new("regions").quantity("triangles", "Triangles", triangles as f64, "").cost(triangles as f64 * 400.0, triangles as f64 * 4e-6);
-        let union = union_mesh(&meshes);
-        let slice_e = slice::estimate(&union, &slice_options(j));
-        let b = union.bounds().map(|b| b.max - b.min).unwrap_or_default();
+        let slice_e = slice::estimate(&placed.union, &slice_options(j));
+        let b = placed.union.bounds().map(|b| b.max - b.min).unwrap_or_default();
         let layers = (b.z / j.foam.layer_height_mm).ceil().max(1.0);
         let s = j.foam.line_spacing_mm;
         // Upper bounds from the box: every layer full, plus a turn per line.
@@ -399,7 +506,8 @@ impl Kind for FoamKind {
         let paths = raster_stage(j, ctx, &layers)?;
         let design = ctx.design;
         let p = process(design, j);
-        let parts = (&j.regions, &j.transitions, j.foam.piece_mm, j.foam.layer_height_mm, j.foam.probe_axis, p.nozzle_mm, p.die_swell, p.filament_mm, p.feed_mm_s);
+        let f = &j.foam;
+        let parts = (&j.regions, &j.transitions, (f.piece_mm, f.layer_height_mm, f.probe_axis, f.junction, f.calibration), p.nozzle_mm, p.die_swell, p.filament_mm, p.feed_mm_s);
         let toolpath = ctx.stage("grade", "grade", &parts, &[regions.key, paths.key], |progress| grade(j, &p, &regions, &layers, &paths, progress))?;
         Ok(Product::Toolpath(toolpath))
     }
@@ -453,38 +561,59 @@ impl Kind for FoamKind {
     }
 }
 
-/// The region meshes in their own coordinates (files) or built (model), with their names.
-fn region_meshes(j: &FoamJob, ctx: &mut Ctx) -> Result<Vec<(String, Mesh)>, Error> {
-    if let Some(m) = &j.model {
-        return Ok(models::build(m));
-    }
-    let input = j.meshes.as_ref().ok_or_else(|| Error::NoInput("a foam needs its region meshes: load one file per region (--input regions=FILE, repeated), or switch on a built-in model".into()))?;
-    let mut out = Vec::new();
-    let items: Vec<Input> = match input {
-        Input::Files(names) => names.iter().map(|n| Input::File { name: n.clone(), embedded: None }).collect(),
-        other => vec![other.clone()],
-    };
-    if items.len() > MAX_REGIONS {
-        return Err(Error::NoInput(format!("{} region meshes: a foam takes at most {MAX_REGIONS}", items.len())));
-    }
-    for (i, item) in items.iter().enumerate() {
-        let name = match item {
-            Input::File { name, .. } => name.clone(),
-            _ => format!("region {}", i + 1),
-        };
-        let mesh = ctx.mesh_item("regions", i, item)?;
-        out.push((name, (*mesh).clone()));
-    }
-    Ok(out)
+/// The regions placed together: each region's mesh, moved with the others so that their
+/// union stands on the plate, XY centred on 0 (their places relative to each other kept), and
+/// that union (all triangles in one mesh: touching outlines merge when sliced).
+pub struct Placed {
+    /// Region names (their files, or the model's).
+    pub names: Vec<String>,
+    /// Region meshes, placed.
+    pub meshes: Vec<Mesh>,
+    /// All of them in one mesh.
+    pub union: Mesh,
 }
 
-/// All regions in one mesh (their union for the slicer: touching outlines merge).
-fn union_mesh(meshes: &[(String, Mesh)]) -> Mesh {
-    let mut m = Mesh::default();
-    for (_, r) in meshes {
-        m.append(r);
+/// The placed regions of the files (each imported and cached on its own) or of the built-in
+/// model: made by the estimate, read again by the run.
+fn placed_stage(j: &FoamJob, ctx: &mut Ctx) -> Result<Out<Placed>, Error> {
+    let mut items: Vec<(String, Out<Mesh>)> = Vec::new();
+    if j.model.is_none() {
+        let input = j.meshes.as_ref().ok_or_else(|| Error::NoInput("a foam needs its region meshes: load one file per region (--input regions=FILE, repeated), or switch on a built-in model".into()))?;
+        let inputs: Vec<Input> = match input {
+            Input::Files(names) => names.iter().map(|n| Input::File { name: n.clone(), embedded: None }).collect(),
+            other => vec![other.clone()],
+        };
+        if inputs.len() > MAX_REGIONS {
+            return Err(Error::NoInput(format!("{} region meshes: a foam takes at most {MAX_REGIONS}", inputs.len())));
+        }
+        for (i, input) in inputs.iter().enumerate() {
+            let name = match input {
+                Input::File { name, .. } => name.clone(),
+                _ => format!("region {}", i + 1),
+            };
+            items.push((name, ctx.mesh_item("regions", i, input)?));
+        }
     }
-    m
+    let keys: Vec<crate::pipeline::Key> = items.iter().map(|(_, m)| m.key).collect();
+    let names: Vec<&str> = items.iter().map(|(n, _)| n.as_str()).collect();
+    ctx.stage_kept("place", "place", &(&j.model, &names), &keys, |_| {
+        let (names, mut meshes): (Vec<String>, Vec<Mesh>) = match &j.model {
+            Some(m) => models::build(m).into_iter().unzip(),
+            None => items.iter().map(|(n, m)| (n.clone(), (**m).clone())).unzip(),
+        };
+        let mut union = Mesh::default();
+        for m in &meshes {
+            union.append(m);
+        }
+        if let Some(b) = union.bounds() {
+            let shift = DVec3::new(-(b.min.x + b.max.x) / 2.0, -(b.min.y + b.max.y) / 2.0, -b.min.z);
+            union.translate(shift);
+            for m in &mut meshes {
+                m.translate(shift);
+            }
+        }
+        Ok((Placed { names, meshes, union }, None))
+    })
 }
 
 fn slice_options(j: &FoamJob) -> slice::Options {
@@ -492,26 +621,12 @@ fn slice_options(j: &FoamJob) -> slice::Options {
     slice::Options { first_layer_height_mm: h, layer_height_mm: h, perimeters: 0, infill_density: 0.0, solid_layers: 0, ..slice::Options::default() }
 }
 
-/// The regions moved together so that their union stands on the plate, XY centred on 0
-/// (their places relative to each other kept).
-fn placed(mut meshes: Vec<(String, Mesh)>) -> Vec<(String, Mesh)> {
-    if let Some(b) = union_mesh(&meshes).bounds() {
-        let c = (b.min + b.max) * 0.5;
-        for (_, m) in &mut meshes {
-            m.translate(DVec3::new(-c.x, -c.y, -b.min.z));
-        }
-    }
-    meshes
-}
-
-/// The regions placed together on the plate, their solids and shared boundaries.
+/// The regions' solids and shared boundaries.
 fn regions_stage(j: &FoamJob, ctx: &mut Ctx) -> Result<Out<Regions>, Error> {
-    let meshes = region_meshes(j, ctx)?;
+    let placed = placed_stage(j, ctx)?;
     let options = regions::Options { many_neighbours: j.foam.many_neighbours, ..regions::Options::default() };
-    let key_meshes: Vec<crate::pipeline::Key> = meshes.iter().map(|(n, m)| crate::pipeline::Key::of(n, &(), &[crate::pipeline::Key::of_bytes(&m.to_stl_binary())])).collect();
-    ctx.stage("regions", "regions", &(j.foam.many_neighbours,), &key_meshes, |_| {
-        let meshes = placed(meshes);
-        let r = regions::regions(meshes, &options).map_err(|e| Error::stage("regions", e))?;
+    ctx.stage("regions", "regions", &(j.foam.many_neighbours,), &[placed.key], |_| {
+        let r = regions::regions(placed.names.iter().cloned().zip(placed.meshes.iter().cloned()).collect(), &options).map_err(|e| Error::stage("regions", e))?;
         let shared: f64 = r.boundaries.iter().map(|b| b.area_mm2).sum();
         let report = StageReport::new("regions", "Finding shared boundaries", &serde_json::json!({ "regions": r.names(), "boundaries": r.boundaries.iter().map(|b| [b.a + 1, b.b + 1]).collect::<Vec<_>>() }))
             .metric("regions", "Regions", r.regions.len() as f64, "", "Region meshes, each with its own V* and H*.")
@@ -532,20 +647,18 @@ pub struct Layer {
 
 /// The union sliced: one outline per layer, or refused naming the layer and the regions.
 fn slice_stage(j: &FoamJob, ctx: &mut Ctx, regions: &Out<Regions>) -> Result<Out<Vec<Layer>>, Error> {
-    let meshes = region_meshes(j, ctx)?;
+    let placed = placed_stage(j, ctx)?;
     let options = slice_options(j);
-    ctx.stage("slice", "slice", &options, &[regions.key], |progress| {
-        let meshes = placed(meshes);
-        let union = union_mesh(&meshes);
-        let sliced = slice::slice(&union, &options, &mut |f| progress(f * 0.5)).map_err(|e| Error::stage("slicing", e))?;
+    ctx.stage("slice", "slice", &options, &[regions.key, placed.key], |progress| {
+        let sliced = slice::slice(&placed.union, &options, &mut |f| progress(f * 0.5)).map_err(|e| Error::stage("slicing", e))?;
         // Each region alone, for the overlap check per layer.
-        let mut per_region = Vec::with_capacity(meshes.len());
-        for (k, (_, m)) in meshes.iter().enumerate() {
+        let mut per_region = Vec::with_capacity(placed.meshes.len());
+        for (k, m) in placed.meshes.iter().enumerate() {
             let s = slice::slice(m, &options, &mut |_| {}).map_err(|e| Error::stage("slicing", e))?;
             per_region.push(s.layers);
-            progress(0.5 + 0.5 * (k + 1) as f32 / meshes.len() as f32);
+            progress(0.5 + 0.5 * (k + 1) as f32 / placed.meshes.len() as f32);
         }
-        let names: Vec<&str> = meshes.iter().map(|(n, _)| n.as_str()).collect();
+        let names: Vec<&str> = placed.names.iter().map(String::as_str).collect();
         let layers = check_layers(&sliced.layers, &per_region, &names).map_err(|e| Error::stage("slicing", e))?;
         let report = super::slice_report(&sliced.report, "Slicing the union").metric("layers", "Layers", layers.len() as f64, "", "Layers of the foam, each one outline.");
         Ok((layers, Some(report)))
@@ -612,10 +725,12 @@ fn check_layers(union: &[slice::SlicedLayer], per_region: &[Vec<slice::SlicedLay
     let last = union.iter().rposition(|l| !l.regions.is_empty()).unwrap_or(first);
     let mut out = Vec::new();
     for (k, l) in union.iter().enumerate().take(last + 1).skip(first) {
+        // Every slicing starts its stack at the plate with the same heights: layer k of a
+        // region is layer k of the union (a lower region just has fewer).
         let here: Vec<(usize, &[Polygon])> = per_region
             .iter()
             .enumerate()
-            .filter_map(|(r, layers)| layers.iter().find(|x| (x.slice_z - l.slice_z).abs() < 1e-9).map(|x| (r, x.regions.as_slice())))
+            .filter_map(|(r, layers)| layers.get(k).filter(|x| (x.slice_z - l.slice_z).abs() < 1e-9).map(|x| (r, x.regions.as_slice())))
             .filter(|(_, p)| !p.is_empty())
             .collect();
         let listed = || here.iter().map(|(r, _)| names[*r]).collect::<Vec<_>>().join(", ");
@@ -637,7 +752,6 @@ fn check_layers(union: &[slice::SlicedLayer], per_region: &[Vec<slice::SlicedLay
         if l.regions.len() > 1 {
             return Err(LayerError::Several { z: l.z, count: l.regions.len(), regions: listed() });
         }
-        let _ = k;
         out.push(Layer { z: l.z, polygon: l.regions[0].clone() });
     }
     Ok(out)
@@ -657,7 +771,7 @@ fn raster_stage(j: &FoamJob, ctx: &mut Ctx, layers: &Out<Vec<Layer>>) -> Result<
         let (mut scan, mut boundary, mut retraced, mut cells) = (0.0, 0.0, 0.0, 0usize);
         for (k, layer) in layers.iter().enumerate() {
             let angle = o.raster_angle_deg + if o.alternate && k % 2 == 1 { 90.0 } else { 0.0 };
-            let area = inset(&layer.polygon, o.inset * o.line_spacing_mm).map_err(|e| Error::stage("raster", e.at(layer.z)))?;
+            let area = inset(&layer.polygon, o.inset * o.line_spacing_mm, layer.z).map_err(|e| Error::stage("raster", e))?;
             let start = out.last().and_then(|p: &LayerPath| p.points.last().copied());
             let r = raster::raster(&area, start, &raster::Options { spacing_mm: o.line_spacing_mm, angle_deg: angle }).map_err(|e| Error::stage("raster", RasterAt { z: layer.z, source: e }))?;
             scan += r.raster_mm;
@@ -684,26 +798,17 @@ struct RasterAt {
     source: raster::Error,
 }
 
-/// An outline inset error.
+/// An outline that cannot be inset for the raster's turns.
 #[derive(Debug, thiserror::Error)]
-enum InsetError {
-    #[error("layer at z = {z:.2} mm: the outline inset by {d:.2} mm {what}; lower the turn inset or the line spacing")]
-    Split { z: f64, d: f64, what: &'static str },
-}
-
-struct InsetFailure {
+#[error("layer at z = {z:.2} mm: the outline inset by {d:.2} mm {what}; lower the turn inset or the line spacing")]
+struct InsetError {
+    z: f64,
     d: f64,
     what: &'static str,
 }
 
-impl InsetFailure {
-    fn at(self, z: f64) -> InsetError {
-        InsetError::Split { z, d: self.d, what: self.what }
-    }
-}
-
 /// `polygon` shrunk by `d` mm (the raster's turns run there); refused when it vanishes or splits.
-fn inset(polygon: &Polygon, d: f64) -> Result<Polygon, InsetFailure> {
+fn inset(polygon: &Polygon, d: f64, z: f64) -> Result<Polygon, InsetError> {
     use i_overlay::mesh::float::outline::offset::OutlineOffset;
     use i_overlay::mesh::float::style::OutlineStyle;
     if d <= 0.0 {
@@ -721,9 +826,9 @@ fn inset(polygon: &Polygon, d: f64) -> Result<Polygon, InsetFailure> {
         .filter(|p| p.area() > 1e-9)
         .collect();
     match polys.len() {
-        0 => Err(InsetFailure { d, what: "vanishes (the part is too thin)" }),
+        0 => Err(InsetError { z, d, what: "vanishes (the part is too thin)" }),
         1 => Ok(polys.remove(0)),
-        _ => Err(InsetFailure { d, what: "splits into several parts (a neck narrower than twice the inset)" }),
+        _ => Err(InsetError { z, d, what: "splits into several parts (a neck narrower than twice the inset)" }),
     }
 }
 
@@ -731,7 +836,7 @@ fn inset(polygon: &Polygon, d: f64) -> Result<Polygon, InsetFailure> {
 /// one free pass per layer whose first point is the last layer's end (one uninterrupted
 /// extrusion), and the report with its plots.
 fn grade(j: &FoamJob, p: &Process, regions: &Regions, layers: &[Layer], paths: &[LayerPath], progress: &mut dyn FnMut(f32)) -> Result<(Toolpath, Option<StageReport>), Error> {
-    let pairs: Vec<Pair> = j.regions.iter().map(|r| Pair { v_star: r.v_star, h_star: r.h_star }).collect();
+    let pairs = pairs(j);
     if pairs.len() != regions.regions.len() {
         return Err(Error::NoInput(format!("the foam has {} regions but the design gives {} V*/H* pairs: give one per region", regions.regions.len(), pairs.len())));
     }
@@ -747,7 +852,7 @@ fn grade(j: &FoamJob, p: &Process, regions: &Regions, layers: &[Layer], paths: &
             )));
         }
     }
-    let field = Field::new(regions, pairs.clone(), &transitions);
+    let field = Field::new(regions, pairs.clone(), &transitions, j.foam.junction);
     let h = j.foam.layer_height_mm;
     let piece = j.foam.piece_mm;
     let width = p.die_swell * p.nozzle_mm;
@@ -813,7 +918,6 @@ fn grade_report(j: &FoamJob, p: &Process, field: &Field, regions: &Regions, tran
         .metric("e_per_mm_max", "Most filament per mm", if v_lo > 0.0 { p.filament_per_mm(v_lo) } else { 0.0 }, "mm/mm", "ΔE per mm of nozzle travel at the lowest V*: A_t / (V*·A_f).")
         .metric("e_per_mm_min", "Least filament per mm", if v_hi > 0.0 { p.filament_per_mm(v_hi) } else { 0.0 }, "mm/mm", "ΔE per mm of nozzle travel at the highest V*.")
         .metric("thread_speed", "Thread speed", p.speed_mm_s(1.0), "mm/s", "Speed of the thread leaving the nozzle, C·A_f/A_t (the nozzle moves V* times as fast).");
-    let _ = regions;
     // The weighting functions of the transitions (appendix A), plotted over x = α_i/α_T.
     let xs: Vec<f64> = (0..=120).map(|i| -0.6 + 1.2 * i as f64 / 120.0).collect();
     let mut weights = Plot { key: "weighting".into(), title: "Weighting functions w(x)".into(), kind: PlotKind::Line, x: Axis::new("x = α_i / α_T", ""), y: Axis::new("w", ""), group: None, series: Vec::new() };
@@ -823,19 +927,20 @@ fn grade_report(j: &FoamJob, p: &Process, field: &Field, regions: &Regions, tran
             seen.push(t.weighting);
         }
     }
-    for w in [Weighting::Linear, Weighting::Cubic { slope: crate::foam::weight::DEFAULT_CUBIC_SLOPE }, Weighting::logarithmic(), Weighting::CubeRoot, Weighting::Sinusoidal] {
+    let used = seen.len();
+    let linear_modulus = Weighting::LinearModulus { ratio: crate::foam::weight::DEFAULT_MODULUS_RATIO };
+    for w in [Weighting::Linear, Weighting::Cubic { slope: crate::foam::weight::DEFAULT_CUBIC_SLOPE }, Weighting::logarithmic(), Weighting::CubeRoot, Weighting::Sinusoidal, linear_modulus] {
         if !seen.iter().any(|s| std::mem::discriminant(s) == std::mem::discriminant(&w)) {
             seen.push(w);
         }
     }
     for (i, w) in seen.iter().enumerate() {
-        let used = i < transitions.iter().map(|t| t.weighting).fold(Vec::<Weighting>::new(), |mut v, x| {
-            if !v.contains(&x) {
-                v.push(x)
-            }
-            v
-        }).len();
-        let name = format!("{}{}", weighting_name(w), if used { " (used)" } else { "" });
+        // Linear-modulus weightings differ by their regions' modulus ratio.
+        let ratio = match w {
+            Weighting::LinearModulus { ratio } => format!(", E × {ratio:.3}"),
+            _ => String::new(),
+        };
+        let name = format!("{}{ratio}{}", weighting_name(w), if i < used { " (used)" } else { "" });
         weights.series.push(Series::xy(&name, xs.clone(), xs.iter().map(|&x| w.weight(x)).collect()));
     }
     r.plots.push(weights);
@@ -849,20 +954,17 @@ fn grade_report(j: &FoamJob, p: &Process, field: &Field, regions: &Regions, tran
             ProbeAxis::Z => (DVec3::Z, "z"),
         };
         let (lo, hi) = (b.min.dot(axis), b.max.dot(axis));
-        let (mut s, mut vs, mut hs, mut es) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+        let cal = &j.foam.calibration;
+        let (mut s, mut vs, mut hs, mut es, mut ms) = (Vec::new(), Vec::new(), Vec::new(), Vec::new(), Vec::new());
         for i in 0..PROBE_SAMPLES {
             let t = lo + (hi - lo) * i as f64 / (PROBE_SAMPLES - 1) as f64;
             let q = c + axis * (t - c.dot(axis));
-            let (region, d) = nearest_region(regions, q);
-            if d > regions.epsilon_mm {
-                continue; // outside the part
-            }
-            let _ = region;
-            let (pair, _) = field.at(q);
+            let Some(pair) = field.inside(q) else { continue }; // outside the part
             s.push(t);
             vs.push(pair.v_star);
             hs.push(pair.h_star);
             es.push(p.filament_per_mm(pair.v_star));
+            ms.push(cal.modulus_kpa(pair.v_star));
         }
         let plot = |key: &str, title: &str, y: &str, unit: &str, values: Vec<f64>| Plot {
             key: key.into(),
@@ -873,9 +975,29 @@ fn grade_report(j: &FoamJob, p: &Process, field: &Field, regions: &Regions, tran
             group: None,
             series: vec![Series::xy(y, s.clone(), values)],
         };
-        r.plots.push(plot("probe_v", "V*", "V*", "", vs));
+        r.plots.push(plot("probe_v", "V*", "V*", "", vs.clone()));
         r.plots.push(plot("probe_h", "H*", "H*", "", hs));
         r.plots.push(plot("probe_e", "Filament per mm", "ΔE/mm", "mm/mm", es));
+        if cal.problems().is_empty() {
+            // Outside the calibration's sweep the fit is extrapolated: the title says so.
+            let (lo, hi) = (cal.v_star_from.min(cal.v_star_to), cal.v_star_from.max(cal.v_star_to));
+            let outside = vs.iter().any(|&v| v < lo * (1.0 - 1e-9) || v > hi * (1.0 + 1e-9));
+            let title = if outside { format!("Predicted modulus (extrapolated outside V* {lo}–{hi})") } else { "Predicted modulus".to_string() };
+            r.plots.push(plot("probe_modulus", &title, "E", "kPa", ms));
+        }
+    }
+    // Regions set by a modulus: the V* weft chose for them.
+    for (i, spec) in j.regions.iter().enumerate() {
+        if spec.set_by == SetBy::Modulus {
+            r.metrics.push(Metric {
+                key: "region_v_star".into(),
+                label: format!("Region {}: V*", i + 1),
+                value: field.pair(i).v_star,
+                unit: String::new(),
+                hint: format!("The V* whose foam has {} kPa ({}), by the calibration under Stiffness.", spec.modulus_kpa, regions.regions.get(i).map_or("", |x| x.name.as_str())),
+                group_index: None,
+            });
+        }
     }
     for (i, t) in transitions.iter().enumerate() {
         r.metrics.push(Metric {
@@ -890,11 +1012,6 @@ fn grade_report(j: &FoamJob, p: &Process, field: &Field, regions: &Regions, tran
     r
 }
 
-/// The region whose signed distance at `q` is least, and that distance.
-fn nearest_region(regions: &Regions, q: DVec3) -> (usize, f64) {
-    regions.regions.iter().enumerate().map(|(i, r)| (i, r.signed_distance(q))).fold((0, f64::INFINITY), |a, b| if b.1 < a.1 { b } else { a })
-}
-
 fn weighting_name(w: &Weighting) -> &'static str {
     match w {
         Weighting::Linear => "linear",
@@ -902,5 +1019,6 @@ fn weighting_name(w: &Weighting) -> &'static str {
         Weighting::Logarithmic { .. } => "logarithmic",
         Weighting::CubeRoot => "cube root",
         Weighting::Sinusoidal => "sinusoidal",
+        Weighting::LinearModulus { .. } => "linear modulus",
     }
 }

@@ -12,7 +12,7 @@
 import { readFileSync, writeFileSync } from "node:fs";
 import { execFileSync } from "node:child_process";
 import { join } from "node:path";
-import { downloadGcode, waitReady, waitResult } from "./page-helpers.mjs";
+import { downloadGcode, runExample, waitReady, waitResult } from "./page-helpers.mjs";
 
 const EXAMPLE = "hourglass-omega3.json";
 
@@ -27,13 +27,7 @@ export async function axisymChecks({ baseUrl, weftBin = process.env.WEFT_BIN, ch
   const { context, page } = await newPage();
   try {
     await check(n++, "axisymmetric: hourglass-omega3 from the Examples menu runs; platform and points cards plot their curves; map and 3D views draw; G-code has B/C words and equals the CLI's", async () => {
-      await page.goto(`${baseUrl}/www/`);
-      await waitReady(page);
-      await page.waitForSelector(`#examples option[value="${EXAMPLE}"]`, { state: "attached", timeout: 10000 }).catch(() => {});
-      const before = await page.evaluate(() => window.weft.resultCount);
-      await page.selectOption("#examples", EXAMPLE);
-      await waitResult(page, before, `running ${EXAMPLE}`, jobTimeout);
-      const report = await page.evaluate(() => window.weft.result?.report ?? null);
+      const report = await runExample(page, baseUrl, EXAMPLE, jobTimeout);
       const stage = (name) => report?.stages?.find((s) => s.stage === name);
       for (const s of ["platform", "points", "path"]) if (!stage(s)) throw new Error(`no ${s} stage in the report (${(report?.stages ?? []).map((x) => x.stage)})`);
       const drawn = await page.evaluate(() => {

@@ -3,30 +3,18 @@
 // weighting functions and V*, H*, ΔE/mm along the probe line; the shared-boundary and layer
 // views draw; the preview colours by ΔE per mm; the G-code equals the CLI's. Then two region
 // STLs dropped on the Regions slot give one V*/H* row each, run, and an overlapping pair is
-// refused naming both files. Called by run.mjs:
+// refused naming both files. Then the stiffness map (beyond the paper): regions set by a
+// modulus show modulus rows, the grade card plots the predicted modulus, a modulus outside
+// the calibration is named under its field. Called by run.mjs:
 //
 //   import { foamChecks } from "./foam-checks.mjs";
 //   await foamChecks({ baseUrl: base, weftBin: WEFT_BIN, check, newPage, outDir: OUT, first: n });
 import { readFileSync, writeFileSync } from "node:fs";
 import { execFileSync } from "node:child_process";
 import { join } from "node:path";
-import { colouredPixels, downloadGcode, waitReady, waitResult } from "./page-helpers.mjs";
+import { boxStl, colouredPixels, downloadGcode, runExample, waitReady, waitResult } from "./page-helpers.mjs";
 
 const EXAMPLE = "foam-dogbone-linear.json";
-
-/** A binary STL of the box from `a` to `b` (mm), facing out. */
-function boxStl(a, b) {
-  const v = (i) => [(i & 1 ? b : a)[0], (i & 2 ? b : a)[1], (i & 4 ? b : a)[2]];
-  // Two triangles per face, counter-clockwise seen from outside.
-  const faces = [[0, 2, 3, 1], [4, 5, 7, 6], [0, 1, 5, 4], [2, 6, 7, 3], [0, 4, 6, 2], [1, 3, 7, 5]];
-  const tris = faces.flatMap(([p, q, r, s]) => [[p, q, r], [p, r, s]]);
-  const buf = Buffer.alloc(84 + 50 * tris.length);
-  buf.writeUInt32LE(tris.length, 80);
-  tris.forEach((t, k) => {
-    t.forEach((i, j) => v(i).forEach((c, m) => buf.writeFloatLE(c, 84 + 50 * k + 12 + 12 * j + 4 * m)));
-  });
-  return buf;
-}
 
 /**
  * @param {{baseUrl: string, weftBin?: string, check: Function, newPage: Function, outDir: string,
@@ -39,13 +27,7 @@ export async function foamChecks({ baseUrl, weftBin = process.env.WEFT_BIN, chec
   const { context, page } = await newPage();
   try {
     await check(n++, "foam: foam-dogbone-linear from the Examples menu is one thread (1 path, 0 retractions); the grade card plots w(x) and V*, H*, ΔE/mm along x; boundary and layer views draw; ΔE-per-mm colours; G-code equals the CLI's", async () => {
-      await page.goto(`${baseUrl}/www/`);
-      await waitReady(page);
-      await page.waitForSelector(`#examples option[value="${EXAMPLE}"]`, { state: "attached", timeout: 10000 }).catch(() => {});
-      const before = await page.evaluate(() => window.weft.resultCount);
-      await page.selectOption("#examples", EXAMPLE);
-      await waitResult(page, before, `running ${EXAMPLE}`, jobTimeout);
-      const report = await page.evaluate(() => window.weft.result?.report ?? null);
+      const report = await runExample(page, baseUrl, EXAMPLE, jobTimeout);
       const a = report?.analysis;
       if (a?.extrusion_paths !== 1 || a?.retractions !== 0) throw new Error(`analysis: ${a?.extrusion_paths} paths, ${a?.retractions} retractions`);
       for (const s of ["regions", "slice", "raster", "grade"]) if (!report.stages.find((x) => x.stage === s)) throw new Error(`no ${s} stage (${report.stages.map((x) => x.stage)})`);
@@ -135,6 +117,53 @@ export async function foamChecks({ baseUrl, weftBin = process.env.WEFT_BIN, chec
       if (!/overlap/.test(message) || !/left-block\.stl/.test(message) || !/over-block\.stl/.test(message)) throw new Error(`refusal reads "${message}"`);
       if ((await page.evaluate(() => window.weft.resultCount)) !== count) throw new Error("a result was shown for overlapping regions");
       return `V* max ${vmax}; refused: "${message.slice(0, 120)}"`;
+    });
+
+    await check(n++, "foam: the stiffness map foam-stiffness-sectors: regions set by a modulus show modulus rows, not V*; the grade card plots the predicted modulus 20 → 2 kPa along x and each region's V*; a modulus outside the calibration is named under its field; G-code equals the CLI's", async () => {
+      const file = "foam-stiffness-sectors.json";
+      const report = await runExample(page, baseUrl, file, jobTimeout);
+      const g = report.stages.find((x) => x.stage === "grade");
+      const vs = g.metrics.filter((m) => m.key === "region_v_star").map((m) => m.value);
+      if (vs.length !== 3 || Math.abs(vs[0] - 0.16011) > 1e-4 || Math.abs(vs[2] - 0.34521) > 1e-4) throw new Error(`region V*: ${vs}`);
+      const modulus = g.plots.find((p) => p.key === "probe_modulus")?.series[0];
+      if (!modulus || Math.abs(Math.max(...modulus.y) - 20) > 1e-6 || Math.abs(Math.min(...modulus.y) - 2) > 1e-6) throw new Error(`predicted modulus: ${modulus ? [Math.min(...modulus.y), Math.max(...modulus.y)] : "none"}`);
+      const rows = await page.evaluate(() => ({
+        modulus: Boolean(document.querySelector("#f-job-regions-1-modulus_kpa")),
+        vstar: Boolean(document.querySelector("#f-job-regions-1-v_star")),
+        plotted: [...document.querySelectorAll('#report .stage-card[data-stage="grade"] [data-plot-key]')].map((p) => p.dataset.plotKey),
+      }));
+      if (!rows.modulus || rows.vstar) throw new Error(`form rows: modulus ${rows.modulus}, V* ${rows.vstar}`);
+      if (!rows.plotted.includes("probe_modulus")) throw new Error(`grade card plots ${rows.plotted}`);
+      if (weftBin) {
+        const text = (await downloadGcode(page, join(outDir, "foam-stiffness-sectors.gcode"))).bytes.toString("utf8");
+        const cli = join(outDir, "foam-stiffness-sectors.cli.gcode");
+        execFileSync(weftBin, ["run", join(process.cwd(), "examples", file), "--out", cli, "-q"]);
+        if (readFileSync(cli, "utf8") !== text) throw new Error("the page's G-code differs from the CLI's");
+      }
+      for (const [w, h, name] of [[1280, 800, "foam-stiffness-desktop.png"], [390, 844, "foam-stiffness-phone.png"]]) {
+        await page.setViewportSize({ width: w, height: h });
+        await page.evaluate(() => document.querySelector('#report .stage-card[data-stage="grade"] [data-plot-key="probe_modulus"]')?.scrollIntoView());
+        await page.waitForTimeout(300);
+        await page.screenshot({ path: join(outDir, name) });
+      }
+      await page.setViewportSize({ width: 1400, height: 900 });
+      // 40 kPa is stiffer than the paper's sweep gives: named under the field, with the range.
+      await page.evaluate(() => document.querySelector("#f-job-regions-1-modulus_kpa")?.closest("details")?.setAttribute("open", ""));
+      await page.fill("#f-job-regions-1-modulus_kpa", "40");
+      await page.dispatchEvent("#f-job-regions-1-modulus_kpa", "change");
+      const said = await page.waitForFunction(() => {
+        const e = document.getElementById("f-job-regions-1-modulus_kpa-error");
+        return e && !e.hidden && e.textContent ? e.textContent : false;
+      }, null, { timeout: 10000 }).then((h) => h.jsonValue());
+      if (!/outside the calibration/.test(said) || !/22\.68 kPa/.test(said)) throw new Error(`the field says "${said}"`);
+      // Back to V* for region 2: its V* row shows and the modulus row goes.
+      await page.fill("#f-job-regions-1-modulus_kpa", "8");
+      await page.dispatchEvent("#f-job-regions-1-modulus_kpa", "change");
+      await page.evaluate(() => document.querySelector("#f-job-regions-1-set_by")?.closest("details")?.setAttribute("open", ""));
+      await page.selectOption("#f-job-regions-1-set_by", JSON.stringify("v_star"));
+      await page.waitForSelector("#f-job-regions-1-v_star", { state: "attached", timeout: 5000 });
+      if (await page.$("#f-job-regions-1-modulus_kpa")) throw new Error("the modulus row stayed after choosing V*");
+      return `region V* ${vs.map((v) => v.toFixed(4)).join(", ")}; modulus 2–20 kPa along x; refused: "${said.slice(0, 100)}"`;
     });
   } finally {
     await context.close();

@@ -12,7 +12,7 @@ import { readFileSync, writeFileSync } from "node:fs";
 import { execFileSync } from "node:child_process";
 import { inflateRawSync } from "node:zlib";
 import { join } from "node:path";
-import { downloadGcode, waitReady, waitResult } from "./page-helpers.mjs";
+import { downloadGcode, runExample, waitReady, waitResult } from "./page-helpers.mjs";
 
 const EXAMPLE = "graded-phantom.json";
 
@@ -45,13 +45,7 @@ export async function gradedChecks({ baseUrl, weftBin = process.env.WEFT_BIN, ch
   const { context, page } = await newPage();
   try {
     await check(n++, "graded: graded-phantom from the Examples menu runs; volume, surface, density and grade cards report; slice views draw HU with contours and the ROI; the surface view offers an STL; G-code equals the CLI's", async () => {
-      await page.goto(`${baseUrl}/www/`);
-      await waitReady(page);
-      await page.waitForSelector(`#examples option[value="${EXAMPLE}"]`, { state: "attached", timeout: 10000 }).catch(() => {});
-      const before = await page.evaluate(() => window.weft.resultCount);
-      await page.selectOption("#examples", EXAMPLE);
-      await waitResult(page, before, `running ${EXAMPLE}`, jobTimeout);
-      const report = await page.evaluate(() => window.weft.result?.report ?? null);
+      const report = await runExample(page, baseUrl, EXAMPLE, jobTimeout);
       const stage = (name) => report?.stages?.find((s) => s.stage === name);
       for (const s of ["volume", "surface", "density", "slice", "grade", "compare"]) if (!stage(s)) throw new Error(`no ${s} stage in the report (${(report?.stages ?? []).map((x) => x.stage)})`);
       if (stage("surface").data.closed !== true) throw new Error(`surface not closed: ${JSON.stringify(stage("surface").data)}`);

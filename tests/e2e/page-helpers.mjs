@@ -78,3 +78,39 @@ export async function downloadGcode(page, path) {
   await dl.saveAs(path);
   return { path, name: dl.suggestedFilename(), bytes: readFileSync(path) };
 }
+
+/**
+ * Opens the page at `baseUrl`, picks `file` from the Examples menu and waits for its result;
+ * returns the run report.
+ */
+export async function runExample(page, baseUrl, file, timeout) {
+  await page.goto(`${baseUrl}/www/`);
+  await waitReady(page);
+  await page.waitForSelector(`#examples option[value="${file}"]`, { state: "attached", timeout: 10000 }).catch(() => {});
+  const before = await page.evaluate(() => window.weft.resultCount);
+  await page.selectOption("#examples", file);
+  await waitResult(page, before, `running ${file}`, timeout);
+  return page.evaluate(() => window.weft.result?.report ?? null);
+}
+
+/** A binary STL of the axis-aligned box from corner `a` to corner `b` (mm), facing out, with normals. */
+export function boxStl(a, b, header = "weft e2e box") {
+  const v = (i) => [(i & 1 ? b : a)[0], (i & 2 ? b : a)[1], (i & 4 ? b : a)[2]];
+  // Two triangles per face, counter-clockwise seen from outside.
+  const faces = [[0, 2, 3, 1], [4, 5, 7, 6], [0, 1, 5, 4], [2, 6, 7, 3], [0, 4, 6, 2], [1, 3, 7, 5]];
+  const tris = faces.flatMap(([p, q, r, s]) => [[p, q, r], [p, r, s]]);
+  const buf = Buffer.alloc(84 + 50 * tris.length);
+  buf.write(header, 0);
+  buf.writeUInt32LE(tris.length, 80);
+  tris.forEach((t, i) => {
+    const o = 84 + i * 50;
+    const [p, q, r] = t.map(v);
+    const u = [q[0] - p[0], q[1] - p[1], q[2] - p[2]];
+    const w = [r[0] - p[0], r[1] - p[1], r[2] - p[2]];
+    const n = [u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]];
+    const len = Math.hypot(...n) || 1;
+    n.forEach((x, k) => buf.writeFloatLE(x / len, o + 4 * k));
+    [p, q, r].forEach((pt, j) => pt.forEach((x, k) => buf.writeFloatLE(x, o + 12 + 12 * j + 4 * k)));
+  });
+  return buf;
+}

@@ -22,7 +22,7 @@ import { latticeChecks } from "./lattice-checks.mjs";
 import { newcomerChecks } from "./newcomer-checks.mjs";
 import { previewChecks } from "./preview-checks.mjs";
 import {
-  collectErrors, colouredPixels, downloadGcode, launchChromium, waitReady, waitResult as waitResultWithin,
+  boxStl, collectErrors, colouredPixels, downloadGcode, launchChromium, waitReady, waitResult as waitResultWithin,
 } from "./page-helpers.mjs";
 
 const OUT = join(ROOT, "tests/e2e/out");
@@ -39,23 +39,7 @@ const sha256 = (buf) => createHash("sha256").update(buf).digest("hex");
 
 /** A binary STL of an axis-aligned cube (12 triangles). */
 function cubeStl(size = 20) {
-  const v = (i) => [(i & 1) * size, ((i >> 1) & 1) * size, ((i >> 2) & 1) * size];
-  const faces = [[0, 2, 3, 1], [4, 5, 7, 6], [0, 1, 5, 4], [2, 6, 7, 3], [0, 4, 6, 2], [1, 3, 7, 5]];
-  const tris = faces.flatMap(([a, b, c, d]) => [[a, b, c], [a, c, d]]);
-  const buf = Buffer.alloc(84 + 50 * tris.length);
-  buf.write("weft e2e cube", 0);
-  buf.writeUInt32LE(tris.length, 80);
-  tris.forEach((t, i) => {
-    const o = 84 + i * 50;
-    const [p, q, r] = t.map(v);
-    const u = [q[0] - p[0], q[1] - p[1], q[2] - p[2]];
-    const w = [r[0] - p[0], r[1] - p[1], r[2] - p[2]];
-    const n = [u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]];
-    const len = Math.hypot(...n) || 1;
-    n.forEach((x, k) => buf.writeFloatLE(x / len, o + 4 * k));
-    [p, q, r].forEach((pt, j) => pt.forEach((x, k) => buf.writeFloatLE(x, o + 12 + 12 * j + 4 * k)));
-  });
-  return buf;
+  return boxStl([0, 0, 0], [size, size, size], "weft e2e cube");
 }
 
 function fixtureCube() {

@@ -22,6 +22,7 @@
 pub mod analyze;
 pub mod axisym;
 pub mod budget;
+pub mod clock;
 pub mod gcode;
 pub mod gcode_edit;
 pub mod geom;
@@ -49,5 +50,6 @@ pub use pipeline::{run, RunOptions, RunOutput};
 pub mod bench;
 pub mod export;
 pub mod foam;
+pub mod freeform;
 #[cfg(target_arch = "wasm32")]
 mod wasm;

@@ -21,6 +21,8 @@ use wasm_bindgen::prelude::*;
 #[wasm_bindgen(start)]
 fn start() {
     console_error_panic_hook::set_once();
+    // The core's wall clock for reports (planning time): the page's Date.now().
+    crate::clock::set(|| js_sys::Date::now() / 1000.0);
 }
 
 fn js_err(e: impl std::fmt::Display) -> JsError {

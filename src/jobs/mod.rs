@@ -13,6 +13,7 @@
 
 pub mod axisymmetric;
 pub mod foam;
+pub mod freeform;
 pub mod graded;
 pub mod lattice;
 pub mod slice;
@@ -375,7 +376,7 @@ pub struct Registry {
 impl Registry {
     /// The kinds built into weft. **Register a new kind here** (one line).
     pub fn builtin() -> Registry {
-        Registry { kinds: vec![&slice::SliceKind, &lattice::LatticeKind, &axisymmetric::AxisymKind, &graded::GradedKind, &foam::FoamKind] }
+        Registry { kinds: vec![&slice::SliceKind, &lattice::LatticeKind, &axisymmetric::AxisymKind, &graded::GradedKind, &foam::FoamKind, &freeform::FreeformKind] }
     }
 
     /// This registry plus `kind` (a kind defined outside the crate, e.g. in a test).

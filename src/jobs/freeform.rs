@@ -1,0 +1,784 @@
+//! The `freeform` job: a wireframe printed beam by beam along 3D paths, in an order planned
+//! under the process constraints and the stability cost of Gelber, Hurst and Bhargava
+//! (`../shared/papers/freeform-assembly-planning.txt`), or a proof that it cannot be printed.
+//!
+//! Stages: `import` (a wireframe file, or a built-in tower / dome / bridge, placed on the plate),
+//! `constraints` (directions and collision precedences, [`freeform::precedence`]), `plan`
+//! (consistent subassemblies best-first, [`freeform::plan`]), `order` (greedy on deadhead time,
+//! [`freeform::deadhead`]), `costs` (the exact and heuristic ε of every step,
+//! [`freeform::cost`]). The G-code prints each beam as one pass of 3D moves at its feed with
+//! the extrusion of its diameter, dwells at the end joint, and deadheads by lifting above the
+//! highest printed beam.
+
+use super::{Inspection, Kind, Product, Shape, Slot, SlotKind, StageInfo, ViewInfo};
+use crate::budget::Estimate;
+use crate::design::{Design, Input};
+use crate::freeform::cost::{self, Costs};
+use crate::freeform::deadhead::{self, Ordered};
+use crate::freeform::frame::{Section, DEFAULT_E_MPA, DEFAULT_G_MPA, DEFAULT_LOAD_N};
+use crate::freeform::models::{self, Model};
+use crate::freeform::plan::{self, Assembly, Cost, Mode, Plan, Unconstructable};
+use crate::freeform::precedence::{self, Constraints, Nozzle};
+use crate::freeform::wireframe::{self, Ground, Wireframe};
+use crate::geom::{DVec3, Feature, Pass, PassKind, Path, PointData, PointFlow, Toolpath};
+use crate::pipeline::{Ctx, Error, Out};
+use crate::report::{Axis, Column, Plot, PlotKind, Row as TableRow, Series, StageReport, Table};
+use crate::settings::{mount, num, other, Field as Row0, Kind as FieldKind, Problem, Row};
+use serde::{Deserialize, Serialize};
+
+/// Default beam diameter, mm (the paper's isomalt filaments: 100–200 µm).
+pub const DEFAULT_BEAM_DIAMETER_MM: f64 = 0.15;
+/// Default print speed along a beam, mm/s (the paper's 400 µm/s).
+pub const DEFAULT_SPEED_MM_S: f64 = 0.4;
+/// Default dwell at a beam's end joint to fuse it, s.
+pub const DEFAULT_DWELL_S: f64 = 0.5;
+/// Most beams a design may have (the issue's largest is 50k; the paper's 6,161).
+pub const MAX_BEAMS: usize = wireframe::MAX_BEAMS;
+/// Rows of the sequence table.
+pub const TABLE_ROWS: usize = 200;
+
+/// How the design is read.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct DesignOptions {
+    /// Where the grounded joints come from.
+    pub ground: Ground,
+    /// "On the lowest level" within this, mm (grounding the lowest joints).
+    pub ground_tolerance_mm: f64,
+    /// CSV beam ends closer than this are one joint, mm.
+    pub merge_tolerance_mm: f64,
+}
+
+impl Default for DesignOptions {
+    fn default() -> Self {
+        DesignOptions { ground: Ground::File, ground_tolerance_mm: wireframe::DEFAULT_GROUND_TOLERANCE_MM, merge_tolerance_mm: wireframe::DEFAULT_MERGE_TOLERANCE_MM }
+    }
+}
+
+/// The nozzle's shape.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct NozzleOptions {
+    /// Cone half-angle, degrees.
+    pub half_angle_deg: f64,
+    /// Body radius above the cone, mm.
+    pub radius_mm: f64,
+    /// Body (cylinder) height above the cone, mm.
+    pub height_mm: f64,
+}
+
+impl Default for NozzleOptions {
+    fn default() -> Self {
+        let n = Nozzle::default();
+        NozzleOptions { half_angle_deg: n.half_angle_deg, radius_mm: n.radius_mm, height_mm: n.height_mm }
+    }
+}
+
+/// The beams' section, material and the planning load.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct BeamOptions {
+    /// Diameter, mm.
+    pub diameter_mm: f64,
+    /// Young's modulus, MPa.
+    pub e_mpa: f64,
+    /// Shear modulus, MPa.
+    pub g_mpa: f64,
+    /// Load at the free end of the beam being printed, N.
+    pub load_n: f64,
+}
+
+impl Default for BeamOptions {
+    fn default() -> Self {
+        BeamOptions { diameter_mm: DEFAULT_BEAM_DIAMETER_MM, e_mpa: DEFAULT_E_MPA, g_mpa: DEFAULT_G_MPA, load_n: DEFAULT_LOAD_N }
+    }
+}
+
+/// The process constraints (section II.A), each switchable.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ConstraintOptions {
+    /// Steep beams only upward.
+    pub directionality: bool,
+    /// The nozzle never sweeps through a printed beam.
+    pub collision: bool,
+    /// Each beam starts at a grounded or printed joint.
+    pub connection: bool,
+    /// One cantilever per joint (strict) or any number (relaxed).
+    pub cantilever: Mode,
+}
+
+impl Default for ConstraintOptions {
+    fn default() -> Self {
+        ConstraintOptions { directionality: true, collision: true, connection: true, cantilever: Mode::Strict }
+    }
+}
+
+/// How the plan is made.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct PlannerOptions {
+    /// Cost used to choose.
+    pub cost: Cost,
+    /// Planning budget, s of counted work (past it the exact cost gives way to the heuristic).
+    pub budget_s: f64,
+    /// Measure both costs along the sequence (the paper's Fig. 8).
+    pub compare: bool,
+}
+
+impl Default for PlannerOptions {
+    fn default() -> Self {
+        PlannerOptions { cost: Cost::Exact, budget_s: plan::DEFAULT_BUDGET_S, compare: true }
+    }
+}
+
+/// Printing.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct PrintOptions {
+    /// Speed along a beam, mm/s.
+    pub speed_mm_s: f64,
+    /// Dwell at each beam's end joint, s.
+    pub dwell_s: f64,
+    /// Clearance over the highest printed beam while deadheading, mm.
+    pub clearance_mm: f64,
+}
+
+impl Default for PrintOptions {
+    fn default() -> Self {
+        PrintOptions { speed_mm_s: DEFAULT_SPEED_MM_S, dwell_s: DEFAULT_DWELL_S, clearance_mm: deadhead::DEFAULT_CLEARANCE_MM }
+    }
+}
+
+/// Settings of a `freeform` job.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FreeformJob {
+    /// The wireframe file.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub input: Option<Input>,
+    /// A built-in design used instead of a file.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub model: Option<Model>,
+    /// Reading the design.
+    #[serde(default)]
+    pub design: DesignOptions,
+    /// The nozzle.
+    #[serde(default)]
+    pub nozzle: NozzleOptions,
+    /// Beams and load.
+    #[serde(default)]
+    pub beam: BeamOptions,
+    /// Process constraints.
+    #[serde(default)]
+    pub constraints: ConstraintOptions,
+    /// Planner.
+    #[serde(default)]
+    pub planner: PlannerOptions,
+    /// Printing.
+    #[serde(default)]
+    pub print: PrintOptions,
+}
+
+impl Default for FreeformJob {
+    fn default() -> Self {
+        FreeformJob {
+            input: None,
+            model: Some(Model::default()),
+            design: DesignOptions::default(),
+            nozzle: NozzleOptions::default(),
+            beam: BeamOptions::default(),
+            constraints: ConstraintOptions::default(),
+            planner: PlannerOptions::default(),
+            print: PrintOptions::default(),
+        }
+    }
+}
+
+/// The `freeform` job kind.
+pub struct FreeformKind;
+
+const SLOTS: &[Slot] = &[Slot {
+    name: "frame",
+    label: "Wireframe",
+    kind: SlotKind::Frame,
+    path: "job.input",
+    required: false,
+    doc: "Joints and beams: assembly_instances or conmech JSON, OBJ with line elements, or a CSV of beams (x1 y1 z1 x2 y2 z2, mm).",
+}];
+
+const STAGES: &[StageInfo] = &[
+    StageInfo { name: "import", label: "Reading the wireframe" },
+    StageInfo { name: "constraints", label: "Directions and collisions" },
+    StageInfo { name: "plan", label: "Planning the sequence" },
+    StageInfo { name: "order", label: "Ordering deadheads" },
+    StageInfo { name: "costs", label: "Exact and heuristic ε" },
+];
+
+const VIEWS: &[ViewInfo] = &[ViewInfo {
+    id: "sequence",
+    stage: "order",
+    label: "Print sequence",
+    shape: Shape::Lines3d,
+    index_label: "Step",
+    doc: "The wireframe after each step: printed beams, the beam being printed, the cantilevered ones, and those still to print (mm).",
+}];
+
+/// Feature codes the sequence view draws with (named by its legend).
+const PRINTED: Feature = Feature::Lattice;
+const CURRENT: Feature = Feature::ExternalPerimeter;
+const CANTILEVER: Feature = Feature::Infill;
+const TODO: Feature = Feature::Handle;
+
+const DESIGN_FIELDS: &[Row0] = &[
+    crate::settings::choice_docs(
+        other("ground", "Design", "Grounded joints", FieldKind::Choice, &["file", "lowest"], "Which joints stand on the substrate."),
+        &["As the file marks them (the lowest joints when it marks none).", "Every joint within the tolerance of the lowest one."],
+    ),
+    num("ground_tolerance_mm", "Design", "Ground tolerance", "mm", 0.0, 1000.0, 0.01, "Joints this close above the lowest one count as grounded (when grounding the lowest)."),
+    num("merge_tolerance_mm", "Design", "Merge tolerance", "mm", 1e-6, 10.0, 0.001, "CSV beam ends closer than this are one joint."),
+];
+
+const NOZZLE_FIELDS: &[Row0] = &[
+    num("half_angle_deg", "Nozzle", "Cone half-angle", "°", 1.0, 89.0, 1.0, "Half-angle of the nozzle's cone at the tip: beams steeper than this may only be printed upward."),
+    num("radius_mm", "Nozzle", "Body radius", "mm", 0.01, 500.0, 0.1, "Radius of the nozzle body where the cone ends."),
+    num("height_mm", "Nozzle", "Body height", "mm", 0.0, 1000.0, 1.0, "Height of the body's cylinder above the cone: beams within it are hit when printing below them."),
+];
+
+const BEAM_FIELDS: &[Row0] = &[
+    num("diameter_mm", "Beams", "Beam diameter", "mm", 0.01, 50.0, 0.01, "Diameter of every beam: sets the extrusion and the stiffness."),
+    num("e_mpa", "Beams", "Young's modulus E", "MPa", 1.0, 1e6, 100.0, "Stiffness of the set material (the paper's isomalt: 2600 MPa)."),
+    num("g_mpa", "Beams", "Shear modulus G", "MPa", 1.0, 1e6, 100.0, "Twisting stiffness (the paper's isomalt: 1100 MPa)."),
+    num("load_n", "Beams", "Nozzle load", "N", 1e-9, 100.0, 1e-5, "Force of the nozzle on the free end of the beam being printed, straight down (the paper's 10⁻⁴ N)."),
+];
+
+const CONSTRAINT_FIELDS: &[Row0] = &[
+    other("directionality", "Constraints", "Directionality", FieldKind::Bool, &[], "A beam steeper than the cone is printed upward, never into the nozzle."),
+    other("collision", "Constraints", "Collision", FieldKind::Bool, &[], "The nozzle never sweeps through a printed beam: such beams are printed after."),
+    other("connection", "Constraints", "Connection", FieldKind::Bool, &[], "Each beam starts at a grounded joint or a joint already printed."),
+    crate::settings::choice_docs(
+        other("cantilever", "Constraints", "Cantilevers", FieldKind::Choice, &["strict", "relaxed"], "How many cantilevers a joint may carry while printing."),
+        &["One per joint: heating a joint lets a second cantilever pivot (isomalt, glassy materials).", "Any number (materials whose joints hold while heated)."],
+    ),
+];
+
+const PLANNER_FIELDS: &[Row0] = &[
+    crate::settings::choice_docs(
+        other("cost", "Planner", "Stability cost", FieldKind::Choice, &["exact", "heuristic"], "How the error ε of each printed joint is computed while planning."),
+        &["The whole connected frame deflects under the nozzle's load (slower, the paper's exact cost).", "Only the cantilevered beams deflect, the rest is rigid (the paper's fast heuristic)."],
+    ),
+    num("budget_s", "Planner", "Planning budget", "s", 0.1, 36000.0, 1.0, "Work allowed for the exact cost (counted, the same on every machine); past it the plan goes on with the heuristic."),
+    other("compare", "Planner", "Compare the costs", FieldKind::Bool, &[], "Measure both the exact and the heuristic ε of every step (plots of the paper's Fig. 8)."),
+];
+
+const PRINT_FIELDS: &[Row0] = &[
+    num("speed_mm_s", "Printing", "Beam speed", "mm/s", 0.01, 200.0, 0.1, "Speed of the nozzle along a beam while extruding (the paper's 0.4 mm/s)."),
+    num("dwell_s", "Printing", "Dwell at joints", "s", 0.0, 60.0, 0.1, "Time the nozzle waits at a beam's end joint so it fuses."),
+    num("clearance_mm", "Printing", "Deadhead clearance", "mm", 0.0, 100.0, 0.5, "How far above the highest printed beam the nozzle moves between beams."),
+];
+
+impl Kind for FreeformKind {
+    type Settings = FreeformJob;
+    const NAME: &'static str = "freeform";
+    const LABEL: &'static str = "Freeform wireframe";
+    const DOC: &'static str = "A wireframe printed beam by beam in free space, in an order that never collides, never strands a joint, and keeps joints where they belong.";
+    const SLOTS: &'static [Slot] = SLOTS;
+    const STAGES: &'static [StageInfo] = STAGES;
+    const VIEWS: &'static [ViewInfo] = VIEWS;
+
+    fn fields() -> Vec<Row> {
+        let mut rows = mount(
+            "job",
+            &[crate::settings::Field { default: Some(r#"{"kind":"tower","cells":2,"levels":4,"cell_mm":3,"level_mm":3,"taper":0.7}"#), ..other("model", "Model", "Built-in design", FieldKind::Section, &[], "Use a wireframe made by weft instead of a loaded file.") }],
+        );
+        rows.extend(mount("job.model", models::FIELDS));
+        rows.extend(mount("job.design", DESIGN_FIELDS));
+        rows.extend(mount("job.constraints", CONSTRAINT_FIELDS));
+        rows.extend(mount("job.nozzle", NOZZLE_FIELDS));
+        rows.extend(mount("job.beam", BEAM_FIELDS));
+        rows.extend(mount("job.planner", PLANNER_FIELDS));
+        rows.extend(mount("job.print", PRINT_FIELDS));
+        rows
+    }
+
+    /// Switched to a freeform job with nothing to print: the built-in tower.
+    fn adopted(design: &mut serde_json::Value) {
+        if let Some(job) = design.get_mut("job").and_then(|j| j.as_object_mut()) {
+            if !job.contains_key("input") && !job.contains_key("model") {
+                job.insert("model".into(), serde_json::to_value(Model::default()).unwrap_or_default());
+            }
+        }
+    }
+
+    fn validate(_design: &Design, j: &FreeformJob, out: &mut Vec<Problem>) {
+        if j.model.is_none() && j.input.is_none() {
+            out.push(Problem { path: "job.input".into(), message: "a freeform job needs a wireframe: load one, or switch on a built-in design".into() });
+        }
+        if let Some(m) = &j.model {
+            for message in models::problems(m) {
+                out.push(Problem { path: "job.model".into(), message });
+            }
+        }
+        let n = &j.nozzle;
+        if !(n.half_angle_deg > 0.0 && n.half_angle_deg < 90.0) {
+            out.push(Problem { path: "job.nozzle.half_angle_deg".into(), message: format!("{}° is not a cone: use more than 0° and less than 90°", n.half_angle_deg) });
+        }
+    }
+
+    fn slot_filled(slot: &str, mut j: FreeformJob) -> FreeformJob {
+        if slot == "frame" {
+            j.model = None;
+        }
+        j
+    }
+
+    fn estimate(j: &FreeformJob, ctx: &mut Ctx) -> Result<Vec<Estimate>, Error> {
+        let w = import_stage(j, ctx)?;
+        let m = w.beams.len() as f64;
+        let import = Estimate::new("import").quantity("beams", "Beams", m, "").cost(m * 200.0, m * 1e-6);
+        // Collision candidates: each beam against those within the nozzle's reach above it.
+        let constraints = Estimate::new("constraints").quantity("beams", "Beams", m, "").cost(m * 400.0, m * 60e-6).budgets("lower the nozzle's radius or height");
+        let exact = j.planner.cost == Cost::Exact;
+        // Exact: compliance updates over the live joints (bounded by the budget); heuristic:
+        // a few searches per beam.
+        let plan_s = if exact { j.planner.budget_s.min(m * m * 1e-6) + m * 2e-5 } else { m * 2e-5 };
+        let plan = Estimate::new("plan").quantity("beams", "Beams", m, "").cost(m * 2000.0, plan_s).budgets("plan with the heuristic cost, or lower the planning budget");
+        let order = Estimate::new("order").quantity("beams", "Beams", m, "").cost(m * 200.0, m * m * 2e-8);
+        let costs = Estimate::new("costs")
+            .quantity("beams", "Beams", if j.planner.compare { m } else { 0.0 }, "")
+            .quantity("segments", "Segments", 4.0 * m, "")
+            .cost(m * 300.0, if j.planner.compare { m * m * 1e-6 } else { 0.0 })
+            .budgets("switch off the comparison of the costs");
+        Ok(vec![import, constraints, plan, order, costs])
+    }
+
+    fn run(j: &FreeformJob, ctx: &mut Ctx) -> Result<Product, Error> {
+        let w = import_stage(j, ctx)?;
+        let c = constraints_stage(j, ctx, &w)?;
+        let p = plan_stage(j, ctx, &w, &c)?;
+        let o = order_stage(j, ctx, &w, &c, &p)?;
+        let costs = costs_stage(j, ctx, &w, &p, &o)?;
+        let design = ctx.design;
+        let parts = (j.beam.diameter_mm, j.print, design.printer.travel_speed_mm_s);
+        let toolpath = ctx.stage("toolpath", "toolpath", &parts, &[o.key, costs.key], |_| Ok((toolpath(j, &w, &o), None)))?;
+        Ok(Product::Toolpath(toolpath))
+    }
+
+    fn inspect(j: &FreeformJob, ctx: &mut Ctx, view: &str, index: usize) -> Result<Inspection, Error> {
+        match view {
+            "sequence" => {
+                let w = import_stage(j, ctx)?;
+                let c = constraints_stage(j, ctx, &w)?;
+                let p = plan_stage(j, ctx, &w, &c)?;
+                let o = order_stage(j, ctx, &w, &c, &p)?;
+                Ok(sequence_view(&w, &o, index))
+            }
+            _ => Err(Error::UnknownView { view: view.into(), job: Self::NAME }),
+        }
+    }
+}
+
+/// The wireframe read (or built) and placed: its lowest joint on the plate, XY centred.
+pub struct Placed {
+    /// The design, placed.
+    pub wire: Wireframe,
+    /// Its name (the file's, or the model's).
+    pub name: String,
+}
+
+impl std::ops::Deref for Placed {
+    type Target = Wireframe;
+    fn deref(&self) -> &Wireframe {
+        &self.wire
+    }
+}
+
+fn import_stage(j: &FreeformJob, ctx: &mut Ctx) -> Result<Out<Placed>, Error> {
+    let options = wireframe::Options { ground: j.design.ground, ground_tolerance_mm: j.design.ground_tolerance_mm, merge_tolerance_mm: j.design.merge_tolerance_mm };
+    let parts = (&j.model, j.design);
+    let (bytes, name, keys) = match (&j.model, &j.input) {
+        (Some(_), _) => (None, "model".to_string(), Vec::new()),
+        (None, Some(input)) => {
+            let (bytes, key) = ctx.file_bytes("frame", input)?;
+            let name = match input {
+                Input::File { name, .. } => name.clone(),
+                _ => "wireframe".into(),
+            };
+            (Some(bytes), name, vec![key])
+        }
+        (None, None) => return Err(Error::NoInput("a freeform job needs a wireframe: load one (--input frame=FILE), or switch on a built-in design".into())),
+    };
+    let design = ctx.design;
+    ctx.stage_kept("import", "import", &(parts, &name), &keys, |_| {
+        let mut wire = match (&j.model, bytes) {
+            (Some(m), _) => {
+                if let Some(p) = models::problems(m).into_iter().next() {
+                    return Err(Error::NoInput(format!("the built-in design: {p}")));
+                }
+                models::build(m)
+            }
+            (None, Some(b)) => wireframe::read(&name, &b, &options).map_err(|e| Error::stage("reading the wireframe", e))?,
+            _ => unreachable!("a model or a file"),
+        };
+        place(&mut wire);
+        let size = bounds(&wire.joints).map(|(lo, hi)| hi - lo).unwrap_or_default();
+        crate::gcode::check_fits([size.x, size.y, size.z], &design.printer).map_err(|e| Error::stage("the wireframe", e))?;
+        let lengths: Vec<f64> = (0..wire.beams.len()).map(|b| wire.length(b)).collect();
+        let total: f64 = lengths.iter().sum();
+        let shortest = lengths.iter().copied().fold(f64::INFINITY, f64::min);
+        let longest = lengths.iter().copied().fold(0.0, f64::max);
+        let grounded = wire.grounded.iter().filter(|&&g| g).count();
+        let report = StageReport::new("import", "Reading the wireframe", &serde_json::json!({ "joints": wire.joints.len(), "beams": wire.beams.len(), "grounded": grounded, "format": wire.format }))
+            .metric("joints", "Joints", wire.joints.len() as f64, "", "Points where beams meet.")
+            .metric("beams", "Beams", wire.beams.len() as f64, "", "Straight beams, each printed once.")
+            .metric("grounded", "Grounded joints", grounded as f64, "", if wire.grounded_by_file { "Joints on the substrate, as the design marks them." } else { "Joints on the substrate: the lowest ones (the design marks none)." })
+            .metric("length", "Beam length", total, "mm", "Total length of all beams.")
+            .metric("shortest", "Shortest beam", if shortest.is_finite() { shortest } else { 0.0 }, "mm", "The shortest beam.")
+            .metric("longest", "Longest beam", longest, "mm", "The longest beam.")
+            .metric("height", "Height", size.z, "mm", "Height of the design on the plate.");
+        Ok((Placed { wire, name: name.clone() }, Some(report)))
+    })
+}
+
+fn bounds(p: &[DVec3]) -> Option<(DVec3, DVec3)> {
+    let first = *p.first()?;
+    Some(p.iter().fold((first, first), |(lo, hi), q| (lo.min(*q), hi.max(*q))))
+}
+
+/// Moves the design so its lowest joint is on the plate and its XY box is centred on 0.
+fn place(w: &mut Wireframe) {
+    if let Some((lo, hi)) = bounds(&w.joints) {
+        let shift = DVec3::new(-(lo.x + hi.x) / 2.0, -(lo.y + hi.y) / 2.0, -lo.z);
+        for p in &mut w.joints {
+            *p += shift;
+        }
+    }
+}
+
+fn precedence_options(j: &FreeformJob) -> precedence::Options {
+    precedence::Options {
+        nozzle: Nozzle { half_angle_deg: j.nozzle.half_angle_deg, radius_mm: j.nozzle.radius_mm, height_mm: j.nozzle.height_mm },
+        beam_radius_mm: j.beam.diameter_mm / 2.0,
+        directionality: j.constraints.directionality,
+        collision: j.constraints.collision,
+    }
+}
+
+fn constraints_stage(j: &FreeformJob, ctx: &mut Ctx, w: &Out<Placed>) -> Result<Out<Constraints>, Error> {
+    let o = precedence_options(j);
+    let parts = (j.nozzle, j.beam.diameter_mm, j.constraints.directionality, j.constraints.collision);
+    ctx.stage("constraints", "constraints", &parts, &[w.key], |progress| {
+        let started = crate::clock::now_s();
+        let c = precedence::constraints(&w.joints, &w.beams, &o, progress).map_err(|e| Error::stage("constraints", e))?;
+        let ms = (crate::clock::now_s() - started) * 1000.0;
+        let one_way = c.forward.iter().zip(&c.backward).filter(|(f, b)| !(**f && **b)).count();
+        let report = StageReport::new("constraints", "Directions and collisions", &serde_json::json!({ "pairs": c.pairs(), "one_way": one_way, "tested": c.tested }))
+            .metric("pairs", "Collision precedences", c.pairs() as f64, "", "Pairs (A, B) where the nozzle printing A would sweep through B: A is printed first.")
+            .metric("one_way", "Upward only", one_way as f64, "", "Beams steeper than the nozzle's cone: printed from their lower joint.")
+            .metric("tested", "Pairs tested exactly", c.tested as f64, "", "Pairs near enough (by the BVH and the 2D distance) for the exact cone/cylinder test.")
+            .metric("time", "Time", ms, "ms", "Wall time of this stage on this machine.");
+        Ok((c, Some(report)))
+    })
+}
+
+fn plan_options(j: &FreeformJob) -> plan::Options {
+    plan::Options {
+        mode: j.constraints.cantilever,
+        cost: j.planner.cost,
+        connection: j.constraints.connection,
+        section: section(j),
+        load_n: j.beam.load_n,
+        budget_s: j.planner.budget_s,
+    }
+}
+
+fn section(j: &FreeformJob) -> Section {
+    Section { diameter_mm: j.beam.diameter_mm, e_mpa: j.beam.e_mpa, g_mpa: j.beam.g_mpa }
+}
+
+/// A design that cannot be printed, in words (beams and joints named as the file names them).
+#[derive(Debug, thiserror::Error)]
+#[error("{0}")]
+struct CannotPrint(String);
+
+fn names(w: &Wireframe, beams: &[usize]) -> String {
+    beams.iter().map(|&b| w.beam_names.get(b).cloned().unwrap_or_else(|| format!("beam {b}"))).collect::<Vec<_>>().join(", ")
+}
+
+/// The reason a design cannot be printed, in words.
+pub fn explain(w: &Wireframe, u: &Unconstructable, mode: Mode) -> String {
+    let joint = |j: usize| w.joint_names.get(j).cloned().unwrap_or_else(|| format!("joint {j}"));
+    match u {
+        Unconstructable::Cycle { beams } => format!(
+            "cannot be printed in this orientation: {} must each be printed before the next (the nozzle printing one sweeps through the next), and the last before the first; tilt or re-orient the design, or narrow the nozzle",
+            names(w, beams)
+        ),
+        Unconstructable::TwoCantilevers { joint: jt, beams } => format!(
+            "cannot be printed with one cantilever per joint: the finished design hangs two cantilevers ({}) on {}; relax the cantilever constraint, or join them to the rest",
+            names(w, beams),
+            joint(*jt)
+        ),
+        Unconstructable::HangsDown { beam, joint: jt } => format!(
+            "cannot be printed: {} hangs down from {} steeper than the nozzle's cone, so it can only be printed upward from its free end, which touches nothing; support it, or re-orient the design",
+            names(w, &[*beam]),
+            joint(*jt)
+        ),
+        Unconstructable::Unreachable { beams, count } => format!(
+            "cannot be printed: {count} beam(s) can never start from a printed joint in an allowed direction, or wait on such beams ({}{}); check the grounded joints and the nozzle",
+            names(w, beams),
+            if *count > beams.len() { ", …" } else { "" }
+        ),
+        Unconstructable::NoSubassembly { printed, beams, count } => format!(
+            "the planner found no consistent subassembly after {printed} beams{}: {count} beam(s) left ({}{}); deciding this is NP-complete under the cantilever constraint and the search here joins at most two paths: relax the cantilever constraint, or add a beam that closes these loops",
+            if mode == Mode::Strict { " with one cantilever per joint" } else { "" },
+            names(w, beams),
+            if *count > beams.len() { ", …" } else { "" }
+        ),
+        Unconstructable::SearchTooLarge { printed, beams, count } => format!(
+            "the search for the next subassembly after {printed} beams needed more than {} steps: {count} beam(s) left ({}{}); relax the cantilever constraint or plan with the heuristic cost",
+            plan::MAX_ROUND_EXPANSIONS,
+            names(w, beams),
+            if *count > beams.len() { ", …" } else { "" }
+        ),
+    }
+}
+
+fn plan_stage(j: &FreeformJob, ctx: &mut Ctx, w: &Out<Placed>, c: &Out<Constraints>) -> Result<Out<Plan>, Error> {
+    let o = plan_options(j);
+    let parts = (j.constraints, j.planner.cost, j.planner.budget_s, j.beam);
+    ctx.stage("plan", "plan", &parts, &[w.key, c.key], |progress| {
+        let a = Assembly { joints: &w.joints, beams: &w.beams, grounded: &w.grounded, constraints: c };
+        let started = crate::clock::now_s();
+        let p = plan::plan(&a, &o, &mut |done, all| progress(done as f32 / all.max(1) as f32)).map_err(|u| Error::stage("planning", CannotPrint(explain(w, &u, o.mode))))?;
+        let ms = (crate::clock::now_s() - started) * 1000.0;
+        let eps: Vec<f64> = p.steps.iter().map(|s| s.cost_mm * 1000.0).collect();
+        let max = eps.iter().copied().fold(0.0, f64::max);
+        let mean = eps.iter().sum::<f64>() / eps.len().max(1) as f64;
+        let multi = p.blocks.iter().filter(|b| b.end - b.start > 1).count();
+        let mut report = StageReport::new("plan", "Planning the sequence", &serde_json::json!({ "steps": p.steps.len(), "blocks": p.blocks.len(), "max_um": max, "expansions": p.expansions, "exact_until": p.exact_until }))
+            .metric("max_eps", "Largest ε", max, "µm", "The largest error of a joint while printing: the deflection of the beam's free end under the nozzle's load (what the plan minimises).")
+            .metric("mean_eps", "Mean ε", mean, "µm", "The mean over all beams (0 for beams that close onto a printed joint).")
+            .metric("blocks", "Subassemblies", p.blocks.len() as f64, "", "Consistent subassemblies added one after another (paths between stable joints, single closing beams, hanging ends).")
+            .metric("paths", "Joined paths", multi as f64, "", "Subassemblies of several beams: cantilevers grown from stable joints until they meet.")
+            .metric("expansions", "Search steps", p.expansions as f64, "", "Tree states expanded by the best-first search.")
+            .metric("work", "Counted work", p.work / plan::WORK_PER_SECOND, "s", "Work counted against the planning budget (the same on every machine).")
+            .metric("time", "Planning time", ms, "ms", "Wall time of the plan on this machine.");
+        if let Some(k) = p.exact_until {
+            report = report.metric("exact_until", "Exact cost until step", k as f64, "", "The planning budget ran out here: later steps were chosen by the heuristic cost.");
+        }
+        if j.planner.cost == Cost::Exact {
+            report = report.metric("peak_live", "Joints tracked", p.peak_live as f64, "", "Most joints whose compliance the exact cost kept at once (its memory grows as the square).");
+        }
+        Ok((p, Some(report)))
+    })
+}
+
+fn order_stage(j: &FreeformJob, ctx: &mut Ctx, w: &Out<Placed>, c: &Out<Constraints>, p: &Out<Plan>) -> Result<Out<Ordered>, Error> {
+    let printer = &ctx.design.printer;
+    let o = deadhead::Options { xy_mm_s: printer.travel_speed_mm_s, z_mm_s: printer.z_speed_mm_s, clearance_mm: j.print.clearance_mm, beam_radius_mm: j.beam.diameter_mm / 2.0 };
+    let parts = (o.xy_mm_s, o.z_mm_s, o.clearance_mm, o.beam_radius_mm);
+    let speed = j.print.speed_mm_s;
+    let dwell = j.print.dwell_s;
+    ctx.stage("order", "order", &parts, &[p.key, c.key], |_| {
+        let ordered = deadhead::order(&w.joints, p, c, &o);
+        let length: f64 = ordered.steps.iter().map(|s| w.joints[s.from].distance(w.joints[s.to])).sum();
+        let print_s = length / speed + dwell * ordered.steps.len() as f64;
+        let mut report = StageReport::new("order", "Ordering deadheads", &serde_json::json!({ "deadhead_s": ordered.deadhead_s, "plan_order_deadhead_s": ordered.plan_order_deadhead_s, "sequence": ordered.steps.iter().map(|s| [s.beam, s.from, s.to]).collect::<Vec<_>>() }))
+            .metric("deadhead", "Deadhead time", ordered.deadhead_s, "s", "Moves between beams: lift above the highest printed beam, move, lower (axes at full speed).")
+            .metric("deadhead_plan", "Deadhead in the plan's order", ordered.plan_order_deadhead_s, "s", "The same moves in the order the planner fixed them, before ordering.")
+            .metric("print", "Printing time", print_s, "s", "Extruding along every beam at the beam speed, plus the dwells.");
+        report.tables.push(sequence_table(w, &ordered));
+        Ok((ordered, Some(report)))
+    })
+}
+
+fn costs_stage(j: &FreeformJob, ctx: &mut Ctx, w: &Out<Placed>, p: &Out<Plan>, o: &Out<Ordered>) -> Result<Out<Vec<Costs>>, Error> {
+    let parts = (j.planner.compare, j.beam);
+    let s = section(j);
+    let load = j.beam.load_n;
+    let compare = j.planner.compare;
+    let chosen = j.planner.cost;
+    ctx.stage("costs", "costs", &parts, &[o.key, p.key], |_| {
+        if !compare {
+            return Ok((Vec::new(), Some(planned_report(o))));
+        }
+        let c = cost::costs(&w.joints, &w.beams, &w.grounded, &o.steps, &s, load);
+        Ok((c.clone(), Some(costs_report(&c, load, chosen))))
+    })
+}
+
+/// ε over the sequence as planned (no comparison asked).
+fn planned_report(o: &Ordered) -> StageReport {
+    let x: Vec<f64> = (1..=o.steps.len()).map(|i| i as f64).collect();
+    let y: Vec<f64> = o.steps.iter().map(|s| s.cost_mm * 1000.0).collect();
+    let mut r = StageReport::new("costs", "ε along the sequence", &serde_json::json!({ "compared": false }));
+    r.plots.push(Plot { key: "eps_sequence".into(), title: "ε of each step (as planned)".into(), kind: PlotKind::Line, x: Axis::new("step", ""), y: Axis::new("ε", "µm"), group: None, series: vec![Series::xy("planned", x, y)] });
+    r
+}
+
+fn costs_report(c: &[Costs], load: f64, chosen: Cost) -> StageReport {
+    let n = c.len();
+    let x: Vec<f64> = (1..=n).map(|i| i as f64).collect();
+    let exact: Vec<f64> = c.iter().map(|k| k.exact_mm * 1000.0).collect();
+    let heur: Vec<f64> = c.iter().map(|k| k.heuristic_mm * 1000.0).collect();
+    let max_e = exact.iter().copied().fold(0.0, f64::max);
+    let max_h = heur.iter().copied().fold(0.0, f64::max);
+    // Steps where the heuristic reads more than the exact cost (the paper's Fig. 8C says never).
+    let above = c.iter().filter(|k| k.heuristic_mm > k.exact_mm * (1.0 + 1e-9) + 1e-15).count();
+    let data = serde_json::json!({ "compared": true, "max_exact_um": max_e, "max_heuristic_um": max_h, "heuristic_above_exact": above });
+    let mut r = StageReport::new("costs", "Exact and heuristic ε", &data)
+        .metric("max_exact", "Largest ε, exact", max_e, "µm", "The largest joint error along this sequence with the whole frame deflecting.")
+        .metric("max_heuristic", "Largest ε, heuristic", max_h, "µm", "The same with only the cantilevered beams deflecting (the rest rigid).")
+        .metric("ratio", "Heuristic ÷ exact (largest)", if max_e > 0.0 { max_h / max_e } else { 0.0 }, "", "How much of the worst error the heuristic sees.")
+        .metric("above", "Steps heuristic > exact", above as f64, "", "Steps where the heuristic reads more than the exact cost (the paper: never).");
+    let chosen_name = match chosen {
+        Cost::Exact => "exact (planned with)",
+        Cost::Heuristic => "heuristic (planned with)",
+    };
+    let (e_name, h_name) = if chosen == Cost::Exact { (chosen_name, "heuristic") } else { ("exact", chosen_name) };
+    r.plots.push(Plot {
+        key: "eps_sequence".into(),
+        title: "ε of each step".into(),
+        kind: PlotKind::Line,
+        x: Axis::new("step", ""),
+        y: Axis::new("ε", "µm"),
+        group: None,
+        series: vec![Series::xy(e_name, x.clone(), exact.clone()), Series::xy(h_name, x, heur.clone())],
+    });
+    // Fig. 8A: compliances (ε per unit load) of the steps, sorted.
+    let mut se: Vec<f64> = c.iter().filter(|k| k.exact_mm > 0.0).map(|k| k.exact_mm / load).collect();
+    let mut sh: Vec<f64> = c.iter().filter(|k| k.exact_mm > 0.0).map(|k| k.heuristic_mm / load).collect();
+    se.sort_by(f64::total_cmp);
+    sh.sort_by(f64::total_cmp);
+    let rank: Vec<f64> = (1..=se.len()).map(|i| i as f64).collect();
+    r.plots.push(Plot {
+        key: "compliance_sorted".into(),
+        title: "Compliance of the steps, sorted (Fig. 8A)".into(),
+        kind: PlotKind::Line,
+        x: Axis::new("rank", ""),
+        y: Axis::new("ε ÷ load", "mm/N"),
+        group: None,
+        series: vec![Series::xy("exact", rank.clone(), se), Series::xy("heuristic", rank, sh)],
+    });
+    // Fig. 8C: heuristic against exact compliance, one point per step.
+    let (xs, ys): (Vec<f64>, Vec<f64>) = c.iter().filter(|k| k.exact_mm > 0.0).map(|k| (k.exact_mm / load, k.heuristic_mm / load)).unzip();
+    let top = xs.iter().copied().fold(0.0, f64::max);
+    r.plots.push(Plot {
+        key: "heuristic_vs_exact".into(),
+        title: "Heuristic against exact compliance (Fig. 8C)".into(),
+        kind: PlotKind::Scatter,
+        x: Axis::new("exact", "mm/N"),
+        y: Axis::new("heuristic", "mm/N"),
+        group: None,
+        series: vec![Series::xy("steps", xs, ys), Series { kind: Some(PlotKind::Line), ..Series::xy("heuristic = exact", vec![0.0, top], vec![0.0, top]) }],
+    });
+    // The distribution of ε.
+    if max_e > 0.0 {
+        let bins = 20;
+        let edges: Vec<f64> = (0..=bins).map(|i| max_e * i as f64 / bins as f64).collect();
+        let mut counts = vec![0.0; bins];
+        for &e in &exact {
+            let k = ((e / max_e * bins as f64) as usize).min(bins - 1);
+            counts[k] += 1.0;
+        }
+        r.plots.push(Plot { key: "eps_histogram".into(), title: "Distribution of ε (exact)".into(), kind: PlotKind::Histogram, x: Axis::new("ε", "µm"), y: Axis::new("steps", ""), group: None, series: vec![Series::xy("steps", edges, counts)] });
+    }
+    r
+}
+
+/// The G-code's toolpath: one free pass per beam (3D moves at the beam speed with the
+/// extrusion of its section, a dwell at the end joint), reached by a deadhead that lifts above
+/// the highest printed beam, moves across and lowers.
+fn toolpath(j: &FreeformJob, w: &Placed, o: &Ordered) -> Toolpath {
+    let d = j.beam.diameter_mm;
+    let area = std::f64::consts::PI * d * d / 4.0;
+    let mut passes = Vec::with_capacity(o.steps.len());
+    let mut last: Option<DVec3> = None;
+    for (i, s) in o.steps.iter().enumerate() {
+        let (a, b) = (w.joints[s.from], w.joints[s.to]);
+        let approach = last.map(|p| {
+            let z = o.safe_z[i].max(p.z).max(a.z);
+            vec![DVec3::new(p.x, p.y, z), DVec3::new(a.x, a.y, z)]
+        });
+        let data = PointData { flow: Some(PointFlow::AreaMm2(vec![0.0, area])), feed_mm_s: Some(vec![0.0, j.print.speed_mm_s]), tool_axis: None, dwell_s: Some(vec![0.0, j.print.dwell_s]) };
+        let path = Path { points: vec![a, b], feature: Feature::Lattice, width: d, speed_factor: 1.0, approach, data: Some(Box::new(data)) };
+        passes.push(Pass { kind: PassKind::Free, z: a.z.max(b.z), height: d, paths: vec![path] });
+        last = Some(b);
+    }
+    Toolpath { passes }
+}
+
+/// The wireframe after step `index`: printed beams, the current one, the cantilevered ones
+/// (a printed beam with a joint not yet held by two disjoint paths to the ground), the rest.
+fn sequence_view(w: &Placed, o: &Ordered, index: usize) -> Inspection {
+    let count = o.steps.len();
+    let index = index.min(count.saturating_sub(1));
+    let mut present = vec![false; w.beams.len()];
+    for s in o.steps.iter().take(index + 1) {
+        present[s.beam] = true;
+    }
+    let mut inc: Vec<Vec<usize>> = vec![Vec::new(); w.joints.len()];
+    for (b, &[p, q]) in w.beams.iter().enumerate() {
+        inc[p].push(b);
+        inc[q].push(b);
+    }
+    let stable = plan::stable_joints(&w.joints, &w.beams, &w.grounded, &inc, &present);
+    let current = o.steps.get(index).map(|s| s.beam);
+    let mut data = Vec::with_capacity(w.beams.len() * 7);
+    let mut cantilevered = 0usize;
+    for (b, &[p, q]) in w.beams.iter().enumerate() {
+        let f = if Some(b) == current {
+            CURRENT
+        } else if !present[b] {
+            TODO
+        } else if !(stable[p] && stable[q]) {
+            cantilevered += 1;
+            CANTILEVER
+        } else {
+            PRINTED
+        };
+        let (a, c) = (w.joints[p], w.joints[q]);
+        data.extend_from_slice(&[a.x as f32, a.y as f32, a.z as f32, c.x as f32, c.y as f32, c.z as f32, f.code() as f32]);
+    }
+    let step = o.steps.get(index);
+    let caption = step.map(|s| format!("{} from {} to {}, ε {:.3} µm", names(w, &[s.beam]), w.joint_names.get(s.from).map_or("", String::as_str), w.joint_names.get(s.to).map_or("", String::as_str), s.cost_mm * 1000.0)).unwrap_or_default();
+    let meta = serde_json::json!({
+        "caption": caption,
+        "play": true,
+        "cantilevered": cantilevered,
+        "legend": {
+            PRINTED.code().to_string(): "printed",
+            CURRENT.code().to_string(): "printing now",
+            CANTILEVER.code().to_string(): "cantilevered",
+            TODO.code().to_string(): "still to print",
+        },
+    });
+    Inspection { view: "sequence".into(), shape: Shape::Lines3d, index, count, stride: Shape::Lines3d.stride(), data, overlay: Vec::new(), meta }
+}
+
+/// The sequence as a table (first [`TABLE_ROWS`] steps): for `--report` readers and the page.
+pub fn sequence_table(w: &Wireframe, o: &Ordered) -> Table {
+    let rows = o
+        .steps
+        .iter()
+        .take(TABLE_ROWS)
+        .enumerate()
+        .map(|(i, s)| TableRow {
+            group_index: None,
+            cells: vec![
+                serde_json::json!(i + 1),
+                serde_json::json!(w.beam_names.get(s.beam).cloned().unwrap_or_default()),
+                serde_json::json!(w.joint_names.get(s.from).cloned().unwrap_or_default()),
+                serde_json::json!(w.joint_names.get(s.to).cloned().unwrap_or_default()),
+                serde_json::json!((s.cost_mm * 1e6).round() / 1e3),
+            ],
+        })
+        .collect();
+    Table {
+        key: "sequence".into(),
+        title: format!("Sequence (first {} of {} steps)", o.steps.len().min(TABLE_ROWS), o.steps.len()),
+        group: None,
+        columns: ["step", "beam", "from", "to", "ε"].iter().zip(["", "", "", "", "µm"]).map(|(l, u)| Column { label: l.to_string(), unit: u.to_string() }).collect(),
+        rows,
+    }
+}

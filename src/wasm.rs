@@ -225,6 +225,10 @@ impl Session {
                 return Err(JsError::new(&format!("{name}: {r}")));
             }
         }
+        // A wireframe over the reader's limit: refused before it is read into memory.
+        if kind == SlotKind::Frame && source.len > crate::freeform::wireframe::MAX_BYTES {
+            return Err(js_err(crate::freeform::wireframe::Error::TooBig { file: name.into(), bytes: source.len }));
+        }
         match kind {
             SlotKind::Volume | SlotKind::Gcode => {
                 self.files.insert_source(name.to_string(), Arc::new(source)).map_err(|m| JsError::new(&format!("{name} could not be read ({m}); load it again")))?;
@@ -288,8 +292,29 @@ impl Session {
                     }
                 }
             }
-            // Read by the job kinds that use them (volumes, wireframes), when they run.
-            SlotKind::Volume | SlotKind::Frame => (format!("{} bytes", group(size)), serde_json::Value::Null),
+            // A wireframe is read now, so a file that is not one is refused on loading, naming
+            // its problems.
+            SlotKind::Frame => {
+                let read = match self.files.get(name) {
+                    Some(bytes) => crate::freeform::wireframe::read(name, bytes, &crate::freeform::wireframe::Options::default()),
+                    None => Err(crate::freeform::wireframe::Error::NotRead { file: name.into(), place: "the file".into(), message: "not loaded".into() }),
+                };
+                match read {
+                    Ok(w) => {
+                        let grounded = w.grounded.iter().filter(|&&g| g).count();
+                        let first = w.joints.first().copied().unwrap_or_default();
+                        let (lo, hi) = w.joints.iter().fold((first, first), |(a, b), p| (a.min(*p), b.max(*p)));
+                        let d = hi - lo;
+                        (format!("{} beams, {} joints ({} grounded), {:.1} × {:.1} × {:.1} mm", group(w.beams.len()), group(w.joints.len()), group(grounded), d.x, d.y, d.z), serde_json::Value::Null)
+                    }
+                    Err(e) => {
+                        self.files.remove(name);
+                        return Err(js_err(e));
+                    }
+                }
+            }
+            // Read by the job kinds that use them (volumes), when they run.
+            SlotKind::Volume => (format!("{} bytes", group(size)), serde_json::Value::Null),
         };
         to_js(&Loaded { slot: slot.into(), name: name.into(), kind, summary, report })
     }

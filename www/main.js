@@ -1091,7 +1091,7 @@ let viewsKey = null;
 
 function buildViews() {
   viewsKey = jobKind().name;
-  for (const v of viewCards.values()) clearTimeout(v.timer);
+  for (const v of viewCards.values()) { clearTimeout(v.timer); clearTimeout(v.playTimer); v.playing = false; }
   viewCards.clear();
   const host = $("views");
   host.replaceChildren();
@@ -1161,7 +1161,14 @@ function buildViews() {
     stlButton.className = "view-stl";
     stlButton.textContent = "Download STL";
     stlButton.hidden = true;
-    tools.append(drawButton, finishButton, cancelButton, stlButton);
+    // A view whose answer says `meta.play` steps through its indices by itself (a print
+    // sequence): Play advances one index per answer, at most every PLAY_STEP_MS.
+    const playButton = document.createElement("button");
+    playButton.type = "button";
+    playButton.className = "view-play";
+    playButton.textContent = "▶ Play";
+    playButton.hidden = true;
+    tools.append(playButton, drawButton, finishButton, cancelButton, stlButton);
     card.append(tools);
     // An image's value window (black … white): starts at the answer's meta.window, kept
     // while the user steps through slices; drawn locally (no new request).
@@ -1184,12 +1191,13 @@ function buildViews() {
     windowUnit.className = "hint";
     windowBox.append(windowUnit);
     card.append(windowBox);
-    const v = { view, card, canvas, range, number, info, legend, tools, drawButton, finishButton, cancelButton, stlButton, drawing: null, frame: null, last: null, seq: 0, timer: 0, count: 0, answers: 0, items: 0, windowInputs, windowUnit, window: null };
+    const v = { view, card, canvas, range, number, info, legend, tools, playButton, playing: false, playTimer: 0, drawButton, finishButton, cancelButton, stlButton, drawing: null, frame: null, last: null, seq: 0, timer: 0, count: 0, answers: 0, items: 0, windowInputs, windowUnit, window: null };
     for (const input of windowInputs) input.addEventListener("change", () => {
       const [a, b] = windowInputs.map((x) => x.valueAsNumber);
       v.window = Number.isFinite(a) && Number.isFinite(b) && b > a ? [a, b] : null;
       redrawView(v);
     });
+    playButton.addEventListener("click", () => setPlaying(v, !v.playing));
     drawButton.addEventListener("click", () => { v.drawing = []; syncDrawTools(v); redrawView(v); });
     cancelButton.addEventListener("click", () => { v.drawing = null; syncDrawTools(v); redrawView(v); });
     finishButton.addEventListener("click", () => finishDrawing(v));
@@ -1206,12 +1214,38 @@ function buildViews() {
       syncDrawTools(v);
       redrawView(v);
     });
-    number.addEventListener("change", () => { range.value = number.value; scheduleInspect(0, v); });
-    range.addEventListener("input", () => { number.value = range.value; scheduleInspect(INSPECT_DEBOUNCE_MS / 2, v); });
+    number.addEventListener("change", () => { setPlaying(v, false); range.value = number.value; scheduleInspect(0, v); });
+    range.addEventListener("input", () => { setPlaying(v, false); number.value = range.value; scheduleInspect(INSPECT_DEBOUNCE_MS / 2, v); });
     new ResizeObserver(() => redrawView(v)).observe(box);
     viewCards.set(view.id, v);
   }
   host.hidden = viewCards.size === 0;
+}
+
+/** Time between the steps of a playing view, ms (or longer: the next step waits for its answer). */
+const PLAY_STEP_MS = 120;
+
+/** Starts or stops a view's playback (from the start when it is at its last index). */
+function setPlaying(v, on) {
+  clearTimeout(v.playTimer);
+  v.playing = on && v.count > 1;
+  v.playButton.textContent = v.playing ? "❚❚ Pause" : "▶ Play";
+  v.playButton.setAttribute("aria-pressed", String(v.playing));
+  if (!v.playing) return;
+  if ((v.number.valueAsNumber || 1) >= v.count) v.number.value = v.range.value = "1";
+  v.playTimer = setTimeout(() => requestInspect(v), 0);
+}
+
+/** After an answer of a playing view: the next index, or stop at the last. */
+function playNext(v) {
+  if (!v.playing) return;
+  const next = (v.number.valueAsNumber || 1) + 1;
+  if (next > v.count) { setPlaying(v, false); return; }
+  v.playTimer = setTimeout(() => {
+    if (!v.playing) return;
+    v.number.value = v.range.value = String(next);
+    requestInspect(v);
+  }, PLAY_STEP_MS);
 }
 
 /** Asks the worker for each view (or one) after `delay` ms without further edits. */
@@ -1256,15 +1290,19 @@ async function requestInspect(v) {
     : `${v.items.toLocaleString("en-US")} ${res.shape === "mesh" ? "triangles" : "segments"}`;
   const caption = typeof res.meta?.caption === "string" ? `${res.meta.caption} · ` : "";
   v.info.textContent = `of ${Math.max(1, res.count)} · ${caption}${what} · ${Math.round(res.ms)} ms`;
+  playNext(v);
 }
 
 /** Shows the view's draw tools for the answer's `meta.draw` (hidden without one). */
 function syncDrawTools(v) {
   const spec = v.last?.meta?.draw;
   const stl = v.last?.shape === "mesh" && Boolean(v.last?.meta?.stl) && v.last.data?.length > 0;
+  const play = Boolean(v.last?.meta?.play) && v.count > 1;
+  if (!play && v.playing) setPlaying(v, false);
+  v.playButton.hidden = !play;
   v.stlButton.hidden = !stl;
   v.drawButton.hidden = !spec;
-  v.tools.hidden = !spec && !stl;
+  v.tools.hidden = !spec && !stl && !play;
   if (!spec) { v.drawing = null; v.finishButton.hidden = v.cancelButton.hidden = true; return; }
   const on = Array.isArray(v.drawing);
   v.drawButton.hidden = on;
@@ -1809,7 +1847,9 @@ async function openFiles(fileList) {
   // Files for the same slot travel together (a `multiple` slot takes them all at once).
   const bySlot = new Map();
   for (const file of fileList) {
-    const slot = slotFor(file.name);
+    // A .json is a weft design unless it is an input of a slot (a wireframe): look inside.
+    const design = extOf(file.name) === ".json" && await looksLikeDesign(file);
+    const slot = design ? null : slotFor(file.name) ?? await switchForSlot(file);
     if (slot) {
       if (!bySlot.has(slot)) bySlot.set(slot, []);
       bySlot.get(slot).push(file);
@@ -1818,6 +1858,36 @@ async function openFiles(fileList) {
     }
   }
   for (const [slot, files] of bySlot) await loadIntoSlot(slot, files);
+}
+
+/** Whether a dropped .json is a weft design (it has a `job`), not a job's input file. */
+async function looksLikeDesign(file) {
+  try {
+    const value = JSON.parse(await file.text());
+    return Boolean(value) && typeof value === "object" && !Array.isArray(value) && "job" in value;
+  } catch {
+    return true; // not JSON at all: opened as a design, whose error says so
+  }
+}
+
+/**
+ * A file no slot of this job takes but another job kind's slot does (a wireframe dropped on
+ * a slicing job): switches to that kind (the first, in the menu's order) and returns its slot.
+ */
+async function switchForSlot(file) {
+  const ext = extOf(file.name);
+  if (GCODE_EXT.includes(ext.slice(1))) return null; // previewed as it is
+  // Only a slot that names the extension (a volume slot takes any file of a folder).
+  const named = (s) => s.kind !== "volume" && (s.accept ?? []).some((a) => a.toLowerCase() === ext);
+  const other = schema.job_kinds.find((k) => k.name !== jobKind().name && (k.slots ?? []).some(named));
+  if (!other) return null;
+  const problem = setFields([["job.kind", JSON.stringify(other.name)]]);
+  if (problem) {
+    showError(problem);
+    return null;
+  }
+  showNotice(`${file.name} is a ${other.label ?? other.name} input: switched the job to “${other.label ?? other.name}”.`);
+  return slotFor(file.name);
 }
 
 /** The job kind of the default design (the plain slicer). */

@@ -21,7 +21,7 @@ fn feature_speed(options: &Options, feature: Feature, first_layer: bool) -> f64 
         Feature::Perimeter | Feature::Skirt => s.perimeter_mm_s,
         Feature::Infill => s.infill_mm_s,
         Feature::SolidInfill => s.solid_infill_mm_s,
-        Feature::Lattice | Feature::Contour | Feature::Handle => s.lattice_mm_s,
+        Feature::Lattice | Feature::Contour | Feature::Handle | Feature::Beam => s.lattice_mm_s,
     }
 }
 

@@ -21,11 +21,13 @@ pub enum Feature {
     Handle,
     /// Skirt or brim.
     Skirt,
+    /// A wireframe beam printed in free space (freeform jobs).
+    Beam,
 }
 
 impl Feature {
     /// Every feature, in a stable order (its index is the feature's code in preview buffers).
-    pub const ALL: [Feature; 8] = [
+    pub const ALL: [Feature; 9] = [
         Feature::ExternalPerimeter,
         Feature::Perimeter,
         Feature::Infill,
@@ -34,6 +36,7 @@ impl Feature {
         Feature::Contour,
         Feature::Handle,
         Feature::Skirt,
+        Feature::Beam,
     ];
 
     /// The name written after `;TYPE:`, as PrusaSlicer's G-code viewer spells it where it has one.
@@ -47,6 +50,7 @@ impl Feature {
             Feature::Contour => "Contour",
             Feature::Handle => "Handle",
             Feature::Skirt => "Skirt/Brim",
+            Feature::Beam => "Beam",
         }
     }
 
@@ -62,6 +66,7 @@ impl Feature {
             "Contour" => Feature::Contour,
             "Handle" => Feature::Handle,
             "Skirt/Brim" | "SKIRT" | "Skirt" | "Brim" => Feature::Skirt,
+            "Beam" => Feature::Beam,
             _ => return None,
         })
     }
@@ -77,6 +82,7 @@ impl Feature {
             Feature::Contour => "contour",
             Feature::Handle => "handle",
             Feature::Skirt => "skirt",
+            Feature::Beam => "beam",
         }
     }
 
@@ -91,6 +97,7 @@ impl Feature {
             Feature::Contour => "#1fb04c",
             Feature::Handle => "#a0a0a0",
             Feature::Skirt => "#00876e",
+            Feature::Beam => "#5fb8e0",
         }
     }
 

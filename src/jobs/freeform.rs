@@ -37,10 +37,45 @@ pub const MAX_BEAMS: usize = wireframe::MAX_BEAMS;
 /// Rows of the sequence table.
 pub const TABLE_ROWS: usize = 200;
 
+/// Which axis of the file points up on the printer.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Up {
+    /// As drawn.
+    #[default]
+    Z,
+    /// The file's +X up.
+    X,
+    /// The file's −X up.
+    MinusX,
+    /// The file's +Y up.
+    Y,
+    /// The file's −Y up.
+    MinusY,
+    /// Upside down.
+    MinusZ,
+}
+
+impl Up {
+    /// The point in printer axes (a proper rotation).
+    pub fn turn(self, p: DVec3) -> DVec3 {
+        match self {
+            Up::Z => p,
+            Up::X => DVec3::new(p.y, p.z, p.x),
+            Up::MinusX => DVec3::new(p.y, -p.z, -p.x),
+            Up::Y => DVec3::new(p.z, p.x, p.y),
+            Up::MinusY => DVec3::new(-p.z, p.x, -p.y),
+            Up::MinusZ => DVec3::new(p.x, -p.y, -p.z),
+        }
+    }
+}
+
 /// How the design is read.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct DesignOptions {
+    /// Which of the file's axes points up.
+    pub up: Up,
     /// Where the grounded joints come from.
     pub ground: Ground,
     /// "On the lowest level" within this, mm (grounding the lowest joints).
@@ -51,7 +86,7 @@ pub struct DesignOptions {
 
 impl Default for DesignOptions {
     fn default() -> Self {
-        DesignOptions { ground: Ground::File, ground_tolerance_mm: wireframe::DEFAULT_GROUND_TOLERANCE_MM, merge_tolerance_mm: wireframe::DEFAULT_MERGE_TOLERANCE_MM }
+        DesignOptions { up: Up::Z, ground: Ground::File, ground_tolerance_mm: wireframe::DEFAULT_GROUND_TOLERANCE_MM, merge_tolerance_mm: wireframe::DEFAULT_MERGE_TOLERANCE_MM }
     }
 }
 
@@ -232,6 +267,10 @@ const TODO: Feature = Feature::Handle;
 
 const DESIGN_FIELDS: &[Row0] = &[
     crate::settings::choice_docs(
+        other("up", "Design", "Up is the file's", FieldKind::Choice, &["z", "x", "minus_x", "y", "minus_y", "minus_z"], "Turn the design on the plate: which of its axes points up."),
+        &["+Z, as drawn.", "+X.", "−X.", "+Y.", "−Y.", "−Z (upside down)."],
+    ),
+    crate::settings::choice_docs(
         other("ground", "Design", "Grounded joints", FieldKind::Choice, &["file", "lowest"], "Which joints stand on the substrate."),
         &["As the file marks them (the lowest joints when it marks none).", "Every joint within the tolerance of the lowest one."],
     ),
@@ -336,18 +375,18 @@ impl Kind for FreeformKind {
         let w = import_stage(j, ctx)?;
         let m = w.beams.len() as f64;
         let import = Estimate::new("import").quantity("beams", "Beams", m, "").cost(m * 200.0, m * 1e-6);
-        // Collision candidates: each beam against those within the nozzle's reach above it.
-        let constraints = Estimate::new("constraints").quantity("beams", "Beams", m, "").cost(m * 400.0, m * 60e-6).budgets("lower the nozzle's radius or height");
+        // Measured on weft's towers and the conmech truss (native, 2026): constraints about
+        // 0.1 ms a beam, the exact plan and the cost replay about 0.4 ms a beam (compliance
+        // updates over the joints still open), the heuristic plan about 0.05 ms.
+        let constraints = Estimate::new("constraints").quantity("beams", "Beams", m, "").cost(m * 400.0, m * 1e-4).budgets("lower the nozzle's radius or height");
         let exact = j.planner.cost == Cost::Exact;
-        // Exact: compliance updates over the live joints (bounded by the budget); heuristic:
-        // a few searches per beam.
-        let plan_s = if exact { j.planner.budget_s.min(m * m * 1e-6) + m * 2e-5 } else { m * 2e-5 };
+        let plan_s = if exact { (m * 4e-4).min(j.planner.budget_s) } else { m * 5e-5 };
         let plan = Estimate::new("plan").quantity("beams", "Beams", m, "").cost(m * 2000.0, plan_s).budgets("plan with the heuristic cost, or lower the planning budget");
-        let order = Estimate::new("order").quantity("beams", "Beams", m, "").cost(m * 200.0, m * m * 2e-8);
+        let order = Estimate::new("order").quantity("beams", "Beams", m, "").cost(m * 200.0, m * 2e-5);
         let costs = Estimate::new("costs")
             .quantity("beams", "Beams", if j.planner.compare { m } else { 0.0 }, "")
             .quantity("segments", "Segments", 4.0 * m, "")
-            .cost(m * 300.0, if j.planner.compare { m * m * 1e-6 } else { 0.0 })
+            .cost(m * 300.0, if j.planner.compare { m * 4e-4 } else { 0.0 })
             .budgets("switch off the comparison of the costs");
         Ok(vec![import, constraints, plan, order, costs])
     }
@@ -420,6 +459,16 @@ fn import_stage(j: &FreeformJob, ctx: &mut Ctx) -> Result<Out<Placed>, Error> {
             (None, Some(b)) => wireframe::read(&name, &b, &options).map_err(|e| Error::stage("reading the wireframe", e))?,
             _ => unreachable!("a model or a file"),
         };
+        if j.design.up != Up::Z {
+            for p in &mut wire.joints {
+                *p = j.design.up.turn(*p);
+            }
+            if !wire.grounded_by_file {
+                // The lowest joints after turning.
+                let low = wire.joints.iter().map(|p| p.z).fold(f64::INFINITY, f64::min);
+                wire.grounded = wire.joints.iter().map(|p| p.z <= low + j.design.ground_tolerance_mm).collect();
+            }
+        }
         place(&mut wire);
         let size = bounds(&wire.joints).map(|(lo, hi)| hi - lo).unwrap_or_default();
         crate::gcode::check_fits([size.x, size.y, size.z], &design.printer).map_err(|e| Error::stage("the wireframe", e))?;
@@ -701,7 +750,7 @@ fn toolpath(j: &FreeformJob, w: &Placed, o: &Ordered) -> Toolpath {
             vec![DVec3::new(p.x, p.y, z), DVec3::new(a.x, a.y, z)]
         });
         let data = PointData { flow: Some(PointFlow::AreaMm2(vec![0.0, area])), feed_mm_s: Some(vec![0.0, j.print.speed_mm_s]), tool_axis: None, dwell_s: Some(vec![0.0, j.print.dwell_s]) };
-        let path = Path { points: vec![a, b], feature: Feature::Lattice, width: d, speed_factor: 1.0, approach, data: Some(Box::new(data)) };
+        let path = Path { points: vec![a, b], feature: Feature::Beam, width: d, speed_factor: 1.0, approach, data: Some(Box::new(data)) };
         passes.push(Pass { kind: PassKind::Free, z: a.z.max(b.z), height: d, paths: vec![path] });
         last = Some(b);
     }

@@ -17,6 +17,7 @@ import { join, resolve } from "node:path";
 import { ROOT, serve } from "./server.mjs";
 import { axisymChecks } from "./axisym-checks.mjs";
 import { foamChecks } from "./foam-checks.mjs";
+import { freeformChecks } from "./freeform-checks.mjs";
 import { gradedChecks } from "./graded-checks.mjs";
 import { latticeChecks } from "./lattice-checks.mjs";
 import { newcomerChecks } from "./newcomer-checks.mjs";
@@ -472,7 +473,8 @@ const next = await previewChecks({ baseUrl: base, check, newPage, first: 18, tim
 const afterNewcomer = await newcomerChecks({ base, check, newPage, outDir: OUT, first: typeof next === "number" ? next : 23, cube });
 const afterAxisym = await axisymChecks({ baseUrl: base, weftBin: WEFT_BIN, check, newPage, outDir: OUT, first: typeof afterNewcomer === "number" ? afterNewcomer : 32, timeoutMs: JOB_TIMEOUT });
 const afterGraded = await gradedChecks({ baseUrl: base, weftBin: WEFT_BIN, check, newPage, outDir: OUT, first: typeof afterAxisym === "number" ? afterAxisym : 36, timeoutMs: JOB_TIMEOUT });
-await foamChecks({ baseUrl: base, weftBin: WEFT_BIN, check, newPage, outDir: OUT, first: typeof afterGraded === "number" ? afterGraded : 39, timeoutMs: JOB_TIMEOUT });
+const afterFoam = await foamChecks({ baseUrl: base, weftBin: WEFT_BIN, check, newPage, outDir: OUT, first: typeof afterGraded === "number" ? afterGraded : 39, timeoutMs: JOB_TIMEOUT });
+await freeformChecks({ baseUrl: base, weftBin: WEFT_BIN, check, newPage, outDir: OUT, first: typeof afterFoam === "number" ? afterFoam : 42, timeoutMs: JOB_TIMEOUT });
 
 if (main.errors.length) console.log(`note: console errors in the main page:\n  ${main.errors.join("\n  ")}`);
 if (offOrigin.length) console.log(`note: blocked requests leaving the origin:\n  ${[...new Set(offOrigin)].join("\n  ")}`);

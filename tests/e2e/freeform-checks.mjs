@@ -1,0 +1,122 @@
+// Browser checks of the freeform job (wireframe sequencing, issue 13): the lattice tower from
+// the Examples menu is planned in the worker; its cards report the constraints, the plan's
+// largest ε, the deadheads and both costs with the paper's Fig. 8 plots; the print-sequence
+// view draws printed, current and waiting beams and Play steps through it; the G-code equals
+// the CLI's. Then a real wireframe JSON dropped on a slicing job switches the job to freeform,
+// fills the Wireframe slot (summary: beams, joints, grounded) and runs; the same design with
+// the default 13° cone on the conmech truss is refused naming the two beams, and the design
+// keeps its settings. Called by run.mjs:
+//
+//   import { freeformChecks } from "./freeform-checks.mjs";
+//   await freeformChecks({ baseUrl: base, weftBin: WEFT_BIN, check, newPage, outDir: OUT, first: n });
+import { readFileSync } from "node:fs";
+import { execFileSync } from "node:child_process";
+import { join } from "node:path";
+import { downloadGcode, runExample, waitReady, waitResult } from "./page-helpers.mjs";
+
+const EXAMPLE = "freeform-tower.json";
+
+/**
+ * @param {{baseUrl: string, weftBin?: string, check: Function, newPage: Function, outDir: string,
+ *          first: number, timeoutMs?: number}} opts
+ * @returns {Promise<number>} the next check number
+ */
+export async function freeformChecks({ baseUrl, weftBin = process.env.WEFT_BIN, check, newPage, outDir, first, timeoutMs }) {
+  const jobTimeout = timeoutMs ?? Number(process.env.E2E_TIMEOUT_S ?? 120) * 1000;
+  let n = first;
+  const { context, page } = await newPage();
+  try {
+    await check(n++, "freeform: freeform-tower from the Examples menu is planned in the worker; the cards give precedences, the largest ε, deadheads and both costs with Fig. 8 plots; the sequence view draws and Play steps through it; G-code equals the CLI's", async () => {
+      const report = await runExample(page, baseUrl, EXAMPLE, jobTimeout);
+      for (const s of ["import", "constraints", "plan", "order", "costs"]) if (!report.stages.find((x) => x.stage === s)) throw new Error(`no ${s} stage (${report.stages.map((x) => x.stage)})`);
+      const metric = (stage, key) => report.stages.find((x) => x.stage === stage)?.metrics.find((m) => m.key === key)?.value;
+      const beams = metric("import", "beams");
+      if (beams !== 116 || report.analysis.extrusion_paths !== 116) throw new Error(`${beams} beams, ${report.analysis.extrusion_paths} extrusion paths`);
+      const eps = metric("plan", "max_eps");
+      if (!(eps > 0) || Math.abs(metric("costs", "max_exact") - eps) > 1e-9 * eps) throw new Error(`largest ε ${eps} µm planned, ${metric("costs", "max_exact")} measured`);
+      if (metric("costs", "above") !== 0) throw new Error(`heuristic above exact on ${metric("costs", "above")} steps`);
+      const cards = await page.evaluate(() => {
+        const card = document.querySelector('#report .stage-card[data-stage="costs"]');
+        return {
+          plots: [...(card?.querySelectorAll("[data-plot-key]") ?? [])].map((p) => p.dataset.plotKey),
+          units: [...document.querySelectorAll('#report .stage-card[data-stage="plan"] dl.metrics > div')].map((m) => m.textContent).join(" | "),
+        };
+      });
+      for (const k of ["eps_sequence", "compliance_sorted", "heuristic_vs_exact", "eps_histogram"]) if (!cards.plots.includes(k)) throw new Error(`costs card plots ${cards.plots}`);
+      if (!/µm/.test(cards.units)) throw new Error(`plan card reads "${cards.units.slice(0, 200)}"`);
+      // The sequence view: one index per beam, the current beam drawn, Play moves on.
+      await page.waitForFunction(() => window.weft.views.find((x) => x.id === "sequence")?.answers > 0, null, { timeout: jobTimeout });
+      const view = await page.evaluate(() => window.weft.views.find((x) => x.id === "sequence"));
+      if (view.count !== 116 || !(view.items >= 116)) throw new Error(`sequence view: ${JSON.stringify(view)}`);
+      const play = '.view-card[data-view="sequence"] .view-play';
+      await page.waitForSelector(play, { state: "visible", timeout: 5000 });
+      const start = await page.evaluate(() => window.weft.views.find((x) => x.id === "sequence").index);
+      await page.click(play);
+      await page.waitForFunction((s) => window.weft.views.find((x) => x.id === "sequence").index >= s + 3, start, { timeout: 20000 });
+      await page.click(play); // pause
+      await page.waitForTimeout(300);
+      const legend = await page.evaluate(() => document.querySelector('.view-card[data-view="sequence"] .mini-legend')?.textContent ?? "");
+      for (const w of ["printed", "printing now", "still to print"]) if (!legend.includes(w)) throw new Error(`legend reads "${legend}"`);
+      const caption = await page.evaluate(() => document.querySelector('.view-card[data-view="sequence"] output')?.textContent ?? "");
+      if (!/beam \d+ from joint \d+ to joint \d+, ε/.test(caption)) throw new Error(`caption reads "${caption}"`);
+      let native = "";
+      if (weftBin) {
+        const text = (await downloadGcode(page, join(outDir, "freeform-tower.gcode"))).bytes.toString("utf8");
+        const cli = join(outDir, "freeform-tower.cli.gcode");
+        execFileSync(weftBin, ["run", join(process.cwd(), "examples", EXAMPLE), "--out", cli, "-q"]);
+        native = readFileSync(cli, "utf8");
+        if (native !== text) throw new Error("the page's G-code differs from the CLI's");
+      }
+      await page.evaluate(() => document.querySelector('.view-card[data-view="sequence"]')?.scrollIntoView());
+      for (const [w, h, name] of [[1280, 800, "freeform-desktop.png"], [390, 844, "freeform-phone.png"]]) {
+        await page.setViewportSize({ width: w, height: h });
+        await page.waitForTimeout(300);
+        await page.screenshot({ path: join(outDir, name), fullPage: w < 500 });
+      }
+      await page.setViewportSize({ width: 1400, height: 900 });
+      return `116 beams, largest ε ${eps.toFixed(3)} µm, played ${start + 1} → beyond ${start + 3}${native ? ", same bytes as the CLI" : ""}`;
+    });
+
+    await check(n++, "freeform: a wireframe JSON dropped on a slicing job switches to freeform and fills the Wireframe slot; it runs; the conmech truss through the default cone is refused naming two beams and the design stays", async () => {
+      await page.goto(`${baseUrl}/www/`);
+      await waitReady(page);
+      const four = join(process.cwd(), "tests/fixtures/wireframes/four-frame.json");
+      // The page-wide file input takes any file (as a drop does).
+      await page.setInputFiles("#file", [four]);
+      await page.waitForFunction(() => JSON.parse(window.weft.design).job.kind === "freeform" && JSON.parse(window.weft.design).job.input?.file?.name === "four-frame.json", null, { timeout: jobTimeout });
+      const summary = await page.waitForFunction(() => document.querySelector('.slot[data-slot="frame"] .file-summary')?.textContent || false, null, { timeout: jobTimeout }).then((h) => h.jsonValue());
+      if (!/4 beams, 5 joints \(2 grounded\)/.test(summary)) throw new Error(`slot reads "${summary}"`);
+      const before = await page.evaluate(() => window.weft.resultCount);
+      await page.click("#slice");
+      await waitResult(page, before, "running four-frame.json", jobTimeout);
+      const r = await page.evaluate(() => window.weft.result.report);
+      if (r.analysis.extrusion_paths !== 4) throw new Error(`${r.analysis.extrusion_paths} paths`);
+      // The truss example, then the default cone.
+      const ran = await runExample(page, baseUrl, "freeform-cantilever-truss.json", jobTimeout);
+      if (ran.analysis.extrusion_paths !== 2197) throw new Error(`the truss printed ${ran.analysis.extrusion_paths} paths`);
+      const count = await page.evaluate(() => window.weft.resultCount);
+      await page.evaluate(() => document.querySelector("#f-job-nozzle-half_angle_deg")?.closest("details")?.setAttribute("open", ""));
+      await page.fill("#f-job-nozzle-half_angle_deg", "13");
+      await page.dispatchEvent("#f-job-nozzle-half_angle_deg", "change");
+      await page.click("#slice");
+      const message = await page.waitForFunction(() => {
+        const err = document.getElementById("error");
+        return !err.hidden && !window.weft.busy ? document.getElementById("error-text").textContent : false;
+      }, null, { timeout: jobTimeout }).then((h) => h.jsonValue());
+      if (!/cannot be printed in this orientation/.test(message) || !/element 827/.test(message) || !/element 1149/.test(message)) throw new Error(`refusal reads "${message}"`);
+      if ((await page.evaluate(() => window.weft.resultCount)) !== count) throw new Error("a result was shown for an unconstructable design");
+      const kept = await page.evaluate(() => JSON.parse(window.weft.design).job.nozzle.half_angle_deg);
+      if (kept !== 13) throw new Error(`the design lost its setting: ${kept}`);
+      for (const [w, h, name] of [[1280, 800, "freeform-refused-desktop.png"], [390, 844, "freeform-refused-phone.png"]]) {
+        await page.setViewportSize({ width: w, height: h });
+        await page.waitForTimeout(200);
+        await page.screenshot({ path: join(outDir, name) });
+      }
+      await page.setViewportSize({ width: 1400, height: 900 });
+      return `slot: ${summary}; refused: "${message.slice(0, 110)}"`;
+    });
+  } finally {
+    await context.close();
+  }
+  return n;
+}

@@ -111,7 +111,7 @@ fn a_kind_defined_in_a_test_runs_through_the_pipeline() {
     let design = Design::from_json_in(&reg, "spiral.json", &text).unwrap();
     // Defaults filled in by the kind; the built-in registry does not know it.
     assert_eq!(design.job.value["turns"], 3.0);
-    assert_eq!(Design::from_json("spiral.json", &text).unwrap_err().to_string(), "spiral.json: job.kind: 'spiral' is not a choice for the job kind; use one of: slice, lattice, axisymmetric, graded, foam");
+    assert_eq!(Design::from_json("spiral.json", &text).unwrap_err().to_string(), "spiral.json: job.kind: 'spiral' is not a choice for the job kind; use one of: slice, lattice, axisymmetric, graded, foam, freeform");
     // Its rows are in the schema and check ranges; its own rule runs too.
     let s = schema::schema(&reg);
     let row = s.fields.iter().find(|r| r.path == "job.turns").expect("the kind's row is in the schema");

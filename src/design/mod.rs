@@ -523,7 +523,7 @@ mod tests {
             ("job.lattice.pattern.kind=hex", "job.lattice.pattern.kind: 'hex' is not a choice for Pattern; use one of: honeycomb, voronoi, penrose, snub_square, arrowhead, reentrant_honeycomb, rectilinear, square_grid, triangle_grid, wavy_honeycomb, wavy_square_grid"),
             ("job.lattice.pattern.hexagon_radius_mm=big", "job.lattice.pattern.hexagon_radius_mm: Hexagon radius must be a number from 0.05 to 1000 mm (got \"big\")"),
             ("job.domain={\"width_mm\":3}", "job.domain.kind: Domain is missing: add it (one of: rectangle, disc, tensile_specimen, solid)"),
-            ("job.kind=weave", "job.kind: 'weave' is not a choice for the job kind; use one of: slice, lattice, axisymmetric, graded, foam"),
+            ("job.kind=weave", "job.kind: 'weave' is not a choice for the job kind; use one of: slice, lattice, axisymmetric, graded, foam, freeform"),
             ("printer.flavor=klipper", "printer.flavor: 'klipper' is not a choice for G-code flavour; use one of: marlin, pneumatic, poses_csv"),
             ("printer.bed_size_mm=200", "printer.bed_size_mm: Bed size X, Y, Z must be three numbers [x, y, z], each from 10 to 2000 mm (got 200)"),
             ("printer.bed_size_mm.1=wide", "printer.bed_size_mm.1: Bed size X, Y, Z must be three numbers [x, y, z], each from 10 to 2000 mm (got \"wide\")"),

@@ -64,12 +64,30 @@ fn sampled_hit(n: &Nozzle, a: [DVec3; 2], b: [DVec3; 2], shared: Option<DVec3>, 
     };
     let step = (0.1 * radius.max(0.02).min(n.radius_mm)).max(1e-3);
     let na = (a[0].distance(a[1]) / step).ceil().max(1.0) as usize;
-    let nb = (b0.distance(b1) / step).ceil().max(1.0) as usize;
     // The body shrunk by 2 % of its radius: only clear hits.
     let inflate = r * 0.98 - 0.02 * n.radius_mm;
+    let (reach, top) = (n.radius_mm + inflate.max(0.0), n.cone_height() + n.height_mm);
+    let d = b1 - b0;
     (0..=na).any(|i| {
         let tip = a[0].lerp(a[1], i as f64 / na as f64);
-        (0..=nb).any(|k| in_nozzle(n, tip, b0.lerp(b1, k as f64 / nb as f64), inflate))
+        // Only the part of B inside the body's box over this tip: an interval of B's parameter.
+        let (mut lo, mut hi) = (0.0f64, 1.0f64);
+        for (p0, dp, min, max) in [(b0.z, d.z, tip.z, tip.z + top), (b0.x, d.x, tip.x - reach, tip.x + reach), (b0.y, d.y, tip.y - reach, tip.y + reach)] {
+            if dp.abs() < 1e-12 {
+                if p0 < min || p0 > max {
+                    return false;
+                }
+            } else {
+                let (t0, t1) = ((min - p0) / dp, (max - p0) / dp);
+                lo = lo.max(t0.min(t1));
+                hi = hi.min(t0.max(t1));
+            }
+        }
+        if lo > hi {
+            return false;
+        }
+        let nb = ((hi - lo) * b0.distance(b1) / step).ceil().max(1.0) as usize;
+        (0..=nb).any(|k| in_nozzle(n, tip, b0.lerp(b1, lo + (hi - lo) * k as f64 / nb as f64), inflate))
     })
 }
 

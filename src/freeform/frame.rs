@@ -407,6 +407,29 @@ impl Factored<'_> {
     pub fn deflection(&self, at: usize, f: DVec3) -> DVec3 {
         displacement(&self.compliance(at), f)
     }
+
+    /// The compliance between the joints `joints` (all free): entry (a, b) is the 6×6 motion
+    /// of joint `joints[a]` per unit wrench at `joints[b]`, row-major over 6·n.
+    pub fn block(&self, joints: &[usize]) -> Vec<f64> {
+        let p = self.pattern;
+        let k = 6 * joints.len();
+        let mut rhs = Mat::<f64>::zeros(p.n, k);
+        for (c, &j) in joints.iter().enumerate() {
+            for t in 0..6 {
+                rhs[(p.dof[j] + t, 6 * c + t)] = 1.0;
+            }
+        }
+        let x = self.llt.solve(rhs.as_ref());
+        let mut out = vec![0.0; k * k];
+        for (r, &j) in joints.iter().enumerate() {
+            for t in 0..6 {
+                for c in 0..k {
+                    out[(6 * r + t) * k + c] = x[(p.dof[j] + t, c)];
+                }
+            }
+        }
+        out
+    }
 }
 
 /// The compliance of a growing frame, kept dense over its *live* joints (joints that may still
@@ -665,6 +688,36 @@ impl Flex {
                 }
             }
         }
+    }
+
+    /// Re-anchors the compliance of the live joints to a fresh sparse factorisation of the
+    /// frame of the `present` beams (faer's Cholesky on `pattern`): repeated rank-6 updates
+    /// lose a little accuracy each; this bounds it. Returns the largest change of an entry
+    /// relative to the largest diagonal entry (the drift it removed).
+    pub fn refresh(&mut self, pattern: &Pattern, present: &[bool]) -> Result<f64, Error> {
+        let live: Vec<(usize, usize)> = (0..self.cap).filter(|&s| self.owner[s] != NONE).map(|s| (s, self.owner[s] as usize)).collect();
+        if live.is_empty() {
+            return Ok(0.0);
+        }
+        let f = pattern.factor(present)?;
+        let joints: Vec<usize> = live.iter().map(|&(_, j)| j).collect();
+        let fresh = f.block(&joints);
+        let (k, n) = (6 * live.len(), self.n());
+        let scale = (0..k).map(|i| fresh[i * k + i].abs()).fold(0.0, f64::max).max(f64::MIN_POSITIVE);
+        let mut drift: f64 = 0.0;
+        for (a, &(sa, _)) in live.iter().enumerate() {
+            for (b, &(sb, _)) in live.iter().enumerate() {
+                for r in 0..6 {
+                    for c in 0..6 {
+                        let v = fresh[(6 * a + r) * k + 6 * b + c];
+                        let cell = &mut self.m[(6 * sa + r) * n + 6 * sb + c];
+                        drift = drift.max((*cell - v).abs() / scale);
+                        *cell = v;
+                    }
+                }
+            }
+        }
+        Ok(drift)
     }
 
     /// Joint `j` will take no more beams: it leaves the live set.

@@ -41,6 +41,10 @@ pub const DEFAULT_BUDGET_S: f64 = 60.0;
 /// Work units a second stands for: one unit is one multiply-add of the exact cost's compliance
 /// updates or one tree expansion (measured: about 10⁹ a second natively).
 pub const WORK_PER_SECOND: f64 = 1e9;
+/// Closing beams between re-anchorings of the exact cost's compliance (see
+/// [`frame::Flex::refresh`]).
+pub const REFRESH_CONNECTS: usize = 2048;
+
 /// Most tree expansions in one round: a round that needs more is refused (the search is
 /// exponential in the worst case, section II.B).
 pub const MAX_ROUND_EXPANSIONS: u64 = 20_000_000;
@@ -130,6 +134,12 @@ pub struct Plan {
     pub exact_until: Option<usize>,
     /// Largest number of live joints held by the exact cost's compliance.
     pub peak_live: usize,
+    /// Times the exact cost's compliance was re-anchored to a sparse factorisation (every
+    /// [`REFRESH_CONNECTS`] closing beams), and the largest drift that removed (relative to
+    /// the largest compliance entry).
+    pub refreshes: usize,
+    /// See `refreshes`.
+    pub drift: f64,
 }
 
 /// Why a design cannot be printed (with what proves it).
@@ -539,6 +549,9 @@ struct Planner<'a> {
     plan: Plan,
     /// The cost in use (the exact cost may give way to the heuristic past the budget).
     cost: Cost,
+    /// The design's sparsity for re-anchoring the compliance (exact cost; made on first use).
+    pattern: Option<frame::Pattern>,
+    connects: usize,
 }
 
 impl<'a> Planner<'a> {
@@ -601,6 +614,10 @@ impl<'a> Planner<'a> {
                     let dofs = 6.0 * self.flex.live() as f64;
                     self.plan.work += 3.0 * dofs * dofs;
                     self.flex.connect(from, to, pf, pt, &self.o.section);
+                    self.connects += 1;
+                    if self.connects % REFRESH_CONNECTS == 0 {
+                        self.refresh();
+                    }
                 }
             } else {
                 if self.cost == Cost::Exact {
@@ -643,6 +660,22 @@ impl<'a> Planner<'a> {
         }
     }
 
+    /// Re-anchors the exact cost's compliance to faer's sparse Cholesky of the printed frame.
+    fn refresh(&mut self) {
+        if self.pattern.is_none() {
+            self.pattern = frame::Pattern::new(self.d.joints, self.d.beams, self.d.grounded, self.o.section).ok();
+        }
+        if let Some(pattern) = &self.pattern {
+            let dofs = pattern.dofs() as f64;
+            // Counted as a factorisation plus a solve per live degree of freedom.
+            self.plan.work += dofs * 200.0 + 12.0 * dofs * self.flex.live() as f64;
+            if let Ok(d) = self.flex.refresh(pattern, &self.printed) {
+                self.plan.refreshes += 1;
+                self.plan.drift = self.plan.drift.max(d);
+            }
+        }
+    }
+
     /// Past the budget, the exact cost gives way to the heuristic (once).
     fn over_budget(&mut self, budget: f64) {
         if self.cost == Cost::Exact && self.plan.work > budget {
@@ -678,6 +711,8 @@ pub fn plan(d: &Assembly, o: &Options, progress: &mut dyn FnMut(usize, usize)) -
         last_block: vec![NONE; n],
         plan: Plan::default(),
         cost: o.cost,
+        pattern: None,
+        connects: 0,
         inc,
     };
     match o.mode {

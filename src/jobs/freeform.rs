@@ -617,6 +617,11 @@ fn plan_stage(j: &FreeformJob, ctx: &mut Ctx, w: &Out<Placed>, c: &Out<Constrain
         }
         if j.planner.cost == Cost::Exact {
             report = report.metric("peak_live", "Joints tracked", p.peak_live as f64, "", "Most joints whose compliance the exact cost kept at once (its memory grows as the square).");
+            if p.refreshes > 0 {
+                report = report
+                    .metric("refreshes", "Sparse re-anchorings", p.refreshes as f64, "", "Times the running compliance was recomputed from a sparse Cholesky factorisation of the printed frame (faer).")
+                    .metric("drift", "Drift removed", p.drift, "", "The largest change a re-anchoring made, relative to the largest compliance: the rounding the running updates had gathered.");
+            }
         }
         Ok((p, Some(report)))
     })

@@ -247,7 +247,7 @@ const STAGES: &[StageInfo] = &[
     StageInfo { name: "constraints", label: "Directions and collisions" },
     StageInfo { name: "plan", label: "Planning the sequence" },
     StageInfo { name: "order", label: "Ordering deadheads" },
-    StageInfo { name: "costs", label: "Exact and heuristic ε" },
+    StageInfo { name: "costs", label: "Joint errors, exact and heuristic" },
 ];
 
 const VIEWS: &[ViewInfo] = &[ViewInfo {
@@ -619,8 +619,8 @@ fn plan_stage(j: &FreeformJob, ctx: &mut Ctx, w: &Out<Placed>, c: &Out<Constrain
             report = report.metric("peak_live", "Joints tracked", p.peak_live as f64, "", "Most joints whose compliance the exact cost kept at once (its memory grows as the square).");
             if p.refreshes > 0 {
                 report = report
-                    .metric("refreshes", "Sparse re-anchorings", p.refreshes as f64, "", "Times the running compliance was recomputed from a sparse Cholesky factorisation of the printed frame (faer).")
-                    .metric("drift", "Drift removed", p.drift, "", "The largest change a re-anchoring made, relative to the largest compliance: the rounding the running updates had gathered.");
+                    .metric("refreshes", "Sparse checks", p.refreshes as f64, "", "Times the running compliance was checked against a sparse Cholesky factorisation of the printed frame (faer).")
+                    .metric("drift", "Largest difference", p.drift, "", "The largest difference a check found, relative to the largest compliance: the rounding the running updates have gathered.");
             }
         }
         Ok((p, Some(report)))
@@ -665,7 +665,7 @@ fn costs_stage(j: &FreeformJob, ctx: &mut Ctx, w: &Out<Placed>, p: &Out<Plan>, o
 fn planned_report(o: &Ordered) -> StageReport {
     let x: Vec<f64> = (1..=o.steps.len()).map(|i| i as f64).collect();
     let y: Vec<f64> = o.steps.iter().map(|s| s.cost_mm * 1000.0).collect();
-    let mut r = StageReport::new("costs", "ε along the sequence", &serde_json::json!({ "compared": false }));
+    let mut r = StageReport::new("costs", "Joint errors along the sequence", &serde_json::json!({ "compared": false }));
     r.plots.push(Plot { key: "eps_sequence".into(), title: "ε of each step (as planned)".into(), kind: PlotKind::Line, x: Axis::new("step", ""), y: Axis::new("ε", "µm"), group: None, series: vec![Series::xy("planned", x, y)] });
     r
 }
@@ -680,7 +680,7 @@ fn costs_report(c: &[Costs], load: f64, chosen: Cost) -> StageReport {
     // Steps where the heuristic reads more than the exact cost (the paper's Fig. 8C says never).
     let above = c.iter().filter(|k| k.heuristic_mm > k.exact_mm * (1.0 + 1e-9) + 1e-15).count();
     let data = serde_json::json!({ "compared": true, "max_exact_um": max_e, "max_heuristic_um": max_h, "heuristic_above_exact": above });
-    let mut r = StageReport::new("costs", "Exact and heuristic ε", &data)
+    let mut r = StageReport::new("costs", "Joint errors, exact and heuristic", &data)
         .metric("max_exact", "Largest ε, exact", max_e, "µm", "The largest joint error along this sequence with the whole frame deflecting.")
         .metric("max_heuristic", "Largest ε, heuristic", max_h, "µm", "The same with only the cantilevered beams deflecting (the rest rigid).")
         .metric("ratio", "Heuristic ÷ exact (largest)", if max_e > 0.0 { max_h / max_e } else { 0.0 }, "", "How much of the worst error the heuristic sees.")

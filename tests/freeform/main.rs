@@ -1,0 +1,7 @@
+//! The freeform job (issue 13), in one test binary (each binary links the whole library):
+//! reading wireframes ([`wireframe`]), the frame, the constraints and the planner replayed by
+//! an independent checker ([`plan`]), the job end to end read back by the analyzer ([`job`]).
+
+mod job;
+mod plan;
+mod wireframe;

@@ -110,3 +110,52 @@ fn hostile_files_are_refused_in_words() {
     let p = problems("nan.obj", "v 0 0 nan\nv 0 0 nan\nl 1 2\n").join("\n");
     assert!(p.contains("no joint is grounded"), "{p}");
 }
+
+/// Mutated wireframes (bytes flipped, inserted, deleted, in the real designs and in small OBJ
+/// and CSV ones) never panic the reader, and whatever it accepts plans or is refused without
+/// a panic.
+#[test]
+fn mutated_wireframes_never_panic() {
+    use rand_core::{Rng, SeedableRng};
+    use rand_pcg::Pcg64;
+    use weft::freeform::{plan, precedence};
+    let mut seeds: Vec<(String, Vec<u8>)> = vec![
+        ("small.obj".into(), b"v 0 0 0\nv 10 0 0\nv 0 10 0\nv 0 0 10\nl 1 4\nl 2 4\nl 3 4\nl 1 2 3\n".to_vec()),
+        ("small.csv".into(), b"x1,y1,z1,x2,y2,z2\n0,0,0,0,0,5\n0,0,5,5,0,5\n5,0,5,5,0,0\n".to_vec()),
+    ];
+    for f in ["four-frame.json", "semi_sphere.json"] {
+        seeds.push((f.into(), fixture(f)));
+    }
+    let nozzle = precedence::Options { nozzle: precedence::Nozzle::default(), beam_radius_mm: 0.5, directionality: true, collision: true };
+    let mut accepted = 0;
+    for (k, (name, original)) in seeds.iter().enumerate() {
+        for r in 0..300u64 {
+            let mut rng = Pcg64::seed_from_u64((k as u64) << 32 | r);
+            let mut data = original.clone();
+            for _ in 0..1 + rng.next_u32() % 3 {
+                let at = (rng.next_u32() as usize) % data.len().max(1);
+                match rng.next_u32() % 3 {
+                    0 if !data.is_empty() => data[at] = b"0123456789-.,e{}[]\"ln \n"[(rng.next_u32() % 20) as usize],
+                    1 => data.insert(at.min(data.len()), b"9e300"[(rng.next_u32() % 5) as usize]),
+                    _ if !data.is_empty() => {
+                        data.remove(at);
+                    }
+                    _ => {}
+                }
+            }
+            let read = std::panic::catch_unwind(|| read(name, &data, &Options::default()));
+            let Ok(Ok(w)) = read else {
+                assert!(read.is_ok(), "{name} round {r}: the reader panicked");
+                continue;
+            };
+            accepted += 1;
+            let planned = std::panic::catch_unwind(|| {
+                let c = precedence::constraints(&w.joints, &w.beams, &nozzle, &mut |_| {}).unwrap();
+                let a = plan::Assembly { joints: &w.joints, beams: &w.beams, grounded: &w.grounded, constraints: &c };
+                let _ = plan::plan(&a, &plan::Options { mode: plan::Mode::Strict, cost: plan::Cost::Exact, connection: true, section: weft::freeform::frame::Section { diameter_mm: 1.0, e_mpa: 2600.0, g_mpa: 1100.0 }, load_n: 1e-4, budget_s: 1.0 }, &mut |_, _| {});
+            });
+            assert!(planned.is_ok(), "{name} round {r}: planning a mutated design panicked");
+        }
+    }
+    assert!(accepted > 100, "only {accepted} mutated designs were read: the mutations are too harsh to reach the planner");
+}

@@ -598,7 +598,19 @@ fn plan_stage(j: &FreeformJob, ctx: &mut Ctx, w: &Out<Placed>, c: &Out<Constrain
     ctx.stage("plan", "plan", &parts, &[w.key, c.key], |progress| {
         let a = Assembly { joints: &w.joints, beams: &w.beams, grounded: &w.grounded, constraints: c };
         let started = crate::clock::now_s();
-        let p = plan::plan(&a, &o, &mut |done, all| progress(done as f32 / all.max(1) as f32)).map_err(|u| Error::stage("planning", CannotPrint(explain(w, &u, o.mode))))?;
+        // A forward planner fixes the sequence's beginning first: printing could start when the
+        // first subassembly is fixed. When that and half the beams were fixed.
+        let (mut first_ms, mut half_ms) = (None, None);
+        let p = plan::plan(&a, &o, &mut |done, all| {
+            if done > 0 && first_ms.is_none() {
+                first_ms = Some((crate::clock::now_s() - started) * 1000.0);
+            }
+            if 2 * done >= all && all > 0 && half_ms.is_none() {
+                half_ms = Some((crate::clock::now_s() - started) * 1000.0);
+            }
+            progress(done as f32 / all.max(1) as f32)
+        })
+        .map_err(|u| Error::stage("planning", CannotPrint(explain(w, &u, o.mode))))?;
         let ms = (crate::clock::now_s() - started) * 1000.0;
         let eps: Vec<f64> = p.steps.iter().map(|s| s.cost_mm * 1000.0).collect();
         let max = eps.iter().copied().fold(0.0, f64::max);
@@ -611,7 +623,9 @@ fn plan_stage(j: &FreeformJob, ctx: &mut Ctx, w: &Out<Placed>, c: &Out<Constrain
             .metric("paths", "Joined paths", multi as f64, "", "Subassemblies of several beams: cantilevers grown from stable joints until they meet.")
             .metric("expansions", "Search steps", p.expansions as f64, "", "Tree states expanded by the best-first search.")
             .metric("work", "Counted work", p.work / plan::WORK_PER_SECOND, "s", "Work counted against the planning budget (the same on every machine).")
-            .metric("time", "Planning time", ms, "ms", "Wall time of the plan on this machine.");
+            .metric("time", "Planning time", ms, "ms", "Wall time of the plan on this machine.")
+            .metric("first_ms", "First beams fixed", first_ms.unwrap_or(ms), "ms", "When the plan's first subassembly was fixed: a printer could start then, while planning goes on (the plan only adds after it).")
+            .metric("half_ms", "Half the beams fixed", half_ms.unwrap_or(ms), "ms", "When half of the sequence was fixed.");
         if let Some(k) = p.exact_until {
             report = report.metric("exact_until", "Exact cost until step", k as f64, "", "The planning budget ran out here: later steps were chosen by the heuristic cost.");
         }

@@ -25,6 +25,7 @@ const CASES: &[(&str, &str, &[&str])] = &[
     ("freeform-bridge", "freeform-bridge", &[]),
     ("freeform-cantilever-truss", "freeform-cantilever-truss", &[]),
     ("freeform-dome", "freeform-dome", &[]),
+    ("freeform-dome-exact", "freeform-dome-exact", &[]),
     ("freeform-duck", "freeform-duck", &[]),
     ("freeform-four-frame", "freeform-four-frame", &[]),
     ("freeform-klein-bottle", "freeform-klein-bottle", &[]),

@@ -13,6 +13,9 @@
 //!   Cholesky) and its incremental form for planning;
 //! - [`plan`] is the best-first search of section III over consistent subassemblies (strict
 //!   mode) or the bottleneck greedy (relaxed mode), with the exact or the heuristic cost;
+//! - [`optimal`] (beyond the paper) searches every order of a small design for the least
+//!   largest ε: it proves the planner's sequence optimal or beats it, and decides the designs
+//!   the planner's search gives up on;
 //! - [`deadhead`] orders the plan within its recorded constraints, greedy on deadhead time
 //!   (lift above the highest printed beam, move, lower);
 //! - [`cost`] replays a sequence and measures both costs of every step (the paper's Fig. 8).
@@ -21,6 +24,7 @@ pub mod cost;
 pub mod deadhead;
 pub mod frame;
 pub mod models;
+pub mod optimal;
 pub mod plan;
 pub mod precedence;
 pub mod wireframe;

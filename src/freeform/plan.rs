@@ -215,7 +215,8 @@ pub struct Assembly<'a> {
 const LISTED: usize = 12;
 
 impl Assembly<'_> {
-    fn other(&self, b: usize, j: usize) -> usize {
+    /// The joint of beam `b` that is not `j`.
+    pub fn other(&self, b: usize, j: usize) -> usize {
         let [p, q] = self.beams[b];
         if p == j {
             q
@@ -224,7 +225,7 @@ impl Assembly<'_> {
         }
     }
     /// May beam `b` be printed starting at joint `j`?
-    fn allowed_from(&self, b: usize, j: usize) -> bool {
+    pub fn allowed_from(&self, b: usize, j: usize) -> bool {
         if self.beams[b][0] == j {
             self.constraints.forward[b]
         } else {

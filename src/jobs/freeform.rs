@@ -17,6 +17,7 @@ use crate::freeform::cost::{self, Costs};
 use crate::freeform::deadhead::{self, Ordered};
 use crate::freeform::frame::{Section, DEFAULT_E_MPA, DEFAULT_G_MPA, DEFAULT_LOAD_N};
 use crate::freeform::models::{self, Model};
+use crate::freeform::optimal::{self, Optimum};
 use crate::freeform::plan::{self, Assembly, Cost, Mode, Plan, Unconstructable};
 use crate::freeform::precedence::{self, Constraints, Nozzle};
 use crate::freeform::wireframe::{self, Ground, Wireframe};
@@ -159,12 +160,32 @@ pub struct PlannerOptions {
     pub budget_s: f64,
     /// Measure both costs along the sequence (the paper's Fig. 8).
     pub compare: bool,
+    /// The exact search over every order, on small designs.
+    pub exact_search: ExactSearch,
+    /// Largest design the exact search takes, beams.
+    pub exact_beams: usize,
+    /// States the exact search explores at most.
+    pub exact_states: usize,
 }
 
 impl Default for PlannerOptions {
     fn default() -> Self {
-        PlannerOptions { cost: Cost::Exact, budget_s: plan::DEFAULT_BUDGET_S, compare: true }
+        PlannerOptions { cost: Cost::Exact, budget_s: plan::DEFAULT_BUDGET_S, compare: true, exact_search: ExactSearch::Compare, exact_beams: optimal::DEFAULT_MAX_BEAMS, exact_states: optimal::DEFAULT_MAX_STATES }
     }
+}
+
+/// What the exact search over every order does on a small design ([`optimal`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ExactSearch {
+    /// Prove the planner's largest ε optimal or show the gap; print the planner's sequence
+    /// (or the search's, when the planner finds none).
+    #[default]
+    Compare,
+    /// Print the search's sequence when it beats the planner's.
+    Print,
+    /// Do not search.
+    Off,
 }
 
 /// Printing.
@@ -246,6 +267,7 @@ const STAGES: &[StageInfo] = &[
     StageInfo { name: "import", label: "Reading the wireframe" },
     StageInfo { name: "constraints", label: "Directions and collisions" },
     StageInfo { name: "plan", label: "Planning the sequence" },
+    StageInfo { name: "optimum", label: "Exact search (small designs)" },
     StageInfo { name: "order", label: "Ordering deadheads" },
     StageInfo { name: "costs", label: "Joint errors, exact and heuristic" },
 ];
@@ -308,6 +330,12 @@ const PLANNER_FIELDS: &[Row0] = &[
     ),
     num("budget_s", "Planner", "Planning budget", "s", 0.1, 36000.0, 1.0, "Work allowed for the exact cost (counted, the same on every machine); past it the plan goes on with the heuristic."),
     other("compare", "Planner", "Compare the costs", FieldKind::Bool, &[], "Measure both the exact and the heuristic ε of every step (plots of the paper's Fig. 8)."),
+    crate::settings::choice_docs(
+        other("exact_search", "Planner", "Exact search", FieldKind::Choice, &["compare", "print", "off"], "On small designs, search every order for the least largest ε (exact cost)."),
+        &["Prove the planner's sequence optimal or show the gap; print the planner's.", "Print the search's sequence when it beats the planner's.", "Do not search."],
+    ),
+    crate::settings::int("exact_beams", "Planner", "Exact search up to", 1.0, optimal::MAX_BEAMS as f64, "Designs with at most this many beams are searched exactly (the work grows exponentially with it)."),
+    crate::settings::int("exact_states", "Planner", "Exact search states", 1.0, 10_000_000.0, "States the exact search explores before it gives up (about 50 µs and 20 bytes each)."),
 ];
 
 const PRINT_FIELDS: &[Row0] = &[
@@ -382,19 +410,28 @@ impl Kind for FreeformKind {
         let exact = j.planner.cost == Cost::Exact;
         let plan_s = if exact { (m * 4e-4).min(j.planner.budget_s) } else { m * 5e-5 };
         let plan = Estimate::new("plan").quantity("beams", "Beams", m, "").cost(m * 2000.0, plan_s).budgets("plan with the heuristic cost, or lower the planning budget");
+        let searched = exact_runs(j, m as usize);
+        let states = if searched { j.planner.exact_states as f64 } else { 0.0 };
+        // Measured: about 40 µs a state on a 30-beam dome (the frame's update grows as the
+        // square of its joints). The time stated is a typical search's (about 2^(beams/2)
+        // states: the dome searched 10 457), the memory the limit's; the worst case at the
+        // largest limit, 10⁷ states, is under 10 minutes.
+        let per_state = 4e-5 * (m / 30.0).powi(2).max(0.05);
+        let typical = states.min(2f64.powf(m / 2.0));
+        let optimum = Estimate::new("optimum").quantity("states", "States at most", states, "").cost(states * 24.0, typical * per_state).budgets("lower the exact search's states, or switch it off");
         let order = Estimate::new("order").quantity("beams", "Beams", m, "").cost(m * 200.0, m * 2e-5);
         let costs = Estimate::new("costs")
             .quantity("beams", "Beams", if j.planner.compare { m } else { 0.0 }, "")
             .quantity("segments", "Segments", 4.0 * m, "")
             .cost(m * 300.0, if j.planner.compare { m * 4e-4 } else { 0.0 })
             .budgets("switch off the comparison of the costs");
-        Ok(vec![import, constraints, plan, order, costs])
+        Ok(vec![import, constraints, plan, optimum, order, costs])
     }
 
     fn run(j: &FreeformJob, ctx: &mut Ctx) -> Result<Product, Error> {
         let w = import_stage(j, ctx)?;
         let c = constraints_stage(j, ctx, &w)?;
-        let p = plan_stage(j, ctx, &w, &c)?;
+        let p = chosen_plan(j, ctx, &w, &c)?;
         let o = order_stage(j, ctx, &w, &c, &p)?;
         let costs = costs_stage(j, ctx, &w, &p, &o)?;
         let design = ctx.design;
@@ -408,7 +445,7 @@ impl Kind for FreeformKind {
             "sequence" => {
                 let w = import_stage(j, ctx)?;
                 let c = constraints_stage(j, ctx, &w)?;
-                let p = plan_stage(j, ctx, &w, &c)?;
+                let p = chosen_plan(j, ctx, &w, &c)?;
                 let o = order_stage(j, ctx, &w, &c, &p)?;
                 Ok(sequence_view(&w, &o, index))
             }
@@ -592,16 +629,31 @@ pub fn explain(w: &Wireframe, u: &Unconstructable, mode: Mode) -> String {
     }
 }
 
-fn plan_stage(j: &FreeformJob, ctx: &mut Ctx, w: &Out<Placed>, c: &Out<Constraints>) -> Result<Out<Plan>, Error> {
+/// Whether the exact search runs on a design of `beams` beams.
+fn exact_runs(j: &FreeformJob, beams: usize) -> bool {
+    j.planner.exact_search != ExactSearch::Off && j.constraints.connection && beams <= j.planner.exact_beams.min(optimal::MAX_BEAMS)
+}
+
+/// The plan printed: the planner's, or the exact search's (see [`ExactSearch`]).
+fn chosen_plan(j: &FreeformJob, ctx: &mut Ctx, w: &Out<Placed>, c: &Out<Constraints>) -> Result<Out<Plan>, Error> {
+    let p = plan_stage(j, ctx, w, c)?;
+    optimum_stage(j, ctx, w, c, &p)
+}
+
+/// The planner's plan, or (on a design the exact search takes) why it found none.
+type Planned = Result<Plan, Unconstructable>;
+
+fn plan_stage(j: &FreeformJob, ctx: &mut Ctx, w: &Out<Placed>, c: &Out<Constraints>) -> Result<Out<Planned>, Error> {
     let o = plan_options(j);
-    let parts = (j.constraints, j.planner.cost, j.planner.budget_s, j.beam);
+    let searched = exact_runs(j, w.beams.len());
+    let parts = (j.constraints, j.planner.cost, j.planner.budget_s, j.beam, searched);
     ctx.stage("plan", "plan", &parts, &[w.key, c.key], |progress| {
         let a = Assembly { joints: &w.joints, beams: &w.beams, grounded: &w.grounded, constraints: c };
         let started = crate::clock::now_s();
         // A forward planner fixes the sequence's beginning first: printing could start when the
         // first subassembly is fixed. When that and half the beams were fixed.
         let (mut first_ms, mut half_ms) = (None, None);
-        let p = plan::plan(&a, &o, &mut |done, all| {
+        let planned = plan::plan(&a, &o, &mut |done, all| {
             if done > 0 && first_ms.is_none() {
                 first_ms = Some((crate::clock::now_s() - started) * 1000.0);
             }
@@ -609,8 +661,17 @@ fn plan_stage(j: &FreeformJob, ctx: &mut Ctx, w: &Out<Placed>, c: &Out<Constrain
                 half_ms = Some((crate::clock::now_s() - started) * 1000.0);
             }
             progress(done as f32 / all.max(1) as f32)
-        })
-        .map_err(|u| Error::stage("planning", CannotPrint(explain(w, &u, o.mode))))?;
+        });
+        let p = match planned {
+            Ok(p) => p,
+            // The planner's refusals that are proofs stand; its search's limits the exact
+            // search may overcome on a small design.
+            Err(u @ (Unconstructable::NoSubassembly { .. } | Unconstructable::SearchTooLarge { .. })) if searched => {
+                let report = StageReport::new("plan", "Planning the sequence: no sequence found", &serde_json::json!({ "refused": &u }));
+                return Ok((Err(u), Some(report)));
+            }
+            Err(u) => return Err(Error::stage("planning", CannotPrint(explain(w, &u, o.mode)))),
+        };
         let ms = (crate::clock::now_s() - started) * 1000.0;
         let eps: Vec<f64> = p.steps.iter().map(|s| s.cost_mm * 1000.0).collect();
         let max = eps.iter().copied().fold(0.0, f64::max);
@@ -637,8 +698,107 @@ fn plan_stage(j: &FreeformJob, ctx: &mut Ctx, w: &Out<Placed>, c: &Out<Constrain
                     .metric("drift", "Largest difference", p.drift, "", "The largest difference a check found, relative to the largest compliance: the rounding the running updates have gathered.");
             }
         }
-        Ok((p, Some(report)))
+        Ok((Ok(p), Some(report)))
     })
+}
+
+/// ε (exact, mm) of each step of `steps`, replayed.
+fn exact_eps(w: &Wireframe, steps: &[plan::Step], s: &Section, load: f64) -> Vec<f64> {
+    cost::costs(&w.joints, &w.beams, &w.grounded, steps, s, load).iter().map(|k| k.exact_mm).collect()
+}
+
+/// The exact search over every order ([`optimal`]) on small designs: proves the planner's
+/// largest ε optimal or shows the gap, and prints the better sequence when asked (or when the
+/// planner found none).
+fn optimum_stage(j: &FreeformJob, ctx: &mut Ctx, w: &Out<Placed>, c: &Out<Constraints>, p: &Out<Planned>) -> Result<Out<Plan>, Error> {
+    let searched = exact_runs(j, w.beams.len());
+    let parts = (j.planner.exact_search, j.planner.exact_beams, j.planner.exact_states, searched);
+    let mode = j.constraints.cantilever;
+    ctx.stage("optimum", "optimum", &parts, &[w.key, c.key, p.key], |progress| {
+        let planned: &Planned = p;
+        if !searched {
+            // Say why when it was asked for.
+            let why = if !j.constraints.connection { "it needs the connection constraint".to_string() } else { format!("{} beams, more than {}", w.beams.len(), j.planner.exact_beams.min(optimal::MAX_BEAMS)) };
+            let note = (j.planner.exact_search != ExactSearch::Off).then(|| StageReport::new("optimum", &format!("Exact search: not run ({why})"), &serde_json::json!({ "skipped": why })));
+            return match planned {
+                Ok(plan) => Ok((plan.clone(), note)),
+                Err(u) => Err(Error::stage("planning", CannotPrint(explain(w, u, mode)))),
+            };
+        }
+        let s = section(j);
+        let load = j.beam.load_n;
+        let planner_eps = planned.as_ref().ok().map(|plan| exact_eps(w, &plan.steps, &s, load));
+        let known = planner_eps.as_ref().map(|e| e.iter().copied().fold(0.0, f64::max));
+        let a = Assembly { joints: &w.joints, beams: &w.beams, grounded: &w.grounded, constraints: c };
+        let o = optimal::Options { mode, section: s, load_n: load, max_states: j.planner.exact_states, known_mm: known };
+        let started = crate::clock::now_s();
+        let best = optimal::optimum(&a, &o, &mut |done, all| progress(done as f32 / all.max(1) as f32)).map_err(|e| Error::stage("the exact search", e))?;
+        let ms = (crate::clock::now_s() - started) * 1000.0;
+        let searched_plan = best.steps.as_ref().map(|steps| sequential_plan(steps.clone(), best.states));
+        let printed = match (planned, &searched_plan) {
+            (Err(_), Some(sp)) => sp.clone(),
+            (Ok(_), Some(sp)) if j.planner.exact_search == ExactSearch::Print => sp.clone(),
+            (Ok(plan), _) => plan.clone(),
+            (Err(u), None) => {
+                let why = explain(w, u, mode);
+                let msg = if best.proven {
+                    format!("cannot be printed: the exact search tried every order ({} states) and none meets the constraints{}; the planner said: {why}", best.states, if mode == Mode::Strict { " with one cantilever per joint" } else { "" })
+                } else {
+                    format!("{why} (the exact search gave up after {} states: raise its states to decide)", best.states)
+                };
+                return Err(Error::stage("planning", CannotPrint(msg)));
+            }
+        };
+        Ok((printed, Some(optimum_report(&best, known, planner_eps.as_deref(), ms, j.planner.exact_search))))
+    })
+}
+
+/// A found sequence as a plan: one step a block, each after the one before (the search's order
+/// is what meets the cantilever rule, so the deadhead order keeps it).
+fn sequential_plan(steps: Vec<plan::Step>, states: usize) -> Plan {
+    let blocks = (0..steps.len())
+        .map(|i| plan::Block { start: i, end: i + 1, after: if i == 0 { Vec::new() } else { vec![i - 1] }, chain: vec![usize::MAX], key_mm: steps[i].cost_mm })
+        .collect();
+    Plan { steps, blocks, expansions: states as u64, ..Plan::default() }
+}
+
+fn optimum_report(best: &Optimum, known: Option<f64>, planner_eps: Option<&[f64]>, ms: f64, use_: ExactSearch) -> StageReport {
+    let um = |x: f64| x * 1000.0;
+    let label = match (best.proven, best.best_mm, &best.steps, known) {
+        (true, None, _, _) => "Exact search: no order meets the constraints".to_string(),
+        (true, Some(_), None, Some(_)) => "Exact search: the planner's sequence is optimal".to_string(),
+        (true, Some(_), Some(_), Some(_)) => format!("Exact search: a better sequence{}", if use_ == ExactSearch::Print { " (printed)" } else { "" }),
+        (true, Some(_), _, None) => "Exact search: the optimal sequence (the planner found none)".to_string(),
+        (false, _, _, _) => format!("Exact search: gave up after {} states", best.states),
+    };
+    let mut r = StageReport::new("optimum", &label, &serde_json::json!({ "proven": best.proven, "best_um": best.best_mm.map(um), "planner_um": known.map(um), "states": best.states, "improvements": best.improvements }));
+    if let Some(b) = best.best_mm {
+        r = r.metric("best", if best.proven { "Least largest ε (proven)" } else { "Least largest ε found" }, um(b), "µm", "The smallest largest joint error over every order the constraints allow (exact cost).");
+    }
+    if let Some(k) = known {
+        r = r.metric("planner", "Planner's largest ε (exact)", um(k), "µm", "The planner's sequence measured with the exact cost.");
+        if let Some(b) = best.best_mm.filter(|&b| b > 0.0) {
+            r = r.metric("gap", "Planner's gap", (k / b - 1.0) * 100.0, "%", "How far the planner's largest ε is above the least found (0: the planner's is optimal when proven).");
+        }
+    }
+    r = r
+        .metric("states", "States searched", best.states as f64, "", "Sets of printed beams the search explored (each a state whatever the order that led to it).")
+        .metric("improvements", "Better orders found", best.improvements as f64, "", "Sequences the search found one after another, each with a smaller largest ε than the last.")
+        .metric("time", "Search time", ms, "ms", "Wall time of the search on this machine.");
+    if let (Some(steps), Some(pe)) = (&best.steps, planner_eps) {
+        let x: Vec<f64> = (1..=pe.len()).map(|i| i as f64).collect();
+        let se: Vec<f64> = steps.iter().map(|s| um(s.cost_mm)).collect();
+        r.plots.push(Plot {
+            key: "optimum_sequence".into(),
+            title: "ε of each step: planner and exact search".into(),
+            kind: PlotKind::Line,
+            x: Axis::new("step", ""),
+            y: Axis::new("ε", "µm"),
+            group: None,
+            series: vec![Series::xy("planner", x.clone(), pe.iter().map(|&e| um(e)).collect()), Series::xy("exact search", x, se)],
+        });
+    }
+    r
 }
 
 fn order_stage(j: &FreeformJob, ctx: &mut Ctx, w: &Out<Placed>, c: &Out<Constraints>, p: &Out<Plan>) -> Result<Out<Ordered>, Error> {

@@ -5,7 +5,8 @@
 // the CLI's. Then a real wireframe JSON dropped on a slicing job switches the job to freeform,
 // fills the Wireframe slot (summary: beams, joints, grounded) and runs; the same design with
 // the default 13° cone on the conmech truss is refused naming the two beams, and the design
-// keeps its settings. Called by run.mjs:
+// keeps its settings. The exact search's card on a small dome: the proven optimum below the
+// heuristic planner's, printed. Called by run.mjs:
 //
 //   import { freeformChecks } from "./freeform-checks.mjs";
 //   await freeformChecks({ baseUrl: base, weftBin: WEFT_BIN, check, newPage, outDir: OUT, first: n });
@@ -114,6 +115,38 @@ export async function freeformChecks({ baseUrl, weftBin = process.env.WEFT_BIN, 
       }
       await page.setViewportSize({ width: 1400, height: 900 });
       return `slot: ${summary}; refused: "${message.slice(0, 110)}"`;
+    });
+
+    await check(n++, "freeform: freeform-dome-exact from the Examples menu: the exact search's card proves the least largest ε below the heuristic planner's, plots both sequences, and its sequence is printed (same bytes as the CLI)", async () => {
+      const report = await runExample(page, baseUrl, "freeform-dome-exact.json", jobTimeout);
+      const stage = report.stages.find((x) => x.stage === "optimum");
+      if (!stage || !/better sequence \(printed\)/.test(stage.label)) throw new Error(`optimum stage: ${stage?.label}`);
+      const metric = (st, key) => report.stages.find((x) => x.stage === st)?.metrics.find((m) => m.key === key)?.value;
+      const best = metric("optimum", "best");
+      const planner = metric("optimum", "planner");
+      if (!(best > 0 && planner > best)) throw new Error(`optimum ${best} µm, planner ${planner} µm`);
+      if (Math.abs(metric("costs", "max_exact") - best) > 1e-9 * best) throw new Error(`printed ${metric("costs", "max_exact")} µm, optimum ${best} µm`);
+      const card = await page.evaluate(() => {
+        const c = document.querySelector('#report .stage-card[data-stage="optimum"]');
+        return { title: c?.querySelector("h3, summary, header")?.textContent ?? c?.textContent?.slice(0, 80) ?? "", plots: [...(c?.querySelectorAll("[data-plot-key]") ?? [])].map((p) => p.dataset.plotKey), text: c?.textContent ?? "" };
+      });
+      if (!card.plots.includes("optimum_sequence")) throw new Error(`optimum card plots ${card.plots}`);
+      if (!/proven/.test(card.text) || !/%/.test(card.text)) throw new Error(`optimum card reads "${card.text.slice(0, 200)}"`);
+      if (weftBin) {
+        const text = (await downloadGcode(page, join(outDir, "freeform-dome-exact.gcode"))).bytes.toString("utf8");
+        const cli = join(outDir, "freeform-dome-exact.cli.gcode");
+        execFileSync(weftBin, ["run", join(process.cwd(), "examples", "freeform-dome-exact.json"), "--out", cli, "-q"]);
+        if (readFileSync(cli, "utf8") !== text) throw new Error("the page's G-code differs from the CLI's");
+      }
+      await page.evaluate(() => document.querySelector('#report .stage-card[data-stage="optimum"]')?.scrollIntoView());
+      for (const [w, h, name] of [[1280, 800, "freeform-exact-desktop.png"], [390, 844, "freeform-exact-phone.png"]]) {
+        await page.setViewportSize({ width: w, height: h });
+        await page.waitForTimeout(300);
+        await page.evaluate(() => document.querySelector('#report .stage-card[data-stage="optimum"]')?.scrollIntoView());
+        await page.screenshot({ path: join(outDir, name) });
+      }
+      await page.setViewportSize({ width: 1400, height: 900 });
+      return `optimum ${best.toFixed(1)} µm proven, heuristic planner ${planner.toFixed(1)} µm (gap ${metric("optimum", "gap").toFixed(1)} %)`;
     });
   } finally {
     await context.close();

@@ -19,13 +19,13 @@ fn fixture(name: &str) -> Wireframe {
 
 /// The robot-scale designs' PLA beams (radius 1.5 mm, as their files state).
 const PLA: Section = Section { diameter_mm: 3.0, e_mpa: 3500.0, g_mpa: 2400.0 };
-const ISOMALT: Section = Section { diameter_mm: 0.15, e_mpa: 2600.0, g_mpa: 1100.0 };
+pub const ISOMALT: Section = Section { diameter_mm: 0.15, e_mpa: 2600.0, g_mpa: 1100.0 };
 
 fn nozzle() -> Nozzle {
     Nozzle::default()
 }
 
-fn constraints(w: &Wireframe, n: &Nozzle, r: f64) -> Constraints {
+pub fn constraints(w: &Wireframe, n: &Nozzle, r: f64) -> Constraints {
     precedence::constraints(&w.joints, &w.beams, &precedence::Options { nozzle: *n, beam_radius_mm: r, directionality: true, collision: true }, &mut |_| {}).unwrap()
 }
 
@@ -115,7 +115,7 @@ fn reach_without(w: &Wireframe, inc: &[Vec<usize>], present: &[bool], avoid: usi
 
 /// Beams cantilevered about joint `j`: printed beams (j, x) with x not grounded and cut off
 /// from the ground when j is removed.
-fn cantilevers_about(w: &Wireframe, inc: &[Vec<usize>], present: &[bool], j: usize) -> Vec<usize> {
+pub fn cantilevers_about(w: &Wireframe, inc: &[Vec<usize>], present: &[bool], j: usize) -> Vec<usize> {
     let mine: Vec<usize> = inc[j].iter().copied().filter(|&b| present[b]).collect();
     if mine.is_empty() {
         return Vec::new();
@@ -128,7 +128,7 @@ fn cantilevers_about(w: &Wireframe, inc: &[Vec<usize>], present: &[bool], j: usi
 }
 
 /// Replays `steps`, asserting every process constraint; returns the collision pairs checked.
-fn check(w: &Wireframe, steps: &[Step], n: &Nozzle, radius: f64, strict: bool, c: &Constraints, label: &str) -> usize {
+pub fn check(w: &Wireframe, steps: &[Step], n: &Nozzle, radius: f64, strict: bool, c: &Constraints, label: &str) -> usize {
     let m = w.beams.len();
     assert_eq!(steps.len(), m, "{label}: every beam, once");
     let mut printed = vec![false; m];

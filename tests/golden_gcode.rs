@@ -24,6 +24,7 @@ const CASES: &[(&str, &str, &[&str])] = &[
     ("v-foam-sectors-nearest", "foam-stiffness-sectors", &["job.foam.junction=nearest"]),
     ("freeform-bridge", "freeform-bridge", &[]),
     ("freeform-cantilever-truss", "freeform-cantilever-truss", &[]),
+    ("freeform-cantilever-truss-tilt", "freeform-cantilever-truss-tilt", &[]),
     ("freeform-dome", "freeform-dome", &[]),
     ("freeform-dome-exact", "freeform-dome-exact", &[]),
     ("freeform-duck", "freeform-duck", &[]),

@@ -16,6 +16,13 @@
 //! by its axis from a small distance off the joint (radius 0): it is hit when it runs into the
 //! cone there (two beams rising steeper than the cone from one joint each block the other: a
 //! cycle, and the design cannot be printed in this orientation).
+//!
+//! Beyond the paper, a nozzle that may tilt (a 5-axis head, or a robot): each beam is printed
+//! with the nozzle's axis chosen among +Z and rings of tilts up to the limit ([`TILT_RINGS`]
+//! rings of [`TILT_AZIMUTHS`] directions), the one that allows the most directions of the
+//! beam, then hits the fewest beams, then tilts least. The directions and precedences follow
+//! from the chosen axis; a beam is tilted only when that removes something, and the report
+//! counts them. The chosen axis goes to the G-code as the tool axis.
 
 use glam::DVec3;
 use parry3d_f64::bounding_volume::Aabb;
@@ -32,6 +39,14 @@ pub const DEFAULT_RADIUS_MM: f64 = 2.0;
 pub const DEFAULT_HEIGHT_MM: f64 = 20.0;
 /// Most precedence pairs stored (refused above: a nozzle this large makes the order a chain).
 pub const MAX_PAIRS: usize = 20_000_000;
+/// Default tilt limit of the nozzle, degrees (0: a 3-axis machine, the nozzle stays vertical).
+pub const DEFAULT_TILT_DEG: f64 = 0.0;
+/// Largest tilt limit, degrees.
+pub const MAX_TILT_DEG: f64 = 60.0;
+/// Directions around the vertical tried per ring of tilts.
+pub const TILT_AZIMUTHS: usize = 8;
+/// Rings of tilts tried: at 1/2 and 2/2 of the limit.
+pub const TILT_RINGS: usize = 2;
 
 /// The nozzle's shape.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -62,8 +77,12 @@ impl Nozzle {
     /// Whether a beam going from its start in direction `d` (unit) may be printed that way: the
     /// part already printed trails behind the tip along −d and must stay out of the cone.
     pub fn can_print(&self, d: DVec3) -> bool {
-        // −d inside the cone: angle(−d, +Z) < θ ⇔ −d.z > cos θ.
-        -d.z <= libm::cos(self.half_angle_deg.to_radians()) + 1e-12
+        self.can_print_along(d, DVec3::Z)
+    }
+    /// [`Nozzle::can_print`] with the nozzle's axis along `axis` (unit, tip to body).
+    pub fn can_print_along(&self, d: DVec3, axis: DVec3) -> bool {
+        // −d inside the cone: angle(−d, axis) < θ ⇔ −d·axis > cos θ.
+        -d.dot(axis) <= libm::cos(self.half_angle_deg.to_radians()) + 1e-12
     }
 }
 
@@ -78,6 +97,24 @@ pub struct Options {
     pub directionality: bool,
     /// Collision on (off: no precedences).
     pub collision: bool,
+    /// How far the nozzle may tilt from the vertical, degrees (0: a 3-axis machine).
+    pub tilt_deg: f64,
+}
+
+/// The nozzle axes tried for a tilt limit: +Z first, then each ring outward, azimuths from +X
+/// anticlockwise.
+pub fn tilt_axes(tilt_deg: f64) -> Vec<DVec3> {
+    let mut out = vec![DVec3::Z];
+    if tilt_deg > 0.0 {
+        for ring in 1..=TILT_RINGS {
+            let phi = (tilt_deg * ring as f64 / TILT_RINGS as f64).to_radians();
+            for k in 0..TILT_AZIMUTHS {
+                let psi = std::f64::consts::TAU * k as f64 / TILT_AZIMUTHS as f64;
+                out.push(DVec3::new(libm::sin(phi) * libm::cos(psi), libm::sin(phi) * libm::sin(psi), libm::cos(phi)));
+            }
+        }
+    }
+    out
 }
 
 /// The state-independent constraints of a design.
@@ -98,6 +135,12 @@ pub struct Constraints {
     pub succ: Vec<u32>,
     /// Pairs given to the exact test (after the BVH and the 2D filter).
     pub tested: usize,
+    /// Per beam: the nozzle's axis it is printed with (+Z unless the nozzle may tilt).
+    pub axis: Vec<DVec3>,
+    /// Beams printed with a tilted nozzle.
+    pub tilted: usize,
+    /// Precedences a vertical nozzle would have had (equal to the pairs without tilting).
+    pub vertical_pairs: usize,
 }
 
 impl Constraints {
@@ -139,16 +182,19 @@ struct Body {
 }
 
 impl Body {
-    fn new(n: &Nozzle) -> Body {
+    /// The body with its axis along `axis` (unit), tip at the origin.
+    fn along(n: &Nozzle, axis: DVec3) -> Body {
         let hc = n.cone_height();
-        // parry's cone: apex at +y; turned so the apex points down (−z) at the origin.
-        let down = Rot3::from_rotation_x(-std::f64::consts::FRAC_PI_2);
-        let up = Rot3::from_rotation_x(std::f64::consts::FRAC_PI_2);
+        // parry's cone: apex at +y; turned so the apex points down (−z) at the origin, then
+        // the whole body turned from +Z onto the axis.
+        let tilt = Rot3::from_rotation_arc(Vector::Z, v(axis).normalize());
+        let down = tilt * Rot3::from_rotation_x(-std::f64::consts::FRAC_PI_2);
+        let up = tilt * Rot3::from_rotation_x(std::f64::consts::FRAC_PI_2);
         Body {
             cone: Cone::new(hc / 2.0, n.radius_mm),
-            cone_pose: Pose::from_parts(Vector::new(0.0, 0.0, hc / 2.0), down),
+            cone_pose: Pose::from_parts(tilt * Vector::new(0.0, 0.0, hc / 2.0), down),
             cylinder: Cylinder::new(n.height_mm / 2.0, n.radius_mm),
-            cylinder_pose: Pose::from_parts(Vector::new(0.0, 0.0, hc + n.height_mm / 2.0), up),
+            cylinder_pose: Pose::from_parts(tilt * Vector::new(0.0, 0.0, hc + n.height_mm / 2.0), up),
         }
     }
 
@@ -178,7 +224,12 @@ impl Body {
 /// `shared`, its axis from a little off that joint. The exact test of [`constraints`], for
 /// checks and tools.
 pub fn collides(nozzle: &Nozzle, a: [DVec3; 2], b: [DVec3; 2], shared: Option<DVec3>, beam_radius: f64) -> bool {
-    let body = Body::new(nozzle);
+    collides_along(nozzle, DVec3::Z, a, b, shared, beam_radius)
+}
+
+/// [`collides`] with the nozzle's axis along `axis` (unit).
+pub fn collides_along(nozzle: &Nozzle, axis: DVec3, a: [DVec3; 2], b: [DVec3; 2], shared: Option<DVec3>, beam_radius: f64) -> bool {
+    let body = Body::along(nozzle, axis);
     match shared {
         Some(s) => {
             let (from, to) = if b[0].distance(s) <= b[1].distance(s) { (b[0], b[1]) } else { (b[1], b[0]) };
@@ -223,18 +274,42 @@ pub fn constraints(joints: &[DVec3], beams: &[[usize; 2]], options: &Options, pr
     if !(n.radius_mm > 0.0 && n.height_mm >= 0.0 && options.beam_radius_mm >= 0.0) {
         return Err(Error::Setting("the nozzle's radius must be above 0 mm and its height and the beam radius 0 mm or more".into()));
     }
+    if !(0.0..=MAX_TILT_DEG).contains(&options.tilt_deg) {
+        return Err(Error::Setting(format!("a tilt of {}° is out of range: use 0° (a 3-axis machine) to {MAX_TILT_DEG}°", options.tilt_deg)));
+    }
     let m = beams.len();
+    let axes = tilt_axes(options.tilt_deg);
+    // The directions each axis allows a beam.
+    let dirs = |b: usize, axis: DVec3| -> (bool, bool) {
+        if !options.directionality {
+            return (true, true);
+        }
+        let [i, j] = beams[b];
+        let d = (joints[j] - joints[i]).normalize_or_zero();
+        (n.can_print_along(d, axis), n.can_print_along(-d, axis))
+    };
     let mut forward = vec![true; m];
     let mut backward = vec![true; m];
-    if options.directionality {
-        for (b, &[i, j]) in beams.iter().enumerate() {
-            let d = (joints[j] - joints[i]).normalize_or_zero();
-            forward[b] = n.can_print(d);
-            backward[b] = n.can_print(-d);
-        }
+    let mut axis = vec![DVec3::Z; m];
+    for b in 0..m {
+        (forward[b], backward[b]) = dirs(b, DVec3::Z);
     }
     let mut pairs: Vec<(u32, u32)> = Vec::new();
     let mut tested = 0usize;
+    let mut vertical_pairs = 0usize;
+    let mut tilted = 0usize;
+    if !options.collision && axes.len() > 1 {
+        // Only directions to gain: the first axis that allows both, or the vertical.
+        for b in 0..m {
+            if !(forward[b] && backward[b]) {
+                if let Some(&t) = axes.iter().find(|&&t| dirs(b, t) == (true, true)) {
+                    axis[b] = t;
+                    (forward[b], backward[b]) = (true, true);
+                    tilted += 1;
+                }
+            }
+        }
+    }
     if options.collision && m > 0 {
         let r = options.beam_radius_mm;
         let boxes: Vec<Aabb> = beams
@@ -245,39 +320,78 @@ pub fn constraints(joints: &[DVec3], beams: &[[usize; 2]], options: &Options, pr
             })
             .collect();
         let bvh = Bvh::from_leaves(BvhBuildStrategy::Binned, &boxes);
-        let body = Body::new(n);
-        let (reach, top) = (n.radius_mm + r, n.top() + r);
+        let bodies: Vec<Body> = axes.iter().map(|&t| Body::along(n, t)).collect();
+        // A tilted body reaches farther sideways (its top swings out) and its rim may dip
+        // below the tip.
+        let sin_tilt = libm::sin(options.tilt_deg.to_radians());
+        let (reach, top) = (n.radius_mm + r + n.top() * sin_tilt, n.top() + r);
+        let below = r + n.radius_mm * sin_tilt;
         let mut found: Vec<u32> = Vec::new();
+        let mut near: Vec<(u32, Option<usize>)> = Vec::new();
+        let mut hits: Vec<u32> = Vec::new();
+        let mut best: Vec<u32> = Vec::new();
         for (a, &[i, j]) in beams.iter().enumerate() {
             let (a0, a1) = (joints[i], joints[j]);
-            let lo = a0.min(a1) - DVec3::new(reach, reach, r);
+            let lo = a0.min(a1) - DVec3::new(reach, reach, below);
             let hi = a0.max(a1) + DVec3::new(reach, reach, top);
             let query = Aabb::new(v(lo), v(hi));
             found.clear();
             found.extend(bvh.intersect_aabb(&query).filter(|&b| b as usize != a));
             found.sort_unstable();
+            near.clear();
             for &b in &found {
                 let [k, l] = beams[b as usize];
-                let (b0, b1) = (joints[k], joints[l]);
-                if seg_dist2_xy(a0, a1, b0, b1) > reach * reach {
+                if seg_dist2_xy(a0, a1, joints[k], joints[l]) <= reach * reach {
+                    near.push((b, [i, j].iter().find(|&&x| x == k || x == l).copied()));
+                }
+            }
+            // Each axis in turn (the vertical first); a tilt is kept when it allows more
+            // directions, or as many and hits fewer beams.
+            let mut best_key = (0u8, usize::MAX);
+            for (t, body) in bodies.iter().enumerate() {
+                let (f, bk) = dirs(a, axes[t]);
+                let allowed = u8::from(f) + u8::from(bk);
+                if allowed == 0 || (t > 0 && best_key.0 == 2 && best_key.1 == 0) {
                     continue;
                 }
-                tested += 1;
-                // A joint shared with A: B's axis from a little off that joint, radius 0.
-                let shared = [i, j].iter().find(|&&x| x == k || x == l).copied();
-                let hit = match shared {
-                    Some(s) => {
-                        let (from, to) = if k == s { (b0, b1) } else { (b1, b0) };
-                        body.sweep_hits(a0, a1, off_joint(from, to, r), to, 0.0)
-                    }
-                    None => body.sweep_hits(a0, a1, b0, b1, r),
-                };
-                if hit {
-                    pairs.push((a as u32, b));
-                    if pairs.len() > MAX_PAIRS {
-                        return Err(Error::TooManyPairs);
+                hits.clear();
+                for &(b, shared) in &near {
+                    let [k, l] = beams[b as usize];
+                    let (b0, b1) = (joints[k], joints[l]);
+                    tested += 1;
+                    // A joint shared with A: B's axis from a little off that joint, radius 0.
+                    let hit = match shared {
+                        Some(s) => {
+                            let (from, to) = if k == s { (b0, b1) } else { (b1, b0) };
+                            body.sweep_hits(a0, a1, off_joint(from, to, r), to, 0.0)
+                        }
+                        None => body.sweep_hits(a0, a1, b0, b1, r),
+                    };
+                    if hit {
+                        hits.push(b);
+                        if allowed == best_key.0 && hits.len() >= best_key.1 {
+                            break;
+                        }
                     }
                 }
+                if t == 0 {
+                    vertical_pairs += hits.len();
+                }
+                if (allowed, std::cmp::Reverse(hits.len())) > (best_key.0, std::cmp::Reverse(best_key.1)) || t == 0 {
+                    best_key = (allowed, hits.len());
+                    best.clone_from(&hits);
+                    axis[a] = axes[t];
+                    (forward[a], backward[a]) = (f, bk);
+                }
+            }
+            if axis[a] != DVec3::Z {
+                tilted += 1;
+            }
+            for &b in &best {
+                pairs.push((a as u32, b));
+            }
+            if pairs.len() > MAX_PAIRS {
+                return Err(Error::TooManyPairs);
             }
             if a % 256 == 255 {
                 progress((a + 1) as f32 / m as f32);
@@ -299,7 +413,7 @@ pub fn constraints(joints: &[DVec3], beams: &[[usize; 2]], options: &Options, pr
     };
     let (succ_start, succ) = csr(&|&(a, b)| (a, b));
     let (pred_start, pred) = csr(&|&(a, b)| (b, a));
-    Ok(Constraints { forward, backward, pred_start, pred, succ_start, succ, tested })
+    Ok(Constraints { forward, backward, pred_start, pred, succ_start, succ, tested, axis, tilted, vertical_pairs })
 }
 
 #[cfg(test)]
@@ -308,7 +422,7 @@ mod tests {
 
     #[test]
     fn body_is_above_the_tip() {
-        let b = Body::new(&Nozzle { half_angle_deg: 13.0, radius_mm: 0.5, height_mm: 5.0 });
+        let b = Body::along(&Nozzle { half_angle_deg: 13.0, radius_mm: 0.5, height_mm: 5.0 }, DVec3::Z);
         let tri = |p: DVec3| Triangle::new(v(p), v(p + DVec3::new(1e-3, 0.0, 0.0)), v(p + DVec3::new(0.0, 1e-3, 0.0)));
         for (p, inside) in [
             (DVec3::new(0.0, 0.0, 1.0), true),

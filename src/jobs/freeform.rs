@@ -101,12 +101,15 @@ pub struct NozzleOptions {
     pub radius_mm: f64,
     /// Body (cylinder) height above the cone, mm.
     pub height_mm: f64,
+    /// How far the nozzle may tilt from the vertical, degrees (0: a 3-axis machine; more
+    /// needs a 5-axis machine).
+    pub tilt_deg: f64,
 }
 
 impl Default for NozzleOptions {
     fn default() -> Self {
         let n = Nozzle::default();
-        NozzleOptions { half_angle_deg: n.half_angle_deg, radius_mm: n.radius_mm, height_mm: n.height_mm }
+        NozzleOptions { half_angle_deg: n.half_angle_deg, radius_mm: n.radius_mm, height_mm: n.height_mm, tilt_deg: precedence::DEFAULT_TILT_DEG }
     }
 }
 
@@ -304,6 +307,7 @@ const NOZZLE_FIELDS: &[Row0] = &[
     num("half_angle_deg", "Nozzle", "Cone half-angle", "°", 1.0, 89.0, 1.0, "Half-angle of the nozzle's cone at the tip: beams steeper than this may only be printed upward."),
     num("radius_mm", "Nozzle", "Body radius", "mm", 0.01, 500.0, 0.1, "Radius of the nozzle body where the cone ends."),
     num("height_mm", "Nozzle", "Body height", "mm", 0.0, 1000.0, 1.0, "Height of the body's cylinder above the cone: beams within it are hit when printing below them."),
+    num("tilt_deg", "Nozzle", "Tilt up to", "°", 0.0, precedence::MAX_TILT_DEG, 5.0, "A 5-axis head may tilt the nozzle this far from vertical per beam to miss beams it would hit (0: a 3-axis printer)."),
 ];
 
 const BEAM_FIELDS: &[Row0] = &[
@@ -390,6 +394,9 @@ impl Kind for FreeformKind {
         if !(n.half_angle_deg > 0.0 && n.half_angle_deg < 90.0) {
             out.push(Problem { path: "job.nozzle.half_angle_deg".into(), message: format!("{}° is not a cone: use more than 0° and less than 90°", n.half_angle_deg) });
         }
+        if n.tilt_deg > 0.0 && _design.printer.machine.kind == crate::machine::Kind::Cartesian {
+            out.push(Problem { path: "job.nozzle.tilt_deg".into(), message: format!("a nozzle that tilts {}° needs a 5-axis machine: set the printer's machine to five_axis, or the tilt to 0° for a 3-axis printer", n.tilt_deg) });
+        }
     }
 
     fn slot_filled(slot: &str, mut j: FreeformJob) -> FreeformJob {
@@ -436,7 +443,7 @@ impl Kind for FreeformKind {
         let costs = costs_stage(j, ctx, &w, &p, &o)?;
         let design = ctx.design;
         let parts = (j.beam.diameter_mm, j.print, design.printer.travel_speed_mm_s);
-        let toolpath = ctx.stage("toolpath", "toolpath", &parts, &[o.key, costs.key], |_| Ok((toolpath(j, &w, &o), None)))?;
+        let toolpath = ctx.stage("toolpath", "toolpath", &parts, &[o.key, costs.key, c.key], |_| Ok((toolpath(j, &w, &o, &c), None)))?;
         Ok(Product::Toolpath(toolpath))
     }
 
@@ -547,6 +554,7 @@ fn precedence_options(j: &FreeformJob) -> precedence::Options {
         beam_radius_mm: j.beam.diameter_mm / 2.0,
         directionality: j.constraints.directionality,
         collision: j.constraints.collision,
+        tilt_deg: j.nozzle.tilt_deg,
     }
 }
 
@@ -561,8 +569,15 @@ fn constraints_stage(j: &FreeformJob, ctx: &mut Ctx, w: &Out<Placed>) -> Result<
         let report = StageReport::new("constraints", "Directions and collisions", &serde_json::json!({ "pairs": c.pairs(), "one_way": one_way, "tested": c.tested }))
             .metric("pairs", "Collision precedences", c.pairs() as f64, "", "Pairs (A, B) where the nozzle printing A would sweep through B: A is printed first.")
             .metric("one_way", "Upward only", one_way as f64, "", "Beams steeper than the nozzle's cone: printed from their lower joint.")
-            .metric("tested", "Pairs tested exactly", c.tested as f64, "", "Pairs near enough (by the BVH and the 2D distance) for the exact cone/cylinder test.")
+            .metric("tested", "Pairs tested exactly", c.tested as f64, "", "Pairs near enough (by the BVH and the 2D distance) for the exact cone/cylinder test (each axis tried counts).")
             .metric("time", "Time", ms, "ms", "Wall time of this stage on this machine.");
+        let report = if o.tilt_deg > 0.0 {
+            report
+                .metric("tilted", "Beams tilted", c.tilted as f64, "", "Beams printed with the nozzle tilted: a tilt let them go either way or hit fewer beams.")
+                .metric("vertical_pairs", "Precedences if vertical", c.vertical_pairs as f64, "", "Collision precedences a vertical nozzle would have had (beside the ones left with tilting).")
+        } else {
+            report
+        };
         Ok((c, Some(report)))
     })
 }
@@ -917,7 +932,7 @@ fn costs_report(c: &[Costs], load: f64, chosen: Cost) -> StageReport {
 /// The G-code's toolpath: one free pass per beam (3D moves at the beam speed with the
 /// extrusion of its section, a dwell at the end joint), reached by a deadhead that lifts above
 /// the highest printed beam, moves across and lowers.
-fn toolpath(j: &FreeformJob, w: &Placed, o: &Ordered) -> Toolpath {
+fn toolpath(j: &FreeformJob, w: &Placed, o: &Ordered, c: &Constraints) -> Toolpath {
     let d = j.beam.diameter_mm;
     let area = std::f64::consts::PI * d * d / 4.0;
     let mut passes = Vec::with_capacity(o.steps.len());
@@ -928,7 +943,10 @@ fn toolpath(j: &FreeformJob, w: &Placed, o: &Ordered) -> Toolpath {
             let z = o.safe_z[i].max(p.z).max(a.z);
             vec![DVec3::new(p.x, p.y, z), DVec3::new(a.x, a.y, z)]
         });
-        let data = PointData { flow: Some(PointFlow::AreaMm2(vec![0.0, area])), feed_mm_s: Some(vec![0.0, j.print.speed_mm_s]), tool_axis: None, dwell_s: Some(vec![0.0, j.print.dwell_s]) };
+        // A tilted beam carries its nozzle axis (the writer turns it into rotary words).
+        let axis = c.axis.get(s.beam).copied().unwrap_or(DVec3::Z);
+        let tool_axis = (axis != DVec3::Z).then(|| vec![axis, axis]);
+        let data = PointData { flow: Some(PointFlow::AreaMm2(vec![0.0, area])), feed_mm_s: Some(vec![0.0, j.print.speed_mm_s]), tool_axis, dwell_s: Some(vec![0.0, j.print.dwell_s]) };
         let path = Path { points: vec![a, b], feature: Feature::Beam, width: d, speed_factor: 1.0, approach, data: Some(Box::new(data)) };
         passes.push(Pass { kind: PassKind::Free, z: a.z.max(b.z), height: d, paths: vec![path] });
         last = Some(b);

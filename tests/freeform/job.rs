@@ -200,3 +200,26 @@ fn where_the_planner_finds_no_subassembly_the_exact_search_decides() {
 fn csv_lines(text: &str) -> usize {
     text.lines().skip(1).filter(|l| !l.trim().is_empty()).count()
 }
+
+#[test]
+fn a_tilting_head_prints_the_truss_a_3_axis_printer_cannot() {
+    let d = example("freeform-cantilever-truss-tilt");
+    let out = run(&d, &Files::new()).unwrap();
+    assert_eq!(out.report.analysis.extrusion_paths, 2197);
+    let c = out.report.stages.iter().find(|s| s.stage == "constraints").unwrap();
+    let metric = |k: &str| c.metrics.iter().find(|m| m.key == k).unwrap().value;
+    assert!(metric("tilted") > 1000.0 && metric("pairs") * 4.0 < metric("vertical_pairs"), "{} tilted, {} of {} precedences", metric("tilted"), metric("pairs"), metric("vertical_pairs"));
+    // Tilted beams are written with their rotary words (a head-head B C machine).
+    assert!(out.gcode.lines().any(|l| l.starts_with("G1 ") && l.contains(" B30")), "no B30 in the G-code");
+    // The same nozzle on a 3-axis printer: the tilt is refused where it is set, and without
+    // the tilt the design is refused with its cycle.
+    let flat = d.with_overrides(&["printer.machine.kind=cartesian".to_string()]);
+    let e = match flat {
+        Err(e) => e.to_string(),
+        Ok(f) => run(&f, &Files::new()).unwrap_err(),
+    };
+    assert!(e.contains("needs a 5-axis machine"), "{e}");
+    let vertical = d.with_overrides(&["job.nozzle.tilt_deg=0".to_string()]).unwrap();
+    let e = run(&vertical, &Files::new()).unwrap_err();
+    assert!(e.contains("cannot be printed in this orientation"), "{e}");
+}

@@ -26,7 +26,7 @@ fn nozzle() -> Nozzle {
 }
 
 pub fn constraints(w: &Wireframe, n: &Nozzle, r: f64) -> Constraints {
-    precedence::constraints(&w.joints, &w.beams, &precedence::Options { nozzle: *n, beam_radius_mm: r, directionality: true, collision: true }, &mut |_| {}).unwrap()
+    precedence::constraints(&w.joints, &w.beams, &precedence::Options { nozzle: *n, beam_radius_mm: r, directionality: true, collision: true, tilt_deg: 0.0 }, &mut |_| {}).unwrap()
 }
 
 fn plan_of(w: &Wireframe, c: &Constraints, mode: Mode, cost: Cost, s: Section) -> Result<Plan, Unconstructable> {
@@ -147,26 +147,33 @@ pub fn check(w: &Wireframe, steps: &[Step], n: &Nozzle, radius: f64, strict: boo
         let [p, q] = w.beams[s.beam];
         assert!((s.from, s.to) == (p, q) || (s.from, s.to) == (q, p), "{label}: step {i} runs along beam {}", s.beam);
         assert!(touched[s.from], "{label}: step {i} starts at joint {} which is neither grounded nor printed", s.from);
-        let d = (w.joints[s.to] - w.joints[s.from]).normalize();
+        // The nozzle's axis for this beam (a tilting nozzle): the geometry is turned so that
+        // axis is vertical, and the vertical checks apply.
+        let axis = c.axis.get(s.beam).copied().unwrap_or(DVec3::Z);
+        assert!((axis.length() - 1.0).abs() < 1e-9 && axis.z > 0.0, "{label}: step {i} has nozzle axis {axis:?}");
+        let turn = glam::DQuat::from_rotation_arc(axis, DVec3::Z);
+        let at = |j: usize| turn * w.joints[j];
+        let d = (at(s.to) - at(s.from)).normalize();
         assert!(-d.z <= cos + 1e-9, "{label}: step {i} prints beam {} downward, steeper than the cone", s.beam);
         // The planner's own precedences hold.
         for &pr in c.preds(s.beam) {
             assert!(printed[pr as usize], "{label}: step {i} prints beam {} before its predecessor {pr}", s.beam);
         }
         // No clear collision with any printed beam, by sampling.
-        let a = [w.joints[p], w.joints[q]];
+        let a = [at(p), at(q)];
         let (lo, hi) = (a[0].min(a[1]), a[0].max(a[1]));
         for (b, &[u, v]) in w.beams.iter().enumerate() {
             if !printed[b] {
                 continue;
             }
-            let (bl, bh) = (w.joints[u].min(w.joints[v]), w.joints[u].max(w.joints[v]));
+            let (bu, bv) = (at(u), at(v));
+            let (bl, bh) = (bu.min(bv), bu.max(bv));
             if bh.z < lo.z - radius || bl.z > hi.z + top || bh.x < lo.x - reach || bl.x > hi.x + reach || bh.y < lo.y - reach || bl.y > hi.y + reach {
                 continue;
             }
             pairs += 1;
-            let shared = [p, q].into_iter().find(|&x| x == u || x == v).map(|x| w.joints[x]);
-            assert!(!sampled_hit(n, a, [w.joints[u], w.joints[v]], shared, radius), "{label}: step {i} (beam {}) sweeps the nozzle through printed beam {b}", s.beam);
+            let shared = [p, q].into_iter().find(|&x| x == u || x == v).map(at);
+            assert!(!sampled_hit(n, a, [bu, bv], shared, radius), "{label}: step {i} (beam {}) sweeps the nozzle through printed beam {b}", s.beam);
         }
         if strict {
             for j in [s.from, s.to] {
@@ -517,4 +524,34 @@ fn the_same_design_plans_the_same() {
     let a = plan_of(&w, &c, Mode::Strict, Cost::Exact, PLA).unwrap();
     let b = plan_of(&w, &c, Mode::Strict, Cost::Exact, PLA).unwrap();
     assert_eq!(a.steps, b.steps);
+}
+
+#[test]
+fn a_tilting_nozzle_breaks_the_cycle_of_the_truss_and_every_tilted_step_checks() {
+    // The conmech truss through the paper's 13° cone (radius 2, height 20): two near-vertical
+    // beams at one joint each sweep the nozzle through the other, a cycle, on a 3-axis
+    // machine. A head tilting up to 30° prints each of them leaning away from the other.
+    let w = fixture("cantilever_beam_truss.json");
+    let n = Nozzle { half_angle_deg: 13.0, radius_mm: 2.0, height_mm: 20.0 };
+    let o = |tilt: f64| precedence::Options { nozzle: n, beam_radius_mm: 1.5, directionality: true, collision: true, tilt_deg: tilt };
+    let vertical = precedence::constraints(&w.joints, &w.beams, &o(0.0), &mut |_| {}).unwrap();
+    assert!(matches!(plan_of(&w, &vertical, Mode::Strict, Cost::Heuristic, PLA), Err(Unconstructable::Cycle { .. })));
+    assert_eq!(vertical.tilted, 0);
+    assert_eq!(vertical.vertical_pairs, vertical.pairs());
+    let tilted = precedence::constraints(&w.joints, &w.beams, &o(30.0), &mut |_| {}).unwrap();
+    assert!(tilted.tilted > 0 && tilted.pairs() < vertical.pairs() / 4, "{} beams tilted, {} precedences against {}", tilted.tilted, tilted.pairs(), vertical.pairs());
+    assert_eq!(tilted.vertical_pairs, vertical.pairs(), "the vertical count is the 3-axis one");
+    // A beam keeps the vertical unless a tilt gains something, and no axis leans past 30°.
+    for (b, t) in tilted.axis.iter().enumerate() {
+        assert!(t.z >= 30f64.to_radians().cos() - 1e-12, "beam {b}: axis {t:?}");
+        if *t == DVec3::Z {
+            continue;
+        }
+        let hits_vertical = vertical.succs(b).len();
+        let both_vertical = vertical.forward[b] && vertical.backward[b];
+        assert!(tilted.succs(b).len() < hits_vertical || !both_vertical, "beam {b} tilted for nothing");
+    }
+    let p = plan_of(&w, &tilted, Mode::Strict, Cost::Heuristic, PLA).unwrap();
+    let pairs = check(&w, &p.steps, &n, 1.5, true, &tilted, "truss tilted");
+    assert!(pairs > 1000, "{pairs} pairs checked by sampling");
 }

@@ -126,7 +126,7 @@ fn mutated_wireframes_never_panic() {
     for f in ["four-frame.json", "semi_sphere.json"] {
         seeds.push((f.into(), fixture(f)));
     }
-    let nozzle = precedence::Options { nozzle: precedence::Nozzle::default(), beam_radius_mm: 0.5, directionality: true, collision: true };
+    let nozzle = precedence::Options { nozzle: precedence::Nozzle::default(), beam_radius_mm: 0.5, directionality: true, collision: true, tilt_deg: 0.0 };
     let mut accepted = 0;
     for (k, (name, original)) in seeds.iter().enumerate() {
         for r in 0..300u64 {

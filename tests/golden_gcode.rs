@@ -36,6 +36,7 @@ const CASES: &[(&str, &str, &[&str])] = &[
     ("freeform-topopt", "freeform-topopt", &[]),
     ("freeform-topopt-relaxed", "freeform-topopt-relaxed", &[]),
     ("freeform-tower", "freeform-tower", &[]),
+    ("freeform-tower-bands", "freeform-tower-bands", &[]),
     ("freeform-voronoi", "freeform-voronoi", &[]),
     ("v-freeform-tower-heuristic", "freeform-tower", &["job.planner.cost=heuristic"]),
     ("graded-phantom", "graded-phantom", &[]),

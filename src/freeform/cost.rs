@@ -26,6 +26,14 @@ pub struct Costs {
 
 /// Replays `steps` over the design and measures both costs of each.
 pub fn costs(joints: &[DVec3], beams: &[[usize; 2]], grounded: &[bool], steps: &[Step], section: &Section, load_n: f64) -> Vec<Costs> {
+    costs_within(joints, beams, grounded, steps, section, load_n, f64::INFINITY).0
+}
+
+/// [`costs`] within `budget_work` units of counted work ([`super::plan::WORK_PER_SECOND`] a
+/// second: the exact cost's compliance updates and the stability searches): past it nothing
+/// more is measured (NaN from the step returned on). A wide frame's compliance grows as the
+/// square of its open joints, so this bounds the replay.
+pub fn costs_within(joints: &[DVec3], beams: &[[usize; 2]], grounded: &[bool], steps: &[Step], section: &Section, load_n: f64, budget_work: f64) -> (Vec<Costs>, Option<usize>) {
     let n = joints.len();
     let mut open = vec![0u32; n];
     for &[a, b] in beams {
@@ -44,19 +52,31 @@ pub fn costs(joints: &[DVec3], beams: &[[usize; 2]], grounded: &[bool], steps: &
     let mut present = vec![false; beams.len()];
     let f = DVec3::new(0.0, 0.0, -load_n);
     let mut out = Vec::with_capacity(steps.len());
-    for s in steps {
+    let mut work = 0.0;
+    for (i, s) in steps.iter().enumerate() {
         let (a, b) = (joints[s.from], joints[s.to]);
         let closing = in_frame[s.to];
+        if work > budget_work {
+            // Past the budget nothing more is measured.
+            let none = Costs { exact_mm: f64::NAN, heuristic_mm: f64::NAN, exact_load_mm: f64::NAN, heuristic_load_mm: f64::NAN };
+            out.resize(steps.len(), none);
+            return (out, Some(i));
+        }
         if closing {
             out.push(Costs::default());
+            let dofs = 6.0 * flex.live() as f64;
+            // The update, and the stability search after it.
+            work += 3.0 * dofs * dofs + 4.0 * (joints.len() + beams.len()) as f64;
             flex.connect(s.from, s.to, a, b, section);
         } else {
-            let exact = frame::extend(&flex.get(s.from), a, b, section);
             let root = if stable[s.from] { RIGID } else { chain[s.from] };
             let heur = frame::extend(&root, a, b, section);
-            let (ue, uh) = (frame::displacement(&exact, f), frame::displacement(&heur, f));
+            let uh = frame::displacement(&heur, f);
             let along = f.normalize_or_zero();
+            let exact = frame::extend(&flex.get(s.from), a, b, section);
+            let ue = frame::displacement(&exact, f);
             out.push(Costs { exact_mm: ue.length(), heuristic_mm: uh.length(), exact_load_mm: ue.dot(along), heuristic_load_mm: uh.dot(along) });
+            work += 36.0 * 6.0 * flex.live() as f64;
             flex.attach(s.to, s.from, a, b, section);
             chain[s.to] = heur;
             in_frame[s.to] = true;
@@ -76,5 +96,5 @@ pub fn costs(joints: &[DVec3], beams: &[[usize; 2]], grounded: &[bool], steps: &
             }
         }
     }
-    out
+    (out, None)
 }

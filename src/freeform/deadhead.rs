@@ -103,11 +103,24 @@ pub fn order(joints: &[DVec3], plan: &Plan, constraints: &Constraints, o: &Optio
         }
         waiting[i] += constraints.preds(plan.steps[i].beam).iter().filter(|&&p| step_of_beam[p as usize] != usize::MAX).count();
     }
+    // Bands (a plan made band by band): a band's steps wait for every step of the bands before.
+    let mut band_of = vec![0usize; n];
+    for (k, &start) in plan.bands.iter().enumerate() {
+        for b in &mut band_of[start.min(n)..] {
+            *b = k;
+        }
+    }
+    let bands = band_of.last().map_or(1, |&k| k + 1);
+    let mut band_left = vec![0usize; bands];
+    for &k in &band_of {
+        band_left[k] += 1;
+    }
+    let mut current = 0usize;
     let mut done = vec![false; n];
     let mut available: Vec<usize> = Vec::new();
-    let is_ready = |i: usize, waiting: &[usize], blocks_waiting: &[usize]| waiting[i] == 0 && blocks_waiting[block_of[i]] == 0;
+    let is_ready = |i: usize, waiting: &[usize], blocks_waiting: &[usize], current: usize| waiting[i] == 0 && blocks_waiting[block_of[i]] == 0 && band_of[i] == current;
     for i in 0..n {
-        if is_ready(i, &waiting, &blocks_waiting) {
+        if is_ready(i, &waiting, &blocks_waiting, current) {
             available.push(i);
         }
     }
@@ -157,6 +170,13 @@ pub fn order(joints: &[DVec3], plan: &Plan, constraints: &Constraints, o: &Optio
                 fresh.push(j);
             }
         }
+        band_left[band_of[i]] -= 1;
+        if band_left[current] == 0 && current + 1 < bands {
+            current += 1;
+            let start = plan.bands[current];
+            let end = plan.bands.get(current + 1).copied().unwrap_or(n);
+            fresh.extend(start..end);
+        }
         let b = block_of[i];
         block_left[b] -= 1;
         if block_left[b] == 0 {
@@ -168,7 +188,7 @@ pub fn order(joints: &[DVec3], plan: &Plan, constraints: &Constraints, o: &Optio
             }
         }
         for c in fresh {
-            if !done[c] && is_ready(c, &waiting, &blocks_waiting) && !available.contains(&c) {
+            if !done[c] && is_ready(c, &waiting, &blocks_waiting, current) && !available.contains(&c) {
                 available.push(c);
             }
         }

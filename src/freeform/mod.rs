@@ -16,10 +16,13 @@
 //! - [`optimal`] (beyond the paper) searches every order of a small design for the least
 //!   largest ε: it proves the planner's sequence optimal or beats it, and decides the designs
 //!   the planner's search gives up on;
+//! - [`bands`] (beyond the paper) plans a design too big to plan whole band by band up its
+//!   height, the bands below rigid, and the costs stage measures what the joins cost;
 //! - [`deadhead`] orders the plan within its recorded constraints, greedy on deadhead time
 //!   (lift above the highest printed beam, move, lower);
 //! - [`cost`] replays a sequence and measures both costs of every step (the paper's Fig. 8).
 
+pub mod bands;
 pub mod cost;
 pub mod deadhead;
 pub mod frame;

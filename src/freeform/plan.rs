@@ -144,6 +144,9 @@ pub struct Plan {
     pub refreshes: usize,
     /// See `refreshes`.
     pub drift: f64,
+    /// Planned in bands ([`super::bands`]): the first step of each band (empty: planned whole).
+    /// Steps of a band wait for every step of the bands before it.
+    pub bands: Vec<usize>,
 }
 
 /// Why a design cannot be printed (with what proves it).
@@ -698,6 +701,12 @@ impl<'a> Planner<'a> {
     fn done(&self) -> bool {
         self.printed.iter().all(|&p| p)
     }
+}
+
+/// The proofs a design cannot be printed that need no search (precedence cycles, two
+/// cantilevers on a joint, a strut hanging down, beams no order reaches).
+pub fn prove(d: &Assembly, mode: Mode, connection: bool) -> Result<(), Unconstructable> {
+    proofs(d, &incidence(d), mode, connection).map(|_| ())
 }
 
 /// Plans the design.

@@ -144,6 +144,33 @@ pub struct Constraints {
 }
 
 impl Constraints {
+    /// The constraints among `beams` alone (global indices, ascending), renumbered 0.. in that
+    /// order: precedences with beams outside are dropped (the caller has them printed).
+    pub fn restricted(&self, beams: &[usize]) -> Constraints {
+        let local = |b: u32| beams.binary_search(&(b as usize)).ok().map(|i| i as u32);
+        let mut pairs: Vec<(u32, u32)> = Vec::new();
+        for (i, &a) in beams.iter().enumerate() {
+            for &s in self.succs(a) {
+                if let Some(j) = local(s) {
+                    pairs.push((i as u32, j));
+                }
+            }
+        }
+        let m = beams.len();
+        let (succ_start, succ, pred_start, pred) = both_csr(&pairs, m);
+        Constraints {
+            forward: beams.iter().map(|&b| self.forward[b]).collect(),
+            backward: beams.iter().map(|&b| self.backward[b]).collect(),
+            pred_start,
+            pred,
+            succ_start,
+            succ,
+            tested: 0,
+            axis: beams.iter().map(|&b| self.axis.get(b).copied().unwrap_or(DVec3::Z)).collect(),
+            tilted: 0,
+            vertical_pairs: 0,
+        }
+    }
     /// The beams that must precede `b`.
     pub fn preds(&self, b: usize) -> &[u32] {
         &self.pred[self.pred_start[b] as usize..self.pred_start[b + 1] as usize]
@@ -398,7 +425,12 @@ pub fn constraints(joints: &[DVec3], beams: &[[usize; 2]], options: &Options, pr
             }
         }
     }
-    // CSR both ways (pairs are ascending by A then B).
+    let (succ_start, succ, pred_start, pred) = both_csr(&pairs, m);
+    Ok(Constraints { forward, backward, pred_start, pred, succ_start, succ, tested, axis, tilted, vertical_pairs })
+}
+
+/// Precedence pairs (A before B) as CSR both ways: (succ_start, succ, pred_start, pred).
+fn both_csr(pairs: &[(u32, u32)], m: usize) -> (Vec<u32>, Vec<u32>, Vec<u32>, Vec<u32>) {
     let csr = |key: &dyn Fn(&(u32, u32)) -> (u32, u32)| -> (Vec<u32>, Vec<u32>) {
         let mut sorted: Vec<(u32, u32)> = pairs.iter().map(key).collect();
         sorted.sort_unstable();
@@ -413,7 +445,7 @@ pub fn constraints(joints: &[DVec3], beams: &[[usize; 2]], options: &Options, pr
     };
     let (succ_start, succ) = csr(&|&(a, b)| (a, b));
     let (pred_start, pred) = csr(&|&(a, b)| (b, a));
-    Ok(Constraints { forward, backward, pred_start, pred, succ_start, succ, tested, axis, tilted, vertical_pairs })
+    (succ_start, succ, pred_start, pred)
 }
 
 #[cfg(test)]

@@ -13,6 +13,7 @@
 use super::{Inspection, Kind, Product, Shape, Slot, SlotKind, StageInfo, ViewInfo};
 use crate::budget::Estimate;
 use crate::design::{Design, Input};
+use crate::freeform::bands;
 use crate::freeform::cost::{self, Costs};
 use crate::freeform::deadhead::{self, Ordered};
 use crate::freeform::frame::{Section, DEFAULT_E_MPA, DEFAULT_G_MPA, DEFAULT_LOAD_N};
@@ -169,11 +170,13 @@ pub struct PlannerOptions {
     pub exact_beams: usize,
     /// States the exact search explores at most.
     pub exact_states: usize,
+    /// Plan in bands of about this many beams up the design's height (0: whole).
+    pub band_beams: usize,
 }
 
 impl Default for PlannerOptions {
     fn default() -> Self {
-        PlannerOptions { cost: Cost::Exact, budget_s: plan::DEFAULT_BUDGET_S, compare: true, exact_search: ExactSearch::Compare, exact_beams: optimal::DEFAULT_MAX_BEAMS, exact_states: optimal::DEFAULT_MAX_STATES }
+        PlannerOptions { cost: Cost::Exact, budget_s: plan::DEFAULT_BUDGET_S, compare: true, exact_search: ExactSearch::Compare, exact_beams: optimal::DEFAULT_MAX_BEAMS, exact_states: optimal::DEFAULT_MAX_STATES, band_beams: bands::DEFAULT_BAND_BEAMS }
     }
 }
 
@@ -340,6 +343,7 @@ const PLANNER_FIELDS: &[Row0] = &[
     ),
     crate::settings::int("exact_beams", "Planner", "Exact search up to", 1.0, optimal::MAX_BEAMS as f64, "Designs with at most this many beams are searched exactly (the work grows exponentially with it)."),
     crate::settings::int("exact_states", "Planner", "Exact search states", 1.0, 10_000_000.0, "States the exact search explores before it gives up (about 50 µs and 20 bytes each)."),
+    crate::settings::int("band_beams", "Planner", "Plan in bands of", 0.0, MAX_BEAMS as f64, "0 plans the design whole; more cuts a big design into bands of about this many beams up its height, each planned with the bands below rigid (the costs card measures what the joins cost)."),
 ];
 
 const PRINT_FIELDS: &[Row0] = &[
@@ -430,7 +434,8 @@ impl Kind for FreeformKind {
         let costs = Estimate::new("costs")
             .quantity("beams", "Beams", if j.planner.compare { m } else { 0.0 }, "")
             .quantity("segments", "Segments", 4.0 * m, "")
-            .cost(m * 300.0, if j.planner.compare { m * 4e-4 } else { 0.0 })
+            // The replay is bounded by the planning budget; in bands the plan's order is replayed too.
+            .cost(m * 300.0, if j.planner.compare { (m * 4e-4).min(j.planner.budget_s) * if j.planner.band_beams > 0 && (j.planner.band_beams as f64) < m { 2.0 } else { 1.0 } } else { 0.0 })
             .budgets("switch off the comparison of the costs");
         Ok(vec![import, constraints, plan, optimum, order, costs])
     }
@@ -661,14 +666,15 @@ type Planned = Result<Plan, Unconstructable>;
 fn plan_stage(j: &FreeformJob, ctx: &mut Ctx, w: &Out<Placed>, c: &Out<Constraints>) -> Result<Out<Planned>, Error> {
     let o = plan_options(j);
     let searched = exact_runs(j, w.beams.len());
-    let parts = (j.constraints, j.planner.cost, j.planner.budget_s, j.beam, searched);
+    let parts = (j.constraints, j.planner.cost, j.planner.budget_s, j.beam, searched, j.planner.band_beams);
     ctx.stage("plan", "plan", &parts, &[w.key, c.key], |progress| {
         let a = Assembly { joints: &w.joints, beams: &w.beams, grounded: &w.grounded, constraints: c };
         let started = crate::clock::now_s();
         // A forward planner fixes the sequence's beginning first: printing could start when the
         // first subassembly is fixed. When that and half the beams were fixed.
         let (mut first_ms, mut half_ms) = (None, None);
-        let planned = plan::plan(&a, &o, &mut |done, all| {
+        let band_of = bands::assign(&w.joints, &w.beams, c, j.planner.band_beams);
+        let planned = bands::plan(&a, &o, &band_of, &mut |done, all| {
             if done > 0 && first_ms.is_none() {
                 first_ms = Some((crate::clock::now_s() - started) * 1000.0);
             }
@@ -678,7 +684,7 @@ fn plan_stage(j: &FreeformJob, ctx: &mut Ctx, w: &Out<Placed>, c: &Out<Constrain
             progress(done as f32 / all.max(1) as f32)
         });
         let p = match planned {
-            Ok(p) => p,
+            Ok((p, _)) => p,
             // The planner's refusals that are proofs stand; its search's limits the exact
             // search may overcome on a small design.
             Err(u @ (Unconstructable::NoSubassembly { .. } | Unconstructable::SearchTooLarge { .. })) if searched => {
@@ -702,6 +708,9 @@ fn plan_stage(j: &FreeformJob, ctx: &mut Ctx, w: &Out<Placed>, c: &Out<Constrain
             .metric("time", "Planning time", ms, "ms", "Wall time of the plan on this machine.")
             .metric("first_ms", "First beams fixed", first_ms.unwrap_or(ms), "ms", "When the plan's first subassembly was fixed: a printer could start then, while planning goes on (the plan only adds after it).")
             .metric("half_ms", "Half the beams fixed", half_ms.unwrap_or(ms), "ms", "When half of the sequence was fixed.");
+        if !p.bands.is_empty() {
+            report = report.metric("bands", "Bands", p.bands.len() as f64, "", "Bands planned one after another up the design, each with the bands below printed and rigid.");
+        }
         if let Some(k) = p.exact_until {
             report = report.metric("exact_until", "Exact cost until step", k as f64, "", "The planning budget ran out here: later steps were chosen by the heuristic cost.");
         }
@@ -836,18 +845,56 @@ fn order_stage(j: &FreeformJob, ctx: &mut Ctx, w: &Out<Placed>, c: &Out<Constrai
 }
 
 fn costs_stage(j: &FreeformJob, ctx: &mut Ctx, w: &Out<Placed>, p: &Out<Plan>, o: &Out<Ordered>) -> Result<Out<Vec<Costs>>, Error> {
-    let parts = (j.planner.compare, j.beam);
+    let parts = (j.planner.compare, j.beam, j.planner.budget_s);
     let s = section(j);
     let load = j.beam.load_n;
     let compare = j.planner.compare;
     let chosen = j.planner.cost;
+    let budget = j.planner.budget_s * plan::WORK_PER_SECOND;
     ctx.stage("costs", "costs", &parts, &[o.key, p.key], |_| {
         if !compare {
             return Ok((Vec::new(), Some(planned_report(o))));
         }
-        let c = cost::costs(&w.joints, &w.beams, &w.grounded, &o.steps, &s, load);
-        Ok((c.clone(), Some(costs_report(&c, load, chosen))))
+        let (c, stopped) = cost::costs_within(&w.joints, &w.beams, &w.grounded, &o.steps, &s, load, budget);
+        let mut report = costs_report(&c, load, chosen, stopped);
+        if !p.bands.is_empty() {
+            // The plan's own order, measured with the whole frame, against what each band saw.
+            let (whole, _) = cost::costs_within(&w.joints, &w.beams, &w.grounded, &p.steps, &s, load, budget);
+            joins_report(&mut report, p, &whole);
+        }
+        Ok((c.clone(), Some(report)))
     })
+}
+
+/// The cost of planning in bands: in each band, in the plan's order, the largest ε its plan
+/// saw (the bands below rigid) against the largest measured with the whole frame (`whole`,
+/// NaN past the budget), and the largest growth of one step's ε.
+fn joins_report(r: &mut StageReport, p: &Plan, whole: &[Costs]) {
+    let n = p.steps.len();
+    let (mut planned, mut measured) = (Vec::new(), Vec::new());
+    for (k, &start) in p.bands.iter().enumerate() {
+        let end = p.bands.get(k + 1).copied().unwrap_or(n);
+        let range = start.min(n)..end.min(n);
+        planned.push(p.steps[range.clone()].iter().map(|s| s.cost_mm * 1000.0).fold(0.0, f64::max));
+        measured.push(whole[range].iter().map(|k| k.exact_mm * 1000.0).filter(|e| e.is_finite()).fold(0.0, f64::max));
+    }
+    let join = p.steps.iter().zip(whole).map(|(s, k)| (k.exact_mm - s.cost_mm) * 1000.0).filter(|e| e.is_finite()).fold(0.0, f64::max);
+    let worst_planned = planned.iter().copied().fold(0.0, f64::max);
+    let worst = measured.iter().copied().fold(0.0, f64::max);
+    let x: Vec<f64> = (1..=planned.len()).map(|i| i as f64).collect();
+    *r = std::mem::replace(r, StageReport::new("costs", "", &serde_json::Value::Null))
+        .metric("band_planned", "Largest ε planned in bands", worst_planned, "µm", "The largest ε the bands' plans saw, each with the bands below rigid.")
+        .metric("band_join", "Cost of the joins", join, "µm", "The most one step's ε grows when the bands below deflect too (the plan's order measured with the whole frame).")
+        .metric("band_measured", "Largest ε measured", worst, "µm", "The largest ε of the joined sequence with the whole frame.");
+    r.plots.push(Plot {
+        key: "bands".into(),
+        title: "Largest ε per band: planned (bands below rigid) and measured (whole frame)".into(),
+        kind: PlotKind::Line,
+        x: Axis::new("band", ""),
+        y: Axis::new("ε", "µm"),
+        group: None,
+        series: vec![Series::xy("planned", x.clone(), planned), Series::xy("measured", x, measured)],
+    });
 }
 
 /// ε over the sequence as planned (no comparison asked).
@@ -859,7 +906,9 @@ fn planned_report(o: &Ordered) -> StageReport {
     r
 }
 
-fn costs_report(c: &[Costs], load: f64, chosen: Cost) -> StageReport {
+fn costs_report(c: &[Costs], load: f64, chosen: Cost, stopped: Option<usize>) -> StageReport {
+    // Past the budget nothing was measured: the measured steps only.
+    let c = &c[..stopped.unwrap_or(c.len())];
     let n = c.len();
     let x: Vec<f64> = (1..=n).map(|i| i as f64).collect();
     let exact: Vec<f64> = c.iter().map(|k| k.exact_mm * 1000.0).collect();
@@ -869,11 +918,15 @@ fn costs_report(c: &[Costs], load: f64, chosen: Cost) -> StageReport {
     // Steps where the heuristic reads more than the exact cost (the paper's Fig. 8C says never).
     let above = c.iter().filter(|k| k.heuristic_mm > k.exact_mm * (1.0 + 1e-9) + 1e-15).count();
     let data = serde_json::json!({ "compared": true, "max_exact_um": max_e, "max_heuristic_um": max_h, "heuristic_above_exact": above });
-    let mut r = StageReport::new("costs", "Joint errors, exact and heuristic", &data)
+    let r = StageReport::new("costs", "Joint errors, exact and heuristic", &data)
         .metric("max_exact", "Largest ε, exact", max_e, "µm", "The largest joint error along this sequence with the whole frame deflecting.")
         .metric("max_heuristic", "Largest ε, heuristic", max_h, "µm", "The same with only the cantilevered beams deflecting (the rest rigid).")
         .metric("ratio", "Heuristic ÷ exact (largest)", if max_e > 0.0 { max_h / max_e } else { 0.0 }, "", "How much of the worst error the heuristic sees.")
         .metric("above", "Steps heuristic > exact", above as f64, "", "Steps where the heuristic reads more than the exact cost (the paper: never).");
+    let mut r = match stopped {
+        Some(k) => r.metric("measured", "Steps measured", k as f64, "", "The planning budget ran out during the measurement: the numbers and plots cover these first steps (raise the budget to measure all)."),
+        None => r,
+    };
     let chosen_name = match chosen {
         Cost::Exact => "exact (planned with)",
         Cost::Heuristic => "heuristic (planned with)",

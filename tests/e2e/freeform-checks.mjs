@@ -6,7 +6,8 @@
 // fills the Wireframe slot (summary: beams, joints, grounded) and runs; the same design with
 // the default 13° cone on the conmech truss is refused naming the two beams, and the design
 // keeps its settings. The exact search's card on a small dome: the proven optimum below the
-// heuristic planner's, printed. Called by run.mjs:
+// heuristic planner's, printed. A tilting 5-axis nozzle on the truss; a tower planned in
+// bands. Called by run.mjs:
 //
 //   import { freeformChecks } from "./freeform-checks.mjs";
 //   await freeformChecks({ baseUrl: base, weftBin: WEFT_BIN, check, newPage, outDir: OUT, first: n });
@@ -147,6 +148,33 @@ export async function freeformChecks({ baseUrl, weftBin = process.env.WEFT_BIN, 
       }
       await page.setViewportSize({ width: 1400, height: 900 });
       return `optimum ${best.toFixed(1)} µm proven, heuristic planner ${planner.toFixed(1)} µm (gap ${metric("optimum", "gap").toFixed(1)} %)`;
+    });
+
+    await check(n++, "freeform: a tilting 5-axis nozzle prints the truss a 3-axis printer refuses (the constraints card counts the tilted beams), and a tower planned in bands shows the cost of the joins per band", async () => {
+      const tilt = await runExample(page, baseUrl, "freeform-cantilever-truss-tilt.json", jobTimeout);
+      const metric = (r, st, key) => r.stages.find((x) => x.stage === st)?.metrics.find((m) => m.key === key)?.value;
+      const tilted = metric(tilt, "constraints", "tilted");
+      if (!(tilted > 1000) || tilt.analysis.extrusion_paths !== 2197) throw new Error(`${tilted} beams tilted, ${tilt.analysis.extrusion_paths} paths`);
+      if (!(metric(tilt, "constraints", "pairs") * 4 < metric(tilt, "constraints", "vertical_pairs"))) throw new Error("tilting did not cut the precedences");
+      const card = await page.evaluate(() => document.querySelector('#report .stage-card[data-stage="constraints"]')?.textContent ?? "");
+      if (!/Beams tilted/.test(card) || !/Precedences if vertical/.test(card)) throw new Error(`constraints card reads "${card.slice(0, 200)}"`);
+      await page.evaluate(() => document.querySelector('#report .stage-card[data-stage="constraints"]')?.scrollIntoView());
+      await page.screenshot({ path: join(outDir, "freeform-tilt-desktop.png") });
+      const banded = await runExample(page, baseUrl, "freeform-tower-bands.json", jobTimeout);
+      const bands = metric(banded, "plan", "bands");
+      const join = metric(banded, "costs", "band_join");
+      if (!(bands >= 3) || !(join >= 0)) throw new Error(`${bands} bands, joins ${join} µm`);
+      const plots = await page.evaluate(() => [...document.querySelectorAll('#report .stage-card[data-stage="costs"] [data-plot-key]')].map((p) => p.dataset.plotKey));
+      if (!plots.includes("bands")) throw new Error(`costs card plots ${plots}`);
+      await page.evaluate(() => document.querySelector('#report .stage-card[data-stage="costs"] [data-plot-key="bands"]')?.scrollIntoView());
+      for (const [w, h, name] of [[1280, 800, "freeform-bands-desktop.png"], [390, 844, "freeform-bands-phone.png"]]) {
+        await page.setViewportSize({ width: w, height: h });
+        await page.waitForTimeout(300);
+        await page.evaluate(() => document.querySelector('#report .stage-card[data-stage="costs"] [data-plot-key="bands"]')?.scrollIntoView());
+        await page.screenshot({ path: join(outDir, name) });
+      }
+      await page.setViewportSize({ width: 1400, height: 900 });
+      return `truss: ${tilted} of 2197 beams tilted; tower: ${bands} bands, joins cost up to ${join.toFixed(3)} µm`;
     });
   } finally {
     await context.close();

@@ -223,3 +223,39 @@ fn a_tilting_head_prints_the_truss_a_3_axis_printer_cannot() {
     let e = run(&vertical, &Files::new()).unwrap_err();
     assert!(e.contains("cannot be printed in this orientation"), "{e}");
 }
+
+#[test]
+fn a_tower_planned_in_bands_reports_the_cost_of_its_joins() {
+    let d = example("freeform-tower-bands");
+    let out = run(&d, &Files::new()).unwrap();
+    let metric = |st: &str, key: &str| out.report.stages.iter().find(|s| s.stage == st).and_then(|s| s.metrics.iter().find(|m| m.key == key)).map(|m| m.value);
+    let bands = metric("plan", "bands").unwrap();
+    assert!(bands >= 3.0, "{bands} bands");
+    let (planned, measured, join) = (metric("costs", "band_planned").unwrap(), metric("costs", "band_measured").unwrap(), metric("costs", "band_join").unwrap());
+    assert!(planned > 0.0 && measured > 0.0 && join > 0.0, "planned {planned}, measured {measured}, joins {join} µm");
+    let costs = out.report.stages.iter().find(|s| s.stage == "costs").unwrap();
+    let plot = costs.plots.iter().find(|p| p.key == "bands").unwrap();
+    assert_eq!(plot.series[0].y.len() as f64, bands);
+    // Whole, the same design plans the same beams (another order).
+    let whole = run(&d.with_overrides(&["job.planner.band_beams=0".to_string()]).unwrap(), &Files::new()).unwrap();
+    assert_eq!(whole.report.analysis.extrusion_paths, out.report.analysis.extrusion_paths);
+    assert!(metric("plan", "bands").is_some() && whole.report.stages.iter().find(|s| s.stage == "plan").unwrap().metrics.iter().all(|m| m.key != "bands"));
+}
+
+#[test]
+fn the_cost_replay_stops_at_its_budget_and_says_where() {
+    use weft::freeform::{cost, frame::Section, models, plan, precedence};
+    let w = models::build(&models::Model::Tower { cells: 2, levels: 4, cell_mm: 3.0, level_mm: 3.0, taper: 0.7 });
+    let c = precedence::constraints(&w.joints, &w.beams, &precedence::Options { nozzle: precedence::Nozzle { half_angle_deg: 13.0, radius_mm: 0.5, height_mm: 5.0 }, beam_radius_mm: 0.075, directionality: true, collision: true, tilt_deg: 0.0 }, &mut |_| {}).unwrap();
+    let s = Section { diameter_mm: 0.15, e_mpa: 2600.0, g_mpa: 1100.0 };
+    let a = plan::Assembly { joints: &w.joints, beams: &w.beams, grounded: &w.grounded, constraints: &c };
+    let p = plan::plan(&a, &plan::Options { mode: plan::Mode::Strict, cost: plan::Cost::Exact, connection: true, section: s, load_n: 1e-4, budget_s: 60.0 }, &mut |_, _| {}).unwrap();
+    let all = cost::costs(&w.joints, &w.beams, &w.grounded, &p.steps, &s, 1e-4);
+    let (within, stopped) = cost::costs_within(&w.joints, &w.beams, &w.grounded, &p.steps, &s, 1e-4, f64::INFINITY);
+    assert_eq!((within.len(), stopped), (all.len(), None));
+    let (cut, stopped) = cost::costs_within(&w.joints, &w.beams, &w.grounded, &p.steps, &s, 1e-4, 20_000.0);
+    let k = stopped.expect("a small budget stops the replay");
+    assert!(k > 0 && k < all.len(), "stopped at {k}");
+    assert!(cut[..k].iter().zip(&all).all(|(a, b)| a.exact_mm.to_bits() == b.exact_mm.to_bits()), "the measured steps are the full replay's");
+    assert!(cut[k..].iter().all(|c| c.exact_mm.is_nan() && c.heuristic_mm.is_nan()));
+}

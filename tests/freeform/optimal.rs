@@ -226,3 +226,55 @@ fn the_search_agrees_with_the_planners_proofs_and_decides_where_its_search_gives
     assert!(planned > 300 && optimal_too > planned / 2, "{planned} planned, {optimal_too} optimal");
     assert!(rescued > 10 && none > 10, "the search decided {rescued} + {none} designs the planner left open");
 }
+
+#[test]
+fn planning_in_bands_checks_keeps_the_bands_in_order_and_fails_only_where_the_whole_fails() {
+    use weft::freeform::{bands, deadhead};
+    let n = Nozzle { half_angle_deg: 13.0, radius_mm: 0.5, height_mm: 5.0 };
+    let w = models::build(&models::Model::Tower { cells: 3, levels: 12, cell_mm: 3.0, level_mm: 2.5, taper: 0.6 });
+    let c = constraints(&w, &n, 0.075);
+    let a = Assembly { joints: &w.joints, beams: &w.beams, grounded: &w.grounded, constraints: &c };
+    let o = plan::Options { mode: Mode::Strict, cost: Cost::Exact, connection: true, section: ISOMALT, load_n: 1e-4, budget_s: 600.0 };
+    let band_of = bands::assign(&w.joints, &w.beams, &c, 100);
+    let (p, list) = bands::plan(&a, &o, &band_of, &mut |_, _| {}).unwrap();
+    assert!(p.bands.len() >= 5 && p.bands.len() == list.len(), "{} bands of {} beams", p.bands.len(), w.beams.len());
+    check(&w, &p.steps, &n, 0.075, true, &c, "tower in bands");
+    // Each band's beams are the band's, and the deadhead order keeps every band after the last.
+    for (k, b) in list.iter().enumerate() {
+        assert!(b.beams > 0 && (k == 0 || b.clamped > 0), "band {k}: {b:?}");
+    }
+    let ordered = deadhead::order(&w.joints, &p, &c, &deadhead::Options { xy_mm_s: 150.0, z_mm_s: 10.0, clearance_mm: 1.0, beam_radius_mm: 0.075 });
+    let band_at = |i: usize| p.bands.iter().rposition(|&s| s <= i).unwrap();
+    let step_of: std::collections::BTreeMap<usize, usize> = p.steps.iter().enumerate().map(|(i, s)| (s.beam, i)).collect();
+    let seq: Vec<usize> = ordered.steps.iter().map(|s| band_at(step_of[&s.beam])).collect();
+    assert!(seq.windows(2).all(|x| x[0] <= x[1]), "the deadhead order mixes bands");
+    check(&w, &ordered.steps, &n, 0.075, true, &c, "tower in bands, ordered");
+    // The whole frame against each band's: every step measured again, the joins cost something.
+    let whole = cost::costs(&w.joints, &w.beams, &w.grounded, &p.steps, &ISOMALT, 1e-4);
+    let grew = p.steps.iter().zip(&whole).filter(|(s, k)| k.exact_mm > s.cost_mm * (1.0 + 1e-9)).count();
+    assert!(grew > 0, "no step felt the bands below");
+    // Random frames cut into bands of four beams: a band that cannot be planned is merged with
+    // the one below, so the bands plan exactly where the whole design plans.
+    let (mut both, mut merged_to_fail) = (0, 0);
+    for seed in 0..400u64 {
+        let free = 4 + (seed % 4) as usize;
+        let w = random_frame(seed, free, free + 3 + (seed % 5) as usize);
+        let c = constraints(&w, &n, 0.075);
+        let a = Assembly { joints: &w.joints, beams: &w.beams, grounded: &w.grounded, constraints: &c };
+        let whole = plan::plan(&a, &o, &mut |_, _| {});
+        let band_of = bands::assign(&w.joints, &w.beams, &c, 4);
+        let banded = bands::plan(&a, &o, &band_of, &mut |_, _| {});
+        match (&whole, &banded) {
+            (Ok(_), Ok((p, _))) => {
+                check(&w, &p.steps, &n, 0.075, true, &c, &format!("seed {seed} in bands"));
+                both += 1;
+            }
+            (Err(_), Err(_)) => merged_to_fail += 1,
+            (Err(_), Ok((p, _))) => {
+                check(&w, &p.steps, &n, 0.075, true, &c, &format!("seed {seed} in bands (the whole plan gave up)"));
+            }
+            (Ok(_), Err(e)) => panic!("seed {seed}: whole plans, bands fail: {e:?}"),
+        }
+    }
+    assert!(both > 100 && merged_to_fail > 50, "{both} planned both ways, {merged_to_fail} neither");
+}

@@ -575,7 +575,8 @@ impl<'a> Planner<'a> {
         self.d.constraints.preds(b).iter().all(|&p| self.printed[p as usize])
     }
 
-    /// Compliance at joint `j` of the current frame (for a path hanging from it).
+    /// Compliance at joint `j` of the current frame (for a path hanging from it; a joint just
+    /// added by a block has its chain's).
     fn root_c(&self, j: usize) -> M6 {
         match self.cost {
             Cost::Exact => self.flex.get(j),
@@ -610,7 +611,7 @@ impl<'a> Planner<'a> {
         after.sort_unstable();
         for (i, &(b, from, to)) in steps.iter().enumerate() {
             // ε at print time: 0 onto an existing joint, else the tip of the path from `from`.
-            let c_from = self.current_c(from);
+            let c_from = self.root_c(from);
             let c_to = frame::extend(&c_from, self.d.joints[from], self.d.joints[to], &self.o.section);
             let cost = if self.in_frame[to] { 0.0 } else { eps(&c_to, self.o.load_n) };
             self.plan.steps.push(Step { beam: b, from, to, cost_mm: cost, block });
@@ -654,19 +655,6 @@ impl<'a> Planner<'a> {
         self.plan.blocks.push(Block { start, end, after, chain, key_mm: key });
     }
 
-    /// The compliance at `j` now (a joint just added by this block has its chain's).
-    fn current_c(&self, j: usize) -> M6 {
-        match self.cost {
-            Cost::Exact => self.flex.get(j),
-            Cost::Heuristic => {
-                if self.stable[j] {
-                    RIGID
-                } else {
-                    self.chain_c[j].unwrap_or(RIGID)
-                }
-            }
-        }
-    }
 
     /// Checks the exact cost's running compliance against faer's sparse Cholesky of the
     /// printed frame (measures only: see [`frame::Flex::check`]).
@@ -925,7 +913,7 @@ fn search(p: &mut Planner) -> Search {
         for &b in &p.inc[j] {
             if !p.printed[b] && p.hang.cantilever[b] && p.hang.root_side[b] == j && d.allowed_from(b, j) && p.preds_done(b) {
                 let x = d.other(b, j);
-                let c = frame::extend(&p.current_c(j), d.joints[j], d.joints[x], &s);
+                let c = frame::extend(&p.root_c(j), d.joints[j], d.joints[x], &s);
                 let cost = eps(&c, load);
                 heap.push(Cand { key: cost, seq, root: j, parent: NONE, beam: b, tip: x, cost, hang: true });
                 seq += 1;
@@ -1085,7 +1073,7 @@ fn relaxed(p: &mut Planner, progress: &mut dyn FnMut(usize, usize)) -> Result<()
                 if (p.o.connection && !p.in_frame[from]) || !d.allowed_from(b, from) {
                     continue;
                 }
-                let cost = if p.in_frame[to] { 0.0 } else { eps(&frame::extend(&p.current_c(from), d.joints[from], d.joints[to], &s), load) };
+                let cost = if p.in_frame[to] { 0.0 } else { eps(&frame::extend(&p.root_c(from), d.joints[from], d.joints[to], &s), load) };
                 if best.is_none_or(|x| cost < x.0) {
                     best = Some((cost, b, from, to));
                 }

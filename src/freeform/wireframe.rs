@@ -211,28 +211,7 @@ fn json(text: &str) -> Result<Raw, (String, String)> {
                 g.push(flag(n.get("is_grounded")));
             }
         }
-        for (i, e) in elements.iter().enumerate() {
-            let place = format!("element_list[{i}]");
-            let ends = e.get("end_node_ids").and_then(Value::as_array).filter(|a| a.len() == 2).ok_or((place.clone(), "a beam needs end_node_ids [i, j]".to_string()))?;
-            let id = e.get("element_id").and_then(Value::as_i64).unwrap_or(i as i64);
-            let bplace = format!("element {id}");
-            let mut pair = [0usize; 2];
-            let mut ok = true;
-            for (k, end) in ends.iter().enumerate() {
-                let n = end.as_i64().ok_or((format!("{place}.end_node_ids"), format!("{end} is not a node id")))?;
-                match by_id.get(&n) {
-                    Some(&j) => pair[k] = j,
-                    None => {
-                        raw.dangling.push((bplace.clone(), format!("node {n}")));
-                        ok = false;
-                    }
-                }
-            }
-            if ok {
-                raw.beams.push(pair);
-                raw.beam_place.push(bplace);
-            }
-        }
+        json_beams(&mut raw, elements, &by_id, ("element_list", "end_node_ids", "element_id", "node id"))?;
         return Ok(raw);
     }
     if let Some(nodes) = v.get("nodes").and_then(Value::as_array) {
@@ -261,31 +240,40 @@ fn json(text: &str) -> Result<Raw, (String, String)> {
             }
         }
         raw.grounded = Some(grounded);
-        for (i, e) in elements.iter().enumerate() {
-            let place = format!("elements[{i}]");
-            let ends = e.get("end_node_inds").and_then(Value::as_array).filter(|a| a.len() == 2).ok_or((place.clone(), "a beam needs end_node_inds [i, j]".to_string()))?;
-            let id = e.get("elem_ind").and_then(Value::as_i64).unwrap_or(i as i64);
-            let bplace = format!("element {id}");
-            let mut pair = [0usize; 2];
-            let mut ok = true;
-            for (k, end) in ends.iter().enumerate() {
-                let n = end.as_i64().ok_or((format!("{place}.end_node_inds"), format!("{end} is not a node index")))?;
-                match by_id.get(&n) {
-                    Some(&j) => pair[k] = j,
-                    None => {
-                        raw.dangling.push((bplace.clone(), format!("node {n}")));
-                        ok = false;
-                    }
-                }
-            }
-            if ok {
-                raw.beams.push(pair);
-                raw.beam_place.push(bplace);
-            }
-        }
+        json_beams(&mut raw, elements, &by_id, ("elements", "end_node_inds", "elem_ind", "node index"))?;
         return Ok(raw);
     }
     Err(("top level".into(), "this JSON is neither an assembly_instances design (node_list, element_list) nor a conmech one (nodes, elements)".into()))
+}
+
+/// The beams of a JSON design's element list: `keys` names the list, the two ends' key, the
+/// id's key and what an end is called, as the format spells them. Ends naming missing joints
+/// are kept as dangling (listed with every other problem).
+fn json_beams(raw: &mut Raw, elements: &[Value], by_id: &std::collections::BTreeMap<i64, usize>, keys: (&str, &str, &str, &str)) -> Result<(), (String, String)> {
+    let (list, ends_key, id_key, what) = keys;
+    for (i, e) in elements.iter().enumerate() {
+        let place = format!("{list}[{i}]");
+        let ends = e.get(ends_key).and_then(Value::as_array).filter(|a| a.len() == 2).ok_or((place.clone(), format!("a beam needs {ends_key} [i, j]")))?;
+        let id = e.get(id_key).and_then(Value::as_i64).unwrap_or(i as i64);
+        let bplace = format!("element {id}");
+        let mut pair = [0usize; 2];
+        let mut ok = true;
+        for (k, end) in ends.iter().enumerate() {
+            let n = end.as_i64().ok_or((format!("{place}.{ends_key}"), format!("{end} is not a {what}")))?;
+            match by_id.get(&n) {
+                Some(&j) => pair[k] = j,
+                None => {
+                    raw.dangling.push((bplace.clone(), format!("node {n}")));
+                    ok = false;
+                }
+            }
+        }
+        if ok {
+            raw.beams.push(pair);
+            raw.beam_place.push(bplace);
+        }
+    }
+    Ok(())
 }
 
 /// The numbers of a line (commas, semicolons, tabs or spaces between them).

@@ -69,7 +69,7 @@ export async function freeformChecks({ baseUrl, weftBin = process.env.WEFT_BIN, 
         native = readFileSync(cli, "utf8");
         if (native !== text) throw new Error("the page's G-code differs from the CLI's");
       }
-      await page.evaluate(() => document.querySelector('.view-card[data-view="sequence"]')?.scrollIntoView());
+      await page.evaluate(() => document.querySelector('.view-card[data-view="sequence"]')?.scrollIntoView({ block: "center" }));
       for (const [w, h, name] of [[1280, 800, "freeform-desktop.png"], [390, 844, "freeform-phone.png"]]) {
         await page.setViewportSize({ width: w, height: h });
         await page.waitForTimeout(300);
@@ -139,11 +139,11 @@ export async function freeformChecks({ baseUrl, weftBin = process.env.WEFT_BIN, 
         execFileSync(weftBin, ["run", join(process.cwd(), "examples", "freeform-dome-exact.json"), "--out", cli, "-q"]);
         if (readFileSync(cli, "utf8") !== text) throw new Error("the page's G-code differs from the CLI's");
       }
-      await page.evaluate(() => document.querySelector('#report .stage-card[data-stage="optimum"]')?.scrollIntoView());
+      await page.evaluate(() => document.querySelector('#report .stage-card[data-stage="optimum"]')?.scrollIntoView({ block: "center" }));
       for (const [w, h, name] of [[1280, 800, "freeform-exact-desktop.png"], [390, 844, "freeform-exact-phone.png"]]) {
         await page.setViewportSize({ width: w, height: h });
         await page.waitForTimeout(300);
-        await page.evaluate(() => document.querySelector('#report .stage-card[data-stage="optimum"]')?.scrollIntoView());
+        await page.evaluate(() => document.querySelector('#report .stage-card[data-stage="optimum"]')?.scrollIntoView({ block: "center" }));
         await page.screenshot({ path: join(outDir, name) });
       }
       await page.setViewportSize({ width: 1400, height: 900 });
@@ -158,23 +158,23 @@ export async function freeformChecks({ baseUrl, weftBin = process.env.WEFT_BIN, 
       if (!(metric(tilt, "constraints", "pairs") * 4 < metric(tilt, "constraints", "vertical_pairs"))) throw new Error("tilting did not cut the precedences");
       const card = await page.evaluate(() => document.querySelector('#report .stage-card[data-stage="constraints"]')?.textContent ?? "");
       if (!/Beams tilted/.test(card) || !/Precedences if vertical/.test(card)) throw new Error(`constraints card reads "${card.slice(0, 200)}"`);
-      await page.evaluate(() => document.querySelector('#report .stage-card[data-stage="constraints"]')?.scrollIntoView());
+      await page.evaluate(() => document.querySelector('#report .stage-card[data-stage="constraints"]')?.scrollIntoView({ block: "center" }));
       await page.screenshot({ path: join(outDir, "freeform-tilt-desktop.png") });
       const banded = await runExample(page, baseUrl, "freeform-tower-bands.json", jobTimeout);
       const bands = metric(banded, "plan", "bands");
-      const join = metric(banded, "costs", "band_join");
-      if (!(bands >= 3) || !(join >= 0)) throw new Error(`${bands} bands, joins ${join} µm`);
+      const joinCost = metric(banded, "costs", "band_join");
+      if (!(bands >= 3) || !(joinCost >= 0)) throw new Error(`${bands} bands, joins ${joinCost} µm`);
       const plots = await page.evaluate(() => [...document.querySelectorAll('#report .stage-card[data-stage="costs"] [data-plot-key]')].map((p) => p.dataset.plotKey));
       if (!plots.includes("bands")) throw new Error(`costs card plots ${plots}`);
-      await page.evaluate(() => document.querySelector('#report .stage-card[data-stage="costs"] [data-plot-key="bands"]')?.scrollIntoView());
+      await page.evaluate(() => document.querySelector('#report .stage-card[data-stage="costs"] [data-plot-key="bands"]')?.scrollIntoView({ block: "center" }));
       for (const [w, h, name] of [[1280, 800, "freeform-bands-desktop.png"], [390, 844, "freeform-bands-phone.png"]]) {
         await page.setViewportSize({ width: w, height: h });
         await page.waitForTimeout(300);
-        await page.evaluate(() => document.querySelector('#report .stage-card[data-stage="costs"] [data-plot-key="bands"]')?.scrollIntoView());
+        await page.evaluate(() => document.querySelector('#report .stage-card[data-stage="costs"] [data-plot-key="bands"]')?.scrollIntoView({ block: "center" }));
         await page.screenshot({ path: join(outDir, name) });
       }
       await page.setViewportSize({ width: 1400, height: 900 });
-      return `truss: ${tilted} of 2197 beams tilted; tower: ${bands} bands, joins cost up to ${join.toFixed(3)} µm`;
+      return `truss: ${tilted} of 2197 beams tilted; tower: ${bands} bands, joins cost up to ${joinCost.toFixed(3)} µm`;
     });
   } finally {
     await context.close();

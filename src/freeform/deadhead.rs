@@ -201,3 +201,85 @@ pub fn order(joints: &[DVec3], plan: &Plan, constraints: &Constraints, o: &Optio
     }
     Ordered { steps: out, safe_z, deadhead_s: time, plan_order_deadhead_s: plan_order }
 }
+
+/// The deadheads of an order that lift or lower the nozzle through a printed beam: the body
+/// (radius `nozzle_radius_mm`, `body_top_mm` from the tip to its top) rising from the last
+/// beam's end joint to the safe height, or lowered from it onto the next start joint, sweeps
+/// the column above that joint. What lies within the body at the joint itself is a collision
+/// precedence already (the beam's own sweep); beams higher up the column are not, and a tall
+/// design can leave one there. Returns the steps whose deadhead does, ascending.
+pub fn blocked(joints: &[DVec3], beams: &[[usize; 2]], ordered: &Ordered, nozzle_radius_mm: f64, body_top_mm: f64, beam_radius_mm: f64) -> Vec<usize> {
+    use parry3d_f64::bounding_volume::Aabb;
+    use parry3d_f64::math::Vector;
+    use parry3d_f64::partitioning::{Bvh, BvhBuildStrategy};
+    let steps = &ordered.steps;
+    let n = steps.len();
+    if n < 2 {
+        return Vec::new();
+    }
+    let r = beam_radius_mm;
+    let v = |p: DVec3| Vector::new(p.x, p.y, p.z);
+    // The steps' beams as boxes, indexed by their place in the order.
+    let boxes: Vec<Aabb> = steps
+        .iter()
+        .map(|s| {
+            let [p, q] = beams[s.beam];
+            let (a, b) = (joints[p], joints[q]);
+            Aabb::new(v(a.min(b) - DVec3::splat(r)), v(a.max(b) + DVec3::splat(r)))
+        })
+        .collect();
+    let bvh = Bvh::from_leaves(BvhBuildStrategy::Binned, &boxes);
+    let reach = nozzle_radius_mm + r;
+    // Whether beam (order index) k, printed before step i, lies in the column over `at` from
+    // `lo` to `hi`.
+    let in_column = |k: usize, at: DVec3, lo: f64, hi: f64| -> bool {
+        let [p, q] = beams[steps[k].beam];
+        let (a, b) = (joints[p], joints[q]);
+        // The part of the beam within the column's heights (its radius added).
+        let (za, zb) = (lo - r, hi + r);
+        let d = b - a;
+        let (mut t0, mut t1) = (0.0f64, 1.0f64);
+        if d.z.abs() < 1e-12 {
+            if a.z < za || a.z > zb {
+                return false;
+            }
+        } else {
+            let (s0, s1) = ((za - a.z) / d.z, (zb - a.z) / d.z);
+            t0 = t0.max(s0.min(s1));
+            t1 = t1.min(s0.max(s1));
+            if t0 > t1 {
+                return false;
+            }
+        }
+        let (c0, c1) = ((a + d * t0).truncate(), (a + d * t1).truncate());
+        let x = at.truncate();
+        let e = c1 - c0;
+        let l = e.length_squared();
+        let t = if l > 0.0 { ((x - c0).dot(e) / l).clamp(0.0, 1.0) } else { 0.0 };
+        (c0 + e * t).distance_squared(x) < reach * reach
+    };
+    let mut out = Vec::new();
+    for i in 1..n {
+        let safe = ordered.safe_z[i];
+        if !safe.is_finite() {
+            continue;
+        }
+        let mut hit = false;
+        for at in [joints[steps[i - 1].to], joints[steps[i].from]] {
+            // Above the body's reach at the joint, up to the safe height.
+            let (lo, hi) = (at.z + body_top_mm, safe);
+            if lo >= hi {
+                continue;
+            }
+            let query = Aabb::new(v(DVec3::new(at.x - reach, at.y - reach, lo - r)), v(DVec3::new(at.x + reach, at.y + reach, hi + r)));
+            if bvh.intersect_aabb(&query).any(|k| (k as usize) < i && in_column(k as usize, at, lo, hi)) {
+                hit = true;
+                break;
+            }
+        }
+        if hit {
+            out.push(i);
+        }
+    }
+    out
+}

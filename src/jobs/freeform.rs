@@ -828,9 +828,10 @@ fn optimum_report(best: &Optimum, known: Option<f64>, planner_eps: Option<&[f64]
 fn order_stage(j: &FreeformJob, ctx: &mut Ctx, w: &Out<Placed>, c: &Out<Constraints>, p: &Out<Plan>) -> Result<Out<Ordered>, Error> {
     let printer = &ctx.design.printer;
     let o = deadhead::Options { xy_mm_s: printer.travel_speed_mm_s, z_mm_s: printer.z_speed_mm_s, clearance_mm: j.print.clearance_mm, beam_radius_mm: j.beam.diameter_mm / 2.0 };
-    let parts = (o.xy_mm_s, o.z_mm_s, o.clearance_mm, o.beam_radius_mm);
+    let parts = (o.xy_mm_s, o.z_mm_s, o.clearance_mm, o.beam_radius_mm, j.nozzle);
     let speed = j.print.speed_mm_s;
     let dwell = j.print.dwell_s;
+    let nozzle = precedence_options(j).nozzle;
     ctx.stage("order", "order", &parts, &[p.key, c.key], |_| {
         let ordered = deadhead::order(&w.joints, p, c, &o);
         let length: f64 = ordered.steps.iter().map(|s| w.joints[s.from].distance(w.joints[s.to])).sum();
@@ -839,6 +840,13 @@ fn order_stage(j: &FreeformJob, ctx: &mut Ctx, w: &Out<Placed>, c: &Out<Constrai
             .metric("deadhead", "Deadhead time", ordered.deadhead_s, "s", "Moves between beams: lift above the highest printed beam, move, lower (axes at full speed).")
             .metric("deadhead_plan", "Deadhead in the plan's order", ordered.plan_order_deadhead_s, "s", "The same moves in the order the planner fixed them, before ordering.")
             .metric("print", "Printing time", print_s, "s", "Extruding along every beam at the beam speed, plus the dwells.");
+        // Lifts and descents through printed beams higher than the nozzle body reaches.
+        let blocked = deadhead::blocked(&w.joints, &w.beams, &ordered, nozzle.radius_mm, nozzle.top(), o.beam_radius_mm);
+        report = report.metric("blocked", "Deadheads through printed beams", blocked.len() as f64, "", "Lifts or descents whose nozzle column above the joint meets a printed beam higher than the nozzle body: make the body's height the whole head's, so those beams become precedences.");
+        if !blocked.is_empty() {
+            report.label = format!("Ordering deadheads: {} pass through printed beams (first at step {})", blocked.len(), blocked[0] + 1);
+            report.data["blocked_steps"] = serde_json::json!(blocked.iter().take(50).collect::<Vec<_>>());
+        }
         report.tables.push(sequence_table(w, &ordered));
         Ok((ordered, Some(report)))
     })

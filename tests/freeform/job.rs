@@ -259,3 +259,19 @@ fn the_cost_replay_stops_at_its_budget_and_says_where() {
     assert!(cut[..k].iter().zip(&all).all(|(a, b)| a.exact_mm.to_bits() == b.exact_mm.to_bits()), "the measured steps are the full replay's");
     assert!(cut[k..].iter().all(|c| c.exact_mm.is_nan() && c.heuristic_mm.is_nan()));
 }
+
+#[test]
+fn weft_models_deadhead_clear_of_printed_beams_and_the_order_card_counts_those_that_do_not() {
+    for name in ["freeform-tower", "freeform-dome", "freeform-bridge"] {
+        let out = run(&example(name), &Files::new()).unwrap();
+        let order = out.report.stages.iter().find(|s| s.stage == "order").unwrap();
+        let blocked = order.metrics.iter().find(|m| m.key == "blocked").unwrap().value;
+        assert_eq!(blocked, 0.0, "{name}: {}", order.label);
+    }
+    // The klein bottle's PLA frame under the default nozzle: some deadheads pass printed
+    // beams above the body (the body's height is the fix), and the card says so.
+    let out = run(&example("freeform-klein-bottle"), &Files::new()).unwrap();
+    let order = out.report.stages.iter().find(|s| s.stage == "order").unwrap();
+    let blocked = order.metrics.iter().find(|m| m.key == "blocked").unwrap().value;
+    assert!(blocked > 0.0 && order.label.contains("pass through printed beams"), "{blocked}: {}", order.label);
+}

@@ -555,3 +555,22 @@ fn a_tilting_nozzle_breaks_the_cycle_of_the_truss_and_every_tilted_step_checks()
     let pairs = check(&w, &p.steps, &n, 1.5, true, &tilted, "truss tilted");
     assert!(pairs > 1000, "{pairs} pairs checked by sampling");
 }
+
+#[test]
+fn a_descent_under_a_printed_roof_is_flagged_and_one_in_the_open_is_not() {
+    use weft::freeform::deadhead::{self, Ordered};
+    // A post at B with a beam over to above A, then a short post at A: lowering onto A passes
+    // the printed beam 45 mm up, higher than the nozzle body (28.7 mm) reaches.
+    let joints = vec![DVec3::new(0.0, 0.0, 0.0), DVec3::new(10.0, 0.0, 0.0), DVec3::new(10.0, 0.0, 45.0), DVec3::new(0.0, 0.0, 45.0), DVec3::new(0.0, 0.0, 5.0), DVec3::new(30.0, 0.0, 0.0), DVec3::new(30.0, 0.0, 5.0)];
+    let beams = vec![[1, 2], [2, 3], [0, 4], [5, 6]];
+    let step = |beam: usize, from: usize, to: usize| Step { beam, from, to, cost_mm: 0.0, block: 0 };
+    let n = Nozzle::default();
+    let safe = 45.0 + 1.5 + 1.0;
+    let under = Ordered { steps: vec![step(0, 1, 2), step(1, 2, 3), step(2, 0, 4)], safe_z: vec![f64::NAN, safe, safe], deadhead_s: 0.0, plan_order_deadhead_s: 0.0 };
+    assert_eq!(deadhead::blocked(&joints, &beams, &under, n.radius_mm, n.top(), 1.5), vec![2]);
+    // The same post printed first, or a post away from the roof: clear.
+    let first = Ordered { steps: vec![step(2, 0, 4), step(0, 1, 2), step(1, 2, 3)], safe_z: vec![f64::NAN, 5.0 + 2.5, safe], deadhead_s: 0.0, plan_order_deadhead_s: 0.0 };
+    assert!(deadhead::blocked(&joints, &beams, &first, n.radius_mm, n.top(), 1.5).is_empty());
+    let away = Ordered { steps: vec![step(0, 1, 2), step(1, 2, 3), step(3, 5, 6)], safe_z: vec![f64::NAN, safe, safe], deadhead_s: 0.0, plan_order_deadhead_s: 0.0 };
+    assert!(deadhead::blocked(&joints, &beams, &away, n.radius_mm, n.top(), 1.5).is_empty());
+}

@@ -207,16 +207,20 @@ pub fn order(joints: &[DVec3], plan: &Plan, constraints: &Constraints, o: &Optio
 /// beam's end joint to the safe height, or lowered from it onto the next start joint, sweeps
 /// the column above that joint. What lies within the body at the joint itself is a collision
 /// precedence already (the beam's own sweep); beams higher up the column are not, and a tall
-/// design can leave one there. Returns the steps whose deadhead does, ascending.
-pub fn blocked(joints: &[DVec3], beams: &[[usize; 2]], ordered: &Ordered, nozzle_radius_mm: f64, body_top_mm: f64, beam_radius_mm: f64) -> Vec<usize> {
+/// design can leave one there. Returns the steps whose deadhead does, ascending. Only a
+/// vertical nozzle is checked: a deadhead next to a beam printed tilted (`axis` per beam, +Z
+/// when upright) is skipped, and counted in the second number returned.
+pub fn blocked(joints: &[DVec3], beams: &[[usize; 2]], axis: &[DVec3], ordered: &Ordered, nozzle_radius_mm: f64, body_top_mm: f64, beam_radius_mm: f64) -> (Vec<usize>, usize) {
     use parry3d_f64::bounding_volume::Aabb;
     use parry3d_f64::math::Vector;
     use parry3d_f64::partitioning::{Bvh, BvhBuildStrategy};
     let steps = &ordered.steps;
     let n = steps.len();
     if n < 2 {
-        return Vec::new();
+        return (Vec::new(), 0);
     }
+    let upright = |b: usize| axis.get(b).is_none_or(|&t| t == DVec3::Z);
+    let mut skipped = 0;
     let r = beam_radius_mm;
     let v = |p: DVec3| Vector::new(p.x, p.y, p.z);
     // The steps' beams as boxes, indexed by their place in the order.
@@ -264,6 +268,10 @@ pub fn blocked(joints: &[DVec3], beams: &[[usize; 2]], ordered: &Ordered, nozzle
         if !safe.is_finite() {
             continue;
         }
+        if !(upright(steps[i - 1].beam) && upright(steps[i].beam)) {
+            skipped += 1;
+            continue;
+        }
         let mut hit = false;
         for at in [joints[steps[i - 1].to], joints[steps[i].from]] {
             // Above the body's reach at the joint, up to the safe height.
@@ -281,5 +289,5 @@ pub fn blocked(joints: &[DVec3], beams: &[[usize; 2]], ordered: &Ordered, nozzle
             out.push(i);
         }
     }
-    out
+    (out, skipped)
 }

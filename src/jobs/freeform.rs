@@ -841,8 +841,11 @@ fn order_stage(j: &FreeformJob, ctx: &mut Ctx, w: &Out<Placed>, c: &Out<Constrai
             .metric("deadhead_plan", "Deadhead in the plan's order", ordered.plan_order_deadhead_s, "s", "The same moves in the order the planner fixed them, before ordering.")
             .metric("print", "Printing time", print_s, "s", "Extruding along every beam at the beam speed, plus the dwells.");
         // Lifts and descents through printed beams higher than the nozzle body reaches.
-        let blocked = deadhead::blocked(&w.joints, &w.beams, &ordered, nozzle.radius_mm, nozzle.top(), o.beam_radius_mm);
+        let (blocked, tilted) = deadhead::blocked(&w.joints, &w.beams, &c.axis, &ordered, nozzle.radius_mm, nozzle.top(), o.beam_radius_mm);
         report = report.metric("blocked", "Deadheads through printed beams", blocked.len() as f64, "", "Lifts or descents whose nozzle column above the joint meets a printed beam higher than the nozzle body: make the body's height the whole head's, so those beams become precedences.");
+        if tilted > 0 {
+            report = report.metric("unchecked", "Deadheads not checked (tilted)", tilted as f64, "", "Deadheads next to a beam printed with the nozzle tilted: the check above is for an upright nozzle.");
+        }
         if !blocked.is_empty() {
             report.label = format!("Ordering deadheads: {} pass through printed beams (first at step {})", blocked.len(), blocked[0] + 1);
             report.data["blocked_steps"] = serde_json::json!(blocked.iter().take(50).collect::<Vec<_>>());

@@ -567,10 +567,13 @@ fn a_descent_under_a_printed_roof_is_flagged_and_one_in_the_open_is_not() {
     let n = Nozzle::default();
     let safe = 45.0 + 1.5 + 1.0;
     let under = Ordered { steps: vec![step(0, 1, 2), step(1, 2, 3), step(2, 0, 4)], safe_z: vec![f64::NAN, safe, safe], deadhead_s: 0.0, plan_order_deadhead_s: 0.0 };
-    assert_eq!(deadhead::blocked(&joints, &beams, &under, n.radius_mm, n.top(), 1.5), vec![2]);
+    assert_eq!(deadhead::blocked(&joints, &beams, &[], &under, n.radius_mm, n.top(), 1.5), (vec![2], 0));
     // The same post printed first, or a post away from the roof: clear.
     let first = Ordered { steps: vec![step(2, 0, 4), step(0, 1, 2), step(1, 2, 3)], safe_z: vec![f64::NAN, 5.0 + 2.5, safe], deadhead_s: 0.0, plan_order_deadhead_s: 0.0 };
-    assert!(deadhead::blocked(&joints, &beams, &first, n.radius_mm, n.top(), 1.5).is_empty());
+    assert!(deadhead::blocked(&joints, &beams, &[], &first, n.radius_mm, n.top(), 1.5).0.is_empty());
     let away = Ordered { steps: vec![step(0, 1, 2), step(1, 2, 3), step(3, 5, 6)], safe_z: vec![f64::NAN, safe, safe], deadhead_s: 0.0, plan_order_deadhead_s: 0.0 };
-    assert!(deadhead::blocked(&joints, &beams, &away, n.radius_mm, n.top(), 1.5).is_empty());
+    assert!(deadhead::blocked(&joints, &beams, &[], &away, n.radius_mm, n.top(), 1.5).0.is_empty());
+    // A tilted beam's deadheads are skipped (the column is for an upright nozzle).
+    let tilted = vec![DVec3::Z, DVec3::Z, DVec3::new(0.5, 0.0, 0.75f64.sqrt()), DVec3::Z];
+    assert_eq!(deadhead::blocked(&joints, &beams, &tilted, &under, n.radius_mm, n.top(), 1.5), (vec![], 1));
 }

@@ -429,7 +429,11 @@ impl Kind for FreeformKind {
         // largest limit, 10⁷ states, is under 10 minutes.
         let per_state = 4e-5 * (m / 30.0).powi(2).max(0.05);
         let typical = states.min(2f64.powf(m / 2.0));
-        let optimum = Estimate::new("optimum").quantity("states", "States at most", states, "").cost(states * 24.0, typical * per_state).budgets("lower the exact search's states, or switch it off");
+        // Memory: the remembered states, and the frame's compliance on every level of the
+        // search's path (its capacity doubles from 16 joints).
+        let cap = if searched { (m + 1.0).max(16.0).log2().ceil().exp2() } else { 0.0 };
+        let path_bytes = if searched { m * (6.0 * cap).powi(2) * 8.0 } else { 0.0 };
+        let optimum = Estimate::new("optimum").quantity("states", "States at most", states, "").cost(states * 24.0 + path_bytes, typical * per_state).budgets("lower the exact search's states, or switch it off");
         let order = Estimate::new("order").quantity("beams", "Beams", m, "").cost(m * 200.0, m * 2e-5);
         let costs = Estimate::new("costs")
             .quantity("beams", "Beams", if j.planner.compare { m } else { 0.0 }, "")
@@ -459,7 +463,7 @@ impl Kind for FreeformKind {
                 let c = constraints_stage(j, ctx, &w)?;
                 let p = chosen_plan(j, ctx, &w, &c)?;
                 let o = order_stage(j, ctx, &w, &c, &p)?;
-                Ok(sequence_view(&w, &o, index))
+                Ok(sequence_view(&w, &o, &c, index))
             }
             _ => Err(Error::UnknownView { view: view.into(), job: Self::NAME }),
         }
@@ -1020,7 +1024,7 @@ fn toolpath(j: &FreeformJob, w: &Placed, o: &Ordered, c: &Constraints) -> Toolpa
 
 /// The wireframe after step `index`: printed beams, the current one, the cantilevered ones
 /// (a printed beam with a joint not yet held by two disjoint paths to the ground), the rest.
-fn sequence_view(w: &Placed, o: &Ordered, index: usize) -> Inspection {
+fn sequence_view(w: &Placed, o: &Ordered, c: &Constraints, index: usize) -> Inspection {
     let count = o.steps.len();
     let index = index.min(count.saturating_sub(1));
     let mut present = vec![false; w.beams.len()];
@@ -1051,7 +1055,14 @@ fn sequence_view(w: &Placed, o: &Ordered, index: usize) -> Inspection {
         data.extend_from_slice(&[a.x as f32, a.y as f32, a.z as f32, c.x as f32, c.y as f32, c.z as f32, f.code() as f32]);
     }
     let step = o.steps.get(index);
-    let caption = step.map(|s| format!("{} from {} to {}, ε {:.3} µm", names(w, &[s.beam]), w.joint_names.get(s.from).map_or("", String::as_str), w.joint_names.get(s.to).map_or("", String::as_str), s.cost_mm * 1000.0)).unwrap_or_default();
+    let tilt = |b: usize| c.axis.get(b).map_or(0.0, |t| libm::acos(t.z.clamp(-1.0, 1.0)).to_degrees());
+    let caption = step
+        .map(|s| {
+            let t = tilt(s.beam);
+            let tilted = if t > 1e-9 { format!(", nozzle tilted {t:.0}°") } else { String::new() };
+            format!("{} from {} to {}, ε {:.3} µm{tilted}", names(w, &[s.beam]), w.joint_names.get(s.from).map_or("", String::as_str), w.joint_names.get(s.to).map_or("", String::as_str), s.cost_mm * 1000.0)
+        })
+        .unwrap_or_default();
     let meta = serde_json::json!({
         "caption": caption,
         "play": true,

@@ -211,6 +211,11 @@ fn a_tilting_head_prints_the_truss_a_3_axis_printer_cannot() {
     assert!(metric("tilted") > 1000.0 && metric("pairs") * 4.0 < metric("vertical_pairs"), "{} tilted, {} of {} precedences", metric("tilted"), metric("pairs"), metric("vertical_pairs"));
     // Tilted beams are written with their rotary words (a head-head B C machine).
     assert!(out.gcode.lines().any(|l| l.starts_with("G1 ") && l.contains(" B30")), "no B30 in the G-code");
+    // The sequence view names a tilted step's tilt.
+    let mut cache = pipeline::Cache::new();
+    let reg = weft::jobs::Registry::builtin();
+    let captions: Vec<String> = (0..6).map(|i| pipeline::inspect(&reg, &mut cache, &d, &Files::new(), "sequence", i).unwrap().meta["caption"].as_str().unwrap_or("").to_string()).collect();
+    assert!(captions.iter().any(|c| c.contains("nozzle tilted")), "{captions:?}");
     // The same nozzle on a 3-axis printer: the tilt is refused where it is set, and without
     // the tilt the design is refused with its cycle.
     let flat = d.with_overrides(&["printer.machine.kind=cartesian".to_string()]);

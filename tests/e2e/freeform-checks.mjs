@@ -18,6 +18,17 @@ import { downloadGcode, runExample, waitReady, waitResult } from "./page-helpers
 
 const EXAMPLE = "freeform-tower.json";
 
+/** Screenshots `selector`, centred, at desktop and phone sizes: `<base>-desktop.png`, `<base>-phone.png`. */
+async function shots(page, selector, base) {
+  for (const [w, h, name] of [[1280, 800, "desktop"], [390, 844, "phone"]]) {
+    await page.setViewportSize({ width: w, height: h });
+    await page.waitForTimeout(300);
+    await page.evaluate((sel) => document.querySelector(sel)?.scrollIntoView({ block: "center" }), selector);
+    await page.screenshot({ path: `${base}-${name}.png` });
+  }
+  await page.setViewportSize({ width: 1400, height: 900 });
+}
+
 /**
  * @param {{baseUrl: string, weftBin?: string, check: Function, newPage: Function, outDir: string,
  *          first: number, timeoutMs?: number}} opts
@@ -139,14 +150,7 @@ export async function freeformChecks({ baseUrl, weftBin = process.env.WEFT_BIN, 
         execFileSync(weftBin, ["run", join(process.cwd(), "examples", "freeform-dome-exact.json"), "--out", cli, "-q"]);
         if (readFileSync(cli, "utf8") !== text) throw new Error("the page's G-code differs from the CLI's");
       }
-      await page.evaluate(() => document.querySelector('#report .stage-card[data-stage="optimum"]')?.scrollIntoView({ block: "center" }));
-      for (const [w, h, name] of [[1280, 800, "freeform-exact-desktop.png"], [390, 844, "freeform-exact-phone.png"]]) {
-        await page.setViewportSize({ width: w, height: h });
-        await page.waitForTimeout(300);
-        await page.evaluate(() => document.querySelector('#report .stage-card[data-stage="optimum"]')?.scrollIntoView({ block: "center" }));
-        await page.screenshot({ path: join(outDir, name) });
-      }
-      await page.setViewportSize({ width: 1400, height: 900 });
+      await shots(page, '#report .stage-card[data-stage="optimum"]', join(outDir, "freeform-exact"));
       return `optimum ${best.toFixed(1)} µm proven, heuristic planner ${planner.toFixed(1)} µm (gap ${metric("optimum", "gap").toFixed(1)} %)`;
     });
 
@@ -166,14 +170,7 @@ export async function freeformChecks({ baseUrl, weftBin = process.env.WEFT_BIN, 
       if (!(bands >= 3) || !(joinCost >= 0)) throw new Error(`${bands} bands, joins ${joinCost} µm`);
       const plots = await page.evaluate(() => [...document.querySelectorAll('#report .stage-card[data-stage="costs"] [data-plot-key]')].map((p) => p.dataset.plotKey));
       if (!plots.includes("bands")) throw new Error(`costs card plots ${plots}`);
-      await page.evaluate(() => document.querySelector('#report .stage-card[data-stage="costs"] [data-plot-key="bands"]')?.scrollIntoView({ block: "center" }));
-      for (const [w, h, name] of [[1280, 800, "freeform-bands-desktop.png"], [390, 844, "freeform-bands-phone.png"]]) {
-        await page.setViewportSize({ width: w, height: h });
-        await page.waitForTimeout(300);
-        await page.evaluate(() => document.querySelector('#report .stage-card[data-stage="costs"] [data-plot-key="bands"]')?.scrollIntoView({ block: "center" }));
-        await page.screenshot({ path: join(outDir, name) });
-      }
-      await page.setViewportSize({ width: 1400, height: 900 });
+      await shots(page, '#report .stage-card[data-stage="costs"] [data-plot-key="bands"]', join(outDir, "freeform-bands"));
       return `truss: ${tilted} of 2197 beams tilted; tower: ${bands} bands, joins cost up to ${joinCost.toFixed(3)} µm`;
     });
   } finally {

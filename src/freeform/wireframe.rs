@@ -17,7 +17,8 @@
 //! Checked, every problem listed with its place: coordinates that are not finite, beams that
 //! name a joint the file lacks, zero-length beams, beams given twice, no grounded joint, and
 //! beams not connected to any grounded joint (a part that could not be reached from the
-//! substrate). Size is bounded before parsing ([`MAX_BYTES`]) and after ([`MAX_BEAMS`]).
+//! substrate). Size is bounded before parsing ([`MAX_BYTES`], and [`MAX_BEAMS`] by a count
+//! of the beams the text states) and after ([`MAX_BEAMS`]).
 
 use crate::geom::DVec3;
 use serde::{Deserialize, Serialize};
@@ -145,6 +146,11 @@ pub fn read(name: &str, bytes: &[u8], options: &Options) -> Result<Wireframe, Er
     let not_read = |place: &str, message: String| Error::NotRead { file: name.into(), place: place.into(), message };
     let text = std::str::from_utf8(bytes).map_err(|e| not_read(&format!("byte {}", e.valid_up_to()), "the file is not text (UTF-8); export the design as JSON, OBJ or CSV".into()))?;
     let lower = name.to_ascii_lowercase();
+    // A cheap count first, so a design far over the limit is refused before it is parsed.
+    let counted = beams_counted(text, &lower);
+    if counted > MAX_BEAMS + 1 {
+        return Err(Error::TooManyBeams { file: name.into(), beams: counted });
+    }
     let raw = if lower.ends_with(".obj") {
         obj(text).map_err(|(line, m)| not_read(&format!("line {line}"), m))?
     } else if lower.ends_with(".csv") || lower.ends_with(".txt") {
@@ -274,6 +280,19 @@ fn json_beams(raw: &mut Raw, elements: &[Value], by_id: &std::collections::BTree
         }
     }
     Ok(())
+}
+
+/// The beams a file states, counted without parsing: CSV lines (a header line left out) that are not comments, OBJ `l` segments, JSON elements' end pairs.
+fn beams_counted(text: &str, lower: &str) -> usize {
+    if lower.ends_with(".obj") {
+        text.lines().filter_map(|l| l.trim_start().strip_prefix("l ")).map(|rest| rest.split_whitespace().count().saturating_sub(1)).sum()
+    } else if lower.ends_with(".csv") || lower.ends_with(".txt") {
+        let mut lines = text.lines().filter(|l| !l.trim().is_empty() && !l.trim_start().starts_with('#')).peekable();
+        let header = lines.peek().is_some_and(|l| l.chars().any(|c| c.is_ascii_alphabetic() && c != 'e' && c != 'E'));
+        lines.count() - usize::from(header)
+    } else {
+        text.matches("end_node_ids").count() + text.matches("end_node_inds").count()
+    }
 }
 
 /// The numbers of a line (commas, semicolons, tabs or spaces between them).

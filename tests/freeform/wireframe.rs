@@ -159,3 +159,17 @@ fn mutated_wireframes_never_panic() {
     }
     assert!(accepted > 100, "only {accepted} mutated designs were read: the mutations are too harsh to reach the planner");
 }
+
+#[test]
+fn a_design_far_over_the_beam_limit_is_refused_before_it_is_parsed() {
+    // 600 000 beams of CSV: refused by counting its lines, naming the count.
+    let mut text = String::from("x1,y1,z1,x2,y2,z2\n");
+    for i in 0..600_000 {
+        text.push_str(&format!("{},{},0,{},{},5\n", i % 700, i / 700, i % 700, i / 700));
+    }
+    let e = weft::freeform::wireframe::read("huge.csv", text.as_bytes(), &weft::freeform::wireframe::Options::default()).unwrap_err().to_string();
+    assert!(e.contains("600000 beams is more than 200000"), "{e}");
+    let obj = format!("v 0 0 0\nv 0 0 1\n{}", "l 1 2\n".repeat(200_001));
+    let e = weft::freeform::wireframe::read("huge.obj", obj.as_bytes(), &weft::freeform::wireframe::Options::default()).unwrap_err().to_string();
+    assert!(e.contains("200001 beams"), "{e}");
+}

@@ -7,20 +7,10 @@ use weft::design::{Design, Input};
 use weft::foam::models::prisms;
 use weft::foam::{Process, Weighting};
 use weft::geom::{DVec2, Mesh};
-use weft::pipeline::{self, Files, RunOptions};
+use weft::pipeline::Files;
 
-fn root() -> std::path::PathBuf {
-    std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
-
-fn example(name: &str) -> Design {
-    let text = std::fs::read_to_string(root().join(format!("examples/{name}.json"))).unwrap();
-    Design::from_json(name, &text).unwrap()
-}
-
-fn run(design: &Design, files: &Files) -> Result<pipeline::RunOutput, String> {
-    pipeline::run(design, files, &RunOptions { collect_preview: true }, &mut |_, _| {}).map_err(|e| e.to_string())
-}
+mod common;
+use common::{example, run};
 
 /// The process of a design with its feed C.
 fn process(d: &Design) -> Process {

@@ -104,12 +104,8 @@ pub fn order(joints: &[DVec3], plan: &Plan, constraints: &Constraints, o: &Optio
         waiting[i] += constraints.preds(plan.steps[i].beam).iter().filter(|&&p| step_of_beam[p as usize] != usize::MAX).count();
     }
     // Bands (a plan made band by band): a band's steps wait for every step of the bands before.
-    let mut band_of = vec![0usize; n];
-    for (k, &start) in plan.bands.iter().enumerate() {
-        for b in &mut band_of[start.min(n)..] {
-            *b = k;
-        }
-    }
+    // (bands[k] is band k's first step: a step's band is the last start at or before it.)
+    let band_of: Vec<usize> = (0..n).map(|i| plan.bands.partition_point(|&s| s <= i).saturating_sub(1)).collect();
     let bands = band_of.last().map_or(1, |&k| k + 1);
     let mut band_left = vec![0usize; bands];
     for &k in &band_of {

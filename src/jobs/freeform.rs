@@ -875,7 +875,7 @@ fn costs_stage(j: &FreeformJob, ctx: &mut Ctx, w: &Out<Placed>, p: &Out<Plan>, o
         if !p.bands.is_empty() {
             // The plan's own order, measured with the whole frame, against what each band saw.
             let (whole, _) = cost::costs_within(&w.joints, &w.beams, &w.grounded, &p.steps, &s, load, budget);
-            joins_report(&mut report, p, &whole);
+            report = joins_report(report, p, &whole);
         }
         Ok((c.clone(), Some(report)))
     })
@@ -884,7 +884,7 @@ fn costs_stage(j: &FreeformJob, ctx: &mut Ctx, w: &Out<Placed>, p: &Out<Plan>, o
 /// The cost of planning in bands: in each band, in the plan's order, the largest ε its plan
 /// saw (the bands below rigid) against the largest measured with the whole frame (`whole`,
 /// NaN past the budget), and the largest growth of one step's ε.
-fn joins_report(r: &mut StageReport, p: &Plan, whole: &[Costs]) {
+fn joins_report(r: StageReport, p: &Plan, whole: &[Costs]) -> StageReport {
     let n = p.steps.len();
     let (mut planned, mut measured) = (Vec::new(), Vec::new());
     for (k, &start) in p.bands.iter().enumerate() {
@@ -897,7 +897,7 @@ fn joins_report(r: &mut StageReport, p: &Plan, whole: &[Costs]) {
     let worst_planned = planned.iter().copied().fold(0.0, f64::max);
     let worst = measured.iter().copied().fold(0.0, f64::max);
     let x: Vec<f64> = (1..=planned.len()).map(|i| i as f64).collect();
-    *r = std::mem::replace(r, StageReport::new("costs", "", &serde_json::Value::Null))
+    let mut r = r
         .metric("band_planned", "Largest ε planned in bands", worst_planned, "µm", "The largest ε the bands' plans saw, each with the bands below rigid.")
         .metric("band_join", "Cost of the joins", join, "µm", "The most one step's ε grows when the bands below deflect too (the plan's order measured with the whole frame).")
         .metric("band_measured", "Largest ε measured", worst, "µm", "The largest ε of the joined sequence with the whole frame.");
@@ -910,6 +910,7 @@ fn joins_report(r: &mut StageReport, p: &Plan, whole: &[Costs]) {
         group: None,
         series: vec![Series::xy("planned", x.clone(), planned), Series::xy("measured", x, measured)],
     });
+    r
 }
 
 /// ε over the sequence as planned (no comparison asked).

@@ -13,3 +13,19 @@ pub const PLANAR_LATTICES: &[&str] = &[
     "ball-burst-disc-48mm",
     "concave-cylinder-honeycomb",
 ];
+
+/// The repository's root.
+pub fn root() -> std::path::PathBuf {
+    std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// A shipped example design, `examples/<name>.json`.
+pub fn example(name: &str) -> weft::design::Design {
+    let text = std::fs::read_to_string(root().join(format!("examples/{name}.json"))).unwrap();
+    weft::design::Design::from_json(name, &text).unwrap()
+}
+
+/// Runs a design through the pipeline with its preview; the error in words.
+pub fn run(design: &weft::design::Design, files: &weft::pipeline::Files) -> Result<weft::pipeline::RunOutput, String> {
+    weft::pipeline::run(design, files, &weft::pipeline::RunOptions { collect_preview: true }, &mut |_, _| {}).map_err(|e| e.to_string())
+}

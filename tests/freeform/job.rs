@@ -7,20 +7,9 @@
 
 use weft::design::{Design, Input};
 use weft::geom::DVec3;
-use weft::pipeline::{self, Files, RunOptions};
+use weft::pipeline::{self, Files};
 
-fn root() -> std::path::PathBuf {
-    std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
-
-fn example(name: &str) -> Design {
-    let text = std::fs::read_to_string(root().join(format!("examples/{name}.json"))).unwrap();
-    Design::from_json(name, &text).unwrap()
-}
-
-fn run(design: &Design, files: &Files) -> Result<pipeline::RunOutput, String> {
-    pipeline::run(design, files, &RunOptions { collect_preview: true }, &mut |_, _| {}).map_err(|e| e.to_string())
-}
+use crate::common::{example, root, run};
 
 /// Reads a run back: each extruding segment matched to a beam of the placed design.
 fn read_back(name: &str, d: &Design) {

@@ -3,6 +3,8 @@
 //! an independent checker ([`plan`]), the exact search over every order against a brute force
 //! and the planner ([`optimal`]), the job end to end read back by the analyzer ([`job`]).
 
+#[path = "../common/mod.rs"]
+mod common;
 mod job;
 mod optimal;
 mod plan;

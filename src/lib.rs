@@ -32,6 +32,7 @@ pub mod lattice;
 pub mod machine;
 pub mod motion;
 pub mod nonplanar;
+pub mod par;
 pub mod paths;
 pub mod slice;
 pub mod source;

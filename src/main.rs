@@ -54,6 +54,15 @@ enum Command {
         /// generic-220, prusa-mk4, ender-3, bioprinter-pneumatic.
         #[arg(long, value_name = "ID")]
         printer: Option<String>,
+        /// Threads to compute on (default: every core). 1 computes on one thread, as the
+        /// browser's worker does; the G-code is the same bytes at any count.
+        #[arg(long, value_name = "N")]
+        threads: Option<usize>,
+        /// Write the G-code a job sends ahead while it runs here, as soon as it is sent: a
+        /// freeform plan's first beams, which a printer can start on while planning goes on
+        /// (the final file's moves begin with them). A folder: <design name>.ahead.gcode in it.
+        #[arg(long, value_name = "FILE")]
+        ahead: Option<PathBuf>,
         /// No progress on stderr.
         #[arg(long, short)]
         quiet: bool,
@@ -358,10 +367,20 @@ fn cmd_inspect(design: &str, view: &str, index: usize, inputs: &[String], set: &
     Ok(())
 }
 
+/// Sizes the pool the parallel loops run on ([`weft::par`]): `n` threads, or every core.
+fn use_threads(n: Option<usize>) -> Result<(), String> {
+    match n {
+        Some(0) => Err("--threads 0: give at least 1 (or leave it out for every core)".into()),
+        Some(n) if n > 1024 => Err(format!("--threads {n}: at most 1024")),
+        _ => rayon::ThreadPoolBuilder::new().num_threads(n.unwrap_or(0)).build_global().map_err(|e| format!("--threads: {e}")),
+    }
+}
+
 fn cmd_run(
     design: &str,
     out: Option<PathBuf>,
     report: Option<PathBuf>,
+    ahead: Option<PathBuf>,
     inputs: &[String],
     set: &[String],
     printer: Option<&str>,
@@ -408,11 +427,30 @@ fn cmd_run(
             last = (stage.to_string(), pct);
         }
     };
-    let result = pipeline::run_in(&registry, &mut cache, &design, &files, &RunOptions::default(), &mut progress);
+    let started = std::time::Instant::now();
+    let ahead_path = ahead.map(|p| output_path(Some(&p), &design.name, &format!("ahead.{}", design.printer.flavor.file_extension())));
+    let ahead_failed = std::cell::RefCell::new(None);
+    let send = |a: &pipeline::Ahead| {
+        let written = ahead_path.as_ref().map(|p| write(p, a.gcode.as_bytes()).map(|_| p));
+        if !quiet {
+            let to = match &written {
+                Some(Ok(p)) => format!(" → {}", p.display()),
+                _ => " (--ahead FILE writes it)".into(),
+            };
+            errln!("\r{}: sent ahead {} ({} of G-code) at {:.2} s{to}", a.stage, a.label, weft::budget::human(a.gcode.len() as f64, "bytes"), started.elapsed().as_secs_f64());
+        }
+        if let Some(Err(e)) = written {
+            *ahead_failed.borrow_mut() = Some(e);
+        }
+    };
+    let result = pipeline::run_sending(&registry, &mut cache, &design, &files, &RunOptions::default(), &mut progress, &send);
     if show {
         err!("\r                \r");
     }
     let output = result.map_err(|e| e.to_string())?;
+    if let Some(e) = ahead_failed.into_inner() {
+        return Err(format!("--ahead: {e}"));
+    }
     let out = output_path(out.as_deref(), &design.name, design.printer.flavor.file_extension());
     write(&out, output.gcode.as_bytes())?;
     if let Some(path) = report {
@@ -431,17 +469,28 @@ fn cmd_run(
             a.retractions,
             hms(a.estimated_time_s)
         );
+        errln!("{}", where_the_time_went(&output.report));
     }
     Ok(())
 }
 
-/// `weft bench --design FILE…`: each design timed stage by stage.
+/// One line: each stage's wall time, the slowest first, and the threads used.
+fn where_the_time_went(r: &weft::pipeline::RunReport) -> String {
+    let mut t: Vec<&weft::pipeline::StageTime> = r.timings.iter().filter(|t| !t.cached && t.ms >= 0.5).collect();
+    t.sort_by(|a, b| b.ms.total_cmp(&a.ms));
+    let parts: Vec<String> = t.iter().map(|t| format!("{} {}", t.stage, weft::budget::human(t.ms / 1000.0, "s"))).collect();
+    let threads = if r.threads == 1 { "1 thread".to_string() } else { format!("{} threads", r.threads) };
+    format!("time: {} ({threads})", if parts.is_empty() { "nothing measurable".into() } else { parts.join(", ") })
+}
+
+/// `weft bench --design FILE…`: each design timed stage by stage, at 1 thread and at every
+/// core (the G-code is the same bytes).
 fn design_bench(paths: &[String]) -> Result<(), String> {
     let mut rows = Vec::new();
     for p in paths {
-        rows.push(load_design(p).and_then(|d| weft::bench::designs::time_design(&d, 3))?);
+        rows.push(load_design(p).and_then(|d| weft::bench::designs::time_design_threads(&d, 3))?);
     }
-    outln!("{}", weft::bench::designs::table(&rows));
+    outln!("{}", weft::bench::designs::threads_table(&rows, rayon::current_num_threads()));
     Ok(())
 }
 
@@ -576,8 +625,12 @@ fn scaling_bench() -> Result<(), String> {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
-        Command::Run { design, out, report, input, set, printer, quiet, dry_run } => {
-            cmd_run(&design, out, report, &input, &set, printer.as_deref(), quiet, dry_run)
+        Command::Run { design, out, report, input, set, printer, threads, ahead, quiet, dry_run } => {
+            if let Err(e) = use_threads(threads) {
+                errln!("weft: error: {e}");
+                return ExitCode::from(2);
+            }
+            cmd_run(&design, out, report, ahead, &input, &set, printer.as_deref(), quiet, dry_run)
         }
         Command::Analyze { file, json } => cmd_analyze(&file, json),
         Command::New => {

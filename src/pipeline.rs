@@ -242,6 +242,9 @@ struct Entry {
     key: Key,
     value: Arc<dyn Any + Send + Sync>,
     report: Option<StageReport>,
+    /// Wall time it took, ms, while no run has counted it yet (an import the estimate made
+    /// before the run that reads it): the run's timings count it once.
+    uncounted_ms: Option<f64>,
 }
 
 /// Stage outputs kept between runs: the newest output of each stage (by cache id), with the
@@ -291,6 +294,57 @@ impl<T> std::ops::Deref for Out<T> {
     }
 }
 
+/// G-code a stage sends ahead while the run goes on: the beginning of the run's G-code, fixed
+/// already (a freeform plan's first beams), so a printer could start on it. Its moves are the
+/// first moves of the final file; its header counts only them and it has no end code.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Ahead {
+    /// The stage sending it.
+    pub stage: String,
+    /// What it is, in words ("the first 200 of 6 120 beams").
+    pub label: String,
+    /// Items (beams, paths) it holds, of `total`.
+    pub done: usize,
+    /// Items in the whole run.
+    pub total: usize,
+    /// The G-code.
+    pub gcode: String,
+}
+
+fn send_nowhere(_: &Ahead) {}
+
+/// A job's handle for sending G-code ahead ([`Ahead`]): copied out of the [`Ctx`] so a stage
+/// can send while it runs.
+#[derive(Clone, Copy)]
+pub struct Sender<'a> {
+    design: &'a Design,
+    to: &'a dyn Fn(&Ahead),
+}
+
+impl Sender<'_> {
+    /// Writes `toolpath` (the first `done` of `total` items of the run's final toolpath) with
+    /// the design's printer and sends its moves. A toolpath the writer refuses is not sent: the
+    /// run's own writer will say why.
+    pub fn send(&self, stage: &str, label: &str, done: usize, total: usize, toolpath: &Toolpath) {
+        let Ok(g) = gcode::write_gcode(toolpath, &writer_options(self.design)) else { return };
+        let mut text = g.text;
+        text.truncate(g.moves_end);
+        text.push_str(&format!("; weft: {label}; the plan goes on, and the final file's moves begin with these\n"));
+        (self.to)(&Ahead { stage: stage.into(), label: label.into(), done, total, gcode: text });
+    }
+}
+
+/// Wall time of one stage in a run (the run report's "where the time went").
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct StageTime {
+    /// Stage name.
+    pub stage: String,
+    /// Wall time on this machine, ms (0 when reused from the cache).
+    pub ms: f64,
+    /// Reused from the cache.
+    pub cached: bool,
+}
+
 /// What a job kind's run sees: the design, the files, progress, the stage cache and the
 /// reports so far.
 pub struct Ctx<'a> {
@@ -300,8 +354,13 @@ pub struct Ctx<'a> {
     pub files: &'a Files,
     cache: &'a mut Cache,
     progress: &'a mut dyn FnMut(&str, f32),
+    ahead: &'a dyn Fn(&Ahead),
     /// Stage reports, in run order.
     pub reports: Vec<StageReport>,
+    /// Wall time of each stage run, in run order (a stage met twice: summed).
+    pub timings: Vec<StageTime>,
+    /// A run counts its stages' time; an estimate leaves what it made to be counted by the run.
+    counting: bool,
     /// Cache ids whose report is in `reports` (a stage reached twice in one run, e.g. an
     /// import by the estimate and then by the run, reports once).
     reported: Vec<String>,
@@ -310,7 +369,22 @@ pub struct Ctx<'a> {
 impl<'a> Ctx<'a> {
     /// A context over `design` and `files` with `cache`.
     pub fn new(design: &'a Design, files: &'a Files, cache: &'a mut Cache, progress: &'a mut dyn FnMut(&str, f32)) -> Ctx<'a> {
-        Ctx { design, files, cache, progress, reports: Vec::new(), reported: Vec::new() }
+        Ctx { design, files, cache, progress, ahead: &send_nowhere, reports: Vec::new(), timings: Vec::new(), counting: false, reported: Vec::new() }
+    }
+
+    fn time(&mut self, stage: &str, ms: f64, cached: bool) {
+        match self.timings.iter_mut().find(|t| t.stage == stage) {
+            Some(t) => {
+                t.ms += ms;
+                t.cached &= cached;
+            }
+            None => self.timings.push(StageTime { stage: stage.into(), ms, cached }),
+        }
+    }
+
+    /// Where a stage's output sent ahead goes (see [`Sender`]); it can be kept while stages run.
+    pub fn sender(&self) -> Sender<'a> {
+        Sender { design: self.design, to: self.ahead }
     }
 
     /// Runs stage `name` (cache id `id`, usually the name) unless the cache holds its output
@@ -345,9 +419,12 @@ impl<'a> Ctx<'a> {
         F: FnOnce(&mut dyn FnMut(f32)) -> Result<(T, Option<StageReport>), Error>,
     {
         let key = Key::of(id, &parts, upstream);
-        if let Some(e) = self.cache.entries.get(id) {
+        if let Some(e) = self.cache.entries.get_mut(id) {
             if e.key == key {
                 if let Ok(value) = e.value.clone().downcast::<T>() {
+                    if let Some(ms) = e.uncounted_ms.take() {
+                        self.timings.push(StageTime { stage: name.into(), ms, cached: false });
+                    }
                     if let Some(mut r) = e.report.clone() {
                         if !self.reported.iter().any(|i| i == id) {
                             r.cached = true;
@@ -356,6 +433,7 @@ impl<'a> Ctx<'a> {
                         }
                     }
                     (self.progress)(name, 1.0);
+                    self.time(name, 0.0, true);
                     return Ok(Out { value, key });
                 }
             }
@@ -363,8 +441,11 @@ impl<'a> Ctx<'a> {
         // Free the stale output first: peak memory is then one copy, not two.
         self.cache.entries.remove(id);
         (self.progress)(name, 0.0);
+        let started = crate::clock::now_s();
         let progress = &mut *self.progress;
         let (value, report) = f(&mut |x| progress(name, x))?;
+        let ms = (crate::clock::now_s() - started) * 1000.0;
+        self.time(name, ms, false);
         (self.progress)(name, 1.0);
         let value = Arc::new(value);
         if let Some(r) = &report {
@@ -372,7 +453,7 @@ impl<'a> Ctx<'a> {
             self.reported.push(id.to_string());
         }
         if self.cache.enabled || keep {
-            self.cache.entries.insert(id.to_string(), Entry { key, value: value.clone(), report });
+            self.cache.entries.insert(id.to_string(), Entry { key, value: value.clone(), report, uncounted_ms: (!self.counting).then_some(ms) });
         }
         Ok(Out { value, key })
     }
@@ -506,7 +587,7 @@ impl<'a> Ctx<'a> {
         }
         let v = f()?;
         if self.cache.enabled {
-            self.cache.entries.insert(id.to_string(), Entry { key, value: Arc::new(v.clone()), report: None });
+            self.cache.entries.insert(id.to_string(), Entry { key, value: Arc::new(v.clone()), report: None, uncounted_ms: None });
         }
         Ok(v)
     }
@@ -622,6 +703,10 @@ pub struct RunReport {
     pub gcode: GcodeStats,
     /// The analyzer's reading of the written G-code.
     pub analysis: analyze::Report,
+    /// Threads the run computed on (1 in the browser's worker; `weft run --threads`).
+    pub threads: usize,
+    /// Each stage's wall time, in run order.
+    pub timings: Vec<StageTime>,
 }
 
 impl RunReport {
@@ -782,10 +867,25 @@ pub fn run_in(
     options: &RunOptions,
     progress: &mut dyn FnMut(&str, f32),
 ) -> Result<RunOutput, Error> {
+    run_sending(registry, cache, design, files, options, progress, &send_nowhere)
+}
+
+/// [`run_in`], with `ahead` receiving the G-code stages send ahead ([`Ahead`]) while it runs.
+pub fn run_sending(
+    registry: &Registry,
+    cache: &mut Cache,
+    design: &Design,
+    files: &Files,
+    options: &RunOptions,
+    progress: &mut dyn FnMut(&str, f32),
+    ahead: &dyn Fn(&Ahead),
+) -> Result<RunOutput, Error> {
     let kind = registry
         .get(design.job.kind())
         .ok_or_else(|| Error::UnknownKind { kind: design.job.kind().into(), known: registry.names().join(", ") })?;
     let mut ctx = Ctx::new(design, files, cache, progress);
+    ctx.ahead = ahead;
+    ctx.counting = true;
     let plan = plan(kind, &mut ctx)?;
     if let Some((stage, source)) = plan.refused {
         return Err(Error::TooBig { stage, source });
@@ -804,6 +904,8 @@ pub fn run_in(
         stages: reports,
         gcode: stats,
         analysis: analysed.report.clone(),
+        threads: crate::par::threads(),
+        timings: std::mem::take(&mut ctx.timings),
     };
     Ok(RunOutput { gcode: written.text.clone(), report, preview: analysed.preview.clone() })
 }

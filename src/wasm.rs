@@ -325,13 +325,22 @@ impl Session {
         self.files.remove(name)
     }
 
-    /// Runs a design; `on_progress(stage, fraction)`; returns the run report (an object).
-    pub fn run(&mut self, design_json: &str, on_progress: &js_sys::Function) -> Result<JsValue, JsError> {
+    /// Runs a design; `on_progress(stage, fraction)`; `on_ahead({stage, label, done, total},
+    /// gcode)` gets the G-code a stage sends ahead while the run goes on (a `Uint8Array` the
+    /// caller owns, see [`pipeline::Ahead`]); returns the run report (an object).
+    pub fn run(&mut self, design_json: &str, on_progress: &js_sys::Function, on_ahead: Option<js_sys::Function>) -> Result<JsValue, JsError> {
         let design = Design::from_json("design", design_json).map_err(js_err)?;
         let mut progress = |stage: &str, f: f32| {
             let _ = on_progress.call2(&JsValue::NULL, &JsValue::from_str(stage), &JsValue::from_f64(f as f64));
         };
-        let out = pipeline::run_in(&self.registry, &mut self.cache, &design, &self.files, &RunOptions { collect_preview: true }, &mut progress)
+        let ahead = |a: &pipeline::Ahead| {
+            let Some(f) = &on_ahead else { return };
+            let info = serde_json::json!({ "stage": a.stage, "label": a.label, "done": a.done, "total": a.total });
+            if let Ok(info) = to_js(&info) {
+                let _ = f.call2(&JsValue::NULL, &info, &js_sys::Uint8Array::from(a.gcode.as_bytes()));
+            }
+        };
+        let out = pipeline::run_sending(&self.registry, &mut self.cache, &design, &self.files, &RunOptions { collect_preview: true }, &mut progress, &ahead)
             .map_err(js_err)?;
         self.gcode = out.gcode;
         self.preview = out.preview.unwrap_or_default();

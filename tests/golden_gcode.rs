@@ -1,5 +1,6 @@
 //! Every example (and variants that exercise each writer option) gives the G-code recorded in
-//! `tests/golden/gcode.sha256`: refactors of the core must not change a byte. When a change
+//! `tests/golden/gcode.sha256`, the same bytes at 1, 2 and 4 threads: refactors of the core
+//! must not change a byte. When a change
 //! is meant to alter output, regenerate the file with `WEFT_BLESS=1 cargo test --test golden_gcode`
 //! and say why in the commit.
 
@@ -72,8 +73,11 @@ const CASES: &[(&str, &str, &[&str])] = &[
     ("v-ijk", "barrel-omega2", &["printer.machine.axis_output=ijk"]),
 ];
 
+/// Threads each case runs at: the G-code must not depend on the count (`weft::par`).
+const THREADS: &[usize] = &[1, 2, 4];
+
 #[test]
-fn examples_give_the_recorded_gcode() {
+fn examples_give_the_recorded_gcode_at_any_thread_count() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let golden_path = root.join("tests/golden/gcode.sha256");
     let golden: BTreeMap<String, String> = std::fs::read_to_string(&golden_path)
@@ -84,18 +88,27 @@ fn examples_give_the_recorded_gcode() {
     let dir = std::env::temp_dir().join(format!("weft-golden-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let mut got = BTreeMap::new();
+    let mut differ = Vec::new();
     for (name, example, sets) in CASES {
-        let out = dir.join(format!("{name}.gcode"));
-        let mut cmd = Command::new(env!("CARGO_BIN_EXE_weft"));
-        cmd.arg("run").arg(root.join(format!("examples/{example}.json"))).arg("--out").arg(&out).arg("-q");
-        for s in *sets {
-            cmd.arg("--set").arg(s);
+        let mut hashes = Vec::new();
+        for &threads in THREADS {
+            let out = dir.join(format!("{name}-{threads}.gcode"));
+            let mut cmd = Command::new(env!("CARGO_BIN_EXE_weft"));
+            cmd.arg("run").arg(root.join(format!("examples/{example}.json"))).arg("--out").arg(&out).arg("-q").arg("--threads").arg(threads.to_string());
+            for s in *sets {
+                cmd.arg("--set").arg(s);
+            }
+            let status = cmd.output().unwrap();
+            assert!(status.status.success(), "{name}: {}", String::from_utf8_lossy(&status.stderr));
+            let hash = Sha256::digest(std::fs::read(&out).unwrap());
+            hashes.push(hash.iter().map(|b| format!("{b:02x}")).collect::<String>());
         }
-        let status = cmd.output().unwrap();
-        assert!(status.status.success(), "{name}: {}", String::from_utf8_lossy(&status.stderr));
-        let hash = Sha256::digest(std::fs::read(&out).unwrap());
-        got.insert(name.to_string(), hash.iter().map(|b| format!("{b:02x}")).collect::<String>());
+        if hashes.iter().any(|h| h != &hashes[0]) {
+            differ.push(format!("{name}: {}", THREADS.iter().zip(&hashes).map(|(t, h)| format!("{t} threads {}", &h[..12])).collect::<Vec<_>>().join(", ")));
+        }
+        got.insert(name.to_string(), hashes.swap_remove(0));
     }
+    assert!(differ.is_empty(), "G-code depends on the thread count: {differ:?}");
     let _ = std::fs::remove_dir_all(&dir);
     if std::env::var_os("WEFT_BLESS").is_some() {
         let text: String = got.iter().map(|(n, h)| format!("{h}  {n}.gcode\n")).collect();

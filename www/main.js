@@ -1532,12 +1532,12 @@ const workers = {
   },
 
   /** Sends a request; resolves with the worker's answer. Transfers `bytes` if present. */
-  request(msg, onProgress) {
+  request(msg, onProgress, onAhead) {
     if (!this.worker) this.start();
     const id = this.nextId++;
     msg.id = id;
     return new Promise((resolve, reject) => {
-      this.pending.set(id, { resolve, reject, type: msg.type, onProgress });
+      this.pending.set(id, { resolve, reject, type: msg.type, onProgress, onAhead });
       this.worker.postMessage(msg, msg.bytes ? [msg.bytes] : []);
     });
   },
@@ -1561,6 +1561,10 @@ const workers = {
     const p = this.pending.get(msg.id);
     if (msg.type === MSG.PROGRESS) {
       p?.onProgress?.(msg.stage, msg.fraction);
+      return;
+    }
+    if (msg.type === MSG.AHEAD) {
+      p?.onAhead?.(msg);
       return;
     }
     if (!p) {
@@ -1599,10 +1603,27 @@ const jobs = {
     clearTimeout(this.timer);
     this.timer = 0;
     $("progress").hidden = true;
+    this.ahead(null);
     document.body.classList.remove("busy");
   },
   endAll() {
     for (const t of [...this.active.keys()]) this.end(t);
+  },
+  /**
+   * G-code a stage sent ahead (protocol AheadMessage) → a download link beside the bar while
+   * the run goes on (null: remove it). The finished run's G-code replaces it.
+   */
+  ahead(msg, fileName) {
+    const link = $("progress-ahead");
+    if (link.href) URL.revokeObjectURL(link.href);
+    link.removeAttribute("href");
+    link.hidden = !msg;
+    if (!msg) return;
+    link.href = URL.createObjectURL(new Blob([msg.gcode], { type: "text/plain" }));
+    link.download = fileName;
+    link.textContent = `Start printing: ${msg.label} (${humanBytes(msg.gcode.byteLength)})`;
+    link.title = "G-code fixed already: the final file's moves begin with these, while the rest is planned";
+    $("progress").hidden = false;
   },
   /** stage progress → overall bar + "Slicing layers… 42%" label */
   progress(stage, fraction) {
@@ -1827,7 +1848,8 @@ async function runDesign({ confirmed = false, fromLink = false, auto = false, th
         { label: "Run anyway", run: () => runDesign({ confirmed: true, then }) });
       return;
     }
-    const res = await workers.request({ type: MSG.RUN, design: json }, (s, f) => jobs.progress(s, f));
+    const res = await workers.request({ type: MSG.RUN, design: json }, (s, f) => jobs.progress(s, f),
+      (a) => mine === latestRun && jobs.ahead(a, `${name}.ahead.${ext}`));
     if (mine === latestRun) {
       showResult(res, `${name}.${ext}`, json, files);
       then?.();
@@ -2004,7 +2026,20 @@ function renderStats(report, gcode, ms) {
   if (typeof ms === "number") rows.push(["Worker time", num(ms / 1000, 2), "s"]);
   const reused = (report?.stages ?? []).filter((s) => s.cached).length;
   if (reused) rows.push(["Stages reused", `${reused} of ${report.stages.length}`, ""]);
-  $("stats").replaceChildren(metricList(rows.map(([label, value, unit, hint]) => ({ label, value, unit, hint })), ""));
+  $("stats").replaceChildren(metricList(rows.map(([label, value, unit, hint]) => ({ label, value, unit, hint })), ""), timeLine(report));
+}
+
+/** "Where the time went": each stage's wall time in the worker, slowest first, and the threads. */
+function timeLine(report) {
+  const p = document.createElement("p");
+  p.className = "time-line";
+  const times = (report?.timings ?? []).filter((t) => !t.cached && t.ms >= 0.5).sort((a, b) => b.ms - a.ms);
+  const label = (name) => jobs.stages.find((s) => s.name === name)?.label ?? name;
+  const parts = times.map((t) => `${label(t.stage)} ${t.ms >= 1000 ? `${(t.ms / 1000).toFixed(2)} s` : `${Math.round(t.ms)} ms`}`);
+  const threads = report?.threads ?? 1;
+  p.textContent = `Where the time went: ${parts.length ? parts.join(" · ") : "nothing measurable (reused)"} — ${threads} thread${threads === 1 ? "" : "s"}`;
+  p.title = threads === 1 ? "This page computes in one worker thread; the weft CLI uses every core (weft run --threads N) and gives the same G-code." : "";
+  return p;
 }
 
 function download(data, name, type) {

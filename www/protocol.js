@@ -2,7 +2,7 @@
 //
 // Every request from the page carries an `id`; the worker answers each request with exactly
 // one `loaded` / `estimated` / `result` / `inspected` / `error` message bearing the same id (plus any number
-// of `progress` messages for `run` and `analyze`); `unload` and `cancel` are not answered
+// of `progress` messages for `run` and `analyze`, and of `ahead` messages for `run`); `unload` and `cancel` are not answered
 // unless they fail. Bytes travel in ArrayBuffers listed in the transfer list of postMessage,
 // so they move between threads instead of being copied.
 //
@@ -33,6 +33,8 @@ export const MSG = Object.freeze({
   LOADED: "loaded",
   /** Stage progress of a `run` / `analyze`. @see ProgressMessage */
   PROGRESS: "progress",
+  /** G-code a stage of a `run` sends ahead while the run goes on. @see AheadMessage */
+  AHEAD: "ahead",
   /** Answer to `run` / `analyze`. @see ResultMessage */
   RESULT: "result",
   /** Answer to `estimate`. @see EstimatedMessage */
@@ -133,6 +135,17 @@ export const PREVIEW_BUFFERS = Object.freeze({
  * @property {number} id
  * @property {string} stage     a stage name of the job kind
  * @property {number} fraction  0..1 within the stage
+ */
+/**
+ * @typedef {Object} AheadMessage
+ * @property {"ahead"} type
+ * @property {number} id
+ * @property {string} stage     the stage sending it
+ * @property {string} label     what it holds, in words ("the first 200 of 6120 beams")
+ * @property {number} done      items it holds
+ * @property {number} total     items of the whole run
+ * @property {Uint8Array} gcode  transferred: a file a printer can start on; the result's G-code
+ *                               moves begin with its moves (its header counts only them)
  */
 /**
  * @typedef {Object} InspectedMessage

@@ -52,7 +52,7 @@ function handle(msg) {
         break;
       case MSG.RUN: {
         const t0 = performance.now();
-        const report = plain(session.run(msg.design, progressReporter(msg.id)));
+        const report = plain(session.run(msg.design, progressReporter(msg.id), aheadReporter(msg.id)));
         postResult(msg.id, "run", report, t0);
         break;
       }
@@ -111,6 +111,14 @@ function progressReporter(id) {
     lastStage = stage;
     lastFraction = fraction;
     self.postMessage({ type: MSG.PROGRESS, id, stage, fraction });
+  };
+}
+
+/** Ahead callback for Session.run: posts the G-code sent ahead, its buffer transferred. */
+function aheadReporter(id) {
+  return (info, bytes) => {
+    const gcode = owned(bytes, Uint8Array);
+    self.postMessage({ type: MSG.AHEAD, id, ...plain(info), gcode }, transferList([gcode]));
   };
 }
 

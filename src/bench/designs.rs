@@ -64,6 +64,29 @@ pub fn time_design(design: &Design, repeats: usize) -> Result<DesignTiming, Stri
     Ok(DesignTiming { name: design.name.clone(), stages, total_s, runs_s: runs })
 }
 
+/// [`time_design`] on one thread and on every core, side by side (native only: the wasm build
+/// has one thread).
+#[cfg(not(target_arch = "wasm32"))]
+pub fn time_design_threads(design: &Design, repeats: usize) -> Result<(DesignTiming, DesignTiming), String> {
+    let pool = |n: usize| rayon::ThreadPoolBuilder::new().num_threads(n).build().map_err(|e| e.to_string());
+    let one = pool(1)?.install(|| time_design(design, repeats))?;
+    let all = pool(0)?.install(|| time_design(design, repeats))?;
+    Ok((one, all))
+}
+
+/// The table of [`time_design_threads`]: each stage at 1 thread and at `threads`, and the ratio.
+pub fn threads_table(rows: &[(DesignTiming, DesignTiming)], threads: usize) -> String {
+    let mut out = format!("| design | stage | 1 thread s | {threads} threads s | speed-up |\n|---|---|---|---|---|\n");
+    for (one, all) in rows {
+        for (stage, s1) in &one.stages {
+            let sn = all.stages.iter().find(|x| &x.0 == stage).map_or(f64::NAN, |x| x.1);
+            out.push_str(&format!("| {} | {stage} | {s1:.3} | {sn:.3} | {:.2}× |\n", one.name, s1 / sn));
+        }
+        out.push_str(&format!("| {} | **total** | **{:.3}** | **{:.3}** | **{:.2}×** |\n", one.name, one.total_s, all.total_s, one.total_s / all.total_s));
+    }
+    out
+}
+
 /// The table `weft bench --design` prints.
 pub fn table(rows: &[DesignTiming]) -> String {
     let mut out = String::from("| design | stage | best s |\n|---|---|---|\n");

@@ -65,13 +65,40 @@ fn safe_heights(joints: &[DVec3], steps: &[Step], o: &Options) -> Vec<f64> {
         .collect()
 }
 
-/// Orders `plan` greedily by deadhead time within its constraints.
+/// Orders `plan` greedily by deadhead time within its constraints. Steps sent ahead
+/// ([`Plan::sent`]) come first, in the order this gives them alone (what was sent).
 pub fn order(joints: &[DVec3], plan: &Plan, constraints: &Constraints, o: &Options) -> Ordered {
     let n = plan.steps.len();
-    let nb = plan.blocks.len();
     if n == 0 {
         return Ordered::default();
     }
+    let head: Vec<usize> = if plan.sent > 0 && plan.sent < n {
+        let sent = order(joints, &plan.prefix(plan.sent), constraints, o);
+        let mut step_of_beam = vec![usize::MAX; constraints.forward.len()];
+        for (i, s) in plan.steps[..plan.sent].iter().enumerate() {
+            step_of_beam[s.beam] = i;
+        }
+        sent.steps.iter().map(|s| step_of_beam[s.beam]).collect()
+    } else {
+        Vec::new()
+    };
+    let greedy = greedy(joints, plan, constraints, o, &head);
+    // A greedy can lose to the plan's own order (after what was sent): keep the better.
+    let mut plan_order: Vec<Step> = head.iter().map(|&i| plan.steps[i]).collect();
+    plan_order.extend_from_slice(&plan.steps[head.len()..]);
+    let alternative = total(joints, &plan_order, o);
+    let plan_order_deadhead_s = if head.is_empty() { alternative } else { total(joints, &plan.steps, o) };
+    if alternative < greedy.deadhead_s {
+        let safe_z = safe_heights(joints, &plan_order, o);
+        return Ordered { steps: plan_order, safe_z, deadhead_s: alternative, plan_order_deadhead_s };
+    }
+    Ordered { plan_order_deadhead_s, ..greedy }
+}
+
+/// The greedy order of `plan`, its first steps `head` (step indices) as given.
+fn greedy(joints: &[DVec3], plan: &Plan, constraints: &Constraints, o: &Options, head: &[usize]) -> Ordered {
+    let n = plan.steps.len();
+    let nb = plan.blocks.len();
     // Step → block and position; waiting counts: blocks before, chain step before, collision
     // predecessors (by beam).
     let mut block_of = vec![0usize; n];
@@ -128,6 +155,7 @@ pub fn order(joints: &[DVec3], plan: &Plan, constraints: &Constraints, o: &Optio
     while out.len() < n {
         // The cheapest available step (ties: the plan's order); the first: the plan's first.
         let pick = match at {
+            _ if out.len() < head.len() => Some(head[out.len()]).filter(|i| available.contains(i)),
             None => available.iter().copied().min(),
             Some(a) => {
                 let z = top + o.beam_radius_mm + o.clearance_mm;
@@ -189,13 +217,7 @@ pub fn order(joints: &[DVec3], plan: &Plan, constraints: &Constraints, o: &Optio
             }
         }
     }
-    let plan_order = total(joints, &plan.steps, o);
-    if plan_order < time {
-        // A greedy can lose to the plan's own order: keep the better of the two.
-        let safe_z = safe_heights(joints, &plan.steps, o);
-        return Ordered { steps: plan.steps.clone(), safe_z, deadhead_s: plan_order, plan_order_deadhead_s: plan_order };
-    }
-    Ordered { steps: out, safe_z, deadhead_s: time, plan_order_deadhead_s: plan_order }
+    Ordered { steps: out, safe_z, deadhead_s: time, plan_order_deadhead_s: 0.0 }
 }
 
 /// The deadheads of an order that lift or lower the nozzle through a printed beam: the body

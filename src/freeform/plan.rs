@@ -35,6 +35,10 @@ use glam::DVec3;
 use std::cmp::Ordering;
 use std::collections::{BTreeMap, BinaryHeap, HashSet};
 
+/// Default number of beams a plan fixes before they are sent ahead ([`plan_sending`]): enough
+/// for minutes of printing, few enough to be fixed in a fraction of the plan's time.
+pub const DEFAULT_SEND_AHEAD_BEAMS: usize = 200;
+
 /// Default planning budget, s of work at [`WORK_PER_SECOND`] (deterministic: counted, not
 /// timed, so a design plans alike on every machine).
 pub const DEFAULT_BUDGET_S: f64 = 60.0;
@@ -147,6 +151,22 @@ pub struct Plan {
     /// Planned in bands ([`super::bands`]): the first step of each band (empty: planned whole).
     /// Steps of a band wait for every step of the bands before it.
     pub bands: Vec<usize>,
+    /// Steps sent ahead while planning went on ([`plan_sending`]; 0: none): they are printed
+    /// first, in the order [`super::deadhead::order`] gives them alone.
+    pub sent: usize,
+}
+
+impl Plan {
+    /// The plan's first `n` steps as a plan of their own (`n` at a block's end).
+    pub fn prefix(&self, n: usize) -> Plan {
+        Plan {
+            steps: self.steps[..n].to_vec(),
+            blocks: self.blocks.iter().filter(|b| b.end <= n).cloned().collect(),
+            bands: self.bands.iter().copied().filter(|&s| s < n).collect(),
+            sent: 0,
+            ..*self
+        }
+    }
 }
 
 /// Why a design cannot be printed (with what proves it).
@@ -560,9 +580,36 @@ struct Planner<'a> {
     /// The design's sparsity for checking the running compliance (exact cost; made on first use).
     pattern: Option<frame::Pattern>,
     connects: usize,
+    /// Strict mode's free beams to be: unprinted, not a cantilever of the design, both joints
+    /// stable and unblocked (kept as joints change, so a round does not scan every joint).
+    free: std::collections::BTreeSet<usize>,
 }
 
 impl<'a> Planner<'a> {
+    fn could_be_free(&self, b: usize) -> bool {
+        let [u, w] = self.d.beams[b];
+        !self.printed[b] && !self.hang.cantilever[b] && self.stable[u] && self.stable[w] && !self.blocked[u] && !self.blocked[w]
+    }
+
+    /// Joint `x` is stable from now on.
+    fn mark_stable(&mut self, x: usize) {
+        self.stable[x] = true;
+        for k in 0..self.inc[x].len() {
+            let b = self.inc[x][k];
+            if self.could_be_free(b) {
+                self.free.insert(b);
+            }
+        }
+    }
+
+    /// Joint `x` carries a cantilever of the design for good.
+    fn mark_blocked(&mut self, x: usize) {
+        self.blocked[x] = true;
+        for &b in &self.inc[x] {
+            self.free.remove(&b);
+        }
+    }
+
     fn find(&mut self, mut x: usize) -> usize {
         while self.parent[x] != x {
             self.parent[x] = self.parent[self.parent[x]];
@@ -616,6 +663,7 @@ impl<'a> Planner<'a> {
             let cost = if self.in_frame[to] { 0.0 } else { eps(&c_to, self.o.load_n) };
             self.plan.steps.push(Step { beam: b, from, to, cost_mm: cost, block });
             self.printed[b] = true;
+            self.free.remove(&b);
             // Frame updates.
             let (pf, pt) = (self.d.joints[from], self.d.joints[to]);
             if self.in_frame[to] {
@@ -699,6 +747,13 @@ pub fn prove(d: &Assembly, mode: Mode, connection: bool) -> Result<(), Unconstru
 
 /// Plans the design.
 pub fn plan(d: &Assembly, o: &Options, progress: &mut dyn FnMut(usize, usize)) -> Result<Plan, Unconstructable> {
+    plan_sending(d, o, 0, progress, &mut |_| {})
+}
+
+/// [`plan`], sending its beginning ahead: once `send_at` beams (> 0) are fixed and some are
+/// left, `ahead` gets the plan so far. The search only adds to a plan, so those steps are the
+/// final plan's first ones; the finished plan records how many were sent ([`Plan::sent`]).
+pub fn plan_sending(d: &Assembly, o: &Options, send_at: usize, progress: &mut dyn FnMut(usize, usize), ahead: &mut dyn FnMut(&Plan)) -> Result<Plan, Unconstructable> {
     let inc = incidence(d);
     let (_, hang) = proofs(d, &inc, o.mode, o.connection)?;
     let n = d.joints.len();
@@ -721,20 +776,30 @@ pub fn plan(d: &Assembly, o: &Options, progress: &mut dyn FnMut(usize, usize)) -
         pattern: None,
         connects: 0,
         inc,
+        free: Default::default(),
+    };
+    p.free = (0..m).filter(|&b| p.could_be_free(b)).collect();
+    let mut tick = |p: &mut Plan, m: usize| {
+        let done = p.steps.len();
+        if send_at > 0 && p.sent == 0 && done >= send_at && done < m {
+            p.sent = done;
+            ahead(p);
+        }
+        progress(done, m)
     };
     match o.mode {
-        Mode::Strict => strict(&mut p, progress)?,
-        Mode::Relaxed => relaxed(&mut p, progress)?,
+        Mode::Strict => strict(&mut p, &mut tick)?,
+        Mode::Relaxed => relaxed(&mut p, &mut tick)?,
     }
     Ok(p.plan)
 }
 
 /// Strict mode: rounds of consistent subassemblies.
-fn strict(p: &mut Planner, progress: &mut dyn FnMut(usize, usize)) -> Result<(), Unconstructable> {
+fn strict(p: &mut Planner, progress: &mut dyn FnMut(&mut Plan, usize)) -> Result<(), Unconstructable> {
     let m = p.d.beams.len();
     let budget = p.o.budget_s * WORK_PER_SECOND;
     while !p.done() {
-        progress(p.plan.steps.len(), m);
+        progress(&mut p.plan, m);
         p.over_budget(budget);
         // 1. A beam between two stable, unblocked joints costs nothing: taken first.
         if let Some((b, from, to)) = free_beam(p) {
@@ -748,10 +813,10 @@ fn strict(p: &mut Planner, progress: &mut dyn FnMut(usize, usize)) -> Result<(),
                 p.commit(&steps, &chain, key);
                 if hangs {
                     // A cantilever of the finished design: its root is blocked for good.
-                    p.blocked[steps[0].1] = true;
+                    p.mark_blocked(steps[0].1);
                 } else {
                     for s in &steps {
-                        p.stable[s.2] = true;
+                        p.mark_stable(s.2);
                     }
                 }
             }
@@ -765,45 +830,30 @@ fn strict(p: &mut Planner, progress: &mut dyn FnMut(usize, usize)) -> Result<(),
             }
         }
     }
-    progress(m, m);
+    progress(&mut p.plan, m);
     Ok(())
 }
 
-/// A beam joining two stable unblocked joints, preds printed, in an allowed direction.
+/// A beam joining two stable unblocked joints, preds printed, in an allowed direction: the
+/// lowest-numbered one (for determinism).
 fn free_beam(p: &Planner) -> Option<(usize, usize, usize)> {
     let d = p.d;
-    // Scan stable joints' open beams (ascending beam index for determinism).
-    let mut best: Option<(usize, usize, usize)> = None;
-    for (j, list) in p.inc.iter().enumerate() {
-        if !p.stable[j] || p.blocked[j] || p.open[j] == 0 {
-            continue;
+    p.free.iter().find_map(|&b| {
+        if !p.preds_done(b) {
+            return None;
         }
-        for &b in list {
-            if p.printed[b] || p.hang.cantilever[b] {
-                continue;
-            }
-            let o = d.other(b, j);
-            if !p.stable[o] || p.blocked[o] || !p.preds_done(b) {
-                continue;
-            }
-            if best.is_some_and(|x| x.0 <= b) {
-                continue;
-            }
-            // Upward when allowed, else the allowed way.
-            let (lo, hi) = if d.joints[j].z <= d.joints[o].z { (j, o) } else { (o, j) };
-            let dir = if d.allowed_from(b, lo) {
-                Some((lo, hi))
-            } else if d.allowed_from(b, hi) {
-                Some((hi, lo))
-            } else {
-                None
-            };
-            if let Some((f, t)) = dir {
-                best = Some((b, f, t));
-            }
+        let [u, w] = d.beams[b];
+        let (j, o) = (u.min(w), u.max(w));
+        // Upward when allowed, else the allowed way (level: from the lower-numbered joint).
+        let (lo, hi) = if d.joints[j].z <= d.joints[o].z { (j, o) } else { (o, j) };
+        if d.allowed_from(b, lo) {
+            Some((b, lo, hi))
+        } else if d.allowed_from(b, hi) {
+            Some((b, hi, lo))
+        } else {
+            None
         }
-    }
-    best
+    })
 }
 
 /// The steps of a state's path from its root, in print order.
@@ -1054,14 +1104,14 @@ fn disjoint(a: &[(usize, usize, usize)], b: &[(usize, usize, usize)], x: usize) 
 }
 
 /// Relaxed mode: the greedy of the bottleneck problem.
-fn relaxed(p: &mut Planner, progress: &mut dyn FnMut(usize, usize)) -> Result<(), Unconstructable> {
+fn relaxed(p: &mut Planner, progress: &mut dyn FnMut(&mut Plan, usize)) -> Result<(), Unconstructable> {
     let d = p.d;
     let m = d.beams.len();
     let load = p.o.load_n;
     let s = p.o.section;
     let budget = p.o.budget_s * WORK_PER_SECOND;
     while !p.done() {
-        progress(p.plan.steps.len(), m);
+        progress(&mut p.plan, m);
         p.over_budget(budget);
         let mut best: Option<(f64, usize, usize, usize)> = None;
         for b in 0..m {
@@ -1097,6 +1147,6 @@ fn relaxed(p: &mut Planner, progress: &mut dyn FnMut(usize, usize)) -> Result<()
             }
         }
     }
-    progress(m, m);
+    progress(&mut p.plan, m);
     Ok(())
 }

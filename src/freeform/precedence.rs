@@ -353,80 +353,130 @@ pub fn constraints(joints: &[DVec3], beams: &[[usize; 2]], options: &Options, pr
         let sin_tilt = libm::sin(options.tilt_deg.to_radians());
         let (reach, top) = (n.radius_mm + r + n.top() * sin_tilt, n.top() + r);
         let below = r + n.radius_mm * sin_tilt;
-        let mut found: Vec<u32> = Vec::new();
-        let mut near: Vec<(u32, Option<usize>)> = Vec::new();
-        let mut hits: Vec<u32> = Vec::new();
-        let mut best: Vec<u32> = Vec::new();
-        for (a, &[i, j]) in beams.iter().enumerate() {
-            let (a0, a1) = (joints[i], joints[j]);
-            let lo = a0.min(a1) - DVec3::new(reach, reach, below);
-            let hi = a0.max(a1) + DVec3::new(reach, reach, top);
-            let query = Aabb::new(v(lo), v(hi));
-            found.clear();
-            found.extend(bvh.intersect_aabb(&query).filter(|&b| b as usize != a));
-            found.sort_unstable();
-            near.clear();
-            for &b in &found {
-                let [k, l] = beams[b as usize];
-                if seg_dist2_xy(a0, a1, joints[k], joints[l]) <= reach * reach {
-                    near.push((b, [i, j].iter().find(|&&x| x == k || x == l).copied()));
-                }
-            }
-            // Each axis in turn (the vertical first); a tilt is kept when it allows more
-            // directions, or as many and hits fewer beams.
-            let mut best_key = (0u8, usize::MAX);
-            for (t, body) in bodies.iter().enumerate() {
-                let (f, bk) = dirs(a, axes[t]);
-                let allowed = u8::from(f) + u8::from(bk);
-                if allowed == 0 || (t > 0 && best_key.0 == 2 && best_key.1 == 0) {
-                    continue;
-                }
-                hits.clear();
-                for &(b, shared) in &near {
-                    let [k, l] = beams[b as usize];
-                    let (b0, b1) = (joints[k], joints[l]);
-                    tested += 1;
-                    // A joint shared with A: B's axis from a little off that joint, radius 0.
-                    let hit = match shared {
-                        Some(s) => {
-                            let (from, to) = if k == s { (b0, b1) } else { (b1, b0) };
-                            body.sweep_hits(a0, a1, off_joint(from, to, r), to, 0.0)
-                        }
-                        None => body.sweep_hits(a0, a1, b0, b1, r),
+        // Each beam's queries on their own, beams side by side (runs reuse their buffers);
+        // a shared count of pairs stops every run once the design is refused.
+        let total = std::sync::atomic::AtomicUsize::new(0);
+        let runs = if crate::par::threads() > 1 { 8 * crate::par::threads() } else { 1 };
+        let per_beam = crate::par::map_runs(m, runs, &mut |d| progress(d as f32 / m as f32), |range, tick| {
+            let mut found: Vec<u32> = Vec::new();
+            let mut near: Vec<(u32, Option<usize>)> = Vec::new();
+            let mut hits: Vec<u32> = Vec::new();
+            range
+                .map(|a| {
+                    let out = if total.load(std::sync::atomic::Ordering::Relaxed) > MAX_PAIRS {
+                        BeamQueries::default()
+                    } else {
+                        let q = beam_queries(a, joints, beams, &bvh, &bodies, &axes, &dirs, (reach, top, below), r, (&mut found, &mut near, &mut hits));
+                        total.fetch_add(q.hits.len(), std::sync::atomic::Ordering::Relaxed);
+                        q
                     };
-                    if hit {
-                        hits.push(b);
-                        if allowed == best_key.0 && hits.len() >= best_key.1 {
-                            break;
-                        }
-                    }
-                }
-                if t == 0 {
-                    vertical_pairs += hits.len();
-                }
-                if (allowed, std::cmp::Reverse(hits.len())) > (best_key.0, std::cmp::Reverse(best_key.1)) || t == 0 {
-                    best_key = (allowed, hits.len());
-                    best.clone_from(&hits);
-                    axis[a] = axes[t];
-                    (forward[a], backward[a]) = (f, bk);
-                }
-            }
-            if axis[a] != DVec3::Z {
+                    tick();
+                    out
+                })
+                .collect::<Vec<_>>()
+        });
+        if total.into_inner() > MAX_PAIRS {
+            return Err(Error::TooManyPairs);
+        }
+        for (a, q) in per_beam.into_iter().enumerate() {
+            tested += q.tested;
+            vertical_pairs += q.vertical_pairs;
+            axis[a] = q.axis;
+            (forward[a], backward[a]) = q.directions;
+            if q.axis != DVec3::Z {
                 tilted += 1;
             }
-            for &b in &best {
-                pairs.push((a as u32, b));
-            }
-            if pairs.len() > MAX_PAIRS {
-                return Err(Error::TooManyPairs);
-            }
-            if a % 256 == 255 {
-                progress((a + 1) as f32 / m as f32);
-            }
+            pairs.extend(q.hits.iter().map(|&b| (a as u32, b)));
         }
     }
     let (succ_start, succ, pred_start, pred) = both_csr(&pairs, m);
     Ok(Constraints { forward, backward, pred_start, pred, succ_start, succ, tested, axis, tilted, vertical_pairs })
+}
+
+/// What the collision queries of one beam found.
+#[derive(Default)]
+struct BeamQueries {
+    /// The nozzle axis chosen and the directions it allows.
+    axis: DVec3,
+    directions: (bool, bool),
+    /// Beams its sweep hits along that axis (it precedes them).
+    hits: Vec<u32>,
+    /// Exact pair tests made; hits along the vertical.
+    tested: usize,
+    vertical_pairs: usize,
+}
+
+/// The collision queries of beam `a`: near beams from the BVH, then each axis in turn (the
+/// vertical first); a tilt is kept when it allows more directions, or as many and hits fewer
+/// beams. `reach` is (sideways, above, below) of the nozzle's box; the buffers are reused.
+#[allow(clippy::too_many_arguments)]
+fn beam_queries(
+    a: usize,
+    joints: &[DVec3],
+    beams: &[[usize; 2]],
+    bvh: &Bvh,
+    bodies: &[Body],
+    axes: &[DVec3],
+    dirs: &dyn Fn(usize, DVec3) -> (bool, bool),
+    (reach, top, below): (f64, f64, f64),
+    r: f64,
+    (found, near, hits): (&mut Vec<u32>, &mut Vec<(u32, Option<usize>)>, &mut Vec<u32>),
+) -> BeamQueries {
+    let [i, j] = beams[a];
+    let (a0, a1) = (joints[i], joints[j]);
+    let lo = a0.min(a1) - DVec3::new(reach, reach, below);
+    let hi = a0.max(a1) + DVec3::new(reach, reach, top);
+    let query = Aabb::new(v(lo), v(hi));
+    found.clear();
+    found.extend(bvh.intersect_aabb(&query).filter(|&b| b as usize != a));
+    found.sort_unstable();
+    near.clear();
+    for &b in found.iter() {
+        let [k, l] = beams[b as usize];
+        if seg_dist2_xy(a0, a1, joints[k], joints[l]) <= reach * reach {
+            near.push((b, [i, j].iter().find(|&&x| x == k || x == l).copied()));
+        }
+    }
+    // Unless an axis is chosen below, the vertical's directions (none) stand.
+    let mut out = BeamQueries { axis: DVec3::Z, directions: dirs(a, DVec3::Z), ..Default::default() };
+    let mut best_key = (0u8, usize::MAX);
+    for (t, body) in bodies.iter().enumerate() {
+        let (f, bk) = dirs(a, axes[t]);
+        let allowed = u8::from(f) + u8::from(bk);
+        if allowed == 0 || (t > 0 && best_key.0 == 2 && best_key.1 == 0) {
+            continue;
+        }
+        hits.clear();
+        for &(b, shared) in near.iter() {
+            let [k, l] = beams[b as usize];
+            let (b0, b1) = (joints[k], joints[l]);
+            out.tested += 1;
+            // A joint shared with A: B's axis from a little off that joint, radius 0.
+            let hit = match shared {
+                Some(s) => {
+                    let (from, to) = if k == s { (b0, b1) } else { (b1, b0) };
+                    body.sweep_hits(a0, a1, off_joint(from, to, r), to, 0.0)
+                }
+                None => body.sweep_hits(a0, a1, b0, b1, r),
+            };
+            if hit {
+                hits.push(b);
+                if allowed == best_key.0 && hits.len() >= best_key.1 {
+                    break;
+                }
+            }
+        }
+        if t == 0 {
+            out.vertical_pairs += hits.len();
+        }
+        if (allowed, std::cmp::Reverse(hits.len())) > (best_key.0, std::cmp::Reverse(best_key.1)) || t == 0 {
+            best_key = (allowed, hits.len());
+            out.hits.clone_from(hits);
+            out.axis = axes[t];
+            out.directions = (f, bk);
+        }
+    }
+    out
 }
 
 /// Precedence pairs (A before B) as CSR both ways: (succ_start, succ, pred_start, pred).

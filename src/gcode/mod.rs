@@ -369,6 +369,12 @@ pub struct Gcode {
     pub text: String,
     /// Totals, also written in the header.
     pub stats: GcodeStats,
+    /// Bytes of the header (totals, flavour): `text[header_len..]` is the same for any two
+    /// toolpaths up to where their passes differ.
+    pub header_len: usize,
+    /// Where the moves end and the dialect's epilogue and the end template begin:
+    /// `text[..moves_end]` is a file a printer can start on while more moves are made.
+    pub moves_end: usize,
 }
 
 /// Why no G-code could be written.

@@ -60,5 +60,6 @@ pub(crate) fn write(toolpath: &Toolpath, options: &Options, offset: DVec3) -> Gc
             last = path.points.last().map(|p| *p + offset);
         }
     }
-    Gcode { text, stats }
+    let moves_end = text.len();
+    Gcode { text, stats, header_len: 0, moves_end }
 }

@@ -368,6 +368,7 @@ pub(crate) fn write(toolpath: &Toolpath, options: &Options) -> Result<Gcode, Err
             }
         }
     }
+    let moves_end = out.text.len();
     d.epilogue(&mut out, options);
     if !end.is_empty() {
         out.code(end.strip_suffix('\n').unwrap_or(&end));
@@ -401,6 +402,7 @@ pub(crate) fn write(toolpath: &Toolpath, options: &Options) -> Result<Gcode, Err
     header.push_str(&format!(";TIME:{}\n", fixed(time_s, 0)));
     header.push_str(&format!(";Filament used: {}m\n", fixed(out.e_total / 1000.0, 5)));
     header.push_str(&format!(";LAYER_COUNT:{layers_written}\n"));
+    let header_len = header.len();
     header.push_str(&out.text);
-    Ok(Gcode { text: header, stats })
+    Ok(Gcode { text: header, stats, header_len, moves_end: header_len + moves_end })
 }

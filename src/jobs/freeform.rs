@@ -172,11 +172,13 @@ pub struct PlannerOptions {
     pub exact_states: usize,
     /// Plan in bands of about this many beams up the design's height (0: whole).
     pub band_beams: usize,
+    /// Send the G-code of the first beams ahead once the plan has fixed this many (0: never).
+    pub send_ahead_beams: usize,
 }
 
 impl Default for PlannerOptions {
     fn default() -> Self {
-        PlannerOptions { cost: Cost::Exact, budget_s: plan::DEFAULT_BUDGET_S, compare: true, exact_search: ExactSearch::Compare, exact_beams: optimal::DEFAULT_MAX_BEAMS, exact_states: optimal::DEFAULT_MAX_STATES, band_beams: bands::DEFAULT_BAND_BEAMS }
+        PlannerOptions { cost: Cost::Exact, budget_s: plan::DEFAULT_BUDGET_S, compare: true, exact_search: ExactSearch::Compare, exact_beams: optimal::DEFAULT_MAX_BEAMS, exact_states: optimal::DEFAULT_MAX_STATES, band_beams: bands::DEFAULT_BAND_BEAMS, send_ahead_beams: plan::DEFAULT_SEND_AHEAD_BEAMS }
     }
 }
 
@@ -344,6 +346,7 @@ const PLANNER_FIELDS: &[Row0] = &[
     crate::settings::int("exact_beams", "Planner", "Exact search up to", 1.0, optimal::MAX_BEAMS as f64, "Designs with at most this many beams are searched exactly (the work grows exponentially with it)."),
     crate::settings::int("exact_states", "Planner", "Exact search states", 1.0, 10_000_000.0, "States the exact search explores before it gives up (about 50 µs and 20 bytes each)."),
     crate::settings::int("band_beams", "Planner", "Plan in bands of", 0.0, MAX_BEAMS as f64, "0 plans the design whole; more cuts a big design into bands of about this many beams up its height, each planned with the bands below rigid (the costs card measures what the joins cost)."),
+    crate::settings::int("send_ahead_beams", "Planner", "Send ahead after", 0.0, MAX_BEAMS as f64, "Once the plan has fixed this many beams, their G-code is sent out while planning goes on, so a printer could start (0: never; not when planned in bands or searched exactly)."),
 ];
 
 const PRINT_FIELDS: &[Row0] = &[
@@ -671,14 +674,29 @@ fn plan_stage(j: &FreeformJob, ctx: &mut Ctx, w: &Out<Placed>, c: &Out<Constrain
     let o = plan_options(j);
     let searched = exact_runs(j, w.beams.len());
     let parts = (j.constraints, j.planner.cost, j.planner.budget_s, j.beam, searched, j.planner.band_beams);
-    ctx.stage("plan", "plan", &parts, &[w.key, c.key], |progress| {
+    let band_of = bands::assign(&w.joints, &w.beams, c, j.planner.band_beams);
+    let whole = band_of.iter().all(|&k| k == 0);
+    // A plan made whole only adds to its beginning, so that can be sent ahead; a band may be
+    // planned again with the one above it, and the exact search may print another order.
+    let send_at = if whole && !searched { j.planner.send_ahead_beams } else { 0 };
+    let dead = deadhead_options(j, ctx.design);
+    let sender = ctx.sender();
+    let parts = (parts, send_at);
+    // The beams fixed, ordered as the order stage orders them alone (it keeps them first).
+    let m = w.beams.len();
+    let send = |fixed: &Plan| {
+        let ordered = deadhead::order(&w.joints, fixed, c, &dead);
+        let label = format!("the first {} of {} beams", fixed.steps.len(), m);
+        sender.send("plan", &label, fixed.steps.len(), m, &toolpath(j, w, &ordered, c));
+    };
+    let sent = std::cell::Cell::new(false);
+    let out = ctx.stage("plan", "plan", &parts, &[w.key, c.key], |progress| {
         let a = Assembly { joints: &w.joints, beams: &w.beams, grounded: &w.grounded, constraints: c };
         let started = crate::clock::now_s();
         // A forward planner fixes the sequence's beginning first: printing could start when the
         // first subassembly is fixed. When that and half the beams were fixed.
-        let (mut first_ms, mut half_ms) = (None, None);
-        let band_of = bands::assign(&w.joints, &w.beams, c, j.planner.band_beams);
-        let planned = bands::plan(&a, &o, &band_of, &mut |done, all| {
+        let (mut first_ms, mut half_ms, mut sent_ms) = (None, None, None);
+        let mut tick = |done: usize, all: usize| {
             if done > 0 && first_ms.is_none() {
                 first_ms = Some((crate::clock::now_s() - started) * 1000.0);
             }
@@ -686,9 +704,15 @@ fn plan_stage(j: &FreeformJob, ctx: &mut Ctx, w: &Out<Placed>, c: &Out<Constrain
                 half_ms = Some((crate::clock::now_s() - started) * 1000.0);
             }
             progress(done as f32 / all.max(1) as f32)
-        });
+        };
+        let mut ahead = |fixed: &Plan| {
+            send(fixed);
+            sent.set(true);
+            sent_ms = Some((crate::clock::now_s() - started) * 1000.0);
+        };
+        let planned = if whole { plan::plan_sending(&a, &o, send_at, &mut tick, &mut ahead) } else { bands::plan(&a, &o, &band_of, &mut tick).map(|(p, _)| p) };
         let p = match planned {
-            Ok((p, _)) => p,
+            Ok(p) => p,
             // The planner's refusals that are proofs stand; its search's limits the exact
             // search may overcome on a small design.
             Err(u @ (Unconstructable::NoSubassembly { .. } | Unconstructable::SearchTooLarge { .. })) if searched => {
@@ -712,6 +736,11 @@ fn plan_stage(j: &FreeformJob, ctx: &mut Ctx, w: &Out<Placed>, c: &Out<Constrain
             .metric("time", "Planning time", ms, "ms", "Wall time of the plan on this machine.")
             .metric("first_ms", "First beams fixed", first_ms.unwrap_or(ms), "ms", "When the plan's first subassembly was fixed: a printer could start then, while planning goes on (the plan only adds after it).")
             .metric("half_ms", "Half the beams fixed", half_ms.unwrap_or(ms), "ms", "When half of the sequence was fixed.");
+        if let Some(t) = sent_ms {
+            report = report
+                .metric("sent", "Beams sent ahead", p.sent as f64, "", "Beams whose G-code was sent out while planning went on; the final G-code's moves begin with theirs.")
+                .metric("sent_ms", "Sent ahead at", t, "ms", "When they were sent, counted from the plan's start.");
+        }
         if !p.bands.is_empty() {
             report = report.metric("bands", "Bands", p.bands.len() as f64, "", "Bands planned one after another up the design, each with the bands below printed and rigid.");
         }
@@ -727,7 +756,15 @@ fn plan_stage(j: &FreeformJob, ctx: &mut Ctx, w: &Out<Placed>, c: &Out<Constrain
             }
         }
         Ok((Ok(p), Some(report)))
-    })
+    })?;
+    // A plan made before (the cache: an earlier run, or a view asked for first) is ready at
+    // once: its beginning is still sent, so every run delivers it.
+    if let (false, Ok(p)) = (sent.get(), &*out) {
+        if p.sent > 0 {
+            send(&p.prefix(p.sent));
+        }
+    }
+    Ok(out)
 }
 
 /// ε (exact, mm) of each step of `steps`, replayed.
@@ -830,8 +867,7 @@ fn optimum_report(best: &Optimum, known: Option<f64>, planner_eps: Option<&[f64]
 }
 
 fn order_stage(j: &FreeformJob, ctx: &mut Ctx, w: &Out<Placed>, c: &Out<Constraints>, p: &Out<Plan>) -> Result<Out<Ordered>, Error> {
-    let printer = &ctx.design.printer;
-    let o = deadhead::Options { xy_mm_s: printer.travel_speed_mm_s, z_mm_s: printer.z_speed_mm_s, clearance_mm: j.print.clearance_mm, beam_radius_mm: j.beam.diameter_mm / 2.0 };
+    let o = deadhead_options(j, ctx.design);
     let parts = (o.xy_mm_s, o.z_mm_s, o.clearance_mm, o.beam_radius_mm, j.nozzle);
     let speed = j.print.speed_mm_s;
     let dwell = j.print.dwell_s;
@@ -857,6 +893,11 @@ fn order_stage(j: &FreeformJob, ctx: &mut Ctx, w: &Out<Placed>, c: &Out<Constrai
         report.tables.push(sequence_table(w, &ordered));
         Ok((ordered, Some(report)))
     })
+}
+
+fn deadhead_options(j: &FreeformJob, design: &crate::design::Design) -> deadhead::Options {
+    let printer = &design.printer;
+    deadhead::Options { xy_mm_s: printer.travel_speed_mm_s, z_mm_s: printer.z_speed_mm_s, clearance_mm: j.print.clearance_mm, beam_radius_mm: j.beam.diameter_mm / 2.0 }
 }
 
 fn costs_stage(j: &FreeformJob, ctx: &mut Ctx, w: &Out<Placed>, p: &Out<Plan>, o: &Out<Ordered>) -> Result<Out<Vec<Costs>>, Error> {

@@ -260,38 +260,20 @@ pub fn optimise(
     let mut toolpath = Toolpath::default();
     let mut report = PathsReport { method: Some(options.method), layers: Vec::with_capacity(layers.len()) };
     let mut last_end: Option<DVec2> = None;
-    for (li, layer) in layers.iter().enumerate() {
-        let graph = build_graph(layer, options.merge_tolerance_mm);
-        let mut stats = LayerPaths {
-            nodes: graph.nodes.len(),
-            edges: graph.edges.len(),
-            degenerate_dropped: graph.degenerate_dropped,
-            components: graph.components,
-            odd_nodes: graph.odd_nodes(),
-            lower_bound_paths: graph.lower_bound_paths(),
-            duplicates_collapsed: graph.duplicates_collapsed,
-            ..LayerPaths::default()
-        };
-        let mut gippo_score = None;
-        let mut chains = match options.method {
-            Method::GippoMax | Method::GippoMin => {
-                let mut rng = Pcg64::seed_from_u64(layer_seed(seed, li));
-                let sol = gippo::run(&graph, options.iterations, options.method == Method::GippoMax, &mut rng);
-                gippo_score = Some(sol.score);
-                stats.iteration_scores = sol.iteration_scores;
-                sol.chains
-            }
-            Method::Euler => {
-                let r = euler::run(&graph, options.exact_pairing_seconds);
-                stats.set_pairing(r.pairing_mm, r.lower_bound_mm, r.optimal);
-                r.chains
-            }
-            Method::Continuous => {
-                let r = postman::run(&graph, options.exact_pairing_seconds);
-                stats.set_pairing(r.pairing_mm, r.lower_bound_mm, r.optimal);
-                r.chains
-            }
-        };
+    // Each layer's graph and chains side by side (its own seed: `layer_seed`), a window of a
+    // few layers a thread at a time so only those graphs are held; then, in turn, the order
+    // of each layer's paths, which starts where the layer below ended.
+    let window = 2 * crate::par::threads().max(1);
+    let n = layers.len();
+    let mut solved: std::collections::VecDeque<Solved> = std::collections::VecDeque::new();
+    for li in 0..n {
+        if solved.is_empty() {
+            let end = (li + window).min(n);
+            solved.extend(crate::par::map(end - li, &mut |_| {}, |k| solve_layer(&layers[li + k], options, seed, li + k)));
+        }
+        let Some(Solved { graph, chains, mut stats, gippo_score }) = solved.pop_front() else { break };
+        let layer = &layers[li];
+        let mut chains = chains;
         let ends: Vec<[DVec2; 2]> = chains.iter().map(|c| order::printed_ends(c, &graph)).collect();
         let circuit: Vec<(usize, bool)> = (0..chains.len()).map(|i| (i, false)).collect();
         stats.circuit_travel_mm = order::travel_of(&circuit, &ends, last_end);
@@ -353,6 +335,51 @@ pub fn optimise(
         progress((li + 1) as f32 / layers.len() as f32);
     }
     Ok(Optimised { toolpath, report })
+}
+
+/// One layer's graph and paths before ordering.
+struct Solved {
+    graph: Graph,
+    chains: Vec<Chain>,
+    stats: LayerPaths,
+    gippo_score: Option<f64>,
+}
+
+/// Builds layer `li`'s graph and covers its edges with the method's chains (GIPPO seeded from
+/// `seed` and the layer's index alone, so layers can be solved in any order).
+fn solve_layer(layer: &StrokeLayer, options: &Options, seed: u64, li: usize) -> Solved {
+    let graph = build_graph(layer, options.merge_tolerance_mm);
+    let mut stats = LayerPaths {
+        nodes: graph.nodes.len(),
+        edges: graph.edges.len(),
+        degenerate_dropped: graph.degenerate_dropped,
+        components: graph.components,
+        odd_nodes: graph.odd_nodes(),
+        lower_bound_paths: graph.lower_bound_paths(),
+        duplicates_collapsed: graph.duplicates_collapsed,
+        ..LayerPaths::default()
+    };
+    let mut gippo_score = None;
+    let chains = match options.method {
+        Method::GippoMax | Method::GippoMin => {
+            let mut rng = Pcg64::seed_from_u64(layer_seed(seed, li));
+            let sol = gippo::run(&graph, options.iterations, options.method == Method::GippoMax, &mut rng);
+            gippo_score = Some(sol.score);
+            stats.iteration_scores = sol.iteration_scores;
+            sol.chains
+        }
+        Method::Euler => {
+            let r = euler::run(&graph, options.exact_pairing_seconds);
+            stats.set_pairing(r.pairing_mm, r.lower_bound_mm, r.optimal);
+            r.chains
+        }
+        Method::Continuous => {
+            let r = postman::run(&graph, options.exact_pairing_seconds);
+            stats.set_pairing(r.pairing_mm, r.lower_bound_mm, r.optimal);
+            r.chains
+        }
+    };
+    Solved { graph, chains, stats, gippo_score }
 }
 
 /// GIPPO's RNG seed for layer `index`: the job seed mixed with the layer index (SplitMix64

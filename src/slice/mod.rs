@@ -387,7 +387,7 @@ pub fn slice(mesh: &Mesh, options: &Options, progress: &mut dyn FnMut(f32)) -> R
     }
     estimate(mesh, options).check()?;
     let o = options;
-    let mut sweep = plane::Sweep::new(mesh);
+    let sweep = plane::Sweep::new(mesh);
     let top = match sweep.top {
         Some(t) if t > 0.0 => t,
         _ => return Ok(Sliced::default()),
@@ -404,27 +404,58 @@ pub fn slice(mesh: &Mesh, options: &Options, progress: &mut dyn FnMut(f32)) -> R
     };
     tick(0.0, progress);
 
-    // Pass 1: regions of every layer.
+    // Pass 1: regions of every layer, runs of layers swept side by side (a few runs a thread,
+    // so one slow run does not hold the rest; each run's cursor starts with its own scan).
     let gap_um = o.gap_closing_mm * UNITS_PER_MM;
-    let mut segs = Vec::new();
+    let runs = if crate::par::threads() > 1 { 4 * crate::par::threads() } else { 1 };
+    let cut = crate::par::map_runs(n, runs, &mut |d| tick(0.4 * d as f32 / n.max(1) as f32, progress), |range, done| {
+        let mut cursor = sweep.cursor(stack[range.start].2);
+        let mut segs = Vec::new();
+        range
+            .map(|i| {
+                cursor.segments(stack[i].2, &mut segs);
+                let (loops, st) = stitch::stitch(&mut segs, gap_um);
+                let (shapes, overlap) = regions::union_loops(&loops);
+                done();
+                (shapes, st, overlap)
+            })
+            .collect()
+    });
     let mut layer_shapes: Vec<IntShapes<i32>> = Vec::with_capacity(n);
-    for (i, &(_, _, slice_z)) in stack.iter().enumerate() {
-        sweep.segments(slice_z, &mut segs);
-        let (loops, st) = stitch::stitch(&mut segs, gap_um);
+    for (shapes, st, overlap) in cut {
         report.gaps_closed += st.gaps_closed;
         report.largest_gap_closed_mm = report.largest_gap_closed_mm.max(st.largest_gap_um / UNITS_PER_MM);
         report.open_contours_dropped += st.open_dropped;
-        let (shapes, overlap) = regions::union_loops(&loops);
         if overlap {
             report.layers_with_overlaps += 1;
         }
         layer_shapes.push(shapes);
-        tick(0.4 * (i + 1) as f32 / n as f32, progress);
     }
 
-    // Pass 2: perimeters, infill, order.
+    // Pass 2: perimeters and infill of each layer side by side, then the order of each layer's
+    // paths, which starts where the layer below ended (in turn).
     let w = o.line_width_mm;
     let w_um = (w * UNITS_PER_MM).round() as i32;
+    let filled = crate::par::map(n, &mut |d| tick(0.4 + 0.5 * d as f32 / n.max(1) as f32, progress), |i| fill_layer(o, &layer_shapes, &stack, i, w_um));
+    let mut layers = Vec::with_capacity(n);
+    let mut toolpath = Toolpath { passes: Vec::with_capacity(n) };
+    let mut pos = DVec2::ZERO;
+    for (i, works) in filled.into_iter().enumerate() {
+        let (z, h, slice_z) = stack[i];
+        let paths = order::order_layer(works, &mut pos, z, w);
+        toolpath.passes.push(Pass::layer(z, h, paths));
+        layers.push(SlicedLayer { slice_z, z, height: h, regions: regions::to_polygons(&layer_shapes[i]) });
+        tick(0.9 + 0.1 * (i + 1) as f32 / n as f32, progress);
+    }
+    tick(1.0, progress);
+    Ok(Sliced { layers, toolpath, report })
+}
+
+/// Perimeters and infill of layer `i` (of `stack`, regions `layer_shapes`), by region: what the
+/// layer's order starts from. Reads the layers within `solid_layers` for its solid infill.
+fn fill_layer(o: &Options, layer_shapes: &[IntShapes<i32>], stack: &[(f64, f64, f64)], i: usize, w_um: i32) -> Vec<order::RegionWork> {
+    let n = stack.len();
+    let slice_z = stack[i].2;
     // Infill centre lines stay a full half width inside the innermost perimeter's inner edge:
     // lines and their boundary-following connectors then sit side by side with the perimeter
     // (the analyzer's overlap_mm is 0) instead of re-covering half of it.
@@ -433,103 +464,92 @@ pub fn slice(mesh: &Mesh, options: &Options, progress: &mut dyn FnMut(f32)) -> R
     let min_len_um = 0.25 * w_um as f64;
     let base_angle = o.infill_angle_deg.to_radians();
     let s = o.solid_layers as usize;
-    let mut layers = Vec::with_capacity(n);
-    let mut toolpath = Toolpath { passes: Vec::with_capacity(n) };
-    let mut pos = DVec2::ZERO;
-    for i in 0..n {
-        let (z, h, slice_z) = stack[i];
-        let shapes = &layer_shapes[i];
-        // Infill area of the whole layer (regions are disjoint, so are their insets).
-        let mut works: Vec<order::RegionWork> = Vec::with_capacity(shapes.len());
-        let mut area: IntShapes<i32> = Vec::new();
-        for region in shapes {
-            let levels = perimeters::perimeter_levels(region, o.perimeters, w_um);
-            let (min, max) = bbox_mm(region);
-            works.push(order::RegionWork {
-                min,
-                max,
-                perimeters: levels.iter().map(|l| l.iter().flat_map(|sh| sh.iter()).map(|c| to_mm_loop(c)).collect()).collect(),
-                infill: Vec::new(),
-            });
-            area.extend(perimeters::inset(std::slice::from_ref(region), infill_inset));
-        }
-        let (solid, sparse) = if area.is_empty() {
-            (Vec::new(), Vec::new())
-        } else if o.infill_density >= 1.0 {
-            (area, Vec::new())
-        } else if s == 0 {
-            (Vec::new(), area)
+    let shapes = &layer_shapes[i];
+    // Infill area of the whole layer (regions are disjoint, so are their insets).
+    let mut works: Vec<order::RegionWork> = Vec::with_capacity(shapes.len());
+    let mut area: IntShapes<i32> = Vec::new();
+    for region in shapes {
+        let levels = perimeters::perimeter_levels(region, o.perimeters, w_um);
+        let (min, max) = bbox_mm(region);
+        works.push(order::RegionWork {
+            min,
+            max,
+            perimeters: levels.iter().map(|l| l.iter().flat_map(|sh| sh.iter()).map(|c| to_mm_loop(c)).collect()).collect(),
+            infill: Vec::new(),
+        });
+        area.extend(perimeters::inset(std::slice::from_ref(region), infill_inset));
+    }
+    let (solid, sparse) = if area.is_empty() {
+        (Vec::new(), Vec::new())
+    } else if o.infill_density >= 1.0 {
+        (area, Vec::new())
+    } else if s == 0 {
+        (Vec::new(), area)
+    } else {
+        // Covered by every layer within `s` above and below.
+        let mut cov: Option<IntShapes<i32>> = None;
+        if i < s || i + s >= n {
+            cov = Some(Vec::new());
         } else {
-            // Covered by every layer within `s` above and below.
-            let mut cov: Option<IntShapes<i32>> = None;
-            if i < s || i + s >= n {
-                cov = Some(Vec::new());
-            } else {
-                for (j, other) in layer_shapes.iter().enumerate().take(i + s + 1).skip(i - s) {
-                    if j == i {
-                        continue;
-                    }
-                    let next = match &cov {
-                        None => other.clone(),
-                        Some(c) => regions::intersect(c, other),
-                    };
-                    let done = next.is_empty();
-                    cov = Some(next);
-                    if done {
-                        break;
-                    }
+            for (j, other) in layer_shapes.iter().enumerate().take(i + s + 1).skip(i - s) {
+                if j == i {
+                    continue;
+                }
+                let next = match &cov {
+                    None => other.clone(),
+                    Some(c) => regions::intersect(c, other),
+                };
+                let done = next.is_empty();
+                cov = Some(next);
+                if done {
+                    break;
                 }
             }
-            let cov = cov.unwrap_or_default();
-            if cov.is_empty() {
-                (area, Vec::new())
-            } else {
-                // Solid and sparse lines both follow their area's boundary; keeping the sparse
-                // area one line width away from the solid one stops them sharing a boundary
-                // (which would print that stretch twice).
-                let solid = regions::difference(&area, &cov);
-                let sparse = regions::intersect(&area, &cov);
-                let sparse = if solid.is_empty() { sparse } else { regions::difference(&sparse, &perimeters::outset(&solid, w_um)) };
-                (solid, sparse)
-            }
-        };
-        let angle = if i % 2 == 0 { base_angle } else { base_angle + std::f64::consts::FRAC_PI_2 };
-        let mut lines: Vec<(Feature, Vec<DVec2>)> = Vec::new();
-        for l in infill::rectilinear(&solid, w_um as f64, angle, min_len_um) {
-            lines.push((Feature::SolidInfill, l));
         }
-        if o.infill_density > 0.0 && !sparse.is_empty() {
-            for l in sparse_lines(o, &sparse, w_um, i, slice_z, angle, min_len_um) {
-                lines.push((Feature::Infill, l));
-            }
+        let cov = cov.unwrap_or_default();
+        if cov.is_empty() {
+            (area, Vec::new())
+        } else {
+            // Solid and sparse lines both follow their area's boundary; keeping the sparse
+            // area one line width away from the solid one stops them sharing a boundary
+            // (which would print that stretch twice).
+            let solid = regions::difference(&area, &cov);
+            let sparse = regions::intersect(&area, &cov);
+            let sparse = if solid.is_empty() { sparse } else { regions::difference(&sparse, &perimeters::outset(&solid, w_um)) };
+            (solid, sparse)
         }
-        // Hand each polyline to the region containing its first point.
-        for (f, l) in lines {
-            let p = l[0];
-            let k = (0..shapes.len())
-                .find(|&k| {
-                    let r = &works[k];
-                    p.x >= r.min.x && p.x <= r.max.x && p.y >= r.min.y && p.y <= r.max.y && contains(&shapes[k], p)
-                })
-                .unwrap_or_else(|| {
-                    (0..works.len())
-                        .min_by(|&a, &b| {
-                            order::box_dist2(p, works[a].min, works[a].max)
-                                .total_cmp(&order::box_dist2(p, works[b].min, works[b].max))
-                        })
-                        .unwrap_or(0)
-                });
-            if let Some(r) = works.get_mut(k) {
-                r.infill.push((f, l));
-            }
-        }
-        let paths = order::order_layer(works, &mut pos, z, w);
-        toolpath.passes.push(Pass::layer(z, h, paths));
-        layers.push(SlicedLayer { slice_z, z, height: h, regions: regions::to_polygons(shapes) });
-        tick(0.4 + 0.6 * (i + 1) as f32 / n as f32, progress);
+    };
+    let angle = if i % 2 == 0 { base_angle } else { base_angle + std::f64::consts::FRAC_PI_2 };
+    let mut lines: Vec<(Feature, Vec<DVec2>)> = Vec::new();
+    for l in infill::rectilinear(&solid, w_um as f64, angle, min_len_um) {
+        lines.push((Feature::SolidInfill, l));
     }
-    tick(1.0, progress);
-    Ok(Sliced { layers, toolpath, report })
+    if o.infill_density > 0.0 && !sparse.is_empty() {
+        for l in sparse_lines(o, &sparse, w_um, i, slice_z, angle, min_len_um) {
+            lines.push((Feature::Infill, l));
+        }
+    }
+    // Hand each polyline to the region containing its first point.
+    for (f, l) in lines {
+        let p = l[0];
+        let k = (0..shapes.len())
+            .find(|&k| {
+                let r = &works[k];
+                p.x >= r.min.x && p.x <= r.max.x && p.y >= r.min.y && p.y <= r.max.y && contains(&shapes[k], p)
+            })
+            .unwrap_or_else(|| {
+                (0..works.len())
+                    .min_by(|&a, &b| {
+                        order::box_dist2(p, works[a].min, works[a].max)
+                            .total_cmp(&order::box_dist2(p, works[b].min, works[b].max))
+                    })
+                    .unwrap_or(0)
+            });
+        if let Some(r) = works.get_mut(k) {
+            r.infill.push((f, l));
+        }
+    }
+    works
 }
 
 #[cfg(test)]

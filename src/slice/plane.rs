@@ -67,20 +67,26 @@ pub(crate) fn cut_triangle(mesh: &Mesh, t: [u32; 3], h: f64) -> Option<Seg> {
     Some(Seg { a: s, b: e })
 }
 
-/// Sweeps increasing plane heights over the triangles, sorted by their lowest Z, keeping an
-/// active list of the triangles that may still be cut. Each call to [`Sweep::segments`]
-/// costs O(triangles spanning the plane + triangles entering), not O(all triangles).
+/// The triangles sorted by their lowest Z, for sweeping planes up through them: shared (read
+/// only) by the [`Cursor`]s that sweep runs of layers side by side.
 pub(crate) struct Sweep<'a> {
     mesh: &'a Mesh,
     /// Triangle indices sorted by (min z, index).
     order: Vec<u32>,
     zmin: Vec<f32>,
     zmax: Vec<f32>,
+    /// Highest Z over the usable triangles (finite coordinates), or `None` if there are none.
+    pub top: Option<f64>,
+}
+
+/// A sweep of increasing plane heights, keeping an active list of the triangles that may
+/// still be cut. Each call to [`Cursor::segments`] costs O(triangles spanning the plane +
+/// triangles entering), not O(all triangles).
+pub(crate) struct Cursor<'s, 'a> {
+    sweep: &'s Sweep<'a>,
     next: usize,
     active: Vec<u32>,
     last_h: f64,
-    /// Highest Z over the usable triangles (finite coordinates), or `None` if there are none.
-    pub top: Option<f64>,
 }
 
 impl<'a> Sweep<'a> {
@@ -106,23 +112,35 @@ impl<'a> Sweep<'a> {
             order.push(i as u32);
         }
         order.sort_unstable_by(|&a, &b| zmin[a as usize].total_cmp(&zmin[b as usize]).then(a.cmp(&b)));
-        Sweep { mesh, order, zmin, zmax, next: 0, active: Vec::new(), last_h: f64::NEG_INFINITY, top: top.map(f64::from) }
+        Sweep { mesh, order, zmin, zmax, top: top.map(f64::from) }
     }
 
+    /// A cursor whose first plane is `h`: its active list is the one a sweep from the bottom
+    /// would hold there (the triangles entered below `h` and reaching it, in entering order),
+    /// so runs of layers swept apart cut the same segments in the same order.
+    pub fn cursor(&self, h: f64) -> Cursor<'_, 'a> {
+        let next = self.order.partition_point(|&t| (self.zmin[t as usize] as f64) < h);
+        let active = self.order[..next].iter().copied().filter(|&t| self.zmax[t as usize] as f64 >= h).collect();
+        Cursor { sweep: self, next, active, last_h: h }
+    }
+}
+
+impl Cursor<'_, '_> {
     /// The oriented segments of the plane `z = h`. Heights must not decrease between calls.
     pub fn segments(&mut self, h: f64, out: &mut Vec<Seg>) {
         debug_assert!(h >= self.last_h);
         self.last_h = h;
         out.clear();
-        while self.next < self.order.len() && (self.zmin[self.order[self.next] as usize] as f64) < h {
-            self.active.push(self.order[self.next]);
+        let s = self.sweep;
+        while self.next < s.order.len() && (s.zmin[s.order[self.next] as usize] as f64) < h {
+            self.active.push(s.order[self.next]);
             self.next += 1;
         }
-        let zmax = &self.zmax;
+        let zmax = &s.zmax;
         self.active.retain(|&t| zmax[t as usize] as f64 >= h);
         for &t in &self.active {
-            if let Some(s) = cut_triangle(self.mesh, self.mesh.triangles[t as usize], h) {
-                out.push(s);
+            if let Some(seg) = cut_triangle(s.mesh, s.mesh.triangles[t as usize], h) {
+                out.push(seg);
             }
         }
     }
@@ -151,9 +169,9 @@ mod tests {
     #[test]
     fn cube_segments_run_counter_clockwise() {
         let mesh = Shape::Cube { size: [2.0, 2.0, 2.0] }.mesh();
-        let mut sweep = Sweep::new(&mesh);
+        let sweep = Sweep::new(&mesh);
         let mut segs = Vec::new();
-        sweep.segments(1.0, &mut segs);
+        sweep.cursor(0.0).segments(1.0, &mut segs);
         assert_eq!(segs.len(), 8);
         // Twice the signed area, summed over the segments (a closed loop).
         let twice: i64 = segs.iter().map(|s| s.a[0] as i64 * s.b[1] as i64 - s.b[0] as i64 * s.a[1] as i64).sum();

@@ -601,21 +601,32 @@ async function workerStep(page, message, type) {
 
 /** Whole designs stage by stage: worker beside native (`weft bench --design` table rows). */
 function designsReport(browserRun, nativeText) {
+  // Native rows: | design | stage | 1 thread s | N threads s | speed-up |
   const native = {};
-  for (const m of nativeText.matchAll(/^\| ([^|]+) \| ([^|*]+) \| ([0-9.]+) \|$/gm)) (native[m[1].trim()] ??= {})[m[2].trim()] = Number(m[3]) * 1000;
-  for (const m of nativeText.matchAll(/^\| ([^|]+) \| \*\*total\*\* \| \*\*([0-9.]+)\*\*/gm)) (native[m[1].trim()] ??= {}).total = Number(m[2]) * 1000;
+  const nativeAll = {};
+  for (const m of nativeText.matchAll(/^\| ([^|]+) \| ([^|*]+) \| ([0-9.]+) \| ([0-9.]+) \| [^|]+ \|$/gm)) {
+    (native[m[1].trim()] ??= {})[m[2].trim()] = Number(m[3]) * 1000;
+    (nativeAll[m[1].trim()] ??= {})[m[2].trim()] = Number(m[4]) * 1000;
+  }
+  for (const m of nativeText.matchAll(/^\| ([^|]+) \| \*\*total\*\* \| \*\*([0-9.]+)\*\* \| \*\*([0-9.]+)\*\*/gm)) {
+    (native[m[1].trim()] ??= {}).total = Number(m[2]) * 1000;
+    (nativeAll[m[1].trim()] ??= {}).total = Number(m[3]) * 1000;
+  }
+  const threads = nativeText.match(/\| ([0-9]+) threads s \|/)?.[1] ?? "N";
   const out = [];
   out.push(`## Whole designs, stage by stage (best of ${REPEATS} runs, no cache)`);
   out.push("");
   out.push(`Browser: Chromium ${browserRun.version}, module Web Worker, wasm (\`Session.run\`, a fresh session per run). Native: \`weft bench --design\`. Milliseconds; a stage runs from its first progress report to the next stage's.`);
   out.push("");
-  out.push("| design | stage | worker ms | native ms | worker / native |");
-  out.push("|---|---|---|---|---|");
+  out.push(`| design | stage | worker ms (1 thread) | native ms, 1 thread | worker / native | native ms, ${threads} threads | 1 ÷ ${threads} threads |`);
+  out.push("|---|---|---|---|---|---|---|");
+  const ratio = (a, b) => (a && b ? `${f(a / b, 2)}×` : "?");
   for (const row of browserRun.designs.rows) {
     const n = native[row.name] ?? {};
-    for (const s of row.stages) out.push(`| ${row.name} | ${s.stage} | ${f(s.ms, 1)} | ${f(n[s.stage], 1)} | ${n[s.stage] ? `${f(s.ms / n[s.stage], 2)}×` : "?"} |`);
+    const a = nativeAll[row.name] ?? {};
+    for (const s of row.stages) out.push(`| ${row.name} | ${s.stage} | ${f(s.ms, 1)} | ${f(n[s.stage], 1)} | ${ratio(s.ms, n[s.stage])} | ${f(a[s.stage], 1)} | ${ratio(n[s.stage], a[s.stage])} |`);
     const best = Math.min(...row.runs);
-    out.push(`| ${row.name} | **total** | **${f(best, 1)}** | **${f(n.total, 1)}** | ${n.total ? `${f(best / n.total, 2)}×` : "?"} |`);
+    out.push(`| ${row.name} | **total** | **${f(best, 1)}** | **${f(n.total, 1)}** | ${ratio(best, n.total)} | **${f(a.total, 1)}** | ${ratio(n.total, a.total)} |`);
   }
   out.push("");
   out.push(`Worker runs (ms): ${browserRun.designs.rows.map((r) => `${r.name} ${r.runs.map((x) => f(x, 0)).join(", ")}`).join("; ")}; wasm linear memory after: ${f(browserRun.designs.memory / MiB, 0)} MiB.`);

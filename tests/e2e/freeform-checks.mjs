@@ -173,6 +173,61 @@ export async function freeformChecks({ baseUrl, weftBin = process.env.WEFT_BIN, 
       await shots(page, '#report .stage-card[data-stage="costs"] [data-plot-key="bands"]', join(outDir, "freeform-bands"));
       return `truss: ${tilted} of 2197 beams tilted; tower: ${bands} bands, joins cost up to ${joinCost.toFixed(3)} µm`;
     });
+
+    await check(n++, "freeform: a big plan sends its first beams ahead while it goes on: the progress bar offers their G-code, and the final G-code's moves begin with theirs (desktop and phone)", async () => {
+      // Every `ahead` message the worker posts, as the page receives it.
+      await page.addInitScript(() => {
+        const Base = window.Worker;
+        window.Worker = class extends Base {
+          constructor(...args) {
+            super(...args);
+            this.addEventListener("message", ({ data }) => {
+              if (data?.type === "ahead") (window.__ahead ??= []).push({ label: data.label, done: data.done, total: data.total, text: new TextDecoder().decode(data.gcode) });
+            });
+          }
+        };
+      });
+      const moves = (text) => {
+        const from = text.indexOf(";LAYER_CHANGE");
+        const to = text.lastIndexOf("; weft: ");
+        return text.slice(from, to > from ? to : text.length);
+      };
+      const seen = [];
+      for (const [file, w, h, name] of [["freeform-cantilever-truss.json", 1280, 800, "desktop"], ["freeform-cantilever-truss-tilt.json", 390, 844, "phone"]]) {
+        await page.setViewportSize({ width: w, height: h });
+        await page.goto(`${baseUrl}/www/`);
+        await waitReady(page);
+        const before = await page.evaluate(() => window.weft.resultCount);
+        await page.selectOption("#examples", file);
+        // The link shows while the rest is planned, ordered and measured.
+        const link = await page.waitForSelector("#progress-ahead:not([hidden])", { timeout: jobTimeout }).then(() => page.evaluate(() => {
+          const a = document.getElementById("progress-ahead");
+          return { text: a.textContent, download: a.download, href: a.href };
+        })).catch(() => null);
+        if (link) await page.screenshot({ path: join(outDir, `freeform-ahead-${name}.png`) });
+        await waitResult(page, before, `running ${file}`, jobTimeout);
+        const design = file.replace(".json", "");
+        await page.waitForFunction((d) => !window.weft.busy && window.weft.result?.report?.name === d, design, { timeout: jobTimeout });
+        const got = await page.evaluate(() => window.__ahead ?? []);
+        if (got.length !== 1) throw new Error(`${file}: ${got.length} files sent ahead`);
+        const a = got[0];
+        const report = await page.evaluate(() => window.weft.result.report);
+        const paths = report.analysis.extrusion_paths;
+        if (!(a.done >= 200 && a.done < paths && a.total === paths)) throw new Error(`${file}: ${a.done} of ${a.total} sent, ${paths} printed`);
+        const sent = report.stages.find((x) => x.stage === "plan")?.metrics.find((m) => m.key === "sent")?.value;
+        if (sent !== a.done) throw new Error(`${file}: the plan card says ${sent} sent`);
+        const final = (await downloadGcode(page, join(outDir, file.replace(".json", ".gcode")))).bytes.toString("utf8");
+        const head = moves(a.text);
+        if (head.length < 1000 || !moves(final).startsWith(head)) throw new Error(`${file}: the final G-code does not begin with the moves sent ahead`);
+        // One pass per beam.
+        const beamsSent = (a.text.match(/^;LAYER:\d+$/gm) ?? []).length;
+        if (beamsSent !== a.done) throw new Error(`${file}: ${beamsSent} beams in the file sent ahead, ${a.done} stated`);
+        if (link && !/Start printing: the first \d+ of \d+ beams/.test(link.text)) throw new Error(`link reads "${link.text}"`);
+        seen.push(`${file}: ${a.done} of ${a.total} beams, ${(a.text.length / 1024).toFixed(0)} KiB${link ? ", link shown" : ""}`);
+      }
+      await page.setViewportSize({ width: 1400, height: 900 });
+      return seen.join("; ");
+    });
   } finally {
     await context.close();
   }

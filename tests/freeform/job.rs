@@ -269,3 +269,53 @@ fn weft_models_deadhead_clear_of_printed_beams_and_the_order_card_counts_those_t
     let blocked = order.metrics.iter().find(|m| m.key == "blocked").unwrap().value;
     assert!(blocked > 0.0 && order.label.contains("pass through printed beams"), "{blocked}: {}", order.label);
 }
+
+/// G-code from its first move (`;LAYER_CHANGE`) on, without the trailer of a file sent ahead.
+fn moves(text: &str) -> &str {
+    let from = text.find(";LAYER_CHANGE").expect("moves");
+    let to = text.rfind("; weft: ").filter(|&i| i > from).unwrap_or(text.len());
+    &text[from..to]
+}
+
+#[test]
+fn the_first_beams_are_sent_ahead_and_the_final_gcode_begins_with_their_moves() {
+    use std::cell::RefCell;
+    use weft::jobs::Registry;
+    use weft::pipeline::{Ahead, Cache, RunOptions};
+    for name in ["freeform-voronoi", "freeform-klein-bottle-relaxed", "freeform-cantilever-truss-tilt"] {
+        let d = example(name);
+        let sent: RefCell<Vec<Ahead>> = RefCell::new(Vec::new());
+        let out = pipeline::run_sending(&Registry::builtin(), &mut Cache::disabled(), &d, &Files::new(), &RunOptions::default(), &mut |_, _| {}, &|a| sent.borrow_mut().push(a.clone())).unwrap();
+        let sent = sent.into_inner();
+        assert_eq!(sent.len(), 1, "{name}: sent once");
+        let a = &sent[0];
+        let beams = out.report.analysis.extrusion_paths;
+        assert!(a.done >= weft::freeform::plan::DEFAULT_SEND_AHEAD_BEAMS && a.done < beams && a.total == beams, "{name}: {} of {} sent, {beams} beams", a.done, a.total);
+        let plan = out.report.stages.iter().find(|s| s.stage == "plan").unwrap();
+        assert_eq!(plan.metrics.iter().find(|m| m.key == "sent").map(|m| m.value), Some(a.done as f64), "{name}: the plan card says how many");
+        // The file sent is G-code of exactly those beams, and the final file's moves begin with its.
+        let options = weft::analyze::Options { machine: d.printer.machine.clone(), filament_diameter_mm: d.printer.filament_diameter_mm, ..Default::default() };
+        let read = weft::analyze::analyze("ahead.gcode", a.gcode.as_bytes(), &options).unwrap().report;
+        assert_eq!(read.extrusion_paths, a.done, "{name}: the beams sent");
+        let (head, all) = (moves(&a.gcode), moves(&out.gcode));
+        assert!(head.len() > 1000 && all.starts_with(head), "{name}: the final G-code's moves begin with those sent");
+        assert!(!a.gcode.contains(d.printer.end_gcode.lines().next().unwrap_or("M84")), "{name}: no end code in a file the plan goes on from");
+        // Listening changes nothing: the same bytes as a run nobody listens to.
+        assert_eq!(run(&d, &Files::new()).unwrap().gcode, out.gcode, "{name}");
+    }
+    // A plan taken from the cache (a view asked for first, an earlier run) is sent as well,
+    // the same bytes as when it was planned.
+    let d = example("freeform-voronoi");
+    let mut cache = Cache::new();
+    let got: RefCell<Vec<Ahead>> = RefCell::new(Vec::new());
+    for _ in 0..2 {
+        pipeline::run_sending(&Registry::builtin(), &mut cache, &d, &Files::new(), &RunOptions::default(), &mut |_, _| {}, &|a| got.borrow_mut().push(a.clone())).unwrap();
+    }
+    let got = got.into_inner();
+    assert_eq!(got.len(), 2);
+    assert_eq!(got[0], got[1], "sent from the cache as when planned");
+    // Planned in bands (a band may be planned again) nothing is sent.
+    let sent = RefCell::new(0);
+    pipeline::run_sending(&Registry::builtin(), &mut Cache::disabled(), &example("freeform-tower-bands"), &Files::new(), &RunOptions::default(), &mut |_, _| {}, &|_| *sent.borrow_mut() += 1).unwrap();
+    assert_eq!(sent.into_inner(), 0);
+}

@@ -577,3 +577,36 @@ fn a_descent_under_a_printed_roof_is_flagged_and_one_in_the_open_is_not() {
     let tilted = vec![DVec3::Z, DVec3::Z, DVec3::new(0.5, 0.0, 0.75f64.sqrt()), DVec3::Z];
     assert_eq!(deadhead::blocked(&joints, &beams, &tilted, &under, n.radius_mm, n.top(), 1.5), (vec![], 1));
 }
+
+#[test]
+fn a_plan_sends_a_beginning_it_keeps_and_the_deadhead_order_prints_it_first_as_sent() {
+    let n = nozzle();
+    let r = PLA.diameter_mm / 2.0;
+    let dead = deadhead::Options { xy_mm_s: 150.0, z_mm_s: 10.0, clearance_mm: 1.0, beam_radius_mm: r };
+    for (file, mode) in [("voronoi_S1_03-14-2019_w_layer.json", Mode::Strict), ("klein_bottle.json", Mode::Relaxed), ("duck.json", Mode::Strict), ("semi_sphere.json", Mode::Relaxed)] {
+        let w = fixture(file);
+        let c = constraints(&w, &n, r);
+        let a = Assembly { joints: &w.joints, beams: &w.beams, grounded: &w.grounded, constraints: &c };
+        let o = plan::Options { mode, cost: Cost::Exact, connection: true, section: PLA, load_n: 1e-4, budget_s: 600.0 };
+        let whole = plan::plan(&a, &o, &mut |_, _| {}).unwrap();
+        let m = w.beams.len();
+        for send_at in [1, m / 3, m - 1] {
+            let label = format!("{file} {mode:?}, sent at {send_at}");
+            let mut sent: Vec<Plan> = Vec::new();
+            let p = plan::plan_sending(&a, &o, send_at, &mut |_, _| {}, &mut |s| sent.push(s.clone())).unwrap();
+            assert_eq!(sent.len(), 1, "{label}: sent once");
+            let head = &sent[0];
+            assert!(head.steps.len() >= send_at && head.steps.len() < m, "{label}: {} sent", head.steps.len());
+            assert_eq!(p.sent, head.steps.len(), "{label}");
+            // Sending changes nothing of the plan: what was sent is its beginning.
+            assert_eq!(p.steps, whole.steps, "{label}: the same plan");
+            assert_eq!(head.steps[..], p.steps[..p.sent], "{label}");
+            // The order prints what was sent first, in the order it was sent, and still checks.
+            let alone = deadhead::order(&w.joints, head, &c, &dead);
+            let all = deadhead::order(&w.joints, &p, &c, &dead);
+            assert_eq!(all.steps[..p.sent], alone.steps[..], "{label}: sent first, as sent");
+            assert!(all.safe_z[..p.sent].iter().zip(&alone.safe_z).all(|(a, b)| a.to_bits() == b.to_bits()), "{label}: the same deadheads");
+            check(&w, &all.steps, &n, r, mode == Mode::Strict, &c, &label);
+        }
+    }
+}

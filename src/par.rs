@@ -1,0 +1,124 @@
+//! Parallel loops over independent items, with the output of a sequential loop.
+//!
+//! Every stage that works item by item (layers, beams, queries) goes through these two
+//! functions. The results come back in item order and each item is computed from its index
+//! alone (an item that needs randomness seeds it from the design's seed and its index), so the
+//! output is the same bytes at any thread count. Natively the items run on rayon's pool (the
+//! CLI sizes it: `weft run --threads N`; a test runs in `ThreadPool::install`); the wasm build
+//! runs the same loops on its one thread.
+//!
+//! Progress stays on the calling thread: a stage's progress callback is not `Send` (the
+//! worker's posts messages), so the caller polls a counter of finished items while the pool
+//! works, and runs pending items itself when it is one of the pool's threads.
+
+use std::ops::Range;
+#[cfg(not(target_arch = "wasm32"))]
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+/// Threads the loops of this thread use (1 in the browser's worker).
+pub fn threads() -> usize {
+    #[cfg(not(target_arch = "wasm32"))]
+    {
+        rayon::current_num_threads()
+    }
+    #[cfg(target_arch = "wasm32")]
+    {
+        1
+    }
+}
+
+/// `f(i)` for every `i` in `0..n`, in order; `progress(done)` as items finish.
+pub fn map<R, F>(n: usize, progress: &mut dyn FnMut(usize), f: F) -> Vec<R>
+where
+    R: Send,
+    F: Fn(usize) -> R + Sync,
+{
+    // One run per item while items are few; runs of several items beyond (spawning costs
+    // about a microsecond, an item here is a layer or a beam's queries).
+    let runs = n.min(4096);
+    map_runs(n, runs, progress, |range, tick| {
+        range
+            .map(|i| {
+                let r = f(i);
+                tick();
+                r
+            })
+            .collect()
+    })
+}
+
+/// Items `0..n` cut into `runs` contiguous runs of about equal length: `f(range, tick)` makes
+/// the results of one run, in order, calling `tick()` after each item; the runs' results are
+/// joined in order. For items that share set-up work along a run (a plane sweep over layers).
+pub fn map_runs<R, F>(n: usize, runs: usize, progress: &mut dyn FnMut(usize), f: F) -> Vec<R>
+where
+    R: Send,
+    F: Fn(Range<usize>, &dyn Fn()) -> Vec<R> + Sync,
+{
+    let runs = runs.clamp(1, n.max(1));
+    let bounds: Vec<Range<usize>> = (0..runs).map(|k| k * n / runs..(k + 1) * n / runs).filter(|r| !r.is_empty()).collect();
+    if threads() <= 1 || bounds.len() <= 1 {
+        // One thread: the ticks report (about every hundredth of the items).
+        let step = (n / 100).max(1);
+        let done = std::cell::Cell::new(0usize);
+        let progress = std::cell::RefCell::new(progress);
+        let tick = || {
+            done.set(done.get() + 1);
+            if done.get() % step == 0 {
+                (progress.borrow_mut())(done.get());
+            }
+        };
+        let mut out = Vec::with_capacity(n);
+        for r in bounds {
+            out.extend(f(r, &tick));
+        }
+        (progress.borrow_mut())(done.get());
+        return out;
+    }
+    #[cfg(target_arch = "wasm32")]
+    unreachable!("one thread in wasm");
+    #[cfg(not(target_arch = "wasm32"))]
+    {
+        /// Counts a run as ended however it ends (a panic is raised again by the scope).
+        struct Ended<'a>(&'a AtomicUsize);
+        impl Drop for Ended<'_> {
+            fn drop(&mut self) {
+                self.0.fetch_add(1, Ordering::Release);
+            }
+        }
+        let done = AtomicUsize::new(0);
+        let ended = AtomicUsize::new(0);
+        let runs = bounds.len();
+        let mut parts: Vec<Option<Vec<R>>> = (0..runs).map(|_| None).collect();
+        let f = &f;
+        let (done_ref, ended_ref) = (&done, &ended);
+        rayon::in_place_scope(|s| {
+            for (slot, r) in parts.iter_mut().zip(bounds.iter().cloned()) {
+                s.spawn(move |_| {
+                    let _end = Ended(ended_ref);
+                    *slot = Some(f(r, &|| {
+                        done_ref.fetch_add(1, Ordering::Relaxed);
+                    }))
+                });
+            }
+            // Report while the pool works; a pool thread helps with the runs instead of waiting.
+            let mut last = usize::MAX;
+            loop {
+                let over = ended.load(Ordering::Acquire) >= runs;
+                let d = done.load(Ordering::Relaxed);
+                if d != last {
+                    progress(d);
+                    last = d;
+                }
+                if over {
+                    break;
+                }
+                match rayon::yield_now() {
+                    Some(rayon::Yield::Executed) => {}
+                    _ => std::thread::sleep(std::time::Duration::from_millis(1)),
+                }
+            }
+        });
+        parts.into_iter().flat_map(|p| p.unwrap_or_default()).collect()
+    }
+}

@@ -8,8 +8,9 @@
 //! runs the same loops on its one thread.
 //!
 //! Progress stays on the calling thread: a stage's progress callback is not `Send` (the
-//! worker's posts messages), so the caller polls a counter of finished items while the pool
-//! works, and runs pending items itself when it is one of the pool's threads.
+//! worker's posts messages), so the caller reads a counter of finished items when a run ends
+//! (or every 20 ms) while the pool works, and runs pending items itself when it is one of the
+//! pool's threads.
 
 use std::ops::Range;
 #[cfg(not(target_arch = "wasm32"))]
@@ -33,9 +34,10 @@ where
     R: Send,
     F: Fn(usize) -> R + Sync,
 {
-    // One run per item while items are few; runs of several items beyond (spawning costs
-    // about a microsecond, an item here is a layer or a beam's queries).
-    let runs = n.min(4096);
+    // Sixteen runs a thread: enough for items of uneven cost to even out, few enough that
+    // spawning and waking (microseconds each) stay small beside short items (a pair's
+    // geodesic, a node).
+    let runs = n.min(16 * threads());
     map_runs(n, runs, progress, |range, tick| {
         range
             .map(|i| {
@@ -79,11 +81,13 @@ where
     unreachable!("one thread in wasm");
     #[cfg(not(target_arch = "wasm32"))]
     {
-        /// Counts a run as ended however it ends (a panic is raised again by the scope).
-        struct Ended<'a>(&'a AtomicUsize);
+        /// Counts a run as ended however it ends (a panic is raised again by the scope), and
+        /// wakes the caller.
+        struct Ended<'a>(&'a AtomicUsize, std::sync::mpsc::Sender<()>);
         impl Drop for Ended<'_> {
             fn drop(&mut self) {
                 self.0.fetch_add(1, Ordering::Release);
+                let _ = self.1.send(());
             }
         }
         let done = AtomicUsize::new(0);
@@ -92,16 +96,21 @@ where
         let mut parts: Vec<Option<Vec<R>>> = (0..runs).map(|_| None).collect();
         let f = &f;
         let (done_ref, ended_ref) = (&done, &ended);
+        let (wake, woken) = std::sync::mpsc::channel::<()>();
+        let in_pool = rayon::current_thread_index().is_some();
         rayon::in_place_scope(|s| {
             for (slot, r) in parts.iter_mut().zip(bounds.iter().cloned()) {
+                let wake = wake.clone();
                 s.spawn(move |_| {
-                    let _end = Ended(ended_ref);
+                    let _end = Ended(ended_ref, wake);
                     *slot = Some(f(r, &|| {
                         done_ref.fetch_add(1, Ordering::Relaxed);
                     }))
                 });
             }
-            // Report while the pool works; a pool thread helps with the runs instead of waiting.
+            // Report while the pool works: woken by each run's end, or every 20 ms. A pool
+            // thread helps with the runs instead of waiting (a 1-thread pool would otherwise
+            // never run them).
             let mut last = usize::MAX;
             loop {
                 let over = ended.load(Ordering::Acquire) >= runs;
@@ -113,10 +122,11 @@ where
                 if over {
                     break;
                 }
-                match rayon::yield_now() {
-                    Some(rayon::Yield::Executed) => {}
-                    _ => std::thread::sleep(std::time::Duration::from_millis(1)),
+                if in_pool && matches!(rayon::yield_now(), Some(rayon::Yield::Executed)) {
+                    continue;
                 }
+                let wait = if in_pool { 1 } else { 20 };
+                let _ = woken.recv_timeout(std::time::Duration::from_millis(wait));
             }
         });
         parts.into_iter().flat_map(|p| p.unwrap_or_default()).collect()

@@ -1748,6 +1748,9 @@ function planSummary(p) {
   if (p.gcode_bytes) parts.push(`${humanBytes(p.gcode_bytes)} of G-code`);
   parts.push(p.seconds < 1 ? "under 1 s" : `about ${formatSeconds(p.seconds)}`);
   if (p.peak_bytes) parts.push(`${humanBytes(p.peak_bytes)} of memory`);
+  // The worker's wasm computes on one thread (ARCHITECTURE.md, "Using every core").
+  const threads = state.result?.report?.threads ?? 1;
+  parts.push(`on ${threads} thread${threads === 1 ? "" : "s"}`);
   return parts.join(" · ");
 }
 

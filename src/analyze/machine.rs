@@ -501,7 +501,7 @@ pub(crate) fn run(file: &str, bytes: &[u8], options: &Options, est: &Estimate) -
     }
     let layer_comments = crate::motion::lex::has_layer_comments(bytes);
     #[cfg(not(target_arch = "wasm32"))]
-    if bytes.len() >= PARALLEL_OVERLAP_MIN_BYTES {
+    if bytes.len() >= PARALLEL_OVERLAP_MIN_BYTES && crate::par::threads() > 1 {
         // Overlap is per layer and independent of parsing: measure it on a second core while
         // the next layers are parsed. Same layers, same order, same arithmetic → same results.
         return std::thread::scope(|scope| {

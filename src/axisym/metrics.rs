@@ -101,28 +101,26 @@ pub fn graded_metrics(s: &Surface, points: &[[f64; 2]], rasters: u32, line_width
     let ne = rasters.max(1) as f64 * line_width_mm;
     let h = 4.0 * spacing;
     let h_max = 4.0 * local.iter().copied().fold(spacing, f64::max);
-    let nodes: Vec<Node> = points.iter().map(|&q| s.node(q)).collect();
+    let nodes: Vec<Node> = crate::par::map(points.len(), &mut |_| {}, |i| s.node(points[i]));
     let n = nodes.len();
-    let mut kdf = vec![0.0; n];
-    let mut nn = Vec::with_capacity(n * k);
     if !(h > 0.0 && h.is_finite() && h_max.is_finite()) || n == 0 || local.len() != n {
         return Metrics { kernel_radius_mm: h, ..Default::default() };
     }
     let grid = Grid::new(nodes.iter().map(|n| n.p), h_max);
-    let mut cand = Vec::new();
-    let mut d: Vec<f64> = Vec::new();
-    for i in 0..n {
+    // Each point's kernel density and nearest distances on its own, points side by side.
+    let rows = crate::par::map(n, &mut |_| {}, |i| {
         let hi = 4.0 * local[i];
         let norm = 15.0 / (PI * hi.powi(6));
-        cand.clear();
+        let mut cand = Vec::new();
         grid.near(nodes[i].p, h_max, &mut cand);
-        d.clear();
+        let mut kdf = 0.0;
+        let mut d: Vec<f64> = Vec::with_capacity(cand.len());
         for &j in &cand {
             if j as usize != i {
                 let dij = s.pair(&nodes[i], &nodes[j as usize]).0;
                 d.push(dij);
                 if dij <= hi {
-                    kdf[i] += norm * (hi - dij).powi(3);
+                    kdf += norm * (hi - dij).powi(3);
                 }
             }
         }
@@ -131,8 +129,11 @@ pub fn graded_metrics(s: &Surface, points: &[[f64; 2]], rasters: u32, line_width
             d = (0..n).filter(|&j| j != i).map(|j| s.pair(&nodes[i], &nodes[j]).0).collect();
         }
         d.sort_by(f64::total_cmp);
-        nn.extend(d.iter().take(k));
-    }
+        d.truncate(k);
+        (kdf, d)
+    });
+    let kdf: Vec<f64> = rows.iter().map(|r| r.0).collect();
+    let nn: Vec<f64> = rows.into_iter().flat_map(|r| r.1).collect();
     let (mean, std) = mean_std(&nn);
     let mut kdf_sorted = kdf.clone();
     kdf_sorted.sort_by(f64::total_cmp);

@@ -64,7 +64,7 @@ pub struct Jet {
 
 /// A generatrix: anything with a radius x(u) and height z(u) and three derivatives. The
 /// geodesic code takes any profile, so analytic surfaces (an exact sphere) can test it.
-pub trait Profile {
+pub trait Profile: Sync {
     /// The parameter range [u_min, u_max].
     fn u_range(&self) -> (f64, f64);
     /// Values and derivatives at u.

@@ -545,6 +545,37 @@ impl Engine<'_, '_> {
         }
     }
 
+    /// The points' nodes (metric and position), side by side.
+    fn nodes(&self, pts: &[[f64; 2]]) -> Vec<Node> {
+        crate::par::map(pts.len(), &mut |_| {}, |k| self.s.node(pts[k]))
+    }
+
+    /// Calls `visit(i, j, pair)` for the pairs `near(i, …)` lists for each point `i` in turn, in
+    /// that order: the pairs' geodesics are evaluated side by side in batches, the sums made in
+    /// order on this thread (the same bits at any thread count).
+    fn for_pairs(&self, nodes: &[Node], near: &(dyn Fn(usize, &mut Vec<u32>, &mut Vec<(u32, u32)>) + Sync), visit: &mut dyn FnMut(usize, usize, &PairEval)) {
+        const BATCH: usize = 1 << 15;
+        let mut cand = Vec::new();
+        let mut pairs: Vec<(u32, u32)> = Vec::with_capacity(BATCH);
+        let mut flush = |pairs: &mut Vec<(u32, u32)>| {
+            let evals = crate::par::map(pairs.len(), &mut |_| {}, |k| {
+                let (i, j) = (pairs[k].0 as usize, pairs[k].1 as usize);
+                if self.geodesic { self.s.pair_both(&nodes[i], &nodes[j]) } else { self.s.chord_pair(&nodes[i], &nodes[j]) }
+            });
+            for (&(i, j), pe) in pairs.iter().zip(&evals) {
+                visit(i as usize, j as usize, pe);
+            }
+            pairs.clear();
+        };
+        for i in 0..nodes.len() {
+            near(i, &mut cand, &mut pairs);
+            if pairs.len() >= BATCH {
+                flush(&mut pairs);
+            }
+        }
+        flush(&mut pairs);
+    }
+
     /// The graded energy E = Σ (d_ij/s̄_ij)^−m − c^−m over pairs with d_ij < c·s̄_ij, where
     /// s̄_ij = ½(s_i + s_j) and c the cutoff in spacings (shifted so it is continuous at the
     /// cutoff, as the uniform one). Scale-free: a pair at its local target spacing weighs the
@@ -554,7 +585,7 @@ impl Engine<'_, '_> {
     /// the descent's no-rise rule holds as in the uniform case:
     /// F_i = m·x^(−m−1)/s̄·(∇_i d − x·∇_i s̄), x = d/s̄, ∇_i s̄ = −½·s_i/ρ_i·∇ρ_i.
     fn eval_graded(&self, pts: &[[f64; 2]], field: &Field) -> (f64, Vec<[f64; 2]>, Vec<Node>, Vec<f64>) {
-        let nodes: Vec<Node> = pts.iter().map(|&q| self.s.node(q)).collect();
+        let nodes = self.nodes(pts);
         let mut sp = Vec::with_capacity(nodes.len());
         let mut dsp = Vec::with_capacity(nodes.len());
         for n in &nodes {
@@ -567,14 +598,13 @@ impl Engine<'_, '_> {
         let shift = if c.is_finite() { libm::pow(c, -self.m) } else { 0.0 };
         let mut f = vec![[0.0; 2]; pts.len()];
         let mut e = 0.0;
-        let mut visit = |i: usize, j: usize| {
-            let pe: PairEval = if self.geodesic { self.s.pair_both(&nodes[i], &nodes[j]) } else { self.s.chord_pair(&nodes[i], &nodes[j]) };
+        let visit = |i: usize, j: usize, pe: &PairEval, e: &mut f64, f: &mut Vec<[f64; 2]>| {
             let sbar = 0.5 * (sp[i] + sp[j]);
             if !(pe.d < c * sbar) {
                 return;
             }
             let x = pe.d.max(1e-9) / sbar;
-            e += libm::pow(x, -self.m) - shift;
+            *e += libm::pow(x, -self.m) - shift;
             let w = self.m * libm::pow(x, -self.m - 1.0) / sbar;
             for k in 0..2 {
                 f[i][k] += w * (pe.ga[k] - x * 0.5 * dsp[i][k]);
@@ -584,28 +614,26 @@ impl Engine<'_, '_> {
         if c.is_finite() {
             let widest = sp.iter().copied().fold(0.0, f64::max) * c;
             let grid = Grid::new(nodes.iter().map(|n| n.p), widest);
-            let mut cand = Vec::new();
-            for i in 0..nodes.len() {
+            let near = |i: usize, cand: &mut Vec<u32>, out: &mut Vec<(u32, u32)>| {
                 cand.clear();
-                grid.near(nodes[i].p, widest, &mut cand);
-                for &j in &cand {
+                grid.near(nodes[i].p, widest, cand);
+                for &j in cand.iter() {
                     let j = j as usize;
                     if j > i {
                         let (a, b) = (nodes[i].p, nodes[j].p);
                         let c2 = (a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2);
                         let rc = c * 0.5 * (sp[i] + sp[j]);
                         if c2 < rc * rc {
-                            visit(i, j);
+                            out.push((i as u32, j as u32));
                         }
                     }
                 }
-            }
+            };
+            self.for_pairs(&nodes, &near, &mut |i, j, pe| visit(i, j, pe, &mut e, &mut f));
         } else {
-            for i in 0..nodes.len() {
-                for j in i + 1..nodes.len() {
-                    visit(i, j);
-                }
-            }
+            let n = nodes.len();
+            let all = |i: usize, _: &mut Vec<u32>, out: &mut Vec<(u32, u32)>| out.extend((i + 1..n).map(|j| (i as u32, j as u32)));
+            self.for_pairs(&nodes, &all, &mut |i, j, pe| visit(i, j, pe, &mut e, &mut f));
         }
         (e, f, nodes, sp)
     }
@@ -613,17 +641,16 @@ impl Engine<'_, '_> {
     /// (E, force covectors F_i = −∇_i E, nodes). The pair energy is shifted by rc^−m so it
     /// is continuous at the cutoff (a truncated, unshifted energy jumps as pairs cross it).
     fn eval_uniform(&self, pts: &[[f64; 2]]) -> (f64, Vec<[f64; 2]>, Vec<Node>) {
-        let nodes: Vec<Node> = pts.iter().map(|&q| self.s.node(q)).collect();
+        let nodes = self.nodes(pts);
         let mut f = vec![[0.0; 2]; pts.len()];
         let mut e = 0.0;
         let shift = if self.rc.is_finite() { libm::pow(self.rc, -self.m) } else { 0.0 };
-        let visit = |i: usize, j: usize, e: &mut f64, f: &mut Vec<[f64; 2]>| {
-            let pe: PairEval = if self.geodesic { self.s.pair_both(&nodes[i], &nodes[j]) } else { self.s.chord_pair(&nodes[i], &nodes[j]) };
+        let mut visit = |i: usize, j: usize, pe: &PairEval| {
             if !(pe.d < self.rc) {
                 return;
             }
             let d = pe.d.max(1e-9);
-            *e += libm::pow(d, -self.m) - shift;
+            e += libm::pow(d, -self.m) - shift;
             let w = self.m * libm::pow(d, -self.m - 1.0);
             f[i][0] += w * pe.ga[0];
             f[i][1] += w * pe.ga[1];
@@ -632,27 +659,26 @@ impl Engine<'_, '_> {
         };
         if self.rc.is_finite() {
             let grid = Grid::new(nodes.iter().map(|n| n.p), self.rc);
-            let mut cand = Vec::new();
-            for i in 0..nodes.len() {
+            let rc = self.rc;
+            let near = |i: usize, cand: &mut Vec<u32>, out: &mut Vec<(u32, u32)>| {
                 cand.clear();
-                grid.near(nodes[i].p, self.rc, &mut cand);
-                for &j in &cand {
+                grid.near(nodes[i].p, rc, cand);
+                for &j in cand.iter() {
                     let j = j as usize;
                     if j > i {
                         let (a, b) = (nodes[i].p, nodes[j].p);
                         let c2 = (a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2);
-                        if c2 < self.rc * self.rc {
-                            visit(i, j, &mut e, &mut f);
+                        if c2 < rc * rc {
+                            out.push((i as u32, j as u32));
                         }
                     }
                 }
-            }
+            };
+            self.for_pairs(&nodes, &near, &mut visit);
         } else {
-            for i in 0..nodes.len() {
-                for j in i + 1..nodes.len() {
-                    visit(i, j, &mut e, &mut f);
-                }
-            }
+            let n = nodes.len();
+            let all = |i: usize, _: &mut Vec<u32>, out: &mut Vec<(u32, u32)>| out.extend((i + 1..n).map(|j| (i as u32, j as u32)));
+            self.for_pairs(&nodes, &all, &mut visit);
         }
         (e, f, nodes)
     }

@@ -223,8 +223,17 @@ export async function freeformChecks({ baseUrl, weftBin = process.env.WEFT_BIN, 
         const beamsSent = (a.text.match(/^;LAYER:\d+$/gm) ?? []).length;
         if (beamsSent !== a.done) throw new Error(`${file}: ${beamsSent} beams in the file sent ahead, ${a.done} stated`);
         if (link && !/Start printing: the first \d+ of \d+ beams/.test(link.text)) throw new Error(`link reads "${link.text}"`);
+        // Where the time went, and on how many threads (the worker's one).
+        const timeLine = await page.evaluate(() => document.querySelector("#stats .time-line")?.textContent ?? "");
+        if (!/^Where the time went: .*\d (ms|s)\b.* — 1 thread$/.test(timeLine) || report.threads !== 1) throw new Error(`time line reads "${timeLine}" (${report.threads} threads)`);
+        if (name === "desktop") {
+          await page.evaluate(() => document.querySelector("#stats .time-line")?.scrollIntoView({ block: "center" }));
+          await page.screenshot({ path: join(outDir, "time-line-desktop.png") });
+        }
         seen.push(`${file}: ${a.done} of ${a.total} beams, ${(a.text.length / 1024).toFixed(0)} KiB${link ? ", link shown" : ""}`);
       }
+      await page.evaluate(() => document.querySelector("#stats .time-line")?.scrollIntoView({ block: "center" }));
+      await page.screenshot({ path: join(outDir, "time-line-phone.png") });
       await page.setViewportSize({ width: 1400, height: 900 });
       return seen.join("; ");
     });

@@ -422,9 +422,8 @@ impl<'a> Ctx<'a> {
         if let Some(e) = self.cache.entries.get_mut(id) {
             if e.key == key {
                 if let Ok(value) = e.value.clone().downcast::<T>() {
-                    if let Some(ms) = e.uncounted_ms.take() {
-                        self.timings.push(StageTime { stage: name.into(), ms, cached: false });
-                    }
+                    // Made by an estimate and not counted yet: this run's work.
+                    let earlier = e.uncounted_ms.take();
                     if let Some(mut r) = e.report.clone() {
                         if !self.reported.iter().any(|i| i == id) {
                             r.cached = true;
@@ -433,7 +432,7 @@ impl<'a> Ctx<'a> {
                         }
                     }
                     (self.progress)(name, 1.0);
-                    self.time(name, 0.0, true);
+                    self.time(name, earlier.unwrap_or(0.0), earlier.is_none());
                     return Ok(Out { value, key });
                 }
             }

@@ -674,11 +674,10 @@ fn plan_stage(j: &FreeformJob, ctx: &mut Ctx, w: &Out<Placed>, c: &Out<Constrain
     let o = plan_options(j);
     let searched = exact_runs(j, w.beams.len());
     let parts = (j.constraints, j.planner.cost, j.planner.budget_s, j.beam, searched, j.planner.band_beams);
-    let band_of = bands::assign(&w.joints, &w.beams, c, j.planner.band_beams);
-    let whole = band_of.iter().all(|&k| k == 0);
     // A plan made whole only adds to its beginning, so that can be sent ahead; a band may be
-    // planned again with the one above it, and the exact search may print another order.
-    let send_at = if whole && !searched { j.planner.send_ahead_beams } else { 0 };
+    // planned again with the one above it (below: no sending), and the exact search may print
+    // another order.
+    let send_at = if searched { 0 } else { j.planner.send_ahead_beams };
     let dead = deadhead_options(j, ctx.design);
     let sender = ctx.sender();
     let parts = (parts, send_at);
@@ -710,7 +709,8 @@ fn plan_stage(j: &FreeformJob, ctx: &mut Ctx, w: &Out<Placed>, c: &Out<Constrain
             sent.set(true);
             sent_ms = Some((crate::clock::now_s() - started) * 1000.0);
         };
-        let planned = if whole { plan::plan_sending(&a, &o, send_at, &mut tick, &mut ahead) } else { bands::plan(&a, &o, &band_of, &mut tick).map(|(p, _)| p) };
+        let band_of = bands::assign(&w.joints, &w.beams, c, j.planner.band_beams);
+        let planned = if band_of.iter().all(|&k| k == 0) { plan::plan_sending(&a, &o, send_at, &mut tick, &mut ahead) } else { bands::plan(&a, &o, &band_of, &mut tick).map(|(p, _)| p) };
         let p = match planned {
             Ok(p) => p,
             // The planner's refusals that are proofs stand; its search's limits the exact

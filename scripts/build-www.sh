@@ -2,6 +2,8 @@
 # Builds everything the static page needs, idempotently, installing what is missing:
 #   pkg/weft.js + pkg/weft_bg.wasm   (cargo --profile wasm → wasm-bindgen --target web →
 #                                     wasm-opt -Oz from the npm package binaryen)
+#   pkg/threads/                     (the same with threads: the worker's module when the page
+#                                     is cross-origin isolated)
 #   www/vendor/                      (three.js module build + OrbitControls, from node_modules)
 #   www/examples/                    (examples/*.json + index.json)
 # Usage: scripts/build-www.sh            (CARGO_TARGET_DIR is honoured; default ./target)
@@ -10,6 +12,7 @@
 #   WEFT_WASM_FEATURES  cargo features of the wasm build, e.g. "bench" (scripts/bench.sh)
 #   WEFT_PKG_DIR        output directory of the wasm build instead of ./pkg (the variable
 #                       tests/e2e/run.mjs and bench.mjs read to serve it as /pkg/)
+#   WEFT_WASM_THREADS   0: no threaded module (pkg/threads/ removed)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 root=$(pwd)
@@ -53,32 +56,85 @@ if [ -z "${SKIP_WASM:-}" ]; then
     cargo install wasm-bindgen-cli --version "$bindgen_version"
   fi
 
-  feature_args=()
-  [ -n "$features" ] && feature_args=(--features "$features")
-  say "cargo build --lib --profile wasm --target wasm32-unknown-unknown${features:+ --features $features}"
-  cargo build --lib --profile wasm --target wasm32-unknown-unknown "${feature_args[@]}"
-  mkdir -p "$pkg_dir"
-  wasm-bindgen --target web --out-dir "$pkg_dir" --out-name weft \
-    "$target_dir/wasm32-unknown-unknown/wasm/weft.wasm"
-  wasm=$pkg_dir/weft_bg.wasm
-  before="$(raw_bytes "$wasm") B (gzip -9: $(gz_bytes "$wasm") B)"
-  # Features rustc enables by default for wasm32-unknown-unknown (bulk memory, saturating
-  # float→int, sign extension, mutable globals, multi-value, reference types): wasm-opt must
-  # accept every one the module uses. Debian's binaryen is too old for the table.fill that
-  # wasm-bindgen emits for reference types, hence the npm build (runs under node), pinned in
-  # package.json. A failure here is an error: the module would ship unoptimised.
-  if ! "$wasm_opt" -Oz --enable-bulk-memory --enable-nontrapping-float-to-int --enable-sign-ext \
-    --enable-mutable-globals --enable-multivalue --enable-reference-types \
-    -o "$wasm.opt" "$wasm"; then
-    rm -f "$wasm.opt"
-    say "wasm-opt ($("$wasm_opt" --version 2>/dev/null)) failed on $wasm"
-    exit 1
+  # build_pkg OUT_DIR CARGO_TARGET_DIR FEATURES WASM_OPT_FLAGS… : cargo → wasm-bindgen → wasm-opt.
+  build_pkg() {
+    local out=$1 tdir=$2 feats=$3
+    shift 3
+    local feature_args=()
+    [ -n "$feats" ] && feature_args=(--features "$feats")
+    say "cargo build --lib --profile wasm --target wasm32-unknown-unknown${feats:+ --features $feats}${BUILD_STD:+ $BUILD_STD}"
+    # shellcheck disable=SC2086
+    CARGO_TARGET_DIR=$tdir cargo build --lib --profile wasm --target wasm32-unknown-unknown \
+      "${feature_args[@]}" ${BUILD_STD:-}
+    mkdir -p "$out"
+    wasm-bindgen --target web --out-dir "$out" --out-name weft "$tdir/wasm32-unknown-unknown/wasm/weft.wasm"
+    local wasm=$out/weft_bg.wasm
+    local before after
+    before="$(raw_bytes "$wasm") B (gzip -9: $(gz_bytes "$wasm") B)"
+    # Features rustc enables by default for wasm32-unknown-unknown (bulk memory, saturating
+    # float→int, sign extension, mutable globals, multi-value, reference types): wasm-opt must
+    # accept every one the module uses. Debian's binaryen is too old for the table.fill that
+    # wasm-bindgen emits for reference types, hence the npm build (runs under node), pinned in
+    # package.json. A failure here is an error: the module would ship unoptimised.
+    if ! "$wasm_opt" -Oz --enable-bulk-memory --enable-nontrapping-float-to-int --enable-sign-ext \
+      --enable-mutable-globals --enable-multivalue --enable-reference-types "$@" \
+      -o "$wasm.opt" "$wasm"; then
+      rm -f "$wasm.opt"
+      say "wasm-opt ($("$wasm_opt" --version 2>/dev/null)) failed on $wasm"
+      exit 1
+    fi
+    mv "$wasm.opt" "$wasm"
+    after="$(raw_bytes "$wasm") B (gzip -9: $(gz_bytes "$wasm") B)"
+    local binaryen_version
+    binaryen_version=$(node -p 'require("./node_modules/binaryen/package.json").version')
+    say "$wasm${feats:+ [features: $feats]}: $before before wasm-opt -Oz, $after after" \
+      "(binaryen $binaryen_version)"
+  }
+
+
+  # The threaded module (pkg/threads/): rayon's pool on web workers sharing one memory. std
+  # must be rebuilt with atomics (-Z build-std, which needs rust-src); RUSTC_BOOTSTRAP lets
+  # the machine's stable toolchain take that flag, so both modules are built from the same
+  # std source as the CLI and give the same bytes (a nightly's std could sort ties or round
+  # differently). Memory may grow to the wasm32 limit of 4 GiB (the plain build's too).
+  # WEFT_WASM_THREADS=0 skips it (the page then runs on one thread everywhere).
+  if [ "${WEFT_WASM_THREADS:-1}" != 0 ]; then
+    if ! rustup component list --installed 2>/dev/null | grep -q '^rust-src'; then
+      say "adding rust component rust-src (std's source, for the threaded module)"
+      rustup component add rust-src
+    fi
+    # rustc no longer links shared memory for +atomics by itself: the memory is imported and
+    # shared, and the thread-local storage symbols wasm-bindgen's thread start needs exported.
+    threads_rustflags="-C target-feature=+atomics,+bulk-memory,+mutable-globals"
+    for arg in --shared-memory --import-memory --max-memory=4294967296 --export=__wasm_init_tls \
+      --export=__tls_size --export=__tls_align --export=__tls_base; do
+      threads_rustflags+=" -C link-arg=$arg"
+    done
+    # Built beside the plain module (own target dir): each build ends in a long one-core link
+    # (fat LTO, one codegen unit) and wasm-opt, so the two overlap on two cores.
+    threads_log=$(mktemp)
+    (
+      RUSTC_BOOTSTRAP=1 CARGO_PROFILE_WASM_PANIC=abort \
+        RUSTFLAGS="$threads_rustflags" \
+        BUILD_STD="-Z build-std=panic_abort,std" \
+        build_pkg "$pkg_dir/threads" "$target_dir/wasm-threads" "wasm-threads${features:+,$features}" --enable-threads
+    ) > "$threads_log" 2>&1 &
+    threads_pid=$!
+  else
+    rm -rf "$pkg_dir/threads"
   fi
-  mv "$wasm.opt" "$wasm"
-  after="$(raw_bytes "$wasm") B (gzip -9: $(gz_bytes "$wasm") B)"
-  binaryen_version=$(node -p 'require("./node_modules/binaryen/package.json").version')
-  say "$wasm${features:+ [features: $features]}: $before before wasm-opt -Oz, $after after" \
-    "(binaryen $binaryen_version)"
+
+  # The plain module: one thread, for pages that are not cross-origin isolated (and the page's
+  # own main-thread instance).
+  BUILD_STD="" build_pkg "$pkg_dir" "$target_dir" "$features"
+
+  if [ -n "${threads_pid:-}" ]; then
+    threads_ok=0
+    wait "$threads_pid" || threads_ok=$?
+    cat "$threads_log"
+    rm -f "$threads_log"
+    [ "$threads_ok" = 0 ] || { say "the threaded module failed to build"; exit 1; }
+  fi
 fi
 
 # --- three.js ----------------------------------------------------------------------------

@@ -10,7 +10,9 @@
 Paths are decoded once; a segment that is empty, `.`, `..`, hidden (`.git`) or holds a
 backslash or NUL is refused before the file system is asked, and the file found must lie
 inside www/ or pkg/. Files are sent with their MIME type (application/wasm, text/javascript
-for module scripts) and `Cache-Control: no-cache` (a rebuilt page is seen at once).
+for module scripts), `Cache-Control: no-cache` (a rebuilt page is seen at once) and the
+cross-origin isolation headers (COOP same-origin, COEP require-corp) that let the worker run
+the threaded module.
 
 Usage: scripts/serve.py [--port PORT] [--root DIR]
 PORT defaults to $PORT or 8080 (0: any free port); DIR is the repository (default: this
@@ -85,6 +87,11 @@ class Handler(BaseHTTPRequestHandler):
         self.send_header("Content-Length", str(len(data)))
         self.send_header("Cache-Control", "no-cache")
         self.send_header("X-Content-Type-Options", "nosniff")
+        # Cross-origin isolation: the page's worker may then share memory with its thread pool
+        # (pkg/threads/). Everything is same-origin, so require-corp blocks nothing.
+        self.send_header("Cross-Origin-Opener-Policy", "same-origin")
+        self.send_header("Cross-Origin-Embedder-Policy", "require-corp")
+        self.send_header("Cross-Origin-Resource-Policy", "same-origin")
         self.end_headers()
         if body:
             self.wfile.write(data)

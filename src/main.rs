@@ -55,7 +55,8 @@ enum Command {
         #[arg(long, value_name = "ID")]
         printer: Option<String>,
         /// Threads to compute on (default: every core). 1 computes on one thread, as the
-        /// browser's worker does; the G-code is the same bytes at any count.
+        /// browser's worker does on a page without cross-origin isolation; the G-code is the
+        /// same bytes at any count.
         #[arg(long, value_name = "N")]
         threads: Option<usize>,
         /// Write the G-code a job sends ahead while it runs here, as soon as it is sent: a

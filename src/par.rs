@@ -4,25 +4,45 @@
 //! functions. The results come back in item order and each item is computed from its index
 //! alone (an item that needs randomness seeds it from the design's seed and its index), so the
 //! output is the same bytes at any thread count. Natively the items run on rayon's pool (the
-//! CLI sizes it: `weft run --threads N`; a test runs in `ThreadPool::install`); the wasm build
-//! runs the same loops on its one thread.
+//! CLI sizes it: `weft run --threads N`; a test runs in `ThreadPool::install`). In the browser
+//! the `wasm-threads` build runs them on rayon's pool of web workers sharing the module's
+//! memory (wasm-bindgen-rayon; the page sizes it); the plain wasm build, for pages that are not
+//! cross-origin isolated, runs the same loops on its one thread.
 //!
 //! Progress stays on the calling thread: a stage's progress callback is not `Send` (the
 //! worker's posts messages), so the caller reads a counter of finished items when a run ends
-//! (or every 20 ms) while the pool works, and runs pending items itself when it is one of the
-//! pool's threads.
+//! (or every 20 ms natively; wasm has no clock for a timed wait, so there at each run's end)
+//! while the pool works, and runs pending items itself when it is one of the pool's threads.
 
 use std::ops::Range;
-#[cfg(not(target_arch = "wasm32"))]
+#[cfg(any(not(target_arch = "wasm32"), feature = "wasm-threads"))]
 use std::sync::atomic::{AtomicUsize, Ordering};
 
-/// Threads the loops of this thread use (1 in the browser's worker).
+/// Cancel in the browser's threaded module: the page sets this word of the shared memory
+/// (its address is `cancelFlagAddress()`), then terminates the worker and its pool. A worker
+/// busy in wasm is only killed two seconds after `terminate()` (Chromium's forcible
+/// termination delay), so the loops stop by themselves: runs not yet started are skipped,
+/// and the caller, instead of going on with missing results, sleeps until it is killed. The
+/// worker's progress callback throws on it too (`src/wasm.rs`). Never set natively.
+static CANCELLED: std::sync::atomic::AtomicU32 = std::sync::atomic::AtomicU32::new(0);
+
+/// The cancel word (see `CANCELLED`): the wasm boundary hands its address to the page.
+pub fn cancel_flag() -> &'static std::sync::atomic::AtomicU32 {
+    &CANCELLED
+}
+
+/// Whether the page has cancelled this run (always false natively).
+pub fn cancelled() -> bool {
+    CANCELLED.load(std::sync::atomic::Ordering::Relaxed) != 0
+}
+
+/// Threads the loops of this thread use (1 in the plain wasm build).
 pub fn threads() -> usize {
-    #[cfg(not(target_arch = "wasm32"))]
+    #[cfg(any(not(target_arch = "wasm32"), feature = "wasm-threads"))]
     {
         rayon::current_num_threads()
     }
-    #[cfg(target_arch = "wasm32")]
+    #[cfg(all(target_arch = "wasm32", not(feature = "wasm-threads")))]
     {
         1
     }
@@ -77,9 +97,9 @@ where
         (progress.borrow_mut())(done.get());
         return out;
     }
-    #[cfg(target_arch = "wasm32")]
-    unreachable!("one thread in wasm");
-    #[cfg(not(target_arch = "wasm32"))]
+    #[cfg(all(target_arch = "wasm32", not(feature = "wasm-threads")))]
+    unreachable!("one thread in the plain wasm build");
+    #[cfg(any(not(target_arch = "wasm32"), feature = "wasm-threads"))]
     {
         /// Counts a run as ended however it ends (a panic is raised again by the scope), and
         /// wakes the caller.
@@ -103,6 +123,9 @@ where
                 let wake = wake.clone();
                 s.spawn(move |_| {
                     let _end = Ended(ended_ref, wake);
+                    if cancelled() {
+                        return;
+                    }
                     *slot = Some(f(r, &|| {
                         done_ref.fetch_add(1, Ordering::Relaxed);
                     }))
@@ -125,10 +148,28 @@ where
                 if in_pool && matches!(rayon::yield_now(), Some(rayon::Yield::Executed)) {
                     continue;
                 }
-                let wait = if in_pool { 1 } else { 20 };
-                let _ = woken.recv_timeout(std::time::Duration::from_millis(wait));
+                #[cfg(not(target_arch = "wasm32"))]
+                {
+                    let wait = if in_pool { 1 } else { 20 };
+                    let _ = woken.recv_timeout(std::time::Duration::from_millis(wait));
+                }
+                // std's timed wait reads a clock wasm32-unknown-unknown does not have (it
+                // panics); the page's worker is never a pool thread, so it just sleeps until
+                // a run ends.
+                #[cfg(target_arch = "wasm32")]
+                {
+                    let _ = woken.recv();
+                }
             }
         });
+        if cancelled() {
+            // Some runs were skipped: let the progress callback stop the run (it throws in
+            // the browser), else sleep until the page's terminate() ends this worker.
+            progress(done.load(Ordering::Relaxed));
+            loop {
+                std::thread::park();
+            }
+        }
         parts.into_iter().flat_map(|p| p.unwrap_or_default()).collect()
     }
 }

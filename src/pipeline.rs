@@ -702,7 +702,7 @@ pub struct RunReport {
     pub gcode: GcodeStats,
     /// The analyzer's reading of the written G-code.
     pub analysis: analyze::Report,
-    /// Threads the run computed on (1 in the browser's worker; `weft run --threads`).
+    /// Threads the run computed on (`weft run --threads`; in the browser the worker's pool, 1 without cross-origin isolation).
     pub threads: usize,
     /// Each stage's wall time, in run order.
     pub timings: Vec<StageTime>,

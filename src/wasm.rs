@@ -25,6 +25,71 @@ fn start() {
     crate::clock::set(|| js_sys::Date::now() / 1000.0);
 }
 
+/// The thread pool of the threaded module (`--features wasm-threads`, pkg/threads/).
+///
+/// rayon's global pool is built here with a spawn handler that only queues each thread's
+/// builder; the page starts one web worker per thread with this module and its shared memory
+/// (www/pool-worker.js), and each calls [`run_pool_thread`], which takes a builder and runs
+/// rayon's loop on that worker for good. The page owns those workers, so Cancel terminates
+/// them with the computing worker: a pool spawned by the worker itself (wasm-bindgen-rayon's
+/// way) is made of nested workers, which Chromium keeps running after their parent is
+/// terminated (measured: the old pool went on slicing for seconds after Cancel), holding the
+/// whole memory.
+#[cfg(feature = "wasm-threads")]
+mod thread_pool {
+    use std::sync::{mpsc, Mutex};
+    use wasm_bindgen::prelude::*;
+
+    type Queue = (Option<mpsc::Sender<rayon::ThreadBuilder>>, Option<mpsc::Receiver<rayon::ThreadBuilder>>);
+    /// The pool's threads, from `startThreadPool` (sender) to the pool workers (receiver).
+    static QUEUE: Mutex<Queue> = Mutex::new((None, None));
+
+    fn queue() -> Result<std::sync::MutexGuard<'static, Queue>, JsError> {
+        QUEUE.lock().map_err(|_| JsError::new("the thread pool's queue is poisoned"))
+    }
+
+    /// What a pool worker needs to join, and where the page sets Cancel: `[module, memory,
+    /// cancel word's byte address]` (the memory is shared; see `par::cancel_flag`). Call
+    /// first: the pool workers wait on the queue it makes.
+    #[wasm_bindgen(js_name = threadPoolShare)]
+    pub fn thread_pool_share() -> Result<js_sys::Array, JsError> {
+        let mut q = queue()?;
+        if q.0.is_none() {
+            let (tx, rx) = mpsc::channel();
+            *q = (Some(tx), Some(rx));
+        }
+        let cancel_at = crate::par::cancel_flag() as *const std::sync::atomic::AtomicU32 as usize;
+        Ok(js_sys::Array::of3(&wasm_bindgen::module(), &wasm_bindgen::memory(), &JsValue::from_f64(cancel_at as f64)))
+    }
+
+    /// Builds rayon's global pool of `threads` threads, each handed to a pool worker through
+    /// the queue. Blocks until every thread runs (rayon waits for them), so the page must
+    /// have started `threads` pool workers.
+    #[wasm_bindgen(js_name = startThreadPool)]
+    pub fn start_thread_pool(threads: usize) -> Result<(), JsError> {
+        let tx = queue()?.0.take().ok_or_else(|| JsError::new("threadPoolShare first, and the pool starts once"))?;
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads.max(1))
+            .spawn_handler(move |thread| tx.send(thread).map_err(|_| std::io::Error::other("no pool queue")))
+            .build_global()
+            .map_err(|e| JsError::new(&format!("the thread pool could not start: {e}")))
+    }
+
+    /// Runs one of the pool's threads on the calling pool worker: waits for its turn on the
+    /// queue, then runs rayon's loop; returns only when the pool ends (never, in the page: the
+    /// worker is terminated).
+    #[wasm_bindgen(js_name = runPoolThread)]
+    pub fn run_pool_thread() -> Result<(), JsError> {
+        let builder = {
+            let q = queue()?;
+            let rx = q.1.as_ref().ok_or_else(|| JsError::new("threadPoolShare was not called"))?;
+            rx.recv().map_err(|_| JsError::new("every thread of the pool has its worker"))?
+        };
+        builder.run();
+        Ok(())
+    }
+}
+
 fn js_err(e: impl std::fmt::Display) -> JsError {
     JsError::new(&e.to_string())
 }
@@ -331,6 +396,11 @@ impl Session {
     pub fn run(&mut self, design_json: &str, on_progress: &js_sys::Function, on_ahead: Option<js_sys::Function>) -> Result<JsValue, JsError> {
         let design = Design::from_json("design", design_json).map_err(js_err)?;
         let mut progress = |stage: &str, f: f32| {
+            // Cancelled by the page (threaded module): leave at once, as a JS exception, so
+            // the worker is idle when its terminate() comes (see `par::cancel_flag`).
+            if crate::par::cancelled() {
+                wasm_bindgen::throw_str("cancelled");
+            }
             let _ = on_progress.call2(&JsValue::NULL, &JsValue::from_str(stage), &JsValue::from_f64(f as f64));
         };
         let ahead = |a: &pipeline::Ahead| {

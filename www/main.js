@@ -83,6 +83,8 @@ window.weft = {
   get resultCount() { return resultCount; },
   get files() { return [...state.files.keys()]; },
   get workerGeneration() { return workers.generation; },
+  /** Threads of the worker now: {asked, used, cores, isolated, note} (used null until it is ready). */
+  get threads() { return { ...workers.threads }; },
   get busy() { return jobs.active.size > 0; },
   get preview() { return preview; },
   run: () => runDesign(),
@@ -135,11 +137,36 @@ async function start() {
   loadInitialDesign();
   fillExamples();
   if ("serviceWorker" in navigator && window.isSecureContext) {
-    navigator.serviceWorker.register("sw.js").catch(() => {});
+    navigator.serviceWorker.register("sw.js").then(isolateThroughServiceWorker, () => {});
   }
   window.addEventListener("hashchange", () => {
     if (location.hash.startsWith("#d=")) openShare(location.hash);
   });
+}
+
+/**
+ * A host that sends no cross-origin isolation headers (a plain static host) gets them from
+ * sw.js, but only for pages it serves: the first visit is not isolated. Once the service
+ * worker controls the page, reload once so the worker can use every core, unless a loaded file
+ * would be lost (a run going on is let finish first). The design is kept in localStorage and
+ * the address, so a reload keeps it; a result is made again by Run.
+ */
+function isolateThroughServiceWorker() {
+  if (self.crossOriginIsolated) return;
+  const KEY = "weft.isolationReload";
+  const tryReload = () => {
+    if (self.crossOriginIsolated || !navigator.serviceWorker.controller) return;
+    if (sessionStorage.getItem(KEY)) return; // reloaded once already: the browser would not isolate
+    if (state.files.size) return; // a dropped file would be lost
+    if (jobs.active.size) {
+      setTimeout(tryReload, 250); // a run going on (the first visit's default part): after it
+      return;
+    }
+    sessionStorage.setItem(KEY, "1");
+    location.reload();
+  };
+  if (navigator.serviceWorker.controller) tryReload();
+  else navigator.serviceWorker.addEventListener("controllerchange", tryReload, { once: true });
 }
 
 /** The design kept in this browser (or the default), then a share link's on top (undoable). */
@@ -1016,7 +1043,9 @@ async function loadIntoSlot(slot, fileList) {
     const token = jobs.begin(`reading ${file.name}`);
     try {
       // The File goes to the worker as a Blob handle: its bytes are not copied here.
+      performance.mark("weft:load");
       const res = await workers.request({ type: MSG.LOAD, slot: slot.name, name: file.name, blob: file });
+      performance.mark("weft:loaded");
       state.files.set(file.name, { slot: slot.name, name: file.name, blob: file, info: res.info ?? {} });
       filesChanged();
       loaded.push(file.name);
@@ -1484,9 +1513,21 @@ const workers = {
   pending: new Map(),
   recentCrashes: [],
 
+  /** What the worker was asked for and uses (see threadsToAsk and the `ready` message). */
+  threads: { asked: 1, used: null, cores: 1, isolated: false, note: "" },
+  /** The current worker's pool workers (pool-worker.js), terminated with it. */
+  pool: [],
+  /** Why the pool's workers cannot start here ("" until they fail once): one thread from then on. */
+  poolBroken: "",
+
   start() {
     this.generation++;
-    const w = new Worker(new URL("./worker.js", import.meta.url), { type: "module", name: `weft-${this.generation}` });
+    const ask = threadsToAsk(this.poolBroken);
+    this.threads = { ...ask, used: null };
+    showThreads();
+    const url = new URL("./worker.js", import.meta.url);
+    if (ask.asked > 1) url.searchParams.set("threads", String(ask.asked));
+    const w = new Worker(url, { type: "module", name: `weft-${this.generation}` });
     this.worker = w;
     w.onmessage = ({ data }) => this.onMessage(w, data);
     w.onerror = (e) => {
@@ -1502,10 +1543,49 @@ const workers = {
     }
   },
 
+  /**
+   * Starts the pool's threads: one pool worker each, joining the worker's module and shared
+   * memory. Runs the worker has queued start as they join.
+   */
+  startPool(w, { module, memory }, threads) {
+    for (let i = 0; i < threads; i++) {
+      const p = new Worker(new URL("./pool-worker.js", import.meta.url), { type: "module", name: `weft-${this.generation}-thread-${i + 1}` });
+      const failed = (message) => {
+        if (w !== this.worker) return;
+        this.poolBroken = `the thread pool's workers could not run (${message})`;
+        this.crashed(this.poolBroken);
+      };
+      p.onmessage = ({ data }) => { if (data?.type === "failed") failed(data.message); };
+      p.onerror = (e) => { e.preventDefault(); failed(e.message || "a pool worker stopped"); };
+      p.postMessage({ module, memory });
+      this.pool.push(p);
+    }
+  },
+
+  /** Where Cancel is said to the threaded module's loops: {memory, cancelAt} (null: plain module). */
+  cancelWord: null,
+
+  /**
+   * Terminates the worker and every pool worker now. A worker busy in wasm dies only two
+   * seconds after terminate() (Chromium), so the threaded module is first told through its
+   * shared memory: its loops skip what has not started and the run throws (par::cancel_flag).
+   */
+  stop() {
+    if (this.cancelWord) {
+      try {
+        Atomics.store(new Int32Array(this.cancelWord.memory.buffer), this.cancelWord.cancelAt >>> 2, 1);
+      } catch { /* terminate() alone, then */ }
+      this.cancelWord = null;
+    }
+    this.worker?.terminate();
+    for (const p of this.pool) p.terminate();
+    this.pool = [];
+    this.worker = null;
+  },
+
   /** Stops all work now (terminate) and starts a fresh worker with the files reloaded. */
   restart(reason) {
-    this.worker?.terminate();
-    this.worker = null;
+    this.stop();
     const stopped = new Error(reason ?? "cancelled");
     stopped.cancelled = true;
     for (const p of this.pending.values()) p.reject(stopped);
@@ -1518,8 +1598,7 @@ const workers = {
     this.recentCrashes = this.recentCrashes.filter((t) => now - t < 10000);
     this.recentCrashes.push(now);
     if (this.recentCrashes.length > 3) {
-      this.worker?.terminate();
-      this.worker = null;
+      this.stop();
       const stopped = new Error(message);
       stopped.cancelled = true; // reported below
       for (const p of this.pending.values()) p.reject(stopped);
@@ -1551,7 +1630,15 @@ const workers = {
 
   onMessage(w, msg) {
     if (w !== this.worker) return; // a terminated worker's late message
-    if (msg.type === MSG.READY) return;
+    if (msg.type === MSG.READY) {
+      this.threads = { ...this.threads, used: msg.threads ?? 1, note: msg.note || this.threads.note };
+      if (msg.pool) {
+        this.cancelWord = { memory: msg.pool.memory, cancelAt: msg.pool.cancelAt };
+        this.startPool(w, msg.pool, msg.threads);
+      }
+      showThreads();
+      return;
+    }
     if (msg.type === MSG.ERROR && (msg.fatal || msg.id === null)) {
       // The wasm instance is unusable (trap, out of memory, no module): restart, which
       // rejects the pending requests quietly, and say so once.
@@ -1748,9 +1835,6 @@ function planSummary(p) {
   if (p.gcode_bytes) parts.push(`${humanBytes(p.gcode_bytes)} of G-code`);
   parts.push(p.seconds < 1 ? "under 1 s" : `about ${formatSeconds(p.seconds)}`);
   if (p.peak_bytes) parts.push(`${humanBytes(p.peak_bytes)} of memory`);
-  // The worker's wasm computes on one thread (ARCHITECTURE.md, "Using every core").
-  const threads = state.result?.report?.threads ?? 1;
-  parts.push(`on ${threads} thread${threads === 1 ? "" : "s"}`);
   return parts.join(" · ");
 }
 
@@ -1836,7 +1920,9 @@ async function runDesign({ confirmed = false, fromLink = false, auto = false, th
   try {
     // The estimate made after the last edit is this design's plan; otherwise ask for it.
     const known = isCurrent(state.estimate) ? state.estimate.plan : null;
+    performance.mark("weft:estimate");
     const plan = known ?? (await workers.request({ type: MSG.ESTIMATE, design: json })).plan;
+    performance.mark("weft:estimated");
     if (!known) {
       state.estimate = { json, files, plan };
       showEstimate();
@@ -1851,8 +1937,10 @@ async function runDesign({ confirmed = false, fromLink = false, auto = false, th
         { label: "Run anyway", run: () => runDesign({ confirmed: true, then }) });
       return;
     }
+    performance.mark("weft:run");
     const res = await workers.request({ type: MSG.RUN, design: json }, (s, f) => jobs.progress(s, f),
       (a) => mine === latestRun && jobs.ahead(a, `${name}.ahead.${ext}`));
+    performance.mark("weft:result");
     if (mine === latestRun) {
       showResult(res, `${name}.${ext}`, json, files);
       then?.();
@@ -2001,8 +2089,10 @@ function showResult(res, fileName, json = null, files = state.filesVersion) {
   $("download").disabled = !(gcode && gcode.byteLength);
   const origin = state.design?.printer?.origin;
   preview?.setResult(buffers, { origin: typeof origin === "string" ? origin : "corner" });
+  performance.mark("weft:preview-set");
   renderStats(report, gcode, res.ms);
   renderReport($("report"), report, state);
+  performance.mark("weft:shown");
   if (res.request === "run") scheduleInspect(0); // views of a loaded solid know their count now
   hideErrorUnlessCrash();
   refreshFreshness();
@@ -2044,8 +2134,49 @@ function timeLine(report, ms) {
   const total = times.reduce((a, t) => a + t.ms, 0);
   const earlier = typeof ms === "number" && total > 1.1 * ms + 50 ? ", some made earlier for the views" : "";
   p.textContent = `Where the time went: ${parts.length ? parts.join(" · ") : "nothing measurable (reused)"}${earlier} — ${threads} thread${threads === 1 ? "" : "s"}`;
-  p.title = threads === 1 ? "This page computes in one worker thread; the weft CLI uses every core (weft run --threads N) and gives the same G-code." : "";
+  p.title = threads === 1 ? `${threadsWhy()} The weft CLI uses every core (weft run --threads N) and gives the same G-code.` : "";
   return p;
+}
+
+/**
+ * Threads to ask the worker for. Shared memory needs a cross-origin isolated page (COOP/COEP
+ * headers from the server, or from sw.js on a plain static host); without it the plain module
+ * runs on one thread. `?threads=N` in the address asks for N (1: the plain module), else every
+ * core the browser reports. The G-code is the same bytes whatever the count.
+ */
+function threadsToAsk(poolBroken = "") {
+  if (poolBroken) return { asked: 1, cores: Math.max(1, navigator.hardwareConcurrency | 0 || 1), isolated: self.crossOriginIsolated === true, note: poolBroken };
+  const cores = Math.max(1, navigator.hardwareConcurrency | 0 || 1);
+  const isolated = self.crossOriginIsolated === true && typeof SharedArrayBuffer === "function";
+  const param = new URLSearchParams(location.search).get("threads");
+  const wanted = param !== null && /^\d+$/.test(param) ? Math.min(64, Math.max(1, Number(param))) : Math.min(cores, 16);
+  if (!isolated) {
+    const note = self.crossOriginIsolated === true ? "this browser has no SharedArrayBuffer"
+      : "the page is not cross-origin isolated (its host sends no COOP/COEP headers and no service worker added them)";
+    return { asked: 1, cores, isolated: false, note };
+  }
+  return { asked: wanted, cores, isolated: true, note: wanted === 1 && param !== null ? "?threads=1 in the address" : "" };
+}
+
+/** Why the worker computes on one thread, as a sentence ("" when it uses more). */
+function threadsWhy() {
+  const t = workers.threads;
+  if ((t.used ?? t.asked) > 1) return "";
+  return t.note ? `One thread: ${t.note}.` : "One thread: this machine reports one core.";
+}
+
+/** The always-shown thread line: threads in use, and why only one. */
+function showThreads() {
+  const el = $("threads");
+  if (!el) return;
+  const t = workers.threads;
+  const n = t.used ?? t.asked;
+  el.textContent = `${t.used === null ? "starting " : ""}${n} thread${n === 1 ? "" : "s"}${n === 1 && t.note ? " (no shared memory here)" : ""}`;
+  el.title = n > 1
+    ? `The worker computes on ${n} threads (web workers sharing its memory; ${t.cores} core${t.cores === 1 ? "" : "s"} reported). Same G-code at any thread count.`
+    : `${threadsWhy()} Same G-code at any thread count, only slower.`;
+  el.dataset.threads = String(n);
+  el.classList.toggle("one", n === 1 && Boolean(t.note));
 }
 
 function download(data, name, type) {

@@ -336,10 +336,13 @@ export class Preview {
     this.layers = 0;
     this.bedKey = "";
     this.frameRequested = false;
+    /** The last frame drawn: when (performance.now(), ms) and how many segments it showed. */
+    this.lastFrame = { at: 0, segments: 0 };
     this.drawFrame = () => {
       this.frameRequested = false;
       this.updateClipping();
       this.renderer.render(this.scene, this.camera);
+      this.lastFrame = { at: performance.now(), segments: this.segmentCount() };
     };
 
     ui.colorBy.addEventListener("change", () => this.applyColors());

@@ -27,7 +27,13 @@ export const MSG = Object.freeze({
   /** Advisory: the page stops work by terminating the worker; see main.js. */
   CANCEL: "cancel",
   // worker → page
-  /** The wasm module is initialised; queued requests are being handled. */
+  /**
+   * The wasm module is initialised; queued requests are being handled. Carries `threads` (the
+   * count the core computes on: the pool's size, or 1 for the plain module), `note` (why
+   * fewer than asked, or "") and `pool`: null, or `{module, memory, cancelAt}`: the page
+   * starts `threads` pool workers (pool-worker.js) with the module and the shared memory, and
+   * on Cancel sets the 32-bit word at byte `cancelAt` of that memory before terminating.
+   */
   READY: "ready",
   /** Answer to `load`. @see LoadedMessage */
   LOADED: "loaded",

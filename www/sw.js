@@ -1,13 +1,30 @@
-// Service worker: keeps the app shell, the wasm package and three.js so the page works
+// Service worker: keeps the app shell, the wasm packages and three.js so the page works
 // offline once it has been opened. Network first (a rebuilt page is seen at once), the cache
 // when the network fails. Only same-origin GETs are handled; nothing leaves the origin.
-const CACHE = "weft-v2";
+//
+// It also makes the page cross-origin isolated where the host cannot send the headers (a
+// plain static host, or offline from the cache): every response it serves carries COOP
+// same-origin and COEP require-corp, so the worker may share memory with its thread pool
+// (main.js reloads once when this worker first takes control). Everything the page loads is
+// same-origin, so require-corp blocks nothing.
+const CACHE = "weft-v3";
 const SHELL = [
-  "./", "index.html", "style.css", "main.js", "worker.js", "protocol.js", "preview.js",
+  "./", "index.html", "style.css", "main.js", "worker.js", "pool-worker.js", "protocol.js", "preview.js",
   "plot.js", "report.js", "views.js",
   "vendor/three.module.js", "vendor/three.core.js", "vendor/OrbitControls.js",
   "examples/index.json", "../pkg/weft.js", "../pkg/weft_bg.wasm",
+  "../pkg/threads/weft.js", "../pkg/threads/weft_bg.wasm",
 ];
+
+/** `res` with the cross-origin isolation headers (an opaque or error response as it is). */
+function isolated(res) {
+  if (!res || res.type === "opaque" || res.status === 0) return res;
+  const headers = new Headers(res.headers);
+  headers.set("Cross-Origin-Opener-Policy", "same-origin");
+  headers.set("Cross-Origin-Embedder-Policy", "require-corp");
+  headers.set("Cross-Origin-Resource-Policy", "same-origin");
+  return new Response(res.body, { status: res.status, statusText: res.statusText, headers });
+}
 
 self.addEventListener("install", (event) => {
   event.waitUntil((async () => {
@@ -33,10 +50,10 @@ self.addEventListener("fetch", (event) => {
     try {
       const res = await fetch(req);
       if (res.ok && res.type === "basic") cache.put(req, res.clone()).catch(() => {});
-      return res;
+      return isolated(res);
     } catch (err) {
       const hit = await cache.match(req, { ignoreSearch: true });
-      if (hit) return hit;
+      if (hit) return isolated(hit);
       throw err;
     }
   })());

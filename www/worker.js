@@ -1,8 +1,17 @@
 // Module worker holding the wasm Session. Requests are queued until the module is
 // initialised, then handled one at a time (every wasm call is synchronous). Cancel is done by
-// the page terminating this worker; see main.js.
-import init, { Session } from "../pkg/weft.js";
+// the page terminating this worker (which ends the thread pool's workers with it); see main.js.
+//
+// Threads: the page asks for them in this script's URL (`worker.js?threads=N`, N > 1 only when
+// the page is cross-origin isolated). Then the threaded module (pkg/threads/) builds rayon's
+// pool of N threads, and the `ready` message hands the page the module and its shared memory:
+// the page starts the N pool workers (pool-worker.js), so it can terminate them with this one.
+// The core's parallel loops run on them and give the same bytes as on one thread. If the
+// threaded module cannot start, the plain one runs on one thread and `ready` says why.
 import { MSG, PREVIEW_BUFFERS, plain, transferList } from "./protocol.js";
+
+/** Threads the page asked for (1: the plain module). */
+const wanted = Math.max(1, Math.min(64, Number(new URL(self.location.href).searchParams.get("threads")) | 0 || 1));
 
 /** @type {Session|null} */
 let session = null;
@@ -20,13 +29,42 @@ self.onmessage = ({ data }) => {
   else handle(data);
 };
 
-init()
-  .then((exports) => {
-    memory = exports?.memory ?? null;
+/** @type {typeof import("../pkg/weft.js").Session} */
+let Session;
+
+/** The threaded module with its pool started, or the plain one: `{ exports, threads, note }`. */
+async function start() {
+  if (wanted > 1) {
+    try {
+      const mod = await import("../pkg/threads/weft.js");
+      const exports = await mod.default();
+      const [module, memory, cancelAt] = mod.threadPoolShare();
+      Session = mod.Session;
+      return { exports, threads: wanted, note: "", pool: { module, memory, cancelAt }, startPool: () => mod.startThreadPool(wanted) };
+    } catch (err) {
+      // A browser without wasm threads, or a host without pkg/threads/: one thread.
+      const mod = await import("../pkg/weft.js");
+      const exports = await mod.default();
+      Session = mod.Session;
+      return { exports, threads: 1, note: `the threaded module could not start (${messageOf(err)})` };
+    }
+  }
+  const mod = await import("../pkg/weft.js");
+  const exports = await mod.default();
+  Session = mod.Session;
+  return { exports, threads: 1, note: "" };
+}
+
+start()
+  .then(({ exports, threads, note, pool, startPool }) => {
+    memory = pool?.memory ?? exports?.memory ?? null;
+    // The page starts the pool's workers on this message; startPool waits until they have
+    // all joined (were one never to, the page sees it fail and replaces this worker).
+    self.postMessage({ type: MSG.READY, threads, note, pool: pool ?? null });
+    startPool?.();
     session = new Session();
     const waiting = queue;
     queue = null;
-    self.postMessage({ type: MSG.READY });
     for (const msg of waiting) handle(msg);
   })
   .catch((err) => {

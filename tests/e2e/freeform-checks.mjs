@@ -223,9 +223,11 @@ export async function freeformChecks({ baseUrl, weftBin = process.env.WEFT_BIN, 
         const beamsSent = (a.text.match(/^;LAYER:\d+$/gm) ?? []).length;
         if (beamsSent !== a.done) throw new Error(`${file}: ${beamsSent} beams in the file sent ahead, ${a.done} stated`);
         if (link && !/Start printing: the first \d+ of \d+ beams/.test(link.text)) throw new Error(`link reads "${link.text}"`);
-        // Where the time went, and on how many threads (the worker's one).
+        // Where the time went, and on how many threads (the worker's pool: the page is isolated).
         const timeLine = await page.evaluate(() => document.querySelector("#stats .time-line")?.textContent ?? "");
-        if (!/^Where the time went: .*\d (ms|s)\b.* — 1 thread$/.test(timeLine) || report.threads !== 1) throw new Error(`time line reads "${timeLine}" (${report.threads} threads)`);
+        const used = await page.evaluate(() => window.weft.threads.used);
+        const said = `${used} thread${used === 1 ? "" : "s"}`;
+        if (!timeLine.startsWith("Where the time went: ") || !/\d (ms|s)\b/.test(timeLine) || !timeLine.endsWith(` — ${said}`) || report.threads !== used) throw new Error(`time line reads "${timeLine}" (${report.threads} threads, the worker has ${used})`);
         if (name === "desktop") {
           await page.evaluate(() => document.querySelector("#stats .time-line")?.scrollIntoView({ block: "center" }));
           await page.screenshot({ path: join(outDir, "time-line-desktop.png") });

@@ -1,6 +1,8 @@
 #!/usr/bin/env node
 // End-to-end test of the browser app: system Chromium driven by playwright-core against a
-// static server of the repository root on localhost. Prints one line per check and ends with
+// static server of the repository root on localhost, cross-origin isolated as scripts/serve.py
+// serves it (so the worker computes on its thread pool; threads-checks.mjs also runs a plain
+// host). Prints one line per check and ends with
 // "<n> passed, <m> failed"; exits non-zero when a check fails.
 //
 //   node tests/e2e/run.mjs
@@ -22,6 +24,7 @@ import { gradedChecks } from "./graded-checks.mjs";
 import { latticeChecks } from "./lattice-checks.mjs";
 import { newcomerChecks } from "./newcomer-checks.mjs";
 import { previewChecks } from "./preview-checks.mjs";
+import { threadsChecks } from "./threads-checks.mjs";
 import {
   boxStl, collectErrors, colouredPixels, downloadGcode, launchChromium, waitReady, waitResult as waitResultWithin,
 } from "./page-helpers.mjs";
@@ -474,7 +477,8 @@ const afterNewcomer = await newcomerChecks({ base, check, newPage, outDir: OUT, 
 const afterAxisym = await axisymChecks({ baseUrl: base, weftBin: WEFT_BIN, check, newPage, outDir: OUT, first: typeof afterNewcomer === "number" ? afterNewcomer : 32, timeoutMs: JOB_TIMEOUT });
 const afterGraded = await gradedChecks({ baseUrl: base, weftBin: WEFT_BIN, check, newPage, outDir: OUT, first: typeof afterAxisym === "number" ? afterAxisym : 36, timeoutMs: JOB_TIMEOUT });
 const afterFoam = await foamChecks({ baseUrl: base, weftBin: WEFT_BIN, check, newPage, outDir: OUT, first: typeof afterGraded === "number" ? afterGraded : 39, timeoutMs: JOB_TIMEOUT });
-await freeformChecks({ baseUrl: base, weftBin: WEFT_BIN, check, newPage, outDir: OUT, first: typeof afterFoam === "number" ? afterFoam : 42, timeoutMs: JOB_TIMEOUT });
+const afterFreeform = await freeformChecks({ baseUrl: base, weftBin: WEFT_BIN, check, newPage, outDir: OUT, first: typeof afterFoam === "number" ? afterFoam : 42, timeoutMs: JOB_TIMEOUT });
+await threadsChecks({ browser, baseUrl: base, weftBin: WEFT_BIN, check, outDir: OUT, first: typeof afterFreeform === "number" ? afterFreeform : 47, timeoutMs: JOB_TIMEOUT });
 
 if (main.errors.length) console.log(`note: console errors in the main page:\n  ${main.errors.join("\n  ")}`);
 if (offOrigin.length) console.log(`note: blocked requests leaving the origin:\n  ${[...new Set(offOrigin)].join("\n  ")}`);

@@ -23,12 +23,20 @@ export const MIME = {
   ".gcode": "text/plain; charset=utf-8", ".ts": "text/plain; charset=utf-8",
 };
 
+/** The headers that make a page cross-origin isolated (as scripts/serve.py sends them). */
+export const ISOLATION = {
+  "cross-origin-opener-policy": "same-origin",
+  "cross-origin-embedder-policy": "require-corp",
+  "cross-origin-resource-policy": "same-origin",
+};
+
 /**
  * Starts the server. Options: `root` (default the repository root), `pkgDir` (served as
- * `/pkg/`, default `<root>/pkg`). Resolves to `{ url, close, server }`; `close()` returns a
- * promise that settles when the server has stopped.
+ * `/pkg/`, default `<root>/pkg`), `isolated` (default true: the ISOLATION headers, as
+ * scripts/serve.py; false: a plain static host). Resolves to `{ url, close, server }`;
+ * `close()` returns a promise that settles when the server has stopped.
  */
-export function serve({ root = ROOT, pkgDir = join(root, "pkg") } = {}) {
+export function serve({ root = ROOT, pkgDir = join(root, "pkg"), isolated = true } = {}) {
   const server = createServer((req, res) => {
     let path = decodeURIComponent(new URL(req.url, "http://localhost").pathname);
     let base = root;
@@ -48,6 +56,7 @@ export function serve({ root = ROOT, pkgDir = join(root, "pkg") } = {}) {
         "content-type": MIME[extname(file)] ?? "application/octet-stream",
         "content-length": size,
         "cache-control": "no-store",
+        ...(isolated ? ISOLATION : {}),
       });
       createReadStream(file).pipe(res);
     } catch {

@@ -50,12 +50,12 @@ def main():
                 r = c.getresponse()
                 body = r.read()
                 c.close()
-                return r.status, r.getheader("Content-Type", ""), body
+                return r.status, r.getheader("Content-Type", ""), body, r
 
             failures = []
 
             def expect(path, status, mime=None, method="GET"):
-                got, ctype, body = get(path, method)
+                got, ctype, body, _ = get(path, method)
                 if got != status or (mime and not ctype.startswith(mime)) or (status == 404 and b"secret" in body):
                     failures.append(f"{method} {path}: {got} {ctype!r}, expected {status} {mime or ''}")
 
@@ -78,10 +78,17 @@ def main():
                 "//etc/passwd", "/%2fetc%2fpasswd", "/%252e%252e/Cargo.toml", "/%ff", "/nonexistent.js",
             ]:
                 expect(path, 404)
+            # Cross-origin isolation, so the worker may run the threaded module.
+            for path in ["/", "/main.js", "/pkg/weft_bg.wasm"]:
+                _, _, _, r = get(path)
+                for name, value in [("Cross-Origin-Opener-Policy", "same-origin"),
+                                    ("Cross-Origin-Embedder-Policy", "require-corp")]:
+                    if r.getheader(name) != value:
+                        failures.append(f"GET {path}: {name} is {r.getheader(name)!r}, expected {value!r}")
             if failures:
                 print("serve.py check failed:\n  " + "\n  ".join(failures))
                 sys.exit(1)
-            print("serve.py: the page at /, /pkg/ served; the repository, dot files and .. tricks are 404")
+            print("serve.py: the page at /, /pkg/ served, cross-origin isolated; the repository, dot files and .. tricks are 404")
         finally:
             proc.terminate()
             proc.wait(timeout=10)

@@ -1,0 +1,154 @@
+#!/usr/bin/env node
+// Threads in the browser (issue 15): the page itself, served cross-origin isolated, runs each
+// workload in a fresh page (so nothing is cached) at `?threads=1` (the plain module, as on a
+// host without isolation) and at more threads (the threaded module's pool), and reads the run
+// report's stage times (the worker's wall time per stage) and the time from the drop to the
+// first drawn frame. Then the native CLI runs the same designs at 1 thread and at the same
+// counts (`weft run --threads N`, its run report). Prints Markdown; not a test (timings depend
+// on the machine); see BENCHMARKS.md, "Threads".
+//
+//   node tests/e2e/threads-bench.mjs
+// Environment:
+//   WEFT_BIN          native CLI (default ./target/release/weft)
+//   BENCH_THREADS     thread counts (default 1,2,4)
+//   BENCH_REPEATS     fresh-page runs per design and count, best counts (default 3)
+//   BENCH_DESIGNS     example names (default ball-burst-disc-48mm,sphere-30mm,graded-phantom,hourglass-omega3)
+//   BENCH_SPHERE=0    leave out the 1M-triangle sphere (the default design with its mesh)
+//   BENCH_BIG=1       also the 4M-triangle sphere (a 200 MB STL dropped on the page)
+import { execFileSync } from "node:child_process";
+import { existsSync, mkdirSync, readFileSync, writeFileSync } from "node:fs";
+import { join, resolve } from "node:path";
+import { ROOT, serve } from "./server.mjs";
+import { launchChromium, waitReady } from "./page-helpers.mjs";
+import { sphereStl } from "./threads-checks.mjs";
+
+const WEFT_BIN = resolve(ROOT, process.env.WEFT_BIN ?? "target/release/weft");
+const COUNTS = (process.env.BENCH_THREADS ?? "1,2,4").split(",").map(Number);
+const REPEATS = Number(process.env.BENCH_REPEATS ?? 3);
+const DESIGNS = (process.env.BENCH_DESIGNS ?? "ball-burst-disc-48mm,sphere-30mm,graded-phantom,hourglass-omega3").split(",").filter(Boolean);
+const SPHERE = process.env.BENCH_SPHERE !== "0";
+const OUT = join(ROOT, "tests/e2e/out");
+mkdirSync(OUT, { recursive: true });
+const sphere = join(OUT, "sphere-1m.stl");
+if (SPHERE && !existsSync(sphere)) writeFileSync(sphere, sphereStl(1000));
+const BIG = process.env.BENCH_BIG === "1";
+const bigSphere = join(OUT, "sphere-4m.stl");
+if (BIG && !existsSync(bigSphere)) writeFileSync(bigSphere, sphereStl(2000));
+const meshes = { "sphere-1m": sphere, "sphere-4m": bigSphere };
+
+const server = await serve({ root: ROOT });
+const browser = await launchChromium();
+const log = (s) => process.stderr.write(`[threads-bench] ${s}\n`);
+
+/** One fresh page at `threads`: the workload, its report's stage times, the frame time and memory. */
+async function once(name, threads) {
+  const context = await browser.newContext({ viewport: { width: 1280, height: 800 }, serviceWorkers: "block" });
+  await context.addInitScript(() => localStorage.setItem("weft.autoRun", "0"));
+  const page = await context.newPage();
+  try {
+    await page.goto(`${server.url}/www/?threads=${threads}`);
+    await waitReady(page);
+    await page.waitForFunction(() => window.weft.threads.used != null);
+    const used = await page.evaluate(() => window.weft.threads.used);
+    if (used !== threads) throw new Error(`asked ${threads} threads, the worker uses ${used}`);
+    const before = await page.evaluate(() => {
+      window.__t0 = null;
+      const mark = () => { window.__t0 ??= performance.now(); };
+      document.getElementById("file").addEventListener("change", mark, { capture: true, once: true });
+      document.getElementById("examples").addEventListener("change", mark, { capture: true, once: true });
+      return window.weft.resultCount;
+    });
+    if (meshes[name]) await page.setInputFiles("#file", meshes[name]);
+    else {
+      await page.waitForFunction(() => document.querySelectorAll("#examples option[value]:not([value=''])").length > 0);
+      await page.selectOption("#examples", `${name}.json`);
+    }
+    const asked = await page.waitForSelector("#notice .notice-action", { timeout: 2000 }).catch(() => null);
+    if (asked) await asked.click();
+    const r = await page.waitForFunction((k) => {
+      if (window.weft.resultCount <= k || window.weft.busy) return false;
+      const f = window.weft.preview?.lastFrame;
+      if (!f || f.segments === 0 || f.at < window.__t0) return false;
+      return { frameMs: f.at - window.__t0, ms: window.weft.result.ms, threads: window.weft.result.report.threads,
+        stages: window.weft.result.report.timings.filter((t) => !t.cached).map((t) => ({ stage: t.stage, ms: t.ms })) };
+    }, before, { timeout: 600000, polling: 20 }).then((h) => h.jsonValue());
+    r.memory = await page.evaluate(async () => {
+      try { return (await performance.measureUserAgentSpecificMemory()).bytes; } catch { return null; }
+    });
+    return r;
+  } finally {
+    await context.close();
+  }
+}
+
+/** Best of REPEATS per stage and for the whole; memory the largest seen. */
+function best(runs) {
+  const stages = new Map();
+  for (const r of runs) for (const s of r.stages) stages.set(s.stage, Math.min(stages.get(s.stage) ?? Infinity, s.ms));
+  return {
+    ms: Math.min(...runs.map((r) => r.ms)), frameMs: Math.min(...runs.map((r) => r.frameMs)),
+    memory: Math.max(...runs.map((r) => r.memory ?? 0)), stages,
+  };
+}
+
+/** Native: `weft run --threads N` (the report's timings), best of REPEATS. */
+function native(name, threads) {
+  const runs = [];
+  for (let i = 0; i < REPEATS; i++) {
+    const report = join(OUT, `threads-bench-${name}.json`);
+    const args = meshes[name]
+      ? ["run", join(ROOT, "examples/cube-20mm.json"), "--input", meshes[name]]
+      : ["run", join(ROOT, `examples/${name}.json`)];
+    const t0 = performance.now();
+    execFileSync(WEFT_BIN, [...args, "--out", join(OUT, `threads-bench-${name}.gcode`), "--report", report, "--threads", String(threads)],
+      { cwd: ROOT, stdio: ["ignore", "ignore", "pipe"], timeout: 600000 });
+    const ms = performance.now() - t0;
+    const rep = JSON.parse(readFileSync(report, "utf8"));
+    runs.push({ ms, frameMs: 0, stages: rep.timings.filter((t) => !t.cached).map((t) => ({ stage: t.stage, ms: t.ms })) });
+  }
+  return best(runs);
+}
+
+const names = [...(SPHERE ? ["sphere-1m"] : []), ...(BIG ? ["sphere-4m"] : []), ...DESIGNS];
+const rows = [];
+for (const name of names) {
+  const worker = new Map();
+  const cli = new Map();
+  // Alternate the counts run by run, so a change of load touches them alike.
+  const runs = new Map(COUNTS.map((c) => [c, []]));
+  for (let i = 0; i < REPEATS; i++) {
+    for (const c of COUNTS) {
+      log(`${name}: worker at ${c} thread(s), run ${i + 1}/${REPEATS}`);
+      runs.get(c).push(await once(name, c));
+    }
+  }
+  for (const c of COUNTS) worker.set(c, best(runs.get(c)));
+  for (const c of COUNTS) {
+    log(`${name}: native at ${c} thread(s)`);
+    cli.set(c, native(name, c));
+  }
+  rows.push({ name, worker, cli });
+}
+await browser.close();
+await server.close();
+
+const f = (ms) => (ms >= 1000 ? `${(ms / 1000).toFixed(2)} s` : `${ms.toFixed(0)} ms`);
+const x = (a, b) => (b > 0 ? `${(a / b).toFixed(2)}×` : "–");
+const [one, ...more] = COUNTS;
+const load = readFileSync("/proc/loadavg", "utf8").split(" ").slice(0, 3).join(" ");
+console.log(`Browser worker (Chromium ${browser.version?.() ?? ""}) and native CLI, ${REPEATS} fresh runs each, best counts; load after: ${load}\n`);
+console.log(`| workload | stage | ${COUNTS.map((c) => `worker ${c}T`).join(" | ")} | ${more.map((c) => `worker ${one}T ÷ ${c}T`).join(" | ")} | ${COUNTS.map((c) => `native ${c}T`).join(" | ")} | ${more.map((c) => `native ${one}T ÷ ${c}T`).join(" | ")} | worker ÷ native at ${more[0] ?? one}T |`);
+console.log(`|${"---|".repeat(2 + COUNTS.length * 2 + more.length * 2 + 1)}`);
+for (const { name, worker, cli } of rows) {
+  const stages = [...worker.get(one).stages.keys()].filter((s) => worker.get(one).stages.get(s) >= 5);
+  const line = (label, get) => {
+    const w = COUNTS.map((c) => get(worker.get(c)));
+    const n = COUNTS.map((c) => get(cli.get(c)));
+    const top = more[0] ?? one;
+    console.log(`| ${name} | ${label} | ${w.map(f).join(" | ")} | ${more.map((c) => x(w[0], get(worker.get(c)))).join(" | ")} | ${n.map(f).join(" | ")} | ${more.map((c) => x(n[0], get(cli.get(c)))).join(" | ")} | ${x(get(worker.get(top)), get(cli.get(top)))} |`);
+  };
+  for (const s of stages) line(s, (b) => b.stages.get(s) ?? NaN);
+  line("**whole run**", (b) => b.ms);
+  console.log(`| ${name} | drop → first frame | ${COUNTS.map((c) => f(worker.get(c).frameMs)).join(" | ")} | ${more.map((c) => x(worker.get(one).frameMs, worker.get(c).frameMs)).join(" | ")} | ${COUNTS.map(() => "").join(" | ")} | ${more.map(() => "").join(" | ")} | |`);
+  console.log(`| ${name} | page memory (measureUserAgentSpecificMemory) | ${COUNTS.map((c) => `${(worker.get(c).memory / 1048576).toFixed(0)} MiB`).join(" | ")} | ${more.map(() => "").join(" | ")} | ${COUNTS.map(() => "").join(" | ")} | ${more.map(() => "").join(" | ")} | |`);
+}

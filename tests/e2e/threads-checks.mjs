@@ -78,6 +78,22 @@ const resultHash = (page) => page.evaluate(async () => {
   return [...new Uint8Array(d)].map((b) => b.toString(16).padStart(2, "0")).join("");
 });
 
+/**
+ * Waits until `ready(arg)` holds in the page, clicking "Run anyway" whenever the page asks
+ * first (a big job is asked about once its file is read, which takes longer under load).
+ */
+async function untilRunning(page, ready, arg, timeout) {
+  const t0 = Date.now();
+  while (Date.now() - t0 < timeout) {
+    const ask = await page.$("#notice .notice-action");
+    if (ask && await ask.isVisible().catch(() => false)) await ask.click().catch(() => {});
+    const got = await page.evaluate(ready, arg).catch(() => false);
+    if (got) return got;
+    await new Promise((r) => setTimeout(r, 10));
+  }
+  return null;
+}
+
 /** Waits for the worker to be ready and returns window.weft.threads. */
 async function threadsOf(page) {
   await page.waitForFunction(() => window.weft?.threads?.used != null, null, { timeout: 60000 });
@@ -121,9 +137,7 @@ export async function threadsChecks({ browser, baseUrl, weftBin, check, outDir, 
       return window.weft.resultCount;
     });
     await page.setInputFiles("#file", sphere);
-    const asked = await page.waitForSelector("#notice .notice-action", { timeout: 3000 }).catch(() => null);
-    if (asked) await asked.click();
-    const done = await page.waitForFunction((k) => {
+    const done = await untilRunning(page, (k) => {
       if (window.weft.resultCount > k && !window.weft.busy) {
         const f = window.weft.preview?.lastFrame;
         if (f && f.segments > 0 && f.at > window.__dropAt) return { frame: f.at - window.__dropAt, segments: f.segments };
@@ -131,7 +145,7 @@ export async function threadsChecks({ browser, baseUrl, weftBin, check, outDir, 
       const err = document.getElementById("error");
       if (!err.hidden && !window.weft.busy) return { error: document.getElementById("error-text").textContent.trim() };
       return false;
-    }, before, { timeout: timeoutMs, polling: 20 }).then((h) => h.jsonValue()).catch(() => ({ error: "timed out" }));
+    }, before, timeoutMs) ?? { error: "timed out" };
     if (done.error) throw new Error(`the 1M-triangle sphere: ${done.error}`);
     const result = await page.evaluate(() => ({ ms: window.weft.result.ms, threads: window.weft.result.report.threads }));
     return { ...done, ...result, hash: await resultHash(page) };
@@ -234,11 +248,9 @@ export async function threadsChecks({ browser, baseUrl, weftBin, check, outDir, 
       await threadsOf(page);
       const before = await page.evaluate(() => window.weft.resultCount);
       await page.setInputFiles("#file", sphere);
-      const asked = await page.waitForSelector("#notice .notice-action", { timeout: 3000 }).catch(() => null);
-      if (asked) await asked.click();
       // Cancel while the slicing stage (parallel) runs.
-      await page.waitForFunction(() => /slic/i.test(document.getElementById("progress-label")?.textContent ?? "") && !document.getElementById("progress").hidden, null, { timeout: timeoutMs, polling: 10 })
-        .catch(() => { throw new Error("the slicing stage was never shown in progress"); });
+      const slicing = await untilRunning(page, () => /slic/i.test(document.getElementById("progress-label")?.textContent ?? "") && !document.getElementById("progress").hidden, null, timeoutMs);
+      if (!slicing) throw new Error("the slicing stage was never shown in progress");
       // Every thread of the cancelled generation (the computing worker and its 4 pool workers)
       // stops within 0.5 s: between 0.5 s and 1 s after the click, their threads use no CPU
       // (Chromium kills a busy worker only 2 s after terminate(); the page tells the threaded
@@ -268,9 +280,7 @@ export async function threadsChecks({ browser, baseUrl, weftBin, check, outDir, 
       // The next run, on the new worker and its new pool.
       await threadsOf(page);
       await page.click("#slice");
-      const asked2 = await page.waitForSelector("#notice .notice-action", { timeout: 3000 }).catch(() => null);
-      if (asked2) await asked2.click();
-      await page.waitForFunction((k) => window.weft.resultCount > k && !window.weft.busy, before, { timeout: timeoutMs });
+      if (!await untilRunning(page, (k) => window.weft.resultCount > k && !window.weft.busy, before, timeoutMs)) throw new Error("the run after Cancel gave no result");
       const hash = await resultHash(page);
       if (hash !== (sphereHash ?? await cliSphereHash(page))) throw new Error(`after Cancel the G-code is ${hash.slice(0, 12)}…, a fresh run's ${(sphereHash ?? cliHash).slice(0, 12)}…`);
       const real = errors.filter((e) => !/cancel/i.test(e));

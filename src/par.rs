@@ -173,3 +173,103 @@ where
         parts.into_iter().flat_map(|p| p.unwrap_or_default()).collect()
     }
 }
+
+/// Whether [`beside`] can run side work on another thread at once: more than one thread,
+/// and (in the browser) not called from a pool thread, whose pool might have no other
+/// thread free to take the side work while this one waits for it.
+pub fn can_beside() -> bool {
+    #[cfg(not(target_arch = "wasm32"))]
+    {
+        threads() > 1
+    }
+    #[cfg(all(target_arch = "wasm32", feature = "wasm-threads"))]
+    {
+        threads() > 1 && rayon::current_thread_index().is_none()
+    }
+    #[cfg(all(target_arch = "wasm32", not(feature = "wasm-threads")))]
+    {
+        false
+    }
+}
+
+/// Runs `side` on another thread while `main` runs on this one (a pipeline's two ends: they
+/// may wait on each other through channels), and returns `main`'s result once both have
+/// ended. Only when [`can_beside`]. Natively `side` gets a thread of its own (a pool
+/// thread could be busy); in the browser, where a wasm module cannot start a thread, one of
+/// the pool's.
+#[cfg(any(not(target_arch = "wasm32"), feature = "wasm-threads"))]
+pub fn beside<R>(side: impl FnOnce() + Send, main: impl FnOnce() -> R) -> R {
+    #[cfg(not(target_arch = "wasm32"))]
+    {
+        std::thread::scope(|scope| {
+            scope.spawn(side);
+            main()
+        })
+    }
+    #[cfg(target_arch = "wasm32")]
+    {
+        rayon::in_place_scope(|scope| {
+            scope.spawn(|_| side());
+            main()
+        })
+    }
+}
+
+/// Sorts `v` by `cmp`, on every thread of the pool. `cmp` must be a total order on the
+/// elements (ties broken by an index, say): then every sort gives the one sorted order, and
+/// the result is the same at any thread count (rayon's parallel quicksort and std's differ
+/// only in how they order equal elements).
+pub fn sort_unstable_by<T, F>(v: &mut [T], cmp: F)
+where
+    T: Send,
+    F: Fn(&T, &T) -> std::cmp::Ordering + Sync,
+{
+    #[cfg(any(not(target_arch = "wasm32"), feature = "wasm-threads"))]
+    if threads() > 1 && v.len() >= PARALLEL_SORT_MIN {
+        use rayon::slice::ParallelSliceMut;
+        return v.par_sort_unstable_by(cmp);
+    }
+    v.sort_unstable_by(cmp)
+}
+
+/// Below this many elements a sort stays on the calling thread (splitting costs more).
+#[cfg(any(not(target_arch = "wasm32"), feature = "wasm-threads"))]
+const PARALLEL_SORT_MIN: usize = 1 << 15;
+
+/// `f` over `0..n` cut into chunks of `chunk` items (the last one shorter), in order: for a
+/// sum over many items whose value must not depend on the thread count. The chunks are fixed
+/// by `chunk` alone, so summing the chunks' partial results in order rounds the same at any
+/// thread count.
+pub fn map_chunks<R, F>(n: usize, chunk: usize, f: F) -> Vec<R>
+where
+    R: Send,
+    F: Fn(Range<usize>) -> R + Sync,
+{
+    let chunk = chunk.max(1);
+    let chunks = n.div_ceil(chunk);
+    map(chunks, &mut |_| {}, |k| f(k * chunk..((k + 1) * chunk).min(n)))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_parallel_sort_and_chunks_give_the_same_result_at_any_thread_count() {
+        let keys: Vec<u64> = (0..200_000u64).map(|i| (i * 2_654_435_761) % 1_000).collect();
+        let run = |threads: usize| {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            pool.install(|| {
+                let mut order: Vec<u32> = (0..keys.len() as u32).collect();
+                sort_unstable_by(&mut order, |&a, &b| keys[a as usize].cmp(&keys[b as usize]).then(a.cmp(&b)));
+                let sums = map_chunks(keys.len(), 4096, |r| r.map(|i| 1.0 / (1.0 + keys[i] as f64)).sum::<f64>());
+                (order, sums.iter().sum::<f64>().to_bits(), sums.len())
+            })
+        };
+        let one = run(1);
+        assert!(one.0.windows(2).all(|w| (keys[w[0] as usize], w[0]) < (keys[w[1] as usize], w[1])), "sorted");
+        assert_eq!(one.2, 200_000usize.div_ceil(4096));
+        assert_eq!(run(2), one);
+        assert_eq!(run(4), one);
+    }
+}

@@ -38,18 +38,19 @@ const PREVIEW_SEGMENT_BYTES: usize = 2 * (6 * 4 + 1 + 4 + 4 + 4 + 4 + 4 + 4 + 3 
 /// Bytes per layer: its record while reading (about 56 bytes, doubled) and its report, plus the
 /// preview's three per-layer entries (doubled).
 const LAYER_BYTES: usize = 2 * 56 + size_of::<LayerReport>() + 2 * 12;
-/// Native builds measure overlap on a second thread: layers in flight to it (at most 10, each
-/// at most `PARALLEL_LAYER_SEGMENTS` segments) and its own working set.
-#[cfg(not(target_arch = "wasm32"))]
+/// Builds with threads (native, the browser's threaded module) measure overlap on a second
+/// thread: layers in flight to it (at most 10, each at most `PARALLEL_LAYER_SEGMENTS`
+/// segments) and its own working set.
+#[cfg(any(not(target_arch = "wasm32"), feature = "wasm-threads"))]
 const PARALLEL_BYTES: usize = 10 * super::machine::PARALLEL_LAYER_SEGMENTS * 2 * size_of::<overlap::Seg>();
 
 /// Peak bytes of an analysis making `segments` segments (extrusion and travel, arcs by their
 /// chords) in `layers` layers, the largest holding `largest_layer` extrusion segments.
 pub fn peak_bytes(segments: usize, layers: usize, largest_layer: usize, preview: bool) -> usize {
     let preview_bytes = if preview { segments.saturating_mul(PREVIEW_SEGMENT_BYTES) } else { 0 };
-    #[cfg(not(target_arch = "wasm32"))]
+    #[cfg(any(not(target_arch = "wasm32"), feature = "wasm-threads"))]
     let parallel = PARALLEL_BYTES + overlap::layer_bytes(super::machine::PARALLEL_LAYER_SEGMENTS);
-    #[cfg(target_arch = "wasm32")]
+    #[cfg(all(target_arch = "wasm32", not(feature = "wasm-threads")))]
     let parallel = 0;
     preview_bytes
         .saturating_add(layers.saturating_mul(LAYER_BYTES))

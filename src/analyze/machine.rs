@@ -500,27 +500,29 @@ pub(crate) fn run(file: &str, bytes: &[u8], options: &Options, est: &Estimate) -
         return Err(Error::NotText { file: file.to_string(), offset });
     }
     let layer_comments = crate::motion::lex::has_layer_comments(bytes);
-    #[cfg(not(target_arch = "wasm32"))]
-    if bytes.len() >= PARALLEL_OVERLAP_MIN_BYTES && crate::par::threads() > 1 {
+    #[cfg(any(not(target_arch = "wasm32"), feature = "wasm-threads"))]
+    if bytes.len() >= PARALLEL_OVERLAP_MIN_BYTES && crate::par::can_beside() {
         // Overlap is per layer and independent of parsing: measure it on a second core while
         // the next layers are parsed. Same layers, same order, same arithmetic → same results.
-        return std::thread::scope(|scope| {
-            let (seg_tx, seg_rx) = std::sync::mpsc::sync_channel::<(usize, Vec<Seg>)>(8);
-            let (res_tx, res_rx) = std::sync::mpsc::channel();
-            let width = options.default_line_width_mm;
-            scope.spawn(move || {
+        let (seg_tx, seg_rx) = std::sync::mpsc::sync_channel::<(usize, Vec<Seg>)>(8);
+        let (res_tx, res_rx) = std::sync::mpsc::channel();
+        let width = options.default_line_width_mm;
+        return crate::par::beside(
+            move || {
                 let mut overlap = Overlap::default();
                 for (index, segs) in seg_rx {
                     if res_tx.send((index, overlap.layer(&segs, width))).is_err() {
                         break;
                     }
                 }
-            });
-            let mut m = Machine::new(options, layer_comments, est);
-            m.overlap_out = Some(seg_tx);
-            m.overlap_in = Some(res_rx);
-            parse_all(file, bytes, m)
-        });
+            },
+            move || {
+                let mut m = Machine::new(options, layer_comments, est);
+                m.overlap_out = Some(seg_tx);
+                m.overlap_in = Some(res_rx);
+                parse_all(file, bytes, m)
+            },
+        );
     }
     parse_all(file, bytes, Machine::new(options, layer_comments, est))
 }
@@ -533,8 +535,9 @@ pub(super) const PARALLEL_LAYER_SEGMENTS: usize = 1 << 16;
 /// layers would otherwise spend its time passing them between threads).
 const PARALLEL_LAYER_MIN_SEGMENTS: usize = 64;
 
-/// Files at least this large (bytes) measure overlap on a second thread (native builds).
-#[cfg(not(target_arch = "wasm32"))]
+/// Files at least this large (bytes) measure overlap on a second thread (not in the plain
+/// wasm build, which has one).
+#[cfg(any(not(target_arch = "wasm32"), feature = "wasm-threads"))]
 const PARALLEL_OVERLAP_MIN_BYTES: usize = 1 << 20;
 
 fn parse_all(file: &str, bytes: &[u8], mut m: Machine) -> Result<Analysis, Error> {

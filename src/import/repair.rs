@@ -128,7 +128,8 @@ pub(super) fn repair(raw: RawMesh, tolerance_mm: f64) -> Repaired {
             edges.push(((lo as u64) << 32) | hi as u64);
         }
     }
-    edges.sort_unstable();
+    // Plain values (equal ones are alike): the same order at any thread count.
+    crate::par::sort_unstable_by(&mut edges, |a, b| a.cmp(b));
     let open_edges = edges.chunk_by(|a, b| a == b).filter(|run| run.len() == 1).count();
     drop(edges);
 

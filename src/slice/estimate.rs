@@ -65,6 +65,9 @@ struct MeshStats {
     max: [f64; 3],
 }
 
+/// Triangles a chunk of [`stats`]'s sums (fixed: the sums must not depend on the threads).
+const STATS_CHUNK: usize = 1 << 16;
+
 fn stats(mesh: &Mesh, layer_height: f64) -> MeshStats {
     let mut s = MeshStats { triangles: mesh.triangles.len(), crossings: 0.0, volume: 0.0, wall_area: 0.0, flat_area: 0.0, min: [f64::INFINITY; 3], max: [f64::NEG_INFINITY; 3] };
     for v in &mesh.vertices {
@@ -74,19 +77,31 @@ fn stats(mesh: &Mesh, layer_height: f64) -> MeshStats {
         }
     }
     let v = |i: u32| mesh.vertices.get(i as usize).map_or([0.0; 3], |p| [p[0] as f64, p[1] as f64, p[2] as f64]);
-    for t in &mesh.triangles {
-        let (a, b, c) = (v(t[0]), v(t[1]), v(t[2]));
-        let (lo, hi) = (a[2].min(b[2]).min(c[2]), a[2].max(b[2]).max(c[2]));
-        // The expected number of planes, spaced `layer_height`, that cut a span of this height.
-        s.crossings += (hi - lo) / layer_height;
-        let u = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
-        let w = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
-        let n = [u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]];
-        let area2 = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
-        s.flat_area += 0.5 * n[2].abs();
-        s.wall_area += 0.5 * (area2 * area2 - n[2] * n[2]).max(0.0).sqrt();
-        // Signed volume of the tetrahedron (origin, a, b, c).
-        s.volume += (a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) + a[2] * (b[0] * c[1] - b[1] * c[0])) / 6.0;
+    // Sums over fixed chunks of triangles, added in order: the same rounding at any thread
+    // count (a 1M-triangle mesh is 16 chunks).
+    let parts = crate::par::map_chunks(mesh.triangles.len(), STATS_CHUNK, |range| {
+        let mut p = [0.0f64; 4]; // crossings, flat area, wall area, volume
+        for t in &mesh.triangles[range] {
+            let (a, b, c) = (v(t[0]), v(t[1]), v(t[2]));
+            let (lo, hi) = (a[2].min(b[2]).min(c[2]), a[2].max(b[2]).max(c[2]));
+            // The expected number of planes, spaced `layer_height`, that cut a span of this height.
+            p[0] += (hi - lo) / layer_height;
+            let u = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
+            let w = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
+            let n = [u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]];
+            let area2 = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+            p[1] += 0.5 * n[2].abs();
+            p[2] += 0.5 * (area2 * area2 - n[2] * n[2]).max(0.0).sqrt();
+            // Signed volume of the tetrahedron (origin, a, b, c).
+            p[3] += (a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) + a[2] * (b[0] * c[1] - b[1] * c[0])) / 6.0;
+        }
+        p
+    });
+    for p in parts {
+        s.crossings += p[0];
+        s.flat_area += p[1];
+        s.wall_area += p[2];
+        s.volume += p[3];
     }
     s.volume = s.volume.abs();
     s
@@ -95,7 +110,7 @@ fn stats(mesh: &Mesh, layer_height: f64) -> MeshStats {
 /// The slicer's work on `mesh` (placed: lowest point at Z = 0) with `options`: layers,
 /// contour segments, toolpath segments and G-code bytes, peak memory and time; refused when a
 /// coordinate is beyond [`MAX_COORD_MM`], the layers beyond [`MAX_LAYERS`], or the stage over
-/// the shared budgets. O(triangles), allocates nothing.
+/// the shared budgets. O(triangles), on every thread; allocates only the partial sums.
 pub fn estimate(mesh: &Mesh, options: &Options) -> Estimate {
     let o = options;
     let s = stats(mesh, o.layer_height_mm);

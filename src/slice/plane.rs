@@ -111,7 +111,8 @@ impl<'a> Sweep<'a> {
             top = Some(top.map_or(hi, |t| t.max(hi)));
             order.push(i as u32);
         }
-        order.sort_unstable_by(|&a, &b| zmin[a as usize].total_cmp(&zmin[b as usize]).then(a.cmp(&b)));
+        // A total order (ties by index): the same order at any thread count.
+        crate::par::sort_unstable_by(&mut order, |&a, &b| zmin[a as usize].total_cmp(&zmin[b as usize]).then(a.cmp(&b)));
         Sweep { mesh, order, zmin, zmax, top: top.map(f64::from) }
     }
 

@@ -223,6 +223,7 @@ async function runBrowser() {
     args: [
       "--headless", "--no-sandbox", "--disable-background-networking", "--disable-component-update",
       "--disable-sync", "--disable-gpu-sandbox", "--use-angle=swiftshader", "--enable-unsafe-swiftshader",
+      "--disable-gpu-compositing", // see launchChromium (page-helpers.mjs)
       "--js-flags=--max-old-space-size=4096",
     ],
   });

@@ -39,17 +39,21 @@ const PREVIEW_SEGMENT_BYTES: usize = 2 * (6 * 4 + 1 + 4 + 4 + 4 + 4 + 4 + 4 + 3 
 /// preview's three per-layer entries (doubled).
 const LAYER_BYTES: usize = 2 * 56 + size_of::<LayerReport>() + 2 * 12;
 /// Builds with threads (native, the browser's threaded module) measure overlap on a second
-/// thread: layers in flight to it (at most 10, each at most `PARALLEL_LAYER_SEGMENTS`
-/// segments) and its own working set.
+/// thread: layers in flight to it (at most 10, each of at most `PARALLEL_LAYER_SEGMENTS`
+/// segments and of at most the largest layer's, in vectors up to twice their length) and its
+/// own working set on one of them.
 #[cfg(any(not(target_arch = "wasm32"), feature = "wasm-threads"))]
-const PARALLEL_BYTES: usize = 10 * super::machine::PARALLEL_LAYER_SEGMENTS * 2 * size_of::<overlap::Seg>();
+fn parallel_bytes(largest_layer: usize) -> usize {
+    let layer = largest_layer.min(super::machine::PARALLEL_LAYER_SEGMENTS);
+    10 * layer * 2 * size_of::<overlap::Seg>() + overlap::layer_bytes(layer)
+}
 
 /// Peak bytes of an analysis making `segments` segments (extrusion and travel, arcs by their
 /// chords) in `layers` layers, the largest holding `largest_layer` extrusion segments.
 pub fn peak_bytes(segments: usize, layers: usize, largest_layer: usize, preview: bool) -> usize {
     let preview_bytes = if preview { segments.saturating_mul(PREVIEW_SEGMENT_BYTES) } else { 0 };
     #[cfg(any(not(target_arch = "wasm32"), feature = "wasm-threads"))]
-    let parallel = PARALLEL_BYTES + overlap::layer_bytes(super::machine::PARALLEL_LAYER_SEGMENTS);
+    let parallel = parallel_bytes(largest_layer);
     #[cfg(all(target_arch = "wasm32", not(feature = "wasm-threads")))]
     let parallel = 0;
     preview_bytes

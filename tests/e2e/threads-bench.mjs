@@ -41,7 +41,8 @@ const meshes = { "sphere-1m": sphere, "sphere-4m": bigSphere };
 const WARMUP = { "ball-burst-disc-48mm": "honeycomb-10mm", "hourglass-omega3": "barrel-omega1", "sphere-30mm": "cube-20mm" };
 const WARM = (process.env.BENCH_WARM ?? "0,1").split(",").map((w) => w === "1");
 
-const server = await serve({ root: ROOT });
+// WEFT_PKG_DIR: serve another build of the modules as /pkg/ (as run.mjs does).
+const server = await serve({ root: ROOT, ...(process.env.WEFT_PKG_DIR ? { pkgDir: resolve(process.env.WEFT_PKG_DIR) } : {}) });
 const browser = await launchChromium();
 const log = (s) => process.stderr.write(`[threads-bench] ${s}\n`);
 

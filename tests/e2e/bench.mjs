@@ -35,11 +35,10 @@
 import { execFileSync } from "node:child_process";
 import { existsSync, readFileSync, writeFileSync } from "node:fs";
 import { basename, join, resolve } from "node:path";
-import { chromium } from "playwright-core";
+import { launchChromium } from "./page-helpers.mjs";
 import { ROOT, serve } from "./server.mjs";
 
 const WEFT_BIN = process.env.WEFT_BIN === "" ? null : resolve(ROOT, process.env.WEFT_BIN ?? "target/release/weft");
-const CHROMIUM = process.env.CHROMIUM ?? "/usr/bin/chromium";
 const PKG_DIR = process.env.WEFT_PKG_DIR ? resolve(process.env.WEFT_PKG_DIR) : join(ROOT, "pkg");
 const TRIANGLES = Number(process.env.BENCH_TRIANGLES ?? 1_000_000);
 const GCODE_MB = Number(process.env.BENCH_GCODE_MB ?? 100);
@@ -217,16 +216,7 @@ function runNativeCache() {
 // ---------------------------------------------------------------------------------------
 async function runBrowser() {
   const server = await serve({ pkgDir: PKG_DIR });
-  const browser = await chromium.launch({
-    executablePath: CHROMIUM,
-    headless: true,
-    args: [
-      "--headless", "--no-sandbox", "--disable-background-networking", "--disable-component-update",
-      "--disable-sync", "--disable-gpu-sandbox", "--use-angle=swiftshader", "--enable-unsafe-swiftshader",
-      "--disable-gpu-compositing", // see launchChromium (page-helpers.mjs)
-      "--js-flags=--max-old-space-size=4096",
-    ],
-  });
+  const browser = await launchChromium(["--js-flags=--max-old-space-size=4096"]);
   try {
     const version = browser.version();
     const context = await browser.newContext();

@@ -8,7 +8,8 @@ import { chromium } from "playwright-core";
  * a small machine: composited by SwiftShader's GL, every page frame (a progress label's
  * change) cost the GPU process about 80 ms of CPU at 1280×800, a whole core at 10 frames a
  * second taken from the worker's threads; the software compositor redraws only what changed,
- * as Chromium does on a machine without a usable GPU. `extraArgs` are added.
+ * as Chromium does on a machine without a usable GPU. `extraArgs` are added (bench.mjs: V8's
+ * heap limit).
  */
 export function launchChromium(extraArgs = []) {
   const headed = Boolean(process.env.E2E_HEADED);
@@ -119,4 +120,17 @@ export function boxStl(a, b, header = "weft e2e box") {
     [p, q, r].forEach((pt, j) => pt.forEach((x, k) => buf.writeFloatLE(x, o + 12 + 12 * j + 4 * k)));
   });
   return buf;
+}
+
+/**
+ * From now on the page clicks "Run anyway" itself the moment a big job's ask shows (an
+ * observer in the page: no polling from the test, which would load the page's main thread).
+ */
+export function confirmBigJobs(page) {
+  return page.evaluate(() => {
+    const notice = document.getElementById("notice");
+    const answer = () => document.querySelector("#notice:not([hidden]) .notice-action")?.click();
+    new MutationObserver(answer).observe(notice, { attributes: true, childList: true, subtree: true });
+    answer();
+  });
 }

@@ -21,7 +21,7 @@ import { execFileSync } from "node:child_process";
 import { existsSync, mkdirSync, readdirSync, readFileSync, writeFileSync } from "node:fs";
 import { join, resolve } from "node:path";
 import { ROOT, serve } from "./server.mjs";
-import { launchChromium, waitReady } from "./page-helpers.mjs";
+import { confirmBigJobs, launchChromium, waitReady } from "./page-helpers.mjs";
 import { sphereStl } from "./threads-checks.mjs";
 
 const WEFT_BIN = resolve(ROOT, process.env.WEFT_BIN ?? "target/release/weft");
@@ -64,6 +64,12 @@ function rendererPeakBytes() {
   return peak;
 }
 
+/** Picks example `name` from the Examples menu (once the menu is filled). */
+async function pickExample(page, name) {
+  await page.waitForFunction(() => document.querySelectorAll("#examples option[value]:not([value=''])").length > 0);
+  await page.selectOption("#examples", `${name}.json`);
+}
+
 /**
  * One fresh page at `threads`: the workload, its report's stage times, the frame time and
  * memory. `warm`: the page first runs another design of the same kind ([`WARMUP`]), so the
@@ -82,8 +88,7 @@ async function once(name, threads, warm) {
     if (used !== threads) throw new Error(`asked ${threads} threads, the worker uses ${used}`);
     if (warm) {
       const k = await page.evaluate(() => window.weft.resultCount);
-      await page.waitForFunction(() => document.querySelectorAll("#examples option[value]:not([value=''])").length > 0);
-      await page.selectOption("#examples", `${WARMUP[name] ?? "cube-20mm"}.json`);
+      await pickExample(page, WARMUP[name] ?? "cube-20mm");
       await page.waitForFunction((n) => window.weft.resultCount > n && !window.weft.busy, k, { timeout: 600000 });
     }
     const before = await page.evaluate(() => {
@@ -91,19 +96,12 @@ async function once(name, threads, warm) {
       const mark = () => { window.__t0 ??= performance.now(); };
       document.getElementById("file").addEventListener("change", mark, { capture: true, once: true });
       document.getElementById("examples").addEventListener("change", mark, { capture: true, once: true });
-      // A big job's "Run anyway" is clicked the moment it shows (by the page itself: polling
-      // from here would load the page's main thread), so the times include no wait for it.
-      window.__asked = 0;
-      new MutationObserver(() => {
-        const ask = document.querySelector("#notice:not([hidden]) .notice-action");
-        if (ask) { window.__asked++; ask.click(); }
-      }).observe(document.getElementById("notice"), { attributes: true, childList: true, subtree: true });
       return window.weft.resultCount;
     });
+    await confirmBigJobs(page); // the times include no wait for the ask
     if (meshes[name]) await page.setInputFiles("#file", meshes[name]);
     else {
-      await page.waitForFunction(() => document.querySelectorAll("#examples option[value]:not([value=''])").length > 0);
-      await page.selectOption("#examples", `${name}.json`);
+      await pickExample(page, name);
     }
     const r = await page.waitForFunction((k) => {
       if (window.weft.resultCount <= k || window.weft.busy) return false;

@@ -12,7 +12,7 @@ import { createHash } from "node:crypto";
 import { execFileSync } from "node:child_process";
 import { join } from "node:path";
 import { ROOT, serve } from "./server.mjs";
-import { collectErrors, waitReady } from "./page-helpers.mjs";
+import { collectErrors, confirmBigJobs, waitReady } from "./page-helpers.mjs";
 
 const sha256 = (buf) => createHash("sha256").update(buf).digest("hex");
 
@@ -79,19 +79,13 @@ const resultHash = (page) => page.evaluate(async () => {
 });
 
 /**
- * Waits until `ready(arg)` holds in the page, clicking "Run anyway" whenever the page asks
- * first (a big job is asked about once its file is read, which takes longer under load).
+ * Waits until `ready(arg)` holds in the page (its value, or null after `timeout` ms), the page
+ * answering "Run anyway" whenever it asks first (a big job is asked about once its file is
+ * read, which takes longer under load).
  */
 async function untilRunning(page, ready, arg, timeout) {
-  const t0 = Date.now();
-  while (Date.now() - t0 < timeout) {
-    const ask = await page.$("#notice .notice-action");
-    if (ask && await ask.isVisible().catch(() => false)) await ask.click().catch(() => {});
-    const got = await page.evaluate(ready, arg).catch(() => false);
-    if (got) return got;
-    await new Promise((r) => setTimeout(r, 10));
-  }
-  return null;
+  await confirmBigJobs(page);
+  return page.waitForFunction(ready, arg, { timeout, polling: 10 }).then((h) => h.jsonValue()).catch(() => null);
 }
 
 /** Waits for the worker to be ready and returns window.weft.threads. */

@@ -5,9 +5,11 @@
 //! smoke test in `tests/fuzz_smoke.rs`).
 //!
 //! Pipeline: detect the format from the content ([`detect_format`]), parse into a raw indexed
-//! triangle list, then clean it ([`repair`]): weld close vertices, drop degenerate and
-//! duplicate triangles, count open edges. The output order follows the file order, so the
-//! same bytes give the same [`Mesh`] on every run and platform.
+//! triangle list (a binary STL's records are checked and read in place), then clean it
+//! ([`repair`]): weld close vertices, drop degenerate and duplicate triangles, count open
+//! edges. The output order follows the file order, so the same bytes give the same [`Mesh`]
+//! on every run and platform, at any thread count (the checks and the cleaning work on every
+//! core through `crate::par`).
 //!
 //! Bounded: every parser and the cleaner are linear in the input (`tests/import_hostile.rs`
 //! checks the growth of each), and the counts are checked against [`MAX_TRIANGLES`] and
@@ -15,6 +17,7 @@
 //! and the memory peak without reading. Strings from files reach messages only through
 //! [`clean`] (bounded length, no control characters).
 
+mod buckets;
 mod obj;
 mod repair;
 mod stl;
@@ -34,14 +37,15 @@ pub use threemf::{MAX_MODEL_PART_BYTES, MAX_XML_DEPTH};
 /// follows import, so import should peak under about 1 GB ([`MAX_IMPORT_BYTES`]).
 /// Measured (`memory_per_triangle` in `tests/import_hostile.rs`: resident high-water mark
 /// of `read_mesh` in a fresh process, glibc unmapping every freed block, 2 M-triangle
-/// spheres), beyond the file's own bytes: binary and ASCII STL 64 B/triangle, OBJ and 3MF
-/// 42, a binary-STL soup where nothing welds (the worst case) 107; [`estimate`] bounds them
-/// at 111, 43, 73. So a binary STL at the limit (a 250 MB file) peaks at about 0.6 GB, and
-/// at most at its estimate of 718 MiB whatever its geometry, leaving room for slicing. The
-/// previous importer peaked at 102 B/triangle beyond the file (same measurement; 625 MiB of
-/// wasm memory for a 4 M-triangle, 200 MB STL; 1.69 GB RSS for 10 M natively) and had no
-/// bound for soups. Meshes this large are scans or over-tessellated exports, which slice
-/// the same once decimated.
+/// spheres), beyond the file's own bytes: binary STL 44 B/triangle (its records are read in
+/// place), ASCII STL 72, OBJ 32, 3MF 42, a binary-STL soup where nothing welds 85;
+/// [`estimate`] bounds them at 111, 111, 43, 73, 111. So a binary STL at the limit (a 250 MB
+/// file) peaks at about 0.4 GB, and at most at its estimate of 718 MiB whatever its geometry,
+/// leaving room for slicing. The one-table cleaner before it peaked at 64 B/triangle for STL,
+/// 42 for OBJ and 107 for the soup; the importer before that at 102 B/triangle beyond the
+/// file (same measurement; 625 MiB of wasm memory for a 4 M-triangle, 200 MB STL; 1.69 GB
+/// RSS for 10 M natively), with no bound for soups. Meshes this large are scans or
+/// over-tessellated exports, which slice the same once decimated.
 pub const MAX_TRIANGLES: usize = 5_000_000;
 
 /// Most memory an import may need by [`estimate`]: the input's own bytes plus the reader's
@@ -302,30 +306,29 @@ pub fn read_mesh(file: &str, bytes: &[u8], options: &Options) -> Result<Imported
     let mut unit_scale = 1.0;
     let input = bytes.len() as u64;
     let check = |v: u64, t: u64| Estimate { format, triangles: t, vertices: v, peak_bytes: input.saturating_add(raw_peak(v, t)) }.check(file);
-    let raw = match format {
+    let tol = options.weld_tolerance_mm;
+    let (triangles_read, repaired) = match format {
         Format::StlBinary => {
             let (v, t) = stl::binary_counts(bytes);
             check(v, t)?;
-            stl::read_binary(file, bytes)?
+            read_and_repair(stl::read_binary(file, bytes)?, tol)
         }
         Format::StlAscii => {
             let (v, t) = stl::scan_ascii(bytes);
             check(v, t)?;
-            stl::read_ascii(file, bytes, (v, t))?
+            read_and_repair(stl::read_ascii(file, bytes, (v, t))?, tol)
         }
         Format::Obj => {
             let (v, t) = obj::scan_obj(bytes);
             check(v, t)?;
-            obj::read_obj(file, bytes, (v, t))?
+            read_and_repair(obj::read_obj(file, bytes, (v, t))?, tol)
         }
         Format::ThreeMf => {
             let (raw, scale) = threemf::read_3mf(file, bytes)?;
             unit_scale = scale;
-            raw
+            read_and_repair(raw, tol)
         }
     };
-    let triangles_read = raw.triangles.len();
-    let repaired = repair::repair(raw, options.weld_tolerance_mm);
     if repaired.mesh.triangles.is_empty() {
         return Err(Error::NoTriangles { file: file.to_string() });
     }
@@ -340,6 +343,11 @@ pub fn read_mesh(file: &str, bytes: &[u8], options: &Options) -> Result<Imported
         unit_scale,
     };
     Ok(Imported { mesh: repaired.mesh, report })
+}
+
+/// The triangles `raw` holds, and `raw` cleaned.
+fn read_and_repair(raw: impl repair::Soup, tolerance_mm: f64) -> (usize, repair::Repaired) {
+    (raw.triangle_count(), repair::repair(raw, tolerance_mm))
 }
 
 /// Detects the format of `bytes` from their content; `file`'s extension only breaks ties.

@@ -6,6 +6,8 @@
 //! endloop endfacet … endsolid`, any case and whitespace, several solids per file. Normals
 //! are ignored (recomputed from the winding).
 
+use super::buckets::{map_chunks, Words};
+use super::repair::{Corners, Soup};
 use super::{malformed, parse_finite, show, Error, RawMesh};
 
 const HEADER: usize = 84;
@@ -54,8 +56,9 @@ pub(super) fn why_not_stl(bytes: &[u8]) -> String {
 /// promises about 10¹¹ bytes).
 const MAX_CUT_RATIO: u64 = 1000;
 
-/// Reads a binary STL. Bytes after the promised triangles are ignored.
-pub(super) fn read_binary(file: &str, bytes: &[u8]) -> Result<RawMesh, Error> {
+/// Checks a binary STL and gives its records to read in place. Bytes after the promised
+/// triangles are ignored.
+pub(super) fn read_binary<'a>(file: &str, bytes: &'a [u8]) -> Result<BinaryStl<'a>, Error> {
     let Some(n) = count(bytes) else {
         return Err(malformed(
             file,
@@ -90,32 +93,64 @@ pub(super) fn read_binary(file: &str, bytes: &[u8]) -> Result<RawMesh, Error> {
         return Err(malformed(file, "header", format!("{n} triangles are more than weft can index"), "split the model into smaller files"));
     }
     let body = bytes.get(HEADER..HEADER + n * RECORD).unwrap_or_default();
-    let mut vertices = Vec::with_capacity(n * 3);
-    let mut triangles = Vec::with_capacity(n);
-    for (i, rec) in body.chunks_exact(RECORD).enumerate() {
-        let mut f = [0f32; 9];
-        for (k, slot) in f.iter_mut().enumerate() {
-            let o = 12 + 4 * k;
-            let b: [u8; 4] = rec.get(o..o + 4).and_then(|s| s.try_into().ok()).unwrap_or_default();
-            *slot = f32::from_le_bytes(b);
-        }
-        if !f.iter().all(|v| v.is_finite()) {
-            let bad = f.iter().position(|v| !v.is_finite()).unwrap_or(0);
-            let what = if f[bad].is_nan() { "not a number (NaN)" } else { "infinite" };
-            return Err(malformed(
-                file,
-                format!("triangle {} (byte {})", i + 1, HEADER + RECORD * i),
-                format!("vertex {} has a coordinate that is {what}", bad / 3 + 1),
-                "repair the mesh in your modelling program and export it again",
-            ));
-        }
-        let base = (i * 3) as u32;
-        vertices.push([f[0], f[1], f[2]]);
-        vertices.push([f[3], f[4], f[5]]);
-        vertices.push([f[6], f[7], f[8]]);
-        triangles.push([base, base + 1, base + 2]);
+    // Every coordinate finite, checked in chunks on every core; the first bad one in the file
+    // is the one named.
+    let bad = map_chunks(n, |range| range.into_iter().find_map(|i| non_finite(body, i).map(|k| (i, k))));
+    if let Some((i, k)) = bad.into_iter().flatten().next() {
+        let c = coordinate(body, i, k);
+        let what = if c.is_nan() { "not a number (NaN)" } else { "infinite" };
+        return Err(malformed(
+            file,
+            format!("triangle {} (byte {})", i + 1, HEADER + RECORD * i),
+            format!("vertex {} has a coordinate that is {what}", k / 3 + 1),
+            "repair the mesh in your modelling program and export it again",
+        ));
     }
-    Ok(RawMesh { vertices, triangles })
+    Ok(BinaryStl { body })
+}
+
+/// Coordinate `k` (0..9: x, y, z of the three vertices) of record `i`.
+#[inline]
+fn coordinate(body: &[u8], i: usize, k: usize) -> f32 {
+    let o = RECORD * i + 12 + 4 * k;
+    let b: [u8; 4] = body.get(o..o + 4).and_then(|s| s.try_into().ok()).unwrap_or_default();
+    f32::from_le_bytes(b)
+}
+
+/// The first coordinate of record `i` that is not finite.
+fn non_finite(body: &[u8], i: usize) -> Option<usize> {
+    (0..9).find(|&k| !coordinate(body, i, k).is_finite())
+}
+
+/// A binary STL's triangle records, checked (every coordinate finite), read in place: the
+/// cleaner reads vertex `3i + k` as record `i`'s corner `k` and needs no copy of them.
+#[derive(Debug)]
+pub(super) struct BinaryStl<'a> {
+    body: &'a [u8],
+}
+
+impl Soup for BinaryStl<'_> {
+    const HELD: bool = false;
+
+    fn vertex_count(&self) -> usize {
+        3 * self.triangle_count()
+    }
+
+    #[inline]
+    fn vertex(&self, i: usize) -> [f32; 3] {
+        let o = RECORD * (i / 3) + 12 + 12 * (i % 3);
+        let b: [u8; 12] = self.body.get(o..o + 12).and_then(|s| s.try_into().ok()).unwrap_or_default();
+        let f = |k: usize| f32::from_le_bytes([b[k], b[k + 1], b[k + 2], b[k + 3]]);
+        [f(0), f(4), f(8)]
+    }
+
+    fn triangle_count(&self) -> usize {
+        self.body.len() / RECORD
+    }
+
+    fn into_corners(self, map: Words) -> Corners {
+        Corners::Map(map)
+    }
 }
 
 /// Whitespace tokenizer over bytes that knows the line of each token.
@@ -316,8 +351,8 @@ mod tests {
         let b = binary(&[T, T]);
         assert!(binary_count_matches(&b));
         let m = read_binary("a.stl", &b).unwrap();
-        assert_eq!(m.triangles.len(), 2);
-        assert_eq!(m.vertices[1], [1.0, 0.0, 0.0]);
+        assert_eq!(m.triangle_count(), 2);
+        assert_eq!(m.vertex(1), [1.0, 0.0, 0.0]);
 
         let cut = &b[..b.len() - 10];
         assert!(!binary_count_matches(cut));

@@ -360,7 +360,10 @@ pub fn estimate(p: &dyn Profile, domain: &Domain, o: &Options, line_width_mm: f6
     // About 1.5 energy evaluations per iteration, two metric passes, the seed.
     let evals = 1.5 * o.iterations as f64 + 4.0 + if o.seed_method == SeedMethod::Ere { 1.5 * ERE_ITERATIONS as f64 } else { 0.0 };
     let seconds = pairs * evals * SECONDS_PER_PAIR;
-    let bytes = n * (std::mem::size_of::<Node>() as f64 + 256.0) + 64.0 * 1024.0;
+    // Per point: its node, forces, trial and counts; then a window of pairs with their
+    // geodesics, twice (the last one held while the next is made, and its runs' overshoot).
+    let window = 2.0 * (WINDOW_PAIRS * (8 + std::mem::size_of::<PairEval>())) as f64;
+    let bytes = n * (std::mem::size_of::<Node>() as f64 + 256.0) + 64.0 * 1024.0 + window.min(pairs * 64.0);
     Estimate::new("axisym_uniform")
         .quantity("points", "points on the domain", n, "")
         .quantity("pairs", "pairs per energy evaluation", pairs, "")
@@ -466,6 +469,10 @@ fn draw(sampler: &Sampler, s: &Surface, field: Option<&Field>, rng: &mut Pcg64, 
 /// domain took 16.6× as long.
 const DART_MISS_LIMIT: usize = 300;
 
+/// Pairs a window of the energy evaluation holds (about 1.8 MB with their geodesics): enough
+/// for every thread to have long runs, few enough to stay in a core's cache share.
+const WINDOW_PAIRS: usize = 1 << 15;
+
 /// Dart throwing with a minimum distance (chord, or geodesic when `geodesic`), the radius
 /// shrinking by 5 % after [`DART_MISS_LIMIT`] consecutive misses until N points are in. With a graded
 /// `field` the minimum distance of a pair is r·s̄/s, s̄ the mean of the two points' target
@@ -530,6 +537,8 @@ struct Engine<'a, 'b> {
     field: Option<&'a Field>,
     /// Cutoff in pair scales s̄ (∞ = all pairs); graded runs only.
     cutoff_spacings: f64,
+    /// Each point's pairs in the last evaluation, to cut the next one's windows.
+    pairs_per_point: std::sync::Mutex<Vec<u32>>,
 }
 
 impl Engine<'_, '_> {
@@ -551,29 +560,63 @@ impl Engine<'_, '_> {
     }
 
     /// Calls `visit(i, j, pair)` for the pairs `near(i, …)` lists for each point `i` in turn, in
-    /// that order: the pairs' geodesics are evaluated side by side in batches, the sums made in
-    /// order on this thread (the same bits at any thread count).
+    /// that order. Points go in windows of about [`WINDOW_PAIRS`] pairs: within one, runs of
+    /// points find their pairs and evaluate their geodesics side by side (one parallel round a
+    /// window, the neighbour search off this thread too), then the sums are made in pair order
+    /// on this thread (the same bits at any thread count). Windows are cut from each point's
+    /// pairs in the evaluation before (points move little between two); the first evaluation
+    /// starts at one point and grows at most 4× a window, so all-pairs runs stay bounded too.
     fn for_pairs(&self, nodes: &[Node], near: &(dyn Fn(usize, &mut Vec<u32>, &mut Vec<(u32, u32)>) + Sync), visit: &mut dyn FnMut(usize, usize, &PairEval)) {
-        const BATCH: usize = 1 << 15;
-        let mut cand = Vec::new();
-        let mut pairs: Vec<(u32, u32)> = Vec::with_capacity(BATCH);
-        let mut flush = |pairs: &mut Vec<(u32, u32)>| {
-            let evals = crate::par::map(pairs.len(), &mut |_| {}, |k| {
-                let (i, j) = (pairs[k].0 as usize, pairs[k].1 as usize);
-                if self.geodesic { self.s.pair_both(&nodes[i], &nodes[j]) } else { self.s.chord_pair(&nodes[i], &nodes[j]) }
-            });
-            for (&(i, j), pe) in pairs.iter().zip(&evals) {
-                visit(i as usize, j as usize, pe);
-            }
-            pairs.clear();
-        };
-        for i in 0..nodes.len() {
-            near(i, &mut cand, &mut pairs);
-            if pairs.len() >= BATCH {
-                flush(&mut pairs);
-            }
+        let n = nodes.len();
+        let runs = 4 * crate::par::threads();
+        let mut last = self.pairs_per_point.lock().map(|mut c| std::mem::take(&mut *c)).unwrap_or_default();
+        if last.len() != n {
+            last.clear();
         }
-        flush(&mut pairs);
+        let mut counts = vec![0u32; n];
+        let (mut start, mut span) = (0usize, 1usize);
+        while start < n {
+            let span_now = if last.is_empty() {
+                span.min(n - start)
+            } else {
+                let mut sum = 0usize;
+                let take = last.get(start..).unwrap_or_default().iter().take_while(|&&c| {
+                    sum += c as usize;
+                    sum <= WINDOW_PAIRS
+                });
+                take.count().clamp(1, n - start)
+            };
+            let parts = crate::par::map_runs(span_now, runs, &mut |_| {}, |range, _| {
+                let (mut cand, mut pairs) = (Vec::new(), Vec::new());
+                for k in range {
+                    near(start + k, &mut cand, &mut pairs);
+                }
+                let evals: Vec<PairEval> = pairs
+                    .iter()
+                    .map(|&(i, j)| {
+                        let (a, b) = (&nodes[i as usize], &nodes[j as usize]);
+                        if self.geodesic { self.s.pair_both(a, b) } else { self.s.chord_pair(a, b) }
+                    })
+                    .collect();
+                vec![(pairs, evals)]
+            });
+            let mut found = 0usize;
+            for (pairs, evals) in &parts {
+                found += pairs.len();
+                for (&(i, j), pe) in pairs.iter().zip(evals) {
+                    if let Some(c) = counts.get_mut(i as usize) {
+                        *c += 1;
+                    }
+                    visit(i as usize, j as usize, pe);
+                }
+            }
+            start += span_now;
+            let per_point = (found as f64 / span_now as f64).max(1.0);
+            span = ((WINDOW_PAIRS as f64 / per_point) as usize).clamp(1, 4 * span_now);
+        }
+        if let Ok(mut c) = self.pairs_per_point.lock() {
+            *c = counts;
+        }
     }
 
     /// The graded energy E = Σ (d_ij/s̄_ij)^−m − c^−m over pairs with d_ij < c·s̄_ij, where
@@ -725,28 +768,24 @@ fn descend(eng: &Engine, d: &Domain, start: Vec<[f64; 2]>, iterations: usize, e_
         let f_ref = reference_force(&nodes, &forces).max(1e-300);
         let mut accepted = None;
         for _ in 0..=MAX_RETRIES {
-            let mut max_step: f64 = 0.0;
-            let trial: Vec<[f64; 2]> = pts
-                .iter()
-                .zip(&nodes)
-                .zip(&forces)
-                .enumerate()
-                .map(|(i, ((q, n), f))| {
-                    // Raise the index (vector = g⁻¹·F), then scale to τ·s·min(|F|/F_ref, 1)
-                    // (s the point's own target spacing when graded).
-                    let len = cov_norm(n, *f);
-                    if !(len > 0.0) {
-                        return *q;
-                    }
-                    let s_i = scales.get(i).copied().unwrap_or(spacing);
-                    let k = tau * s_i * (len / f_ref).min(1.0) / len;
-                    let v = [k * f[0] / n.g[0], if n.g[1] > 0.0 { k * f[1] / n.g[1] } else { 0.0 }];
-                    let t = d.project_inside(eng.s, [q[0] + v[0], q[1] + v[1]]);
-                    let moved = (n.g[0] * (t[0] - q[0]).powi(2) + n.g[1] * (t[1] - q[1]).powi(2)).sqrt();
-                    max_step = max_step.max(moved);
-                    t
-                })
-                .collect();
+            // Each point's move on its own, side by side; the largest step is a maximum (the
+            // same whatever the order).
+            let moves = crate::par::map(pts.len(), &mut |_| {}, |i| {
+                let (q, n, f) = (pts[i], &nodes[i], forces[i]);
+                // Raise the index (vector = g⁻¹·F), then scale to τ·s·min(|F|/F_ref, 1)
+                // (s the point's own target spacing when graded).
+                let len = cov_norm(n, f);
+                if !(len > 0.0) {
+                    return (q, 0.0);
+                }
+                let s_i = scales.get(i).copied().unwrap_or(spacing);
+                let k = tau * s_i * (len / f_ref).min(1.0) / len;
+                let v = [k * f[0] / n.g[0], if n.g[1] > 0.0 { k * f[1] / n.g[1] } else { 0.0 }];
+                let t = d.project_inside(eng.s, [q[0] + v[0], q[1] + v[1]]);
+                (t, (n.g[0] * (t[0] - q[0]).powi(2) + n.g[1] * (t[1] - q[1]).powi(2)).sqrt())
+            });
+            let max_step = moves.iter().map(|m| m.1).fold(0.0, f64::max);
+            let trial: Vec<[f64; 2]> = moves.into_iter().map(|m| m.0).collect();
             let (e, f, nd, sc) = eng.eval(&trial);
             let en = e / e0;
             if en <= e_prev + e_tol {
@@ -810,11 +849,11 @@ pub fn distribute(p: &dyn Profile, domain: &Domain, o: &Options, line_width_mm: 
             for _ in 0..n {
                 start.push(draw(&sampler, &s, field.as_ref(), &mut rng, domain).ok_or(Error::SeedFailed { wanted: n, placed: start.len() })?);
             }
-            let eng = Engine { s: &s, m: o.exponent, rc, geodesic: false, field: field.as_ref(), cutoff_spacings: cut };
+            let eng = Engine { s: &s, m: o.exponent, rc, geodesic: false, field: field.as_ref(), cutoff_spacings: cut, pairs_per_point: Default::default() };
             descend(&eng, domain, start, ERE_ITERATIONS, o.energy_tolerance, o.displacement_tolerance * sp, sp, &mut |_| {}).0
         }
     };
-    let eng = Engine { s: &s, m: o.exponent, rc, geodesic: true, field: field.as_ref(), cutoff_spacings: cut };
+    let eng = Engine { s: &s, m: o.exponent, rc, geodesic: true, field: field.as_ref(), cutoff_spacings: cut, pairs_per_point: Default::default() };
     let (points, iterations, stop) = descend(&eng, domain, seed_points.clone(), o.iterations, o.energy_tolerance, o.displacement_tolerance * sp, sp, progress);
     let (seed_metrics, m, graded) = match &field {
         None => (metrics(&s, &seed_points, o.rasters, o.density, line_width_mm), metrics(&s, &points, o.rasters, o.density, line_width_mm), None),

@@ -225,6 +225,20 @@ fn read(path: &Path) -> Result<Vec<u8>, String> {
     std::fs::read(path).map_err(|e| format!("{}: cannot read it: {}", path.display(), io_words(&e)))
 }
 
+/// A mesh file the importer would refuse from its head alone (a binary STL over the triangle
+/// or memory limit), refused before the whole file is read into memory.
+fn refuse_huge_mesh(path: &Path, name: &str) -> Result<(), String> {
+    use std::io::Read;
+    let Ok(mut file) = std::fs::File::open(path) else { return Ok(()) };
+    let len = file.metadata().map(|m| m.len()).unwrap_or(0);
+    let mut head = Vec::with_capacity(weft::import::HEAD_BYTES);
+    if file.by_ref().take(weft::import::HEAD_BYTES as u64).read_to_end(&mut head).is_err() {
+        // The full read that follows names the problem.
+        return Ok(());
+    }
+    weft::import::check_head(name, &head, len).map_err(|e| e.to_string())
+}
+
 fn write(path: &Path, bytes: &[u8]) -> Result<(), String> {
     std::fs::write(path, bytes).map_err(|e| format!("{}: cannot write it: {}", path.display(), io_words(&e)))
 }
@@ -303,6 +317,10 @@ fn apply_inputs(design: &mut Design, inputs: &[String], files: &mut Files) -> Re
             }
         } else {
             let name = file_name(&path);
+            let mesh = kind.slots().iter().any(|s| s.name == slot && s.kind == weft::jobs::SlotKind::Mesh);
+            if mesh {
+                refuse_huge_mesh(&path, &name)?;
+            }
             files.insert(name.clone(), read(&path)?);
             Input::File { name, embedded: None }
         };

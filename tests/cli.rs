@@ -312,3 +312,29 @@ fn set_errors_name_the_field_and_the_fix() {
         "weft: error: junk.stl is not an STL file: its size does not fit the triangle count a binary STL states at byte 80, and it does not start with the word \"solid\" as a text STL does; export the mesh again as STL, OBJ or 3MF"
     );
 }
+
+/// A binary STL over the triangle limit is refused from its header, before the file is read:
+/// under an address-space limit far below the file's size, the refusal is the limit's (not
+/// "out of memory"). The file is sparse (a header and a length), so it costs no disk.
+#[test]
+fn a_huge_binary_stl_is_refused_before_it_is_read() {
+    let n: u32 = 10_000_000;
+    let path = tmp("huge-10m.stl");
+    let mut head = vec![0u8; 80];
+    head.extend_from_slice(&n.to_le_bytes());
+    std::fs::write(&path, &head).unwrap();
+    std::fs::OpenOptions::new().write(true).open(&path).unwrap().set_len(84 + 50 * n as u64).unwrap();
+    let script = format!(
+        "ulimit -v 400000 && exec '{}' run '{}' --input '{}' -o '{}'",
+        env!("CARGO_BIN_EXE_weft"),
+        repo("examples/cube-20mm.json"),
+        path.display(),
+        tmp("huge.gcode").display()
+    );
+    let out = Command::new("sh").args(["-c", &script]).output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(err.contains("huge-10m.stl: the mesh has 10,000,000 triangles, limit 5,000,000"), "{err}");
+    assert!(err.contains("decimate"), "{err}");
+    let _ = std::fs::remove_file(&path);
+}

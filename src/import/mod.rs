@@ -278,6 +278,26 @@ pub fn estimate(file: &str, bytes: &[u8]) -> Result<Estimate, Error> {
     Ok(Estimate { format, triangles, vertices, peak_bytes: input.saturating_add(peak) })
 }
 
+/// The refusal [`read_mesh`] would give, from a file's first [`HEAD_BYTES`] bytes and its
+/// length alone, for a binary STL (detected as [`detect_format`] does: not a zip, and exactly
+/// as long as its header's count says). So a front end can refuse a file over the limits
+/// before reading it: the CLI reads nothing more of a 10 M-triangle STL. `Ok` when the head
+/// cannot tell (another format, or within the limits): read the file, then [`read_mesh`].
+pub fn check_head(file: &str, head: &[u8], len: u64) -> Result<(), Error> {
+    if head.starts_with(b"PK\x03\x04") {
+        return Ok(());
+    }
+    let Some(n) = stl::count(head) else { return Ok(()) };
+    if stl::binary_len(n) != len {
+        return Ok(());
+    }
+    let (v, t) = (3 * n as u64, n as u64);
+    Estimate { format: Format::StlBinary, triangles: t, vertices: v, peak_bytes: len.saturating_add(raw_peak(v, t)) }.check(file)
+}
+
+/// Bytes [`check_head`] reads: a binary STL's header and count.
+pub const HEAD_BYTES: usize = 84;
+
 /// Memory an import uses whatever its size: stack, small allocations, parser buffers.
 pub(crate) const FIXED_PEAK_BYTES: u64 = 2 << 20;
 
@@ -520,6 +540,27 @@ pub(crate) fn group(n: u64) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_head_refuses_a_binary_stl_over_the_limits_and_nothing_else() {
+        let head = |n: u32| {
+            let mut h = vec![0u8; 80];
+            h.extend_from_slice(&n.to_le_bytes());
+            h
+        };
+        let over = (MAX_TRIANGLES + 1) as u32;
+        let len = |n: u32| 84 + 50 * n as u64;
+        let err = check_head("big.stl", &head(over), len(over)).unwrap_err().to_string();
+        assert!(err.contains("big.stl") && err.contains("limit 5,000,000") && err.contains("decimate"), "{err}");
+        // The same refusal as reading the whole file (its estimate).
+        assert!(check_head("ok.stl", &head(1000), len(1000)).is_ok());
+        // Not a binary STL by its length, a zip, or too short to tell: read the file first.
+        assert!(check_head("big.stl", &head(over), len(over) + 1).is_ok());
+        let mut zip = head(over);
+        zip[..4].copy_from_slice(b"PK\x03\x04");
+        assert!(check_head("big.3mf", &zip, len(over)).is_ok());
+        assert!(check_head("a.stl", b"solid", 5).is_ok());
+    }
 
     #[test]
     fn empty_and_unknown() {

@@ -14,17 +14,19 @@ const HEADER: usize = 84;
 const RECORD: usize = 50;
 const REEXPORT: &str = "the file was cut short; export it again";
 
-fn count(bytes: &[u8]) -> Option<u32> {
+pub(super) fn count(bytes: &[u8]) -> Option<u32> {
     let c: [u8; 4] = bytes.get(80..84)?.try_into().ok()?;
     Some(u32::from_le_bytes(c))
 }
 
+/// The length of a binary STL of `n` triangles.
+pub(super) fn binary_len(n: u32) -> u64 {
+    HEADER as u64 + RECORD as u64 * n as u64
+}
+
 /// True when the file is exactly as long as its binary-STL triangle count says.
 pub(super) fn binary_count_matches(bytes: &[u8]) -> bool {
-    match count(bytes) {
-        Some(n) => HEADER as u64 + RECORD as u64 * n as u64 == bytes.len() as u64,
-        None => false,
-    }
+    count(bytes).is_some_and(|n| binary_len(n) == bytes.len() as u64)
 }
 
 /// (vertices, triangles) a binary STL read gives: the header's count, capped by the

@@ -43,6 +43,7 @@ pub mod jobs;
 pub mod report;
 pub mod scaffold;
 pub mod testgen;
+pub mod thread_cache;
 pub mod thumbnail;
 pub mod volume;
 
@@ -54,3 +55,8 @@ pub mod foam;
 pub mod freeform;
 #[cfg(target_arch = "wasm32")]
 mod wasm;
+
+/// The threaded browser module allocates through per-thread caches (see [`thread_cache`]).
+#[cfg(all(target_arch = "wasm32", feature = "wasm-threads"))]
+#[global_allocator]
+static ALLOCATOR: thread_cache::ThreadCache = thread_cache::ThreadCache;

@@ -72,7 +72,12 @@ mod thread_pool {
             .num_threads(threads.max(1))
             .spawn_handler(move |thread| tx.send(thread).map_err(|_| std::io::Error::other("no pool queue")))
             .build_global()
-            .map_err(|e| JsError::new(&format!("the thread pool could not start: {e}")))
+            .map_err(|e| JsError::new(&format!("the thread pool could not start: {e}")))?;
+        // Once every pool thread has run a task, each has its thread-local storage: the
+        // allocator's per-thread caches may be used from then on (no thread starts later).
+        rayon::broadcast(|_| ());
+        crate::thread_cache::enable();
+        Ok(())
     }
 
     /// Runs one of the pool's threads on the calling pool worker: waits for its turn on the

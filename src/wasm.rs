@@ -305,6 +305,14 @@ impl Session {
                 self.check_loaded(slot, name, kind)
             }
             SlotKind::Mesh | SlotKind::Meshes | SlotKind::Frame => {
+                if kind != SlotKind::Frame {
+                    // A mesh over the limits is refused from its head and size, before a copy
+                    // of it is made here (a file of gigabytes does not fit this memory). The
+                    // size as the browser states it: `len` saturates at 4 GiB.
+                    let mut head = vec![0u8; source.len.min(crate::import::HEAD_BYTES)];
+                    source.read_at(0, &mut head).map_err(|m| JsError::new(&format!("{name} could not be read ({m}); load it again")))?;
+                    crate::import::check_head(name, &head, source.blob.size() as u64).map_err(js_err)?;
+                }
                 let mut bytes = vec![0u8; source.len];
                 source.read_at(0, &mut bytes).map_err(|m| JsError::new(&format!("{name} could not be read ({m}); load it again")))?;
                 self.add_file(slot, name, bytes)

@@ -313,28 +313,45 @@ fn set_errors_name_the_field_and_the_fix() {
     );
 }
 
-/// A binary STL over the triangle limit is refused from its header, before the file is read:
-/// under an address-space limit far below the file's size, the refusal is the limit's (not
-/// "out of memory"). The file is sparse (a header and a length), so it costs no disk.
-#[test]
-fn a_huge_binary_stl_is_refused_before_it_is_read() {
-    let n: u32 = 10_000_000;
-    let path = tmp("huge-10m.stl");
-    let mut head = vec![0u8; 80];
-    head.extend_from_slice(&n.to_le_bytes());
-    std::fs::write(&path, &head).unwrap();
-    std::fs::OpenOptions::new().write(true).open(&path).unwrap().set_len(84 + 50 * n as u64).unwrap();
+/// `weft run` of the cube example with `input` for its mesh, under an address-space limit of
+/// 400 MB (far below the inputs below): its stderr.
+fn run_limited(input: &Path) -> String {
     let script = format!(
         "ulimit -v 400000 && exec '{}' run '{}' --input '{}' -o '{}'",
         env!("CARGO_BIN_EXE_weft"),
         repo("examples/cube-20mm.json"),
-        path.display(),
+        input.display(),
         tmp("huge.gcode").display()
     );
     let out = Command::new("sh").args(["-c", &script]).output().unwrap();
-    let err = String::from_utf8_lossy(&out.stderr);
     assert!(!out.status.success());
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+/// A sparse file: `head`, then zeros up to `len` bytes (no disk used).
+fn sparse(name: &str, head: &[u8], len: u64) -> PathBuf {
+    let path = tmp(name);
+    std::fs::write(&path, head).unwrap();
+    std::fs::OpenOptions::new().write(true).open(&path).unwrap().set_len(len).unwrap();
+    path
+}
+
+/// A mesh over the limits is refused from its head and size, before the file is read: under
+/// the address-space limit the refusal is the limit's (not "out of memory"). A binary STL
+/// over the triangle limit, and any mesh file over the import's memory limit.
+#[test]
+fn a_huge_mesh_is_refused_before_it_is_read() {
+    let n: u32 = 10_000_000;
+    let mut head = vec![0u8; 80];
+    head.extend_from_slice(&n.to_le_bytes());
+    let stl = sparse("huge-10m.stl", &head, 84 + 50 * n as u64);
+    let err = run_limited(&stl);
     assert!(err.contains("huge-10m.stl: the mesh has 10,000,000 triangles, limit 5,000,000"), "{err}");
     assert!(err.contains("decimate"), "{err}");
-    let _ = std::fs::remove_file(&path);
+    let obj = sparse("huge-5g.obj", b"v 0 0 0\n", 5 << 30);
+    let err = run_limited(&obj);
+    assert!(err.contains("huge-5g.obj: the file is 5,120 MiB, more than the 1,024 MiB weft reads a mesh from"), "{err}");
+    for p in [stl, obj] {
+        let _ = std::fs::remove_file(p);
+    }
 }

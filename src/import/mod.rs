@@ -279,20 +279,26 @@ pub fn estimate(file: &str, bytes: &[u8]) -> Result<Estimate, Error> {
 }
 
 /// The refusal [`read_mesh`] would give, from a file's first [`HEAD_BYTES`] bytes and its
-/// length alone, for a binary STL (detected as [`detect_format`] does: not a zip, and exactly
-/// as long as its header's count says). So a front end can refuse a file over the limits
-/// before reading it: the CLI reads nothing more of a 10 M-triangle STL. `Ok` when the head
-/// cannot tell (another format, or within the limits): read the file, then [`read_mesh`].
+/// length alone: a binary STL over the limits (detected as [`detect_format`] does: not a
+/// zip, and exactly as long as its header's count says), or any file longer than
+/// [`MAX_IMPORT_BYTES`] (its bytes alone are over the import's memory limit). So a front end
+/// refuses such a file before reading it: the CLI reads nothing more of a 10 M-triangle STL,
+/// and the page does not try to copy a file of gigabytes into its memory. `Ok` when the head
+/// cannot tell: read the file, then [`read_mesh`].
 pub fn check_head(file: &str, head: &[u8], len: u64) -> Result<(), Error> {
-    if head.starts_with(b"PK\x03\x04") {
-        return Ok(());
+    let binary_stl = !head.starts_with(b"PK\x03\x04") && stl::count(head).is_some_and(|n| stl::binary_len(n) == len);
+    if let (true, Some(n)) = (binary_stl, stl::count(head)) {
+        let (v, t) = (3 * n as u64, n as u64);
+        return Estimate { format: Format::StlBinary, triangles: t, vertices: v, peak_bytes: len.saturating_add(raw_peak(v, t)) }.check(file);
     }
-    let Some(n) = stl::count(head) else { return Ok(()) };
-    if stl::binary_len(n) != len {
-        return Ok(());
+    if len > MAX_IMPORT_BYTES {
+        return Err(Error::TooLarge {
+            file: file.to_string(),
+            problem: format!("the file is {} MiB, more than the {} MiB weft reads a mesh from", group(len >> 20), group(MAX_IMPORT_BYTES >> 20)),
+            fix: "decimate the mesh (e.g. in PrusaSlicer: right-click the object, Simplify model), or export it as binary STL or 3MF, which are 4–10× smaller than text".into(),
+        });
     }
-    let (v, t) = (3 * n as u64, n as u64);
-    Estimate { format: Format::StlBinary, triangles: t, vertices: v, peak_bytes: len.saturating_add(raw_peak(v, t)) }.check(file)
+    Ok(())
 }
 
 /// Bytes [`check_head`] reads: a binary STL's header and count.
@@ -560,6 +566,10 @@ mod tests {
         zip[..4].copy_from_slice(b"PK\x03\x04");
         assert!(check_head("big.3mf", &zip, len(over)).is_ok());
         assert!(check_head("a.stl", b"solid", 5).is_ok());
+        // Any file longer than the import's memory limit (a 5 GB text mesh), whatever it is.
+        let err = check_head("huge.obj", b"v 0 0 0\n", 5 << 30).unwrap_err().to_string();
+        assert!(err.contains("huge.obj") && err.contains("5,120 MiB") && err.contains("1,024 MiB"), "{err}");
+        assert!(check_head("big.obj", b"v 0 0 0\n", MAX_IMPORT_BYTES).is_ok());
     }
 
     #[test]

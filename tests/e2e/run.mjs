@@ -12,7 +12,7 @@
 //   WEFT_PKG_DIR   serve this directory as /pkg/ instead of ./pkg (test another wasm build)
 //   E2E_TIMEOUT_S  per-job timeout in seconds (default 120)
 //   E2E_HEADED=1   show the browser
-import { existsSync, mkdirSync, readFileSync, writeFileSync } from "node:fs";
+import { closeSync, existsSync, ftruncateSync, mkdirSync, openSync, readFileSync, unlinkSync, writeFileSync, writeSync } from "node:fs";
 import { createHash } from "node:crypto";
 import { execFileSync } from "node:child_process";
 import { join, resolve } from "node:path";
@@ -245,6 +245,40 @@ await check(5, "corrupt STL → #error names the file and line; design and previ
   const px = await colouredPixels(page);
   if (px < Math.min(1500, pxBefore * 0.5)) throw new Error(`preview lost: ${px} coloured pixels (was ${pxBefore})`);
   return `"${message.split("\n")[0].slice(0, 90)}"`;
+});
+
+await check(51, "a mesh over the limits (a 100M-triangle binary STL of 5 GB, a 5 GiB OBJ: sparse files) is refused from its head and size before a copy is made: #error names the file, the count or size, the limit and the fix; the worker is not restarted and the design is kept", async () => {
+  const designBefore = await page.evaluate(() => window.weft.design);
+  const stlHead = Buffer.alloc(84);
+  stlHead.writeUInt32LE(100_000_000, 80);
+  const cases = [
+    ["huge-100m.stl", stlHead, 84 + 50 * 100_000_000, ["100,000,000 triangles", "limit 5,000,000", "decimate"]],
+    ["huge-5g.obj", Buffer.from("v 0 0 0\n"), 5 * 2 ** 30, ["5,120 MiB", "1,024 MiB", "decimate"]],
+  ];
+  const seen = [];
+  for (const [name, head, size, words] of cases) {
+    // Sparse: a head and a length, no disk. Without the head check the worker would try to
+    // copy gigabytes into its memory (wasm32 holds at most 4 GiB) and stop.
+    const path = join(OUT, name);
+    const fd = openSync(path, "w");
+    writeSync(fd, head);
+    ftruncateSync(fd, size);
+    closeSync(fd);
+    try {
+      await page.setInputFiles("#file", path);
+      await page.waitForFunction((n) => !document.getElementById("error").hidden && document.getElementById("error-text").textContent.includes(n), name, { timeout: JOB_TIMEOUT });
+      const message = (await page.textContent("#error-text")).trim();
+      for (const w of words) if (!message.includes(w)) throw new Error(`${name}: the message lacks "${w}": ${message}`);
+      if (/worker stopped|restarted/i.test(message)) throw new Error(`${name}: the worker stopped: ${message}`);
+      seen.push(message.split(";")[0].slice(0, 80));
+    } finally {
+      unlinkSync(path);
+    }
+  }
+  const after = await page.evaluate(() => ({ design: window.weft.design, files: window.weft.files }));
+  if (after.design !== designBefore) throw new Error("the design changed");
+  if (after.files.some((f) => f.startsWith("huge-"))) throw new Error(`a refused file was kept: ${after.files}`);
+  return seen.join(" | ");
 });
 
 await check(6, "damaged share fragment #d=!!!! → clear error, page still works", () => inFreshPage("/www/#d=!!!!", async (p) => {

@@ -291,13 +291,18 @@ fn apply_inputs(design: &mut Design, inputs: &[String], files: &mut Files) -> Re
                 (first.name.to_string(), PathBuf::from(arg))
             }
         };
-        let several = kind.slots().iter().any(|s| s.name == slot && s.kind.multiple());
+        let slot_kind = kind.slots().iter().find(|s| s.name == slot).map(|s| s.kind);
+        let several = slot_kind.is_some_and(|k| k.multiple());
+        let meshes = matches!(slot_kind, Some(weft::jobs::SlotKind::Mesh | weft::jobs::SlotKind::Meshes));
         let input = if several {
             // A folder (a DICOM series) gives every file in it, named by its path inside the
             // folder; repeated --input SLOT=FILE gather.
             let mut names = Vec::new();
             if path.is_dir() {
                 for (name, file) in files_in_folder(&path)? {
+                    if meshes {
+                        refuse_huge_mesh(&file, &name)?;
+                    }
                     files.insert(name.clone(), read(&file)?);
                     names.push(name);
                 }
@@ -306,6 +311,9 @@ fn apply_inputs(design: &mut Design, inputs: &[String], files: &mut Files) -> Re
                 }
             } else {
                 let name = file_name(&path);
+                if meshes {
+                    refuse_huge_mesh(&path, &name)?;
+                }
                 files.insert(name.clone(), read(&path)?);
                 names.push(name);
             }
@@ -317,8 +325,7 @@ fn apply_inputs(design: &mut Design, inputs: &[String], files: &mut Files) -> Re
             }
         } else {
             let name = file_name(&path);
-            let mesh = kind.slots().iter().any(|s| s.name == slot && s.kind == weft::jobs::SlotKind::Mesh);
-            if mesh {
+            if meshes {
                 refuse_huge_mesh(&path, &name)?;
             }
             files.insert(name.clone(), read(&path)?);

@@ -313,14 +313,14 @@ fn set_errors_name_the_field_and_the_fix() {
     );
 }
 
-/// `weft run` of the cube example with `input` for its mesh, under an address-space limit of
-/// 400 MB (far below the inputs below): its stderr.
-fn run_limited(input: &Path) -> String {
+/// `weft run` of `design` with `input` (`FILE` or `SLOT=FILE`), under an address-space limit
+/// of 400 MB (far below the inputs below): its stderr.
+fn run_limited(design: &str, input: &str) -> String {
     let script = format!(
         "ulimit -v 400000 && exec '{}' run '{}' --input '{}' -o '{}'",
         env!("CARGO_BIN_EXE_weft"),
-        repo("examples/cube-20mm.json"),
-        input.display(),
+        repo(design),
+        input,
         tmp("huge.gcode").display()
     );
     let out = Command::new("sh").args(["-c", &script]).output().unwrap();
@@ -345,12 +345,15 @@ fn a_huge_mesh_is_refused_before_it_is_read() {
     let mut head = vec![0u8; 80];
     head.extend_from_slice(&n.to_le_bytes());
     let stl = sparse("huge-10m.stl", &head, 84 + 50 * n as u64);
-    let err = run_limited(&stl);
+    let err = run_limited("examples/cube-20mm.json", &stl.display().to_string());
     assert!(err.contains("huge-10m.stl: the mesh has 10,000,000 triangles, limit 5,000,000"), "{err}");
     assert!(err.contains("decimate"), "{err}");
     let obj = sparse("huge-5g.obj", b"v 0 0 0\n", 5 << 30);
-    let err = run_limited(&obj);
+    let err = run_limited("examples/cube-20mm.json", &obj.display().to_string());
     assert!(err.contains("huge-5g.obj: the file is 5,120 MiB, more than the 1,024 MiB weft reads a mesh from"), "{err}");
+    // A slot of several meshes (a foam's regions) checks each file the same way.
+    let err = run_limited("examples/foam-dogbone-linear.json", &format!("regions={}", stl.display()));
+    assert!(err.contains("huge-10m.stl: the mesh has 10,000,000 triangles, limit 5,000,000"), "{err}");
     for p in [stl, obj] {
         let _ = std::fs::remove_file(p);
     }

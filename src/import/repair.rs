@@ -262,11 +262,10 @@ fn number_firsts(first: Words, n: usize, vertex: impl Fn(usize) -> [f32; 3] + Sy
         return (vertices, first);
     }
     let parts = map_chunks(n, |range| {
-        let mut k = starts.get(range.start / CHUNK).copied().unwrap_or(0) as u32;
+        let from = starts.get(range.start / CHUNK).copied().unwrap_or(0) as u32;
         let mut positions = Vec::new();
-        for i in range.filter(|&i| is_first(i)) {
+        for (k, i) in (from..).zip(range.filter(|&i| is_first(i))) {
             first.set(i, k | MARK);
-            k += 1;
             let v = vertex(i);
             positions.push([v[0] + 0.0, v[1] + 0.0, v[2] + 0.0]);
         }
@@ -347,6 +346,10 @@ fn weld(points: &mut Vec<[f32; 3]>, tol: f64, seed: u64) -> Option<Vec<u32>> {
     Some(map)
 }
 
+/// A bucket's scratch in [`close_points`]: its table, each cell's (hash, some point's own,
+/// records), and each record's cell.
+type CellScratch = (Table, Vec<(u32, bool, u32)>, Vec<u32>);
+
 /// Cells of the close-point search are this many tolerances wide: not a power of two or
 /// ten, so the round coordinates of CAD exports do not all fall on cell borders.
 const CLOSE_CELL: f64 = 27.0;
@@ -412,7 +415,7 @@ fn close_points(points: &[[f32; 3]], tol: f64, seed: u64) -> Option<Vec<u32>> {
     })?;
     // Per bucket: each cell's hash, whether it is some point's own, and its records; then
     // the points of the cells that are both.
-    let flagged = each_bucket(&parts, |records, (table, cells, cell_of): &mut (Table, Vec<(u32, bool, u32)>, Vec<u32>)| {
+    let flagged = each_bucket(&parts, |records, (table, cells, cell_of): &mut CellScratch| {
         table.reset(records.len());
         cells.clear();
         cell_of.clear();

@@ -225,18 +225,29 @@ fn read(path: &Path) -> Result<Vec<u8>, String> {
     std::fs::read(path).map_err(|e| format!("{}: cannot read it: {}", path.display(), io_words(&e)))
 }
 
-/// A mesh file the importer would refuse from its head alone (a binary STL over the triangle
-/// or memory limit), refused before the whole file is read into memory.
-fn refuse_huge_mesh(path: &Path, name: &str) -> Result<(), String> {
+/// The first `max` bytes of `path` (all of a shorter file).
+fn read_at_most(path: &Path, max: u64) -> Result<Vec<u8>, String> {
     use std::io::Read;
-    let Ok(mut file) = std::fs::File::open(path) else { return Ok(()) };
+    let mut bytes = Vec::new();
+    std::fs::File::open(path).and_then(|f| f.take(max).read_to_end(&mut bytes)).map_err(|e| format!("{}: cannot read it: {}", path.display(), io_words(&e)))?;
+    Ok(bytes)
+}
+
+/// A file its slot would refuse anyway (a mesh over the import's limits, volume files or
+/// G-code over theirs: [`weft::jobs::SlotKind::check_file`]), refused from its head and size
+/// before it is read into memory. Returns its size.
+fn refuse_huge_file(kind: Option<weft::jobs::SlotKind>, path: &Path, name: &str) -> Result<u64, String> {
+    use std::io::Read;
+    let Ok(mut file) = std::fs::File::open(path) else { return Ok(0) };
     let len = file.metadata().map(|m| m.len()).unwrap_or(0);
-    let mut head = Vec::with_capacity(weft::import::HEAD_BYTES);
-    if file.by_ref().take(weft::import::HEAD_BYTES as u64).read_to_end(&mut head).is_err() {
+    let Some(kind) = kind else { return Ok(len) };
+    let mut head = Vec::with_capacity(weft::jobs::FILE_HEAD_BYTES);
+    if file.by_ref().take(weft::jobs::FILE_HEAD_BYTES as u64).read_to_end(&mut head).is_err() {
         // The full read that follows names the problem.
-        return Ok(());
+        return Ok(len);
     }
-    weft::import::check_head(name, &head, len).map_err(|e| e.to_string())
+    kind.check_file(name, &head, len)?;
+    Ok(len)
 }
 
 fn write(path: &Path, bytes: &[u8]) -> Result<(), String> {
@@ -264,7 +275,12 @@ fn load_design(arg: &str) -> Result<Design, String> {
         return share::decode(arg).map_err(|e| e.to_string());
     }
     let path = Path::new(arg);
-    let bytes = read(path)?;
+    // A file over the limit is refused from its size, before it is read.
+    let len = std::fs::metadata(path).map(|m| m.len()).unwrap_or(0);
+    if len > weft::design::MAX_DESIGN_BYTES as u64 {
+        return Err(weft::design::Error::TooLarge { source_name: file_name(path), bytes: usize::try_from(len).unwrap_or(usize::MAX) }.to_string());
+    }
+    let bytes = read_at_most(path, weft::design::MAX_DESIGN_BYTES as u64 + 1)?;
     let text = String::from_utf8(bytes).map_err(|_| format!("{arg}: this is not a design: a design is a JSON text file and this is not text"))?;
     Design::from_json(&file_name(path), &text).map_err(|e| e.to_string())
 }
@@ -293,16 +309,21 @@ fn apply_inputs(design: &mut Design, inputs: &[String], files: &mut Files) -> Re
         };
         let slot_kind = kind.slots().iter().find(|s| s.name == slot).map(|s| s.kind);
         let several = slot_kind.is_some_and(|k| k.multiple());
-        let meshes = matches!(slot_kind, Some(weft::jobs::SlotKind::Mesh | weft::jobs::SlotKind::Meshes));
         let input = if several {
             // A folder (a DICOM series) gives every file in it, named by its path inside the
             // folder; repeated --input SLOT=FILE gather.
             let mut names = Vec::new();
             if path.is_dir() {
-                for (name, file) in files_in_folder(&path)? {
-                    if meshes {
-                        refuse_huge_mesh(&file, &name)?;
-                    }
+                let folder = files_in_folder(&path)?;
+                let mut total = 0u64;
+                for (name, file) in &folder {
+                    total = total.saturating_add(refuse_huge_file(slot_kind, file, name)?);
+                }
+                // A series is read whole: its files together are checked as well.
+                if slot_kind == Some(weft::jobs::SlotKind::Volume) {
+                    weft::jobs::SlotKind::Volume.check_file(&format!("{} (all its files)", file_name(&path)), &[], total)?;
+                }
+                for (name, file) in folder {
                     files.insert(name.clone(), read(&file)?);
                     names.push(name);
                 }
@@ -311,9 +332,7 @@ fn apply_inputs(design: &mut Design, inputs: &[String], files: &mut Files) -> Re
                 }
             } else {
                 let name = file_name(&path);
-                if meshes {
-                    refuse_huge_mesh(&path, &name)?;
-                }
+                refuse_huge_file(slot_kind, &path, &name)?;
                 files.insert(name.clone(), read(&path)?);
                 names.push(name);
             }
@@ -325,9 +344,7 @@ fn apply_inputs(design: &mut Design, inputs: &[String], files: &mut Files) -> Re
             }
         } else {
             let name = file_name(&path);
-            if meshes {
-                refuse_huge_mesh(&path, &name)?;
-            }
+            refuse_huge_file(slot_kind, &path, &name)?;
             files.insert(name.clone(), read(&path)?);
             Input::File { name, embedded: None }
         };
@@ -523,13 +540,17 @@ fn design_bench(paths: &[String]) -> Result<(), String> {
 /// The plan as a table: one line per stage (its counts, peak memory, time), then the totals.
 fn plan_table(plan: &weft::budget::Plan) -> String {
     use weft::budget::human;
-    let mut out = format!("{:<10} {:>10} {:>9}  {}\n", "stage", "memory", "time", "work");
+    let n = plan.threads;
+    let threads = |n: usize| format!("{n} thread{}", if n == 1 { "" } else { "s" });
+    let mut out = format!("{:<10} {:>10} {:>9} {:>10}  {}\n", "stage", "memory", "1 thread", threads(n), "work");
     for e in &plan.stages {
         let work: Vec<String> = e.quantities.iter().map(|q| format!("{} {}", q.label.to_lowercase(), human(q.value, q.unit))).collect();
-        out += &format!("{:<10} {:>10} {:>9}  {}\n", e.stage, human(e.bytes, "bytes"), human(e.seconds, "s"), work.join(", "));
+        out += &format!("{:<10} {:>10} {:>9} {:>10}  {}\n", e.stage, human(e.bytes, "bytes"), human(e.seconds, "s"), human(e.seconds_on(n), "s"), work.join(", "));
     }
     out += &format!(
-        "total: about {}, peak {}, {} segments, {} of G-code\n",
+        "total: about {} on {} ({} on 1), peak {}, {} segments, {} of G-code\n",
+        human(plan.wall_seconds, "s"),
+        threads(n),
         human(plan.seconds, "s"),
         human(plan.peak_bytes, "bytes"),
         human(plan.segments, ""),

@@ -288,16 +288,16 @@ impl Session {
     #[wasm_bindgen(js_name = addBlob)]
     pub fn add_blob(&mut self, slot: &str, name: &str, blob: web_sys::Blob) -> Result<JsValue, JsError> {
         let kind = self.slot_kind(slot)?;
+        // A file the slot would refuse anyway, refused from its head and its size as the
+        // browser states it, before it is copied here or hashed (a file of gigabytes does not
+        // fit this memory; hashing it takes seconds).
+        let size = blob.size();
         let source = BlobSource::new(blob)?;
-        // Over the editor's limit: refused before the file is read (hashing would read it all).
-        if kind == SlotKind::Gcode {
-            if let Some(r) = gcode_edit::estimate(source.len, &gcode_edit::Options::default()).refused {
-                return Err(JsError::new(&format!("{name}: {r}")));
-            }
-        }
-        // A wireframe over the reader's limit: refused before it is read into memory.
-        if kind == SlotKind::Frame && source.len > crate::freeform::wireframe::MAX_BYTES {
-            return Err(js_err(crate::freeform::wireframe::Error::TooBig { file: name.into(), bytes: source.len }));
+        let mut head = vec![0u8; source.len.min(crate::jobs::FILE_HEAD_BYTES)];
+        source.read_at(0, &mut head).map_err(|m| JsError::new(&format!("{name} could not be read ({m}); load it again")))?;
+        kind.check_file(name, &head, size as u64).map_err(|m| JsError::new(&m))?;
+        if size > source.len as f64 {
+            return Err(JsError::new(&format!("{name}: the file is {} MiB, more than this browser's worker can address; use the weft CLI", (size / 1048576.0) as u64)));
         }
         match kind {
             SlotKind::Volume | SlotKind::Gcode => {
@@ -305,14 +305,6 @@ impl Session {
                 self.check_loaded(slot, name, kind)
             }
             SlotKind::Mesh | SlotKind::Meshes | SlotKind::Frame => {
-                if kind != SlotKind::Frame {
-                    // A mesh over the limits is refused from its head and size, before a copy
-                    // of it is made here (a file of gigabytes does not fit this memory). The
-                    // size as the browser states it: `len` saturates at 4 GiB.
-                    let mut head = vec![0u8; source.len.min(crate::import::HEAD_BYTES)];
-                    source.read_at(0, &mut head).map_err(|m| JsError::new(&format!("{name} could not be read ({m}); load it again")))?;
-                    crate::import::check_head(name, &head, source.blob.size() as u64).map_err(js_err)?;
-                }
                 let mut bytes = vec![0u8; source.len];
                 source.read_at(0, &mut bytes).map_err(|m| JsError::new(&format!("{name} could not be read ({m}); load it again")))?;
                 self.add_file(slot, name, bytes)

@@ -358,3 +358,35 @@ fn a_huge_mesh_is_refused_before_it_is_read() {
         let _ = std::fs::remove_file(p);
     }
 }
+
+/// Volume files, another slicer's G-code and a design over their limits are refused from
+/// their size before they are read (under the address-space limit the refusal is the
+/// limit's, not "out of memory"); a series' files are refused by their total too.
+#[test]
+fn huge_volumes_gcode_and_designs_are_refused_before_they_are_read() {
+    let raw = sparse("huge-5g.raw", b"", 5 << 30);
+    let err = run_limited("examples/graded-phantom.json", &format!("volume={}", raw.display()));
+    assert!(err.contains(&format!("huge-5g.raw: 5120 MiB is more than the {} MiB of files a volume is read from", weft::volume::MAX_INPUT_BYTES >> 20)), "{err}");
+    assert!(err.contains("crop or resample"), "{err}");
+    // A folder of files each under the limit, over it together.
+    let dir = tmp("huge-series");
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    for k in 0..3 {
+        std::fs::OpenOptions::new().create(true).truncate(true).write(true).open(dir.join(format!("s{k}.dcm"))).unwrap().set_len(600 << 20).unwrap();
+    }
+    let err = run_limited("examples/graded-phantom.json", &format!("volume={}", dir.display()));
+    assert!(err.contains("huge-series (all its files): 1800 MiB is more than"), "{err}");
+    let gcode = sparse("huge-2g.gcode", b"G1 X0\n", 2 << 30);
+    let err = run_limited("examples/graded-phantom.json", &format!("gcode={}", gcode.display()));
+    assert!(err.contains("huge-2g.gcode:") && err.contains("the G-code to edit"), "{err}");
+    let design = sparse("huge-design.json", b"{", 3 << 30);
+    let out = Command::new("sh").args(["-c", &format!("ulimit -v 400000 && exec '{}' run '{}'", env!("CARGO_BIN_EXE_weft"), design.display())]).output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert!(!out.status.success());
+    assert!(err.contains("huge-design.json: the design is 3221225472 bytes, over the limit"), "{err}");
+    for p in [raw, gcode, design] {
+        let _ = std::fs::remove_file(p);
+    }
+    let _ = std::fs::remove_dir_all(dir);
+}

@@ -1833,7 +1833,9 @@ function planSummary(p) {
   if (layers) parts.push(`${count(layers)} layer${layers === 1 ? "" : "s"}`);
   if (p.segments) parts.push(`${count(p.segments)} segments`);
   if (p.gcode_bytes) parts.push(`${humanBytes(p.gcode_bytes)} of G-code`);
-  parts.push(p.seconds < 1 ? "under 1 s" : `about ${formatSeconds(p.seconds)}`);
+  // The time on the threads the worker uses (the plan counts each stage's parallel share).
+  const s = p.wall_seconds ?? p.seconds;
+  parts.push(s < 1 ? "under 1 s" : `about ${formatSeconds(s)}`);
   if (p.peak_bytes) parts.push(`${humanBytes(p.peak_bytes)} of memory`);
   return parts.join(" · ");
 }
@@ -1858,7 +1860,7 @@ function maybeAutoRun() {
   if (!$("auto-run").checked || !e?.plan || !isCurrent(e)) return;
   if (!state.result || state.result.json === null || isCurrent(state.result)) return; // nothing shown from a design, or fresh
   const p = e.plan;
-  if (p.refusal || p.ask || !(p.seconds < AUTO_RUN_SECONDS) || jobs.active.size) return;
+  if (p.refusal || p.ask || !((p.wall_seconds ?? p.seconds) < AUTO_RUN_SECONDS) || jobs.active.size) return;
   runDesign({ auto: true });
 }
 

@@ -495,8 +495,8 @@ pub const MAX_GCODE_BYTES: f64 = 256.0 * crate::budget::MIB;
 /// 24–33).
 const GCODE_BYTES_PER_SEGMENT: f64 = 30.0;
 /// Writer time per segment on the reference machine, s (`cargo run --release --example
-/// slice_bench`: 0.25–0.7 µs).
-const SECONDS_PER_SEGMENT: f64 = 0.5e-6;
+/// slice_bench`: 0.11 µs on the 1M-triangle sphere, 0.3–0.4 µs on solid cubes).
+const SECONDS_PER_SEGMENT: f64 = 0.3e-6;
 
 /// The writer's work for a toolpath of `segments` segments (extrusions, travels and approach
 /// points): G-code bytes, peak memory (the text, grown by doubling) and time; refused over

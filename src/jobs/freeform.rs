@@ -419,8 +419,11 @@ impl Kind for FreeformKind {
         let import = Estimate::new("import").quantity("beams", "Beams", m, "").cost(m * 200.0, m * 1e-6);
         // Measured on weft's towers and the conmech truss (native, 2026): constraints about
         // 0.1 ms a beam, the exact plan and the cost replay about 0.4 ms a beam (compliance
-        // updates over the joints still open), the heuristic plan about 0.05 ms.
-        let constraints = Estimate::new("constraints").quantity("beams", "Beams", m, "").cost(m * 400.0, m * 1e-4).budgets("lower the nozzle's radius or height");
+        // updates over the joints still open), the heuristic plan about 0.05 ms. A nozzle
+        // that may tilt tests every axis it may take (17 with the default rings): the
+        // cantilever truss with tilt took 3.7 s where 0.22 s was stated before this counted.
+        let axes = precedence::tilt_axes(j.nozzle.tilt_deg.clamp(0.0, precedence::MAX_TILT_DEG)).len() as f64;
+        let constraints = Estimate::new("constraints").quantity("beams", "Beams", m, "").quantity("axes", "Nozzle axes tried", axes, "").cost(m * 400.0, m * 1e-4 * axes).parallel(0.85).budgets("lower the nozzle's radius or height, or its tilt");
         let exact = j.planner.cost == Cost::Exact;
         let plan_s = if exact { (m * 4e-4).min(j.planner.budget_s) } else { m * 5e-5 };
         let plan = Estimate::new("plan").quantity("beams", "Beams", m, "").cost(m * 2000.0, plan_s).budgets("plan with the heuristic cost, or lower the planning budget");

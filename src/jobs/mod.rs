@@ -58,7 +58,31 @@ impl SlotKind {
     pub fn multiple(self) -> bool {
         matches!(self, SlotKind::Meshes | SlotKind::Volume)
     }
+
+    /// Refuses a file that a slot of this kind would refuse anyway, from its first bytes
+    /// (`head`, up to [`FILE_HEAD_BYTES`]) and its length alone, so a front end refuses it
+    /// before reading it into memory or hashing it: a mesh over the import's limits
+    /// ([`crate::import::check_head`]), volume files over [`crate::volume::MAX_INPUT_BYTES`],
+    /// G-code over the editor's limit, a wireframe over its reader's. `Ok` when the head and
+    /// length cannot tell; the reader decides then. A series' files are checked one by one,
+    /// and their total with `file` naming the series.
+    pub fn check_file(self, file: &str, head: &[u8], len: u64) -> Result<(), String> {
+        let len_usize = usize::try_from(len).unwrap_or(usize::MAX);
+        match self {
+            SlotKind::Mesh | SlotKind::Meshes => crate::import::check_head(file, head, len).map_err(|e| e.to_string()),
+            SlotKind::Volume => crate::volume::check_input_bytes(file, len).map_err(|e| e.to_string()),
+            SlotKind::Gcode => match crate::gcode_edit::estimate(len_usize, &crate::gcode_edit::Options::default()).refused {
+                Some(r) => Err(format!("{file}: {r}")),
+                None => Ok(()),
+            },
+            SlotKind::Frame if len_usize > crate::freeform::wireframe::MAX_BYTES => Err(crate::freeform::wireframe::Error::TooBig { file: file.into(), bytes: len_usize }.to_string()),
+            SlotKind::Frame => Ok(()),
+        }
+    }
 }
+
+/// Bytes of a file's head [`SlotKind::check_file`] looks at.
+pub const FILE_HEAD_BYTES: usize = crate::import::HEAD_BYTES;
 
 /// A named input of a job kind.
 #[derive(Clone, Copy, Debug, Serialize)]

@@ -37,6 +37,21 @@ pub const MAX_FILES: usize = 4096;
 /// big to import anyway: [`MAX_VOXELS`] of 16-bit samples is 256 MiB).
 pub const MAX_UNZIPPED_BYTES: u64 = 1 << 30;
 
+/// Most bytes of a volume's files together (one file, or all the files of a series): the
+/// largest volume weft reads ([`MAX_VOXELS`] of 8-byte samples) is 1 GiB, and 256 MiB more
+/// leaves room for headers and zip records. A front end checks each file's size, and a
+/// series' total, with [`check_input_bytes`] before it reads or hashes any of it.
+pub const MAX_INPUT_BYTES: u64 = MAX_VOXELS as u64 * 8 + (256 << 20);
+
+/// Refuses volume input of `bytes` bytes over [`MAX_INPUT_BYTES`] (`file`: the file, or the
+/// series, named in the message), before any of it is read.
+pub fn check_input_bytes(file: &str, bytes: u64) -> Result<(), Error> {
+    if bytes <= MAX_INPUT_BYTES {
+        return Ok(());
+    }
+    Err(Error::TooMuchInput { file: file.to_string(), mib: bytes >> 20 })
+}
+
 /// Bytes of each zip entry (or of a deflated DICOM data set) inflated by the header scan of
 /// [`estimate`]: headers sit before the pixel data and are a few KiB.
 pub const HEAD_BYTES: usize = 64 << 10;
@@ -275,6 +290,14 @@ pub enum Error {
         file: String,
         /// What is wrong, where.
         message: String,
+    },
+    /// Files over [`MAX_INPUT_BYTES`] together; refused before they are read.
+    #[error("{file}: {mib} MiB is more than the {} MiB of files a volume is read from ({} voxels of 8-byte samples, with headers); crop or resample the series, or export it with 16-bit samples", MAX_INPUT_BYTES >> 20, MAX_VOXELS)]
+    TooMuchInput {
+        /// The file, or the series.
+        file: String,
+        /// Its size, MiB.
+        mib: u64,
     },
     /// Over [`MAX_VOXELS`], [`MAX_FILES`] or the memory budget; refused before allocating.
     #[error("the volume is too big: {0}")]

@@ -14,7 +14,7 @@
 import { readFileSync } from "node:fs";
 import { execFileSync } from "node:child_process";
 import { join } from "node:path";
-import { downloadGcode, runExample, waitReady, waitResult } from "./page-helpers.mjs";
+import { confirmBigJobs, downloadGcode, runExample, waitReady, waitResult } from "./page-helpers.mjs";
 
 const EXAMPLE = "freeform-tower.json";
 
@@ -155,7 +155,7 @@ export async function freeformChecks({ baseUrl, weftBin = process.env.WEFT_BIN, 
     });
 
     await check(n++, "freeform: a tilting 5-axis nozzle prints the truss a 3-axis printer refuses (the constraints card counts the tilted beams), and a tower planned in bands shows the cost of the joins per band", async () => {
-      const tilt = await runExample(page, baseUrl, "freeform-cantilever-truss-tilt.json", jobTimeout);
+      const tilt = await runExample(page, baseUrl, "freeform-cantilever-truss-tilt.json", jobTimeout, { confirm: true });
       const metric = (r, st, key) => r.stages.find((x) => x.stage === st)?.metrics.find((m) => m.key === key)?.value;
       const tilted = metric(tilt, "constraints", "tilted");
       if (!(tilted > 1000) || tilt.analysis.extrusion_paths !== 2197) throw new Error(`${tilted} beams tilted, ${tilt.analysis.extrusion_paths} paths`);
@@ -197,6 +197,7 @@ export async function freeformChecks({ baseUrl, weftBin = process.env.WEFT_BIN, 
         await page.setViewportSize({ width: w, height: h });
         await page.goto(`${baseUrl}/www/`);
         await waitReady(page);
+        await confirmBigJobs(page); // the tilted truss is asked about on one thread
         const before = await page.evaluate(() => window.weft.resultCount);
         await page.selectOption("#examples", file);
         // The link shows while the rest is planned, ordered and measured.

@@ -4,11 +4,12 @@
 // value window; the surface view offers its STL; the G-code equals the CLI's; a dropped
 // .zip fills the volume slot and a truncated DICOM file is refused by name while the design
 // keeps its other inputs; another slicer's G-code dropped on the G-code slot is edited (the
-// dropped file read in pieces) with the same bytes as the CLI. Called by run.mjs:
+// dropped file read in pieces) with the same bytes as the CLI; volume files and G-code over
+// their limits are refused from their size before they are read. Called by run.mjs:
 //
 //   import { gradedChecks } from "./graded-checks.mjs";
 //   await gradedChecks({ baseUrl: base, weftBin: WEFT_BIN, check, newPage, outDir: OUT, first: n });
-import { readFileSync, writeFileSync } from "node:fs";
+import { closeSync, ftruncateSync, openSync, readFileSync, unlinkSync, writeFileSync, writeSync } from "node:fs";
 import { execFileSync } from "node:child_process";
 import { inflateRawSync } from "node:zlib";
 import { join } from "node:path";
@@ -163,6 +164,45 @@ export async function gradedChecks({ baseUrl, weftBin = process.env.WEFT_BIN, ch
       const after = await page.evaluate(() => JSON.parse(window.weft.design).job);
       if (after.surface.iso !== iso || after.kind !== "graded") throw new Error(`the design lost its settings: ${JSON.stringify(after).slice(0, 200)}`);
       return `zip run; refused: ${message.slice(0, 120)}`;
+    });
+
+    await check(n++, "graded: a 5 GiB volume file and a 2 GiB G-code (sparse files) are refused from their size before they are read or hashed: #error names the file, the size, the limit and the fix; the worker is not restarted and the design keeps its inputs", async () => {
+      await waitReady(page);
+      const designBefore = await page.evaluate(() => window.weft.design);
+      const cases = [
+        ['.slot[data-slot="volume"] input[type=file]', "huge-5g.raw", 5 * 2 ** 30, ["huge-5g.raw: 5120 MiB", "of files a volume is read from", "crop or resample"]],
+        ['.slot[data-slot="gcode"] input[type=file]', "huge-2g.gcode", 2 * 2 ** 30, ["huge-2g.gcode:", "the G-code to edit", "smaller"]],
+      ];
+      const seen = [];
+      for (const [input, name, size, words] of cases) {
+        const path = join(outDir, name);
+        const fd = openSync(path, "w");
+        writeSync(fd, Buffer.from("G1 X0\n"));
+        ftruncateSync(fd, size);
+        closeSync(fd);
+        const t0 = Date.now();
+        try {
+          await page.setInputFiles(input, path);
+          await page.waitForFunction((nm) => !document.getElementById("error").hidden && document.getElementById("error-text").textContent.includes(nm), name, { timeout: jobTimeout });
+          const message = (await page.textContent("#error-text")).trim();
+          for (const w of words) if (!message.includes(w)) throw new Error(`${name}: the message lacks "${w}": ${message}`);
+          if (/worker stopped|restarted/i.test(message)) throw new Error(`${name}: the worker stopped: ${message}`);
+          seen.push(`${message.split(";")[0].slice(0, 70)} (${Date.now() - t0} ms)`);
+          if (name.endsWith(".raw")) {
+            for (const [w, h, shot] of [[1280, 800, "graded-huge-volume-desktop.png"], [390, 844, "graded-huge-volume-phone.png"]]) {
+              await page.setViewportSize({ width: w, height: h });
+              await page.waitForTimeout(200);
+              await page.screenshot({ path: join(outDir, shot) });
+            }
+            await page.setViewportSize({ width: 1400, height: 900 });
+          }
+        } finally {
+          unlinkSync(path);
+        }
+      }
+      const after = await page.evaluate(() => window.weft.design);
+      if (after !== designBefore) throw new Error("the design changed");
+      return seen.join(" | ");
     });
   } finally {
     await context.close();

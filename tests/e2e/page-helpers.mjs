@@ -90,9 +90,11 @@ export async function downloadGcode(page, path) {
  * Opens the page at `baseUrl`, picks `file` from the Examples menu and waits for its result;
  * returns the run report.
  */
-export async function runExample(page, baseUrl, file, timeout) {
+export async function runExample(page, baseUrl, file, timeout, { confirm = false } = {}) {
   await page.goto(`${baseUrl}/www/`);
   await waitReady(page);
+  // An example over the soft thresholds on this machine's threads is asked about first.
+  if (confirm) await confirmBigJobs(page);
   await page.waitForSelector(`#examples option[value="${file}"]`, { state: "attached", timeout: 10000 }).catch(() => {});
   const before = await page.evaluate(() => window.weft.resultCount);
   await page.selectOption("#examples", file);

@@ -247,7 +247,7 @@ await check(5, "corrupt STL → #error names the file and line; design and previ
   return `"${message.split("\n")[0].slice(0, 90)}"`;
 });
 
-await check(51, "a mesh over the limits (a 100M-triangle binary STL of 5 GB, a 5 GiB OBJ: sparse files) is refused from its head and size before a copy is made: #error names the file, the count or size, the limit and the fix; the worker is not restarted and the design is kept", async () => {
+await check(52, "a mesh over the limits (a 100M-triangle binary STL of 5 GB, a 5 GiB OBJ: sparse files) is refused from its head and size before a copy is made: #error names the file, the count or size, the limit and the fix; the worker is not restarted and the design is kept", async () => {
   const designBefore = await page.evaluate(() => window.weft.design);
   const stlHead = Buffer.alloc(84);
   stlHead.writeUInt32LE(100_000_000, 80);
@@ -465,8 +465,9 @@ await check(17, "hostile share links: a name of HTML stays text and runs nothing
   const design = JSON.parse(cli(["new"]));
   design.name = "<img src=x onerror=alert(1)>";
   design.job.input = { builtin: { shape: "cube", size: [200, 200, 200] } };
-  design.job.slice.layer_height_mm = 0.05;
-  design.job.slice.first_layer_height_mm = 0.05;
+  // 0.02 mm layers: 2.7M segments, 77 MiB of G-code (over the soft thresholds, in the budgets).
+  design.job.slice.layer_height_mm = 0.02;
+  design.job.slice.first_layer_height_mm = 0.02;
   const bigPath = join(OUT, "hostile-big.json");
   writeFileSync(bigPath, JSON.stringify(design));
   const big = cli(["share", bigPath]).trim();

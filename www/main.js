@@ -1835,7 +1835,8 @@ function planSummary(p) {
   if (p.gcode_bytes) parts.push(`${humanBytes(p.gcode_bytes)} of G-code`);
   // The time on the threads the worker uses (the plan counts each stage's parallel share).
   const s = p.wall_seconds ?? p.seconds;
-  parts.push(s < 1 ? "under 1 s" : `about ${formatSeconds(s)}`);
+  const on = p.threads > 1 ? ` on ${p.threads} threads` : "";
+  parts.push(s < 1 ? `under 1 s${on}` : `about ${formatSeconds(s)}${on}`);
   if (p.peak_bytes) parts.push(`${humanBytes(p.peak_bytes)} of memory`);
   return parts.join(" · ");
 }

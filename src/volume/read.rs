@@ -292,7 +292,7 @@ pub enum Error {
         message: String,
     },
     /// Files over [`MAX_INPUT_BYTES`] together; refused before they are read.
-    #[error("{file}: {mib} MiB is more than the {} MiB of files a volume is read from ({} voxels of 8-byte samples, with headers); crop or resample the series, or export it with 16-bit samples", MAX_INPUT_BYTES >> 20, MAX_VOXELS)]
+    #[error("{file}: {} MiB is more than the {} MiB of files a volume is read from ({} voxels of 8-byte samples, with headers); crop or resample the series, or export it with 16-bit samples", crate::import::group(*mib), crate::import::group(MAX_INPUT_BYTES >> 20), crate::import::group(MAX_VOXELS as u64))]
     TooMuchInput {
         /// The file, or the series.
         file: String,

@@ -170,7 +170,7 @@ export async function gradedChecks({ baseUrl, weftBin = process.env.WEFT_BIN, ch
       await waitReady(page);
       const designBefore = await page.evaluate(() => window.weft.design);
       const cases = [
-        ['.slot[data-slot="volume"] input[type=file]', "huge-5g.raw", 5 * 2 ** 30, ["huge-5g.raw: 5120 MiB", "of files a volume is read from", "crop or resample"]],
+        ['.slot[data-slot="volume"] input[type=file]', "huge-5g.raw", 5 * 2 ** 30, ["huge-5g.raw: 5,120 MiB", "1,280 MiB of files a volume is read from", "crop or resample"]],
         ['.slot[data-slot="gcode"] input[type=file]', "huge-2g.gcode", 2 * 2 ** 30, ["huge-2g.gcode:", "the G-code to edit", "smaller"]],
       ];
       const seen = [];

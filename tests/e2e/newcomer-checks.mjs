@@ -42,6 +42,11 @@ export async function newcomerChecks({ base, check, newPage, outDir, first, cube
       if (!/drop/i.test(notice) || !/example/i.test(notice)) throw new Error(`the first-visit line does not say what to do: "${notice}"`);
       const est = await page.textContent("#estimate");
       if (!/segments/.test(est) || !/G-code/.test(est)) throw new Error(`no estimate of the next run shown: "${est}"`);
+      // The time is stated for the threads the worker uses (the plan counts each stage's
+      // parallel share over them).
+      const used = await page.evaluate(() => window.weft.threads?.used);
+      if (used > 1 && !est.includes(`on ${used} threads`)) throw new Error(`the estimate does not say it is for ${used} threads: "${est}"`);
+      if (used === 1 && /threads/.test(est)) throw new Error(`one thread, but the estimate names threads: "${est}"`);
       if (errors.length) throw new Error(`console errors: ${errors.join("\n")}`);
       return `estimate line: "${est}"`;
     } finally {

@@ -235,19 +235,18 @@ fn read_at_most(path: &Path, max: u64) -> Result<Vec<u8>, String> {
 
 /// A file its slot would refuse anyway (a mesh over the import's limits, volume files or
 /// G-code over theirs: [`weft::jobs::SlotKind::check_file`]), refused from its head and size
-/// before it is read into memory. Returns its size.
-fn refuse_huge_file(kind: Option<weft::jobs::SlotKind>, path: &Path, name: &str) -> Result<u64, String> {
+/// before it is read into memory.
+fn refuse_huge_file(kind: Option<weft::jobs::SlotKind>, path: &Path, name: &str) -> Result<(), String> {
     use std::io::Read;
-    let Ok(mut file) = std::fs::File::open(path) else { return Ok(0) };
+    let Some(kind) = kind else { return Ok(()) };
+    let Ok(mut file) = std::fs::File::open(path) else { return Ok(()) };
     let len = file.metadata().map(|m| m.len()).unwrap_or(0);
-    let Some(kind) = kind else { return Ok(len) };
     let mut head = Vec::with_capacity(weft::jobs::FILE_HEAD_BYTES);
     if file.by_ref().take(weft::jobs::FILE_HEAD_BYTES as u64).read_to_end(&mut head).is_err() {
         // The full read that follows names the problem.
-        return Ok(len);
+        return Ok(());
     }
-    kind.check_file(name, &head, len)?;
-    Ok(len)
+    kind.check_file(name, &head, len)
 }
 
 fn write(path: &Path, bytes: &[u8]) -> Result<(), String> {
@@ -285,28 +284,51 @@ fn load_design(arg: &str) -> Result<Design, String> {
     Design::from_json(&file_name(path), &text).map_err(|e| e.to_string())
 }
 
+/// The slot and the path of `--input [SLOT=]FILE` (the kind's first slot when none is named).
+fn input_slot(design: &Design, kind: &dyn weft::jobs::JobKind, arg: &str) -> Result<(String, PathBuf), String> {
+    match arg.split_once('=') {
+        Some((slot, path)) if kind.slots().iter().any(|s| s.name == slot) => Ok((slot.to_string(), PathBuf::from(path))),
+        Some((slot, _)) if !Path::new(arg).exists() => {
+            let names: Vec<&str> = kind.slots().iter().map(|s| s.name).collect();
+            Err(format!(
+                "--input {arg}: a {} job has no input slot '{slot}'; its slots are {}",
+                design.job.kind(),
+                if names.is_empty() { "none".into() } else { names.join(", ") }
+            ))
+        }
+        _ => {
+            let first = kind.slots().first().ok_or_else(|| format!("--input: a {} job takes no input file", design.job.kind()))?;
+            Ok((first.name.to_string(), PathBuf::from(arg)))
+        }
+    }
+}
+
 /// Reads each `--input [SLOT=]FILE`, puts it in its slot of the design and in `files`.
 fn apply_inputs(design: &mut Design, inputs: &[String], files: &mut Files) -> Result<(), String> {
     let registry = Registry::builtin();
     // Files given on this command line for each slot that takes several.
     let mut gathered: std::collections::BTreeMap<String, Vec<String>> = std::collections::BTreeMap::new();
+    let kind = registry.get(design.job.kind()).ok_or_else(|| format!("unknown job kind '{}'", design.job.kind()))?;
+    // A volume's series is read whole: the sizes of all its files, however they are given
+    // (folders, repeated --input), are checked together before any is read.
+    let mut series_bytes: std::collections::BTreeMap<String, u64> = std::collections::BTreeMap::new();
     for arg in inputs {
-        let kind = registry.get(design.job.kind()).ok_or_else(|| format!("unknown job kind '{}'", design.job.kind()))?;
-        let (slot, path) = match arg.split_once('=') {
-            Some((slot, path)) if kind.slots().iter().any(|s| s.name == slot) => (slot.to_string(), PathBuf::from(path)),
-            Some((slot, _)) if !Path::new(arg).exists() => {
-                let names: Vec<&str> = kind.slots().iter().map(|s| s.name).collect();
-                return Err(format!(
-                    "--input {arg}: a {} job has no input slot '{slot}'; its slots are {}",
-                    design.job.kind(),
-                    if names.is_empty() { "none".into() } else { names.join(", ") }
-                ));
-            }
-            _ => {
-                let first = kind.slots().first().ok_or_else(|| format!("--input: a {} job takes no input file", design.job.kind()))?;
-                (first.name.to_string(), PathBuf::from(arg))
-            }
-        };
+        let (slot, path) = input_slot(design, kind, arg)?;
+        if kind.slots().iter().any(|s| s.name == slot && s.kind == weft::jobs::SlotKind::Volume) {
+            let size = |p: &Path| std::fs::metadata(p).map_or(0, |m| m.len());
+            let (bytes, what) = if path.is_dir() {
+                (files_in_folder(&path)?.iter().map(|(_, f)| size(f)).fold(0u64, u64::saturating_add), format!("{} (all its files)", file_name(&path)))
+            } else {
+                (size(&path), file_name(&path))
+            };
+            weft::jobs::SlotKind::Volume.check_file(&what, &[], bytes)?;
+            let total = series_bytes.entry(slot.clone()).or_default();
+            *total = total.saturating_add(bytes);
+            weft::jobs::SlotKind::Volume.check_file(&format!("the files given for '{slot}'"), &[], *total)?;
+        }
+    }
+    for arg in inputs {
+        let (slot, path) = input_slot(design, kind, arg)?;
         let slot_kind = kind.slots().iter().find(|s| s.name == slot).map(|s| s.kind);
         let several = slot_kind.is_some_and(|k| k.multiple());
         let input = if several {
@@ -315,13 +337,8 @@ fn apply_inputs(design: &mut Design, inputs: &[String], files: &mut Files) -> Re
             let mut names = Vec::new();
             if path.is_dir() {
                 let folder = files_in_folder(&path)?;
-                let mut total = 0u64;
                 for (name, file) in &folder {
-                    total = total.saturating_add(refuse_huge_file(slot_kind, file, name)?);
-                }
-                // A series is read whole: its files together are checked as well.
-                if slot_kind == Some(weft::jobs::SlotKind::Volume) {
-                    weft::jobs::SlotKind::Volume.check_file(&format!("{} (all its files)", file_name(&path)), &[], total)?;
+                    refuse_huge_file(slot_kind, file, name)?;
                 }
                 for (name, file) in folder {
                     files.insert(name.clone(), read(&file)?);

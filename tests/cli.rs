@@ -377,6 +377,10 @@ fn huge_volumes_gcode_and_designs_are_refused_before_they_are_read() {
     }
     let err = run_limited("examples/graded-phantom.json", &format!("volume={}", dir.display()));
     assert!(err.contains("huge-series (all its files): 1,800 MiB is more than"), "{err}");
+    // The same files given one by one: their running total is checked before each is read.
+    let args: Vec<String> = (0..3).map(|k| format!("volume={}", dir.join(format!("s{k}.dcm")).display())).collect();
+    let err = run_limited("examples/graded-phantom.json", &args.join("' --input '"));
+    assert!(err.contains("the files given for 'volume': 1,800 MiB is more than"), "{err}");
     let gcode = sparse("huge-2g.gcode", b"G1 X0\n", 2 << 30);
     let err = run_limited("examples/graded-phantom.json", &format!("gcode={}", gcode.display()));
     assert!(err.contains("huge-2g.gcode:") && err.contains("the G-code to edit"), "{err}");

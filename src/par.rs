@@ -174,10 +174,10 @@ where
     }
 }
 
-/// Whether [`beside`] can run side work on another thread at once: more than one thread,
-/// and (in the browser) not called from a pool thread, whose pool might have no other
-/// thread free to take the side work while this one waits for it.
-pub fn can_beside() -> bool {
+/// Whether the calling thread may hand work to the pool and wait for its results in a
+/// pipeline of its own ([`recv`]): more than one thread, and (in the browser) not called from
+/// a pool thread, which could not help with the work while it waits (wasm has no timed wait).
+pub fn can_wait_on_pool() -> bool {
     #[cfg(not(target_arch = "wasm32"))]
     {
         threads() > 1
@@ -192,26 +192,35 @@ pub fn can_beside() -> bool {
     }
 }
 
-/// Runs `side` on another thread while `main` runs on this one (a pipeline's two ends: they
-/// may wait on each other through channels), and returns `main`'s result once both have
-/// ended. Only when [`can_beside`]. Natively `side` gets a thread of its own (a pool
-/// thread could be busy); in the browser, where a wasm module cannot start a thread, one of
-/// the pool's.
+/// The next result from work spawned on the pool (`rayon::scope`): a pool thread runs
+/// pending work while none is ready (a small pool might otherwise have no thread left for
+/// it), any other thread sleeps until one comes. `None` once every sender is gone.
 #[cfg(any(not(target_arch = "wasm32"), feature = "wasm-threads"))]
-pub fn beside<R>(side: impl FnOnce() + Send, main: impl FnOnce() -> R) -> R {
-    #[cfg(not(target_arch = "wasm32"))]
-    {
-        std::thread::scope(|scope| {
-            scope.spawn(side);
-            main()
-        })
-    }
-    #[cfg(target_arch = "wasm32")]
-    {
-        rayon::in_place_scope(|scope| {
-            scope.spawn(|_| side());
-            main()
-        })
+pub fn recv<T>(rx: &std::sync::mpsc::Receiver<T>) -> Option<T> {
+    use std::sync::mpsc::TryRecvError;
+    let in_pool = rayon::current_thread_index().is_some();
+    loop {
+        match rx.try_recv() {
+            Ok(v) => return Some(v),
+            Err(TryRecvError::Disconnected) => return None,
+            Err(TryRecvError::Empty) => {}
+        }
+        if !in_pool {
+            return rx.recv().ok();
+        }
+        if matches!(rayon::yield_now(), Some(rayon::Yield::Executed)) {
+            continue;
+        }
+        #[cfg(not(target_arch = "wasm32"))]
+        match rx.recv_timeout(std::time::Duration::from_millis(1)) {
+            Ok(v) => return Some(v),
+            Err(std::sync::mpsc::RecvTimeoutError::Disconnected) => return None,
+            Err(std::sync::mpsc::RecvTimeoutError::Timeout) => {}
+        }
+        // std's timed wait reads a clock wasm32-unknown-unknown does not have; the page's
+        // worker is never a pool thread (see can_wait_on_pool), so this is not reached there.
+        #[cfg(target_arch = "wasm32")]
+        return rx.recv().ok();
     }
 }
 

@@ -69,3 +69,68 @@ fn a_one_million_triangle_sphere_slices_to_the_same_bytes_at_one_two_and_four_th
         assert!(o.gcode == outputs[0].gcode, "{} threads: the G-code differs from 1 thread's", [1, 2, 4][k]);
     }
 }
+
+/// The analyzer's report, preview and errors at 1, 2 and 4 threads, on files over the size it
+/// reads on the pool (blocks lexed ahead, layers measured behind: `src/analyze/pooled.rs`).
+#[test]
+fn the_analysis_and_its_errors_are_the_same_at_any_thread_count() {
+    use weft::analyze::{analyze, Options};
+    let fixture = |name: &str| std::fs::read(format!("{}/tests/fixtures/{name}", env!("CARGO_MANIFEST_DIR"))).unwrap();
+    let mut files: Vec<(String, Vec<u8>)> = Vec::new();
+    // Other slicers' files (arcs, CRLF, layer comments), repeated past a few blocks.
+    for name in ["prusaslicer-style.gcode", "cura-style.gcode"] {
+        let one = String::from_utf8(fixture(name)).unwrap();
+        files.push((name.into(), weft::bench::repeat_to(&one, 3_000_000).into_bytes()));
+    }
+    // Layers of every size: tiny ones and ones over the pool's per-layer limit (measured on the
+    // reading thread), some overlapping themselves; no layer comments (Z starts layers).
+    let mut z_layers = String::from("G21\nG90\nM83\n");
+    for layer in 0..120 {
+        let n = [3, 40, 70, 900, 70_000][layer % 5];
+        z_layers.push_str(&format!("G1 Z{:.2} F600\n", 0.2 * (layer + 1) as f64));
+        for k in 0..n {
+            let x = (k % 200) as f64 * 0.3;
+            let y = (k / 200) as f64 * 0.4 + if layer % 3 == 0 { 0.0 } else { 0.1 };
+            z_layers.push_str(&format!("G1 X{x:.3} Y{y:.3} E0.02\n"));
+        }
+        z_layers.push_str("G1 E-0.8\nG0 X0 Y0\nG1 E0.8\n");
+    }
+    files.push(("z-layers.gcode".into(), z_layers.into_bytes()));
+    // A bad number far into the file: the same line at any thread count.
+    let mut bad = weft::bench::repeat_to(&String::from_utf8(fixture("prusaslicer-style.gcode")).unwrap(), 2_500_000);
+    let bad_line = bad.lines().count() + 1;
+    bad.push_str("G1 X1e5 Y2\n");
+    bad.push_str(&weft::bench::repeat_to("G1 X1 Y1 E1\n", 600_000));
+    files.push(("bad-number.gcode".into(), bad.into_bytes()));
+    // A layer over the analyzer's limit, then a bad number in a later block: the earlier
+    // refusal wins, as when the file is read on one thread.
+    let mut huge = String::from("M83\n;LAYER:0\nG1 X0 Y0 E1\n");
+    for k in 0..(weft::analyze::MAX_LAYER_SEGMENTS + 10) {
+        huge.push_str(if k % 2 == 0 { "X1E1\n" } else { "X0E1\n" });
+    }
+    huge.push_str("G1 X1e5\n");
+    files.push(("huge-layer.gcode".into(), huge.into_bytes()));
+
+    for (name, bytes) in &files {
+        assert!(bytes.len() > 1 << 20, "{name}: {} bytes is over the size read on the pool", bytes.len());
+        for preview in [false, true] {
+            let options = Options { collect_preview: preview, ..Default::default() };
+            let runs: Vec<_> = [1, 2, 4].iter().map(|&t| pool(t).install(|| analyze(name, bytes, &options))).collect();
+            for (k, r) in runs.iter().enumerate().skip(1) {
+                match (&runs[0], r) {
+                    (Ok(a), Ok(b)) => {
+                        assert!(a.report == b.report, "{name}: the report differs at {} threads", [1, 2, 4][k]);
+                        assert!(a.preview == b.preview, "{name}: the preview differs at {} threads", [1, 2, 4][k]);
+                    }
+                    (a, b) => assert_eq!(a.as_ref().err(), b.as_ref().err(), "{name}: {} threads", [1, 2, 4][k]),
+                }
+            }
+            match (name.as_str(), &runs[0]) {
+                ("bad-number.gcode", Err(weft::analyze::Error::Malformed { line, .. })) => assert_eq!(*line, bad_line),
+                ("huge-layer.gcode", Err(weft::analyze::Error::TooLarge { line, .. })) => assert!(*line > 1 << 20, "line {line}"),
+                (_, Ok(a)) => assert!(a.report.layers > 0 && a.report.overlap_mm >= 0.0, "{name}"),
+                (_, r) => panic!("{name}: {:?}", r.as_ref().err()),
+            }
+        }
+    }
+}

@@ -51,10 +51,10 @@ pub(crate) struct Machine<'o> {
     segs: Vec<Seg>,
     layer_paths: Vec<(f64, u32)>,
     overlap: Overlap,
-    /// Native builds measure overlap on a second thread: layers go out here (index, segments)…
-    overlap_out: Option<std::sync::mpsc::SyncSender<(usize, Vec<Seg>)>>,
-    /// …and their overlap comes back here, in layer order.
-    overlap_in: Option<std::sync::mpsc::Receiver<(usize, f64)>>,
+    /// Layers handed to the pool for their overlap (index, segments), when the analysis runs
+    /// on several threads ([`super::pooled`]): the driver takes them from here and gives the
+    /// results back through [`Machine::set_overlap`]. `None` measures every layer here.
+    pub(super) handed: Option<Vec<(usize, Vec<Seg>)>>,
     preview: Option<Preview>,
     /// The options' machine is 5-axis: positions are turned into tips (forward kinematics).
     fk: bool,
@@ -98,8 +98,7 @@ impl<'o> Machine<'o> {
             segs: Vec::new(),
             layer_paths: Vec::new(),
             overlap: Overlap::default(),
-            overlap_out: None,
-            overlap_in: None,
+            handed: None,
             preview: if opts.collect_preview { Some(Preview::default()) } else { None },
             fk: opts.machine.is_five_axis(),
             last_view: [0.0; 3],
@@ -163,7 +162,7 @@ impl<'o> Machine<'o> {
             self.arc_extra += n - 1;
             let segments = self.est.moves.saturating_add(self.arc_extra);
             let largest = self.est.largest_layer.max(layer);
-            let need = super::peak_bytes(segments, self.est.layers, largest, self.preview.is_some());
+            let need = super::peak_bytes(self.est.bytes, segments, self.est.layers, largest, self.preview.is_some());
             if need > MAX_PEAK_BYTES {
                 let arcs = if self.arc_extra > 0 { format!("the arcs up to here add {} chords; ", super::human_count(self.arc_extra)) } else { String::new() };
                 return Err(format!("{arcs}{}", super::too_large(need, segments, self.est.layers, self.preview.is_some())));
@@ -388,13 +387,13 @@ impl<'o> Machine<'o> {
         if self.layer_paths.is_empty() {
             return;
         }
-        match &self.overlap_out {
-            // The overlap thread owns the buffer from here; the result is filled in at finish().
-            // Large layers are measured here, so that the layers in flight stay small; so are
-            // tiny ones, which cost less than handing them over.
-            Some(tx)
-                if (PARALLEL_LAYER_MIN_SEGMENTS..=PARALLEL_LAYER_SEGMENTS).contains(&self.segs.len())
-                    && tx.send((index, std::mem::take(&mut self.segs))).is_ok() => {}
+        match &mut self.handed {
+            // The pool measures it; the result comes back through set_overlap(). Large layers
+            // are measured here, so that the layers in flight stay small; so are tiny ones,
+            // which cost less than handing them over.
+            Some(out) if (PARALLEL_LAYER_MIN_SEGMENTS..=PARALLEL_LAYER_SEGMENTS).contains(&self.segs.len()) => {
+                out.push((index, std::mem::take(&mut self.segs)));
+            }
             _ => layer.overlap = self.overlap.layer(&self.segs, self.opts.default_line_width_mm),
         }
         layer.gippo = gippo_score(&self.layer_paths);
@@ -404,19 +403,22 @@ impl<'o> Machine<'o> {
         self.layer_paths.clear();
     }
 
-    /// Ends the file and builds the analysis.
-    pub fn finish(mut self) -> Analysis {
+    /// The overlap of layer `index`, measured elsewhere (see [`Machine::handed`]).
+    pub(super) fn set_overlap(&mut self, index: usize, overlap: f64) {
+        if let Some(layer) = self.layers.get_mut(index) {
+            layer.overlap = overlap;
+        }
+    }
+
+    /// Ends the file: the last layer is finished (and handed over, when layers are).
+    pub(super) fn close(&mut self) {
         self.m.timer.stop();
         self.finish_layer();
-        // Closing the channel ends the overlap thread once it has measured every layer sent.
-        drop(self.overlap_out.take());
-        if let Some(rx) = self.overlap_in.take() {
-            for (index, overlap) in rx {
-                if let Some(layer) = self.layers.get_mut(index) {
-                    layer.overlap = overlap;
-                }
-            }
-        }
+    }
+
+    /// Ends the file and builds the analysis.
+    pub fn finish(mut self) -> Analysis {
+        self.close();
         let n = self.layers.len();
         let mut per_layer = Vec::with_capacity(n);
         for i in 0..n {
@@ -474,6 +476,21 @@ pub fn gippo_score(paths: &[(f64, u32)]) -> f64 {
     paths.iter().map(|p| p.0 * p.1 as f64).sum::<f64>() / (total * paths.len() as f64)
 }
 
+/// `text` cut into blocks of about `block_bytes`, each ending after a newline (the last at the
+/// end of the text): whole lines, to be read side by side.
+pub(super) fn cut_lines(text: &[u8], block_bytes: usize) -> Vec<std::ops::Range<usize>> {
+    let block_bytes = block_bytes.max(1);
+    let mut out = Vec::with_capacity(text.len() / block_bytes + 1);
+    let mut start = 0;
+    while start < text.len() {
+        let cut = (start + block_bytes).min(text.len());
+        let end = find_newline(&text[cut - 1..]).map_or(text.len(), |p| cut + p);
+        out.push(start..end);
+        start = end;
+    }
+    out
+}
+
 /// Position of the first `\n` in `s`, eight bytes at a time.
 #[inline]
 pub(super) fn find_newline(s: &[u8]) -> Option<usize> {
@@ -500,45 +517,20 @@ pub(crate) fn run(file: &str, bytes: &[u8], options: &Options, est: &Estimate) -
         return Err(Error::NotText { file: file.to_string(), offset });
     }
     let layer_comments = crate::motion::lex::has_layer_comments(bytes);
+    let m = Machine::new(options, layer_comments, est);
     #[cfg(any(not(target_arch = "wasm32"), feature = "wasm-threads"))]
-    if bytes.len() >= PARALLEL_OVERLAP_MIN_BYTES && crate::par::can_beside() {
-        // Overlap is per layer and independent of parsing: measure it on a second core while
-        // the next layers are parsed. Same layers, same order, same arithmetic → same results.
-        let (seg_tx, seg_rx) = std::sync::mpsc::sync_channel::<(usize, Vec<Seg>)>(8);
-        let (res_tx, res_rx) = std::sync::mpsc::channel();
-        let width = options.default_line_width_mm;
-        return crate::par::beside(
-            move || {
-                let mut overlap = Overlap::default();
-                for (index, segs) in seg_rx {
-                    if res_tx.send((index, overlap.layer(&segs, width))).is_err() {
-                        break;
-                    }
-                }
-            },
-            move || {
-                let mut m = Machine::new(options, layer_comments, est);
-                m.overlap_out = Some(seg_tx);
-                m.overlap_in = Some(res_rx);
-                parse_all(file, bytes, m)
-            },
-        );
+    if bytes.len() >= super::pooled::MIN_BYTES && crate::par::can_wait_on_pool() {
+        return super::pooled::run(file, bytes, m, options.default_line_width_mm);
     }
-    parse_all(file, bytes, Machine::new(options, layer_comments, est))
+    parse_all(file, bytes, m)
 }
 
-/// Layers of at most this many segments go to the overlap thread (native builds); larger
-/// ones are measured on the reading thread, so that the layers in flight (at most 10) stay
-/// within a few tens of MB.
+/// Layers of at most this many segments are measured on the pool ([`super::pooled`]); larger
+/// ones on the reading thread, so that the layers in flight stay within a few tens of MB.
 pub(super) const PARALLEL_LAYER_SEGMENTS: usize = 1 << 16;
 /// Layers of fewer segments are measured on the reading thread (a file of a million one-move
-/// layers would otherwise spend its time passing them between threads).
+/// layers would otherwise spend its time handing them over).
 const PARALLEL_LAYER_MIN_SEGMENTS: usize = 64;
-
-/// Files at least this large (bytes) measure overlap on a second thread (not in the plain
-/// wasm build, which has one).
-#[cfg(any(not(target_arch = "wasm32"), feature = "wasm-threads"))]
-const PARALLEL_OVERLAP_MIN_BYTES: usize = 1 << 20;
 
 fn parse_all(file: &str, bytes: &[u8], mut m: Machine) -> Result<Analysis, Error> {
     let mut start = 0;

@@ -9,6 +9,8 @@ mod estimate;
 mod machine;
 mod overlap;
 mod poses;
+#[cfg(any(not(target_arch = "wasm32"), feature = "wasm-threads"))]
+mod pooled;
 /// The G-code lexer (shared with the writer; lives in [`crate::motion::lex`]).
 pub use crate::motion::lex as parse;
 /// The time model (shared with the writer; lives in [`crate::motion::time`]).
@@ -315,13 +317,16 @@ const SECONDS_PER_SEGMENT: f64 = 1.0e-6;
 pub fn plan(segments: f64, layers: f64, options: &Options) -> crate::budget::Estimate {
     let layers = layers.max(1.0);
     let largest = (2.0 * segments / layers).min(segments).min(MAX_LAYER_SEGMENTS as f64);
-    let bytes = peak_bytes(segments.min(usize::MAX as f64 / 4.0) as usize, layers as usize, largest as usize, options.collect_preview) as f64;
+    let text = (segments * crate::gcode::GCODE_BYTES_PER_SEGMENT).min(usize::MAX as f64 / 4.0) as usize;
+    let bytes = peak_bytes(text, segments.min(usize::MAX as f64 / 4.0) as usize, layers as usize, largest as usize, options.collect_preview) as f64;
     let fix = "print fewer or thicker layers, less infill, or a smaller part";
     crate::budget::Estimate::new("analyze")
         .quantity("segments", "Moves read back", segments, "")
         .cost(bytes, segments * SECONDS_PER_SEGMENT)
-        // Layers are read back side by side: 1.45× natively, 1.57× in the worker at 2 threads.
-        .parallel(0.65)
+        // Lexing ahead and overlap behind the interpreter, on the pool (analyze/pooled.rs):
+        // 1.85× natively at 2 threads. The interpreter itself (about a quarter of one
+        // thread's time) bounds it near 3–4× however many threads.
+        .parallel(0.85)
         .limit("the analysis' memory", bytes, MAX_PEAK_BYTES as f64, "bytes", fix)
         .budgets(fix)
 }

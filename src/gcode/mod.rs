@@ -493,7 +493,7 @@ pub const MAX_GCODE_BYTES: f64 = 256.0 * crate::budget::MIB;
 /// G-code bytes per toolpath segment: a `G1 X… Y… E…` line (about 27 bytes) plus each
 /// segment's share of travels, retractions and layer comments (measured on the examples:
 /// 24–33).
-const GCODE_BYTES_PER_SEGMENT: f64 = 30.0;
+pub(crate) const GCODE_BYTES_PER_SEGMENT: f64 = 30.0;
 /// Writer time per segment on the reference machine, s (`cargo run --release --example
 /// slice_bench`: 0.11 µs on the 1M-triangle sphere, 0.3–0.4 µs on solid cubes).
 const SECONDS_PER_SEGMENT: f64 = 0.3e-6;

@@ -224,6 +224,106 @@ pub fn recv<T>(rx: &std::sync::mpsc::Receiver<T>) -> Option<T> {
     }
 }
 
+/// A task's answer on a channel, `(index, Some(result))`; a task that ends without one (it
+/// was skipped, or it panicked) answers `(index, None)` as its `Reply` drops, so whoever
+/// waits for it never waits forever.
+#[cfg(any(not(target_arch = "wasm32"), feature = "wasm-threads"))]
+pub(crate) struct Reply<T> {
+    tx: std::sync::mpsc::Sender<(usize, Option<T>)>,
+    index: usize,
+    sent: bool,
+}
+
+#[cfg(any(not(target_arch = "wasm32"), feature = "wasm-threads"))]
+impl<T> Reply<T> {
+    /// The answer of task `index`, to be sent on `tx`.
+    pub(crate) fn new(tx: &std::sync::mpsc::Sender<(usize, Option<T>)>, index: usize) -> Self {
+        Reply { tx: tx.clone(), index, sent: false }
+    }
+
+    /// Answers with `value`.
+    pub(crate) fn send(mut self, value: T) {
+        self.sent = self.tx.send((self.index, Some(value))).is_ok();
+    }
+}
+
+#[cfg(any(not(target_arch = "wasm32"), feature = "wasm-threads"))]
+impl<T> Drop for Reply<T> {
+    fn drop(&mut self) {
+        if !self.sent {
+            let _ = self.tx.send((self.index, None));
+        }
+    }
+}
+
+/// `produce(k)` for every `k` in `0..n` on the pool, and `consume(k, result)` on this thread in
+/// order of `k` as the results come: a pipeline whose second stage is sequential (sums in a
+/// fixed order). At most `ahead` items past the one being consumed are produced or waiting, so
+/// the memory in flight is bounded. On one thread (or where [`can_wait_on_pool`] says no) it
+/// is the plain loop. `consume` returning `Err` stops it (items not started are skipped).
+pub fn ordered<R, E, P, C>(n: usize, ahead: usize, produce: P, mut consume: C) -> Result<(), E>
+where
+    R: Send,
+    P: Fn(usize) -> R + Sync,
+    C: FnMut(usize, R) -> Result<(), E>,
+{
+    #[cfg(any(not(target_arch = "wasm32"), feature = "wasm-threads"))]
+    if n > 1 && can_wait_on_pool() {
+        use std::sync::atomic::AtomicBool;
+        let stop = AtomicBool::new(false);
+        let (tx, rx) = std::sync::mpsc::channel::<(usize, Option<R>)>();
+        let (produce, stop) = (&produce, &stop);
+        return rayon::in_place_scope(|s| {
+            let mut waiting: std::collections::VecDeque<Option<R>> = std::collections::VecDeque::new();
+            let mut spawned = 0;
+            for k in 0..n {
+                while spawned < n && spawned <= k + ahead.max(1) {
+                    let reply = Reply::new(&tx, spawned);
+                    let i = spawned;
+                    s.spawn(move |_| {
+                        if !stop.load(Ordering::Relaxed) && !cancelled() {
+                            reply.send(produce(i));
+                        }
+                    });
+                    spawned += 1;
+                }
+                // waiting[j] holds item k + j once it has come.
+                while waiting.front().is_none_or(|r| r.is_none()) {
+                    match recv(&rx) {
+                        Some((i, Some(r))) => {
+                            let j = i - k;
+                            if waiting.len() <= j {
+                                waiting.resize_with(j + 1, || None);
+                            }
+                            waiting[j] = Some(r);
+                        }
+                        // Skipped or panicked: after a cancel, sleep until the page ends the
+                        // worker (as map does); after a panic, leave (the scope raises it).
+                        _ => {
+                            stop.store(true, Ordering::Relaxed);
+                            while cancelled() {
+                                std::thread::park();
+                            }
+                            return Ok(());
+                        }
+                    }
+                }
+                let r = waiting.pop_front().flatten().expect("item k has come");
+                if let Err(e) = consume(k, r) {
+                    stop.store(true, Ordering::Relaxed);
+                    return Err(e);
+                }
+            }
+            Ok(())
+        });
+    }
+    let _ = ahead;
+    for k in 0..n {
+        consume(k, produce(k))?;
+    }
+    Ok(())
+}
+
 /// Sorts `v` by `cmp`, on every thread of the pool. `cmp` must be a total order on the
 /// elements (ties broken by an index, say): then every sort gives the one sorted order, and
 /// the result is the same at any thread count (rayon's parallel quicksort and std's differ

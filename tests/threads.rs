@@ -37,6 +37,40 @@ fn loops_give_the_sequential_result_at_any_thread_count() {
 }
 
 #[test]
+fn an_ordered_pipeline_consumes_every_item_in_order_and_stops_on_an_error() {
+    // Items of very different cost, so they are made out of order.
+    let work = |i: usize| -> u64 { (0..(i % 7) * 3000).fold(i as u64, |a, k| a.wrapping_mul(6364136223846793005).wrapping_add(k as u64)) };
+    let expected: Vec<(usize, u64)> = (0..500).map(|i| (i, work(i))).collect();
+    for threads in [1, 2, 4, 8] {
+        for ahead in [1, 3, 32] {
+            let mut got = Vec::new();
+            let r: Result<(), ()> = pool(threads).install(|| {
+                weft::par::ordered(500, ahead, work, |k, v| {
+                    got.push((k, v));
+                    Ok(())
+                })
+            });
+            assert!(r.is_ok());
+            assert_eq!(got, expected, "{threads} threads, {ahead} ahead");
+            // An error stops it there: nothing after the failing item is consumed.
+            let mut seen = 0;
+            let r = pool(threads).install(|| weft::par::ordered(500, ahead, work, |k, _| if k == 123 { Err(k) } else { seen += 1; Ok(()) }));
+            assert_eq!((r, seen), (Err(123), 123), "{threads} threads, {ahead} ahead");
+        }
+        let r = std::panic::catch_unwind(|| pool(threads).install(|| weft::par::ordered(100, 4, |i| if i == 57 { panic!("item 57") } else { i }, |_, _| Ok::<(), ()>(()))));
+        assert!(r.is_err(), "{threads} threads: the panic comes back");
+    }
+    // From a thread outside any pool (the CLI's main thread), on the global pool.
+    let mut got = Vec::new();
+    weft::par::ordered(500, 4, work, |k, v| {
+        got.push((k, v));
+        Ok::<(), ()>(())
+    })
+    .unwrap();
+    assert_eq!(got, expected, "outside a pool");
+}
+
+#[test]
 fn a_panicking_item_comes_back_as_a_panic_not_a_hang() {
     for threads in [1, 3] {
         let r = std::panic::catch_unwind(|| pool(threads).install(|| weft::par::map(100, &mut |_| {}, |i| if i == 57 { panic!("item 57") } else { i })));

@@ -404,6 +404,7 @@ impl<'o> Machine<'o> {
     }
 
     /// The overlap of layer `index`, measured elsewhere (see [`Machine::handed`]).
+    #[cfg(any(not(target_arch = "wasm32"), feature = "wasm-threads"))]
     pub(super) fn set_overlap(&mut self, index: usize, overlap: f64) {
         if let Some(layer) = self.layers.get_mut(index) {
             layer.overlap = overlap;

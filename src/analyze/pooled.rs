@@ -1,6 +1,6 @@
 //! The analyzer on every thread (builds with threads): the interpreter reads the file in order
-//! on the calling thread, the pool lexes the blocks ahead of it and measures the overlap of
-//! the layers behind it.
+//! on one of the pool's threads, the pool lexes the blocks ahead of it and measures the
+//! overlap of the layers behind it.
 //!
 //! Why this shape: each move of a G-code file depends on the state every earlier line left
 //! (positions, modes, the time model's planner), so the interpreter ([`Machine`]) is
@@ -24,7 +24,8 @@ use super::overlap::{Overlap, Seg};
 use super::{Analysis, Error};
 use crate::motion::lex::{lex_line, Command, Line, Words};
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::mpsc::{channel, Sender};
+use crate::par::Reply;
+use std::sync::mpsc::channel;
 
 /// Files of at least this many bytes are analysed on the pool; smaller ones on the calling
 /// thread alone (a few milliseconds, less than handing blocks over would save).
@@ -112,37 +113,11 @@ fn lex_block(text: &[u8]) -> Lexed<'_> {
     out
 }
 
-/// Sends `(index, None)` unless a result was sent: a task that is skipped (cancel, an earlier
-/// error) or panics still answers, so the caller never waits for it forever.
-struct Reply<T> {
-    tx: Sender<(usize, Option<T>)>,
-    index: usize,
-    sent: bool,
-}
-
-impl<T> Reply<T> {
-    fn new(tx: &Sender<(usize, Option<T>)>, index: usize) -> Self {
-        Reply { tx: tx.clone(), index, sent: false }
-    }
-
-    fn send(mut self, value: T) {
-        self.sent = self.tx.send((self.index, Some(value))).is_ok();
-    }
-}
-
-impl<T> Drop for Reply<T> {
-    fn drop(&mut self) {
-        if !self.sent {
-            let _ = self.tx.send((self.index, None));
-        }
-    }
-}
-
 /// A batch's overlaps: (layer index, overlap) for each of its layers, and its segments.
 type Measured = (Vec<(usize, f64)>, usize);
 
 /// Gives a batch's overlaps to `m` and takes its segments off `in_flight`; false when the
-/// batch has no result (see [`Reply`]).
+/// batch has no result (see [`crate::par::Reply`]).
 fn settle(reply: Option<(usize, Option<Measured>)>, m: &mut Machine<'_>, in_flight: &mut usize) -> bool {
     let Some((_, Some((done, segments)))) = reply else { return false };
     *in_flight -= segments;
@@ -152,7 +127,14 @@ fn settle(reply: Option<(usize, Option<Measured>)>, m: &mut Machine<'_>, in_flig
 
 /// Analyses `bytes` with `m` (see the module's notes); `width` is the options' default line
 /// width.
-pub(super) fn run(file: &str, bytes: &[u8], mut m: Machine<'_>, width: f64) -> Result<Analysis, Error> {
+pub(super) fn run(file: &str, bytes: &[u8], m: Machine<'_>, width: f64) -> Result<Analysis, Error> {
+    if rayon::current_thread_index().is_none() {
+        // Interpret on one of the pool's threads, which lexes and measures too while it waits,
+        // and leave the caller asleep: from outside, the caller would be one thread more than
+        // the cores, and the interpreter, the pipeline's slowest part, would share one.
+        return rayon::scope(|_| run(file, bytes, m, width));
+    }
+    let mut m = m;
     let bounds = cut_lines(bytes, BLOCK_BYTES);
     m.handed = Some(Vec::new());
     let stop = AtomicBool::new(false);

@@ -472,9 +472,17 @@ fn draw(sampler: &Sampler, s: &Surface, field: Option<&Field>, rng: &mut Pcg64, 
 /// domain took 16.6× as long.
 const DART_MISS_LIMIT: usize = 300;
 
-/// Pairs a window of the energy evaluation holds (about 1.8 MB with their geodesics): enough
+/// Pairs a window of the first energy evaluation holds (about 1.8 MB with their terms): enough
 /// for every thread to have long runs, few enough to stay in a core's cache share.
 const WINDOW_PAIRS: usize = 1 << 15;
+/// Pairs an item of the later evaluations holds at most (fewer when an evaluation has fewer
+/// than four items a thread): the pool makes items while the calling thread sums the one
+/// before, so an item is short (a few milliseconds of geodesics at most)…
+const ITEM_PAIRS: usize = 1 << 12;
+/// …and at most this many are made ahead of the one being summed: the pairs in flight,
+/// `(AHEAD_ITEMS + 1) · ITEM_PAIRS`, are the two windows the estimate counts; enough to keep
+/// 16 threads busy.
+const AHEAD_ITEMS: usize = 15;
 
 /// Dart throwing with a minimum distance (chord, or geodesic when `geodesic`), the radius
 /// shrinking by 5 % after [`DART_MISS_LIMIT`] consecutive misses until N points are in. With a graded
@@ -562,60 +570,80 @@ impl Engine<'_, '_> {
         crate::par::map(pts.len(), &mut |_| {}, |k| self.s.node(pts[k]))
     }
 
-    /// Calls `visit(i, j, pair)` for the pairs `near(i, …)` lists for each point `i` in turn, in
-    /// that order. Points go in windows of about [`WINDOW_PAIRS`] pairs: within one, runs of
-    /// points find their pairs and evaluate their geodesics side by side (one parallel round a
-    /// window, the neighbour search off this thread too), then the sums are made in pair order
-    /// on this thread (the same bits at any thread count). Windows are cut from each point's
-    /// pairs in the evaluation before (points move little between two); the first evaluation
-    /// starts at one point and grows at most 4× a window, so all-pairs runs stay bounded too.
-    fn for_pairs(&self, nodes: &[Node], near: &(dyn Fn(usize, &mut Vec<u32>, &mut Vec<(u32, u32)>) + Sync), visit: &mut dyn FnMut(usize, usize, &PairEval)) {
+    /// Calls `add(i, j, term(i, j, pair))` for the pairs `near(i, …)` lists for each point `i`
+    /// in turn, in that order: the neighbour search, the pair's geodesic and its `term` run side
+    /// by side on the pool, `add` (the sums) on this thread in pair order, so the sums are the
+    /// same bits at any thread count.
+    ///
+    /// After the first evaluation, points go in items of about [`ITEM_PAIRS`] pairs, cut from
+    /// each point's pairs in the evaluation before (points move little between two), and this
+    /// thread sums one item while the pool makes the next ones ([`crate::par::ordered`], at most
+    /// [`AHEAD_ITEMS`] ahead). The first evaluation has no counts yet: it goes in windows of
+    /// about [`WINDOW_PAIRS`] pairs, each made in one parallel round then summed, starting at
+    /// one point and growing at most 4× a window, so all-pairs runs stay bounded too.
+    fn for_pairs<T: Send>(
+        &self,
+        nodes: &[Node],
+        near: &Near<'_>,
+        term: &(dyn Fn(usize, usize, &PairEval) -> T + Sync),
+        add: &mut dyn FnMut(usize, usize, T),
+    ) {
         let n = nodes.len();
-        let runs = 4 * crate::par::threads();
-        let mut last = self.pairs_per_point.lock().map(|mut c| std::mem::take(&mut *c)).unwrap_or_default();
-        if last.len() != n {
-            last.clear();
-        }
+        let last = self.pairs_per_point.lock().map(|mut c| std::mem::take(&mut *c)).unwrap_or_default();
         let mut counts = vec![0u32; n];
-        let (mut start, mut span) = (0usize, 1usize);
-        while start < n {
-            let span_now = if last.is_empty() {
-                span.min(n - start)
-            } else {
-                let mut sum = 0usize;
-                let take = last.get(start..).unwrap_or_default().iter().take_while(|&&c| {
-                    sum += c as usize;
-                    sum <= WINDOW_PAIRS
-                });
-                take.count().clamp(1, n - start)
-            };
-            let parts = crate::par::map_runs(span_now, runs, &mut |_| {}, |range, _| {
-                let (mut cand, mut pairs) = (Vec::new(), Vec::new());
-                for k in range {
-                    near(start + k, &mut cand, &mut pairs);
+        // The pairs of points `range`, with their terms.
+        let make = |range: std::ops::Range<usize>| -> Vec<(u32, u32, T)> {
+            let (mut cand, mut pairs) = (Vec::new(), Vec::new());
+            for i in range {
+                near(i, &mut cand, &mut pairs);
+            }
+            pairs
+                .iter()
+                .map(|&(i, j)| {
+                    let (a, b) = (&nodes[i as usize], &nodes[j as usize]);
+                    let pe = if self.geodesic { self.s.pair_both(a, b) } else { self.s.chord_pair(a, b) };
+                    (i, j, term(i as usize, j as usize, &pe))
+                })
+                .collect()
+        };
+        let mut sum = |part: Vec<(u32, u32, T)>, counts: &mut Vec<u32>| {
+            let found = part.len();
+            for (i, j, t) in part {
+                if let Some(c) = counts.get_mut(i as usize) {
+                    *c += 1;
                 }
-                let evals: Vec<PairEval> = pairs
-                    .iter()
-                    .map(|&(i, j)| {
-                        let (a, b) = (&nodes[i as usize], &nodes[j as usize]);
-                        if self.geodesic { self.s.pair_both(a, b) } else { self.s.chord_pair(a, b) }
-                    })
-                    .collect();
-                vec![(pairs, evals)]
-            });
-            let mut found = 0usize;
-            for (pairs, evals) in &parts {
-                found += pairs.len();
-                for (&(i, j), pe) in pairs.iter().zip(evals) {
-                    if let Some(c) = counts.get_mut(i as usize) {
-                        *c += 1;
-                    }
-                    visit(i as usize, j as usize, pe);
+                add(i as usize, j as usize, t);
+            }
+            found
+        };
+        if last.len() == n {
+            // Four items a thread at least, so that a small evaluation keeps every thread busy.
+            let total: usize = last.iter().map(|&c| c as usize).sum();
+            let item_pairs = (total / (4 * crate::par::threads())).clamp(1, ITEM_PAIRS);
+            let mut items = Vec::new();
+            let (mut start, mut pairs) = (0usize, 0usize);
+            for (i, &c) in last.iter().enumerate() {
+                pairs += c as usize;
+                if pairs >= item_pairs || i + 1 == n {
+                    items.push(start..i + 1);
+                    (start, pairs) = (i + 1, 0);
                 }
             }
-            start += span_now;
-            let per_point = (found as f64 / span_now as f64).max(1.0);
-            span = ((WINDOW_PAIRS as f64 / per_point) as usize).clamp(1, 4 * span_now);
+            let _ = crate::par::ordered(items.len(), AHEAD_ITEMS, |k| make(items[k].clone()), |_, part| -> Result<(), ()> {
+                sum(part, &mut counts);
+                Ok(())
+            });
+        } else {
+            let runs = 4 * crate::par::threads();
+            let (mut start, mut span) = (0usize, 1usize);
+            while start < n {
+                let span_now = span.min(n - start);
+                let parts = crate::par::map_runs(span_now, runs, &mut |_| {}, |range, _| vec![make(start + range.start..start + range.end)]);
+                let found: usize = parts.into_iter().map(|part| sum(part, &mut counts)).sum();
+                start += span_now;
+                let per_point = (found as f64 / span_now as f64).max(1.0);
+                span = ((WINDOW_PAIRS as f64 / per_point) as usize).clamp(1, 4 * span_now);
+            }
         }
         if let Ok(mut c) = self.pairs_per_point.lock() {
             *c = counts;
@@ -644,19 +672,19 @@ impl Engine<'_, '_> {
         let shift = if c.is_finite() { libm::pow(c, -self.m) } else { 0.0 };
         let mut f = vec![[0.0; 2]; pts.len()];
         let mut e = 0.0;
-        let visit = |i: usize, j: usize, pe: &PairEval, e: &mut f64, f: &mut Vec<[f64; 2]>| {
+        // A pair's energy and its force on each point (made on the pool), summed in pair order.
+        let term = |i: usize, j: usize, pe: &PairEval| -> PairTerm {
             let sbar = 0.5 * (sp[i] + sp[j]);
             if !(pe.d < c * sbar) {
-                return;
+                return None;
             }
             let x = pe.d.max(1e-9) / sbar;
-            *e += libm::pow(x, -self.m) - shift;
             let w = self.m * libm::pow(x, -self.m - 1.0) / sbar;
-            for k in 0..2 {
-                f[i][k] += w * (pe.ga[k] - x * 0.5 * dsp[i][k]);
-                f[j][k] += w * (pe.gb[k] - x * 0.5 * dsp[j][k]);
-            }
+            let fi = [w * (pe.ga[0] - x * 0.5 * dsp[i][0]), w * (pe.ga[1] - x * 0.5 * dsp[i][1])];
+            let fj = [w * (pe.gb[0] - x * 0.5 * dsp[j][0]), w * (pe.gb[1] - x * 0.5 * dsp[j][1])];
+            Some((libm::pow(x, -self.m) - shift, [fi[0], fi[1], fj[0], fj[1]]))
         };
+        let mut add = |i: usize, j: usize, t: PairTerm| add_term(&mut e, &mut f, i, j, t);
         if c.is_finite() {
             let widest = sp.iter().copied().fold(0.0, f64::max) * c;
             let grid = Grid::new(nodes.iter().map(|n| n.p), widest);
@@ -675,11 +703,11 @@ impl Engine<'_, '_> {
                     }
                 }
             };
-            self.for_pairs(&nodes, &near, &mut |i, j, pe| visit(i, j, pe, &mut e, &mut f));
+            self.for_pairs(&nodes, &near, &term, &mut add);
         } else {
             let n = nodes.len();
             let all = |i: usize, _: &mut Vec<u32>, out: &mut Vec<(u32, u32)>| out.extend((i + 1..n).map(|j| (i as u32, j as u32)));
-            self.for_pairs(&nodes, &all, &mut |i, j, pe| visit(i, j, pe, &mut e, &mut f));
+            self.for_pairs(&nodes, &all, &term, &mut add);
         }
         (e, f, nodes, sp)
     }
@@ -691,18 +719,16 @@ impl Engine<'_, '_> {
         let mut f = vec![[0.0; 2]; pts.len()];
         let mut e = 0.0;
         let shift = if self.rc.is_finite() { libm::pow(self.rc, -self.m) } else { 0.0 };
-        let mut visit = |i: usize, j: usize, pe: &PairEval| {
+        // A pair's energy and its force on each point (made on the pool), summed in pair order.
+        let term = |_: usize, _: usize, pe: &PairEval| -> PairTerm {
             if !(pe.d < self.rc) {
-                return;
+                return None;
             }
             let d = pe.d.max(1e-9);
-            e += libm::pow(d, -self.m) - shift;
             let w = self.m * libm::pow(d, -self.m - 1.0);
-            f[i][0] += w * pe.ga[0];
-            f[i][1] += w * pe.ga[1];
-            f[j][0] += w * pe.gb[0];
-            f[j][1] += w * pe.gb[1];
+            Some((libm::pow(d, -self.m) - shift, [w * pe.ga[0], w * pe.ga[1], w * pe.gb[0], w * pe.gb[1]]))
         };
+        let mut add = |i: usize, j: usize, t: PairTerm| add_term(&mut e, &mut f, i, j, t);
         if self.rc.is_finite() {
             let grid = Grid::new(nodes.iter().map(|n| n.p), self.rc);
             let rc = self.rc;
@@ -720,13 +746,31 @@ impl Engine<'_, '_> {
                     }
                 }
             };
-            self.for_pairs(&nodes, &near, &mut visit);
+            self.for_pairs(&nodes, &near, &term, &mut add);
         } else {
             let n = nodes.len();
             let all = |i: usize, _: &mut Vec<u32>, out: &mut Vec<(u32, u32)>| out.extend((i + 1..n).map(|j| (i as u32, j as u32)));
-            self.for_pairs(&nodes, &all, &mut visit);
+            self.for_pairs(&nodes, &all, &term, &mut add);
         }
         (e, f, nodes)
+    }
+}
+
+/// Lists point `i`'s pairs `(i, j)`, j > i, into the last argument (the second is scratch).
+type Near<'a> = dyn Fn(usize, &mut Vec<u32>, &mut Vec<(u32, u32)>) + Sync + 'a;
+
+/// A pair's share of the energy and its force covectors on its two points (i's two
+/// components, then j's), or `None` beyond the cutoff.
+type PairTerm = Option<(f64, [f64; 4])>;
+
+/// Adds a pair's term to the energy `e` and the forces `f`.
+fn add_term(e: &mut f64, f: &mut [[f64; 2]], i: usize, j: usize, t: PairTerm) {
+    if let Some((et, g)) = t {
+        *e += et;
+        f[i][0] += g[0];
+        f[i][1] += g[1];
+        f[j][0] += g[2];
+        f[j][1] += g[3];
     }
 }
 

@@ -175,8 +175,9 @@ where
 }
 
 /// Whether the calling thread may hand work to the pool and wait for its results in a
-/// pipeline of its own ([`recv`]): more than one thread, and (in the browser) not called from
-/// a pool thread, which could not help with the work while it waits (wasm has no timed wait).
+/// pipeline of its own ([`recv`], [`ordered`]): more than one thread, and (in the browser)
+/// not called from a pool thread, which might be waited for itself by whoever runs it
+/// (wasm has no timed wait to fall back on).
 pub fn can_wait_on_pool() -> bool {
     #[cfg(not(target_arch = "wasm32"))]
     {
@@ -217,8 +218,10 @@ pub fn recv<T>(rx: &std::sync::mpsc::Receiver<T>) -> Option<T> {
             Err(std::sync::mpsc::RecvTimeoutError::Disconnected) => return None,
             Err(std::sync::mpsc::RecvTimeoutError::Timeout) => {}
         }
-        // std's timed wait reads a clock wasm32-unknown-unknown does not have; the page's
-        // worker is never a pool thread (see can_wait_on_pool), so this is not reached there.
+        // std's timed wait reads a clock wasm32-unknown-unknown does not have. A pool thread
+        // gets here (the analyzer's interpreter runs on one) only when no work was left for
+        // it to run, so every task it spawned and waits for is running on another thread:
+        // wait for its result without a timeout.
         #[cfg(target_arch = "wasm32")]
         return rx.recv().ok();
     }

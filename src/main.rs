@@ -588,6 +588,10 @@ fn hms(s: f64) -> String {
 }
 
 fn cmd_analyze(file: &Path, json: bool) -> Result<(), String> {
+    // A file over the analyzer's limit is refused from its size, before it is read.
+    if let Ok(meta) = std::fs::metadata(file) {
+        weft::analyze::check_size(&file_name(file), meta.len()).map_err(|e| e.to_string())?;
+    }
     let bytes = read(file)?;
     let analysis = weft::analyze::analyze(&file_name(file), &bytes, &Default::default()).map_err(|e| e.to_string())?;
     let r = &analysis.report;

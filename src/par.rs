@@ -154,8 +154,8 @@ where
                     let _ = woken.recv_timeout(std::time::Duration::from_millis(wait));
                 }
                 // std's timed wait reads a clock wasm32-unknown-unknown does not have (it
-                // panics); the page's worker is never a pool thread, so it just sleeps until
-                // a run ends.
+                // panics): sleep until a run ends. A pool thread gets here only when no run
+                // was left for it to take, so every run not ended is on another thread.
                 #[cfg(target_arch = "wasm32")]
                 {
                     let _ = woken.recv();
@@ -174,23 +174,28 @@ where
     }
 }
 
+/// `f()` run on one of the pool's threads, this thread sleeping until it returns (when it is
+/// not a pool thread already and there is more than one thread; else `f()` here). For a
+/// stretch of short parallel rounds: from a pool thread, a round's runs go to that thread's
+/// own queue and it works on them too, where an outside caller is one thread more than the
+/// pool, woken at every run's end (in the browser through `Atomics.wait`, at a cost that
+/// short rounds feel). `f` cannot report progress (the caller's callback is not `Send`):
+/// keep stretches short and report between them.
+pub fn on_pool<R: Send>(f: impl FnOnce() -> R + Send) -> R {
+    #[cfg(any(not(target_arch = "wasm32"), feature = "wasm-threads"))]
+    if threads() > 1 && rayon::current_thread_index().is_none() {
+        return rayon::scope(|_| f());
+    }
+    f()
+}
+
 /// Whether the calling thread may hand work to the pool and wait for its results in a
-/// pipeline of its own ([`recv`], [`ordered`]): more than one thread, and (in the browser)
-/// not called from a pool thread, which might be waited for itself by whoever runs it
-/// (wasm has no timed wait to fall back on).
+/// pipeline of its own ([`recv`], [`ordered`]): more than one thread. A pool thread may too,
+/// in the browser as well, where it has no timed wait: [`recv`] blocks only when the pool has
+/// no pending work left, so every task waited for is running on another thread; the tasks of
+/// these pipelines wait for nothing themselves, so that thread finishes them.
 pub fn can_wait_on_pool() -> bool {
-    #[cfg(not(target_arch = "wasm32"))]
-    {
-        threads() > 1
-    }
-    #[cfg(all(target_arch = "wasm32", feature = "wasm-threads"))]
-    {
-        threads() > 1 && rayon::current_thread_index().is_none()
-    }
-    #[cfg(all(target_arch = "wasm32", not(feature = "wasm-threads")))]
-    {
-        false
-    }
+    threads() > 1
 }
 
 /// The next result from work spawned on the pool (`rayon::scope`): a pool thread runs

@@ -136,6 +136,14 @@ impl Files {
         })
     }
 
+    /// The size of `name` in bytes, known without reading it.
+    pub fn size(&self, name: &str) -> Option<usize> {
+        self.map.get(name).map(|e| match &e.content {
+            Content::Bytes(b) => b.len(),
+            Content::Far(s) => s.len(),
+        })
+    }
+
     /// Whether `name` is loaded.
     pub fn contains(&self, name: &str) -> bool {
         self.map.contains_key(name)
@@ -667,6 +675,11 @@ fn file_bytes_in<'f>(files: &'f Files, slot: &str, input: &Input) -> Result<(std
 fn volume_files<'f>(files: &'f Files, slot: &str, input: &Input) -> Result<Vec<(String, std::borrow::Cow<'f, [u8]>, Key)>, Error> {
     match input {
         Input::Files(names) => {
+            // Each file was checked alone as it was loaded; the series together, from the
+            // files' sizes, before any is read (in the browser they stay in the page's blob
+            // store until now).
+            let total = names.iter().filter_map(|n| files.size(n)).fold(0u64, |sum, len| sum.saturating_add(len as u64));
+            volume::check_input_bytes(&format!("the files given for '{slot}'"), total).map_err(|e| Error::stage("reading the volume", e))?;
             let mut out = Vec::with_capacity(names.len());
             for name in names {
                 match (files.whole(name), files.hash(name)) {

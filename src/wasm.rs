@@ -10,6 +10,7 @@
 use crate::analyze::{self, Preview};
 use crate::design::{schema, share, Design, Input};
 
+use crate::import::group;
 use crate::jobs::{Registry, SlotKind};
 use crate::gcode_edit;
 use crate::pipeline::{self, Cache, Files, RunOptions};
@@ -198,6 +199,10 @@ struct Loaded {
 
 /// A `Blob` read in ranges with `FileReaderSync` (synchronous, which the worker's synchronous
 /// calls need; workers only). A dropped file's bytes stay in the browser's blob store.
+/// Bytes read from a `Blob` at once when a whole file is copied in: the browser makes a
+/// JavaScript buffer of each piece, so pieces keep that second copy small.
+const BLOB_PIECE_BYTES: usize = 8 << 20;
+
 struct BlobSource {
     blob: web_sys::Blob,
     reader: web_sys::FileReaderSync,
@@ -213,6 +218,15 @@ impl BlobSource {
         let reader = web_sys::FileReaderSync::new().map_err(|e| JsError::new(&format!("files cannot be read here ({}): weft reads them in its worker", js_message(e))))?;
         let len = blob.size() as usize;
         Ok(BlobSource { blob, reader, len })
+    }
+
+    /// The whole file, read in pieces of [`BLOB_PIECE_BYTES`]; `name` names it in the error.
+    fn read_all(&self, name: &str) -> Result<Vec<u8>, JsError> {
+        let mut bytes = vec![0u8; self.len];
+        for (k, piece) in bytes.chunks_mut(BLOB_PIECE_BYTES).enumerate() {
+            self.read_at(k * BLOB_PIECE_BYTES, piece).map_err(|m| JsError::new(&format!("{name} could not be read ({m}); load it again")))?;
+        }
+        Ok(bytes)
     }
 }
 
@@ -295,18 +309,16 @@ impl Session {
         let source = BlobSource::new(blob)?;
         let mut head = vec![0u8; source.len.min(crate::jobs::FILE_HEAD_BYTES)];
         source.read_at(0, &mut head).map_err(|m| JsError::new(&format!("{name} could not be read ({m}); load it again")))?;
+        // Every kind's limit is under 4 GiB (a unit test in `jobs` holds it), so `source.len`,
+        // a `usize` here, is the file's whole size past this check.
         kind.check_file(name, &head, size as u64).map_err(|m| JsError::new(&m))?;
-        if size > source.len as f64 {
-            return Err(JsError::new(&format!("{name}: the file is {} MiB, more than this browser's worker can address; use the weft CLI", (size / 1048576.0) as u64)));
-        }
         match kind {
             SlotKind::Volume | SlotKind::Gcode => {
                 self.files.insert_source(name.to_string(), Arc::new(source)).map_err(|m| JsError::new(&format!("{name} could not be read ({m}); load it again")))?;
                 self.check_loaded(slot, name, kind)
             }
             SlotKind::Mesh | SlotKind::Meshes | SlotKind::Frame => {
-                let mut bytes = vec![0u8; source.len];
-                source.read_at(0, &mut bytes).map_err(|m| JsError::new(&format!("{name} could not be read ({m}); load it again")))?;
+                let bytes = source.read_all(name)?;
                 self.add_file(slot, name, bytes)
             }
         }
@@ -336,7 +348,7 @@ impl Session {
                         let report = ctx.reports.first().map(|r| r.data.clone()).unwrap_or_default();
                         let size = mesh.bounds().map(|b| b.max - b.min).unwrap_or_default();
                         let tris = mesh.triangles.len();
-                        (format!("{} triangles, {:.1} × {:.1} × {:.1} mm", group(tris), size.x, size.y, size.z), report)
+                        (format!("{} triangles, {:.1} × {:.1} × {:.1} mm", group(tris as u64), size.x, size.y, size.z), report)
                     }
                     Err(e) => {
                         self.files.remove(name);
@@ -375,7 +387,7 @@ impl Session {
                         let first = w.joints.first().copied().unwrap_or_default();
                         let (lo, hi) = w.joints.iter().fold((first, first), |(a, b), p| (a.min(*p), b.max(*p)));
                         let d = hi - lo;
-                        (format!("{} beams, {} joints ({} grounded), {:.1} × {:.1} × {:.1} mm", group(w.beams.len()), group(w.joints.len()), group(grounded), d.x, d.y, d.z), serde_json::Value::Null)
+                        (format!("{} beams, {} joints ({} grounded), {:.1} × {:.1} × {:.1} mm", group(w.beams.len() as u64), group(w.joints.len() as u64), group(grounded as u64), d.x, d.y, d.z), serde_json::Value::Null)
                     }
                     Err(e) => {
                         self.files.remove(name);
@@ -384,7 +396,7 @@ impl Session {
                 }
             }
             // Read by the job kinds that use them (volumes), when they run.
-            SlotKind::Volume => (format!("{} bytes", group(size)), serde_json::Value::Null),
+            SlotKind::Volume => (format!("{} bytes", group(size as u64)), serde_json::Value::Null),
         };
         to_js(&Loaded { slot: slot.into(), name: name.into(), kind, summary, report })
     }
@@ -447,9 +459,30 @@ impl Session {
     /// Analyses a G-code file and makes it the current result; returns `{analysis}`.
     #[wasm_bindgen(js_name = analyzeGcode)]
     pub fn analyze_gcode(&mut self, name: &str, bytes: Vec<u8>) -> Result<JsValue, JsError> {
+        self.analyze_bytes(name, bytes)
+    }
+
+    /// Analyses a dropped G-code file (a `Blob`, as the page has it), as
+    /// [`Session::analyze_gcode`] does. A file over [`analyze::MAX_FILE_BYTES`] is refused
+    /// from its size before it is read; the rest is read straight into this memory in pieces,
+    /// with no whole copy on the JavaScript side.
+    #[wasm_bindgen(js_name = analyzeBlob)]
+    pub fn analyze_blob(&mut self, name: &str, blob: web_sys::Blob) -> Result<JsValue, JsError> {
+        analyze::check_size(name, blob.size() as u64).map_err(js_err)?;
+        let source = BlobSource::new(blob)?;
+        // The last result's text is let go first: two large files need not fit together.
+        self.gcode = Arc::default();
+        self.preview = Arc::default();
+        let bytes = source.read_all(name)?;
+        self.analyze_bytes(name, bytes)
+    }
+
+    fn analyze_bytes(&mut self, name: &str, bytes: Vec<u8>) -> Result<JsValue, JsError> {
         let options = analyze::Options { collect_preview: true, ..Default::default() };
         let a = analyze::analyze(name, &bytes, &options).map_err(js_err)?;
-        self.gcode = Arc::new(String::from_utf8_lossy(&bytes).into_owned());
+        // The bytes become the text without a copy (the analysis refused control bytes; any
+        // invalid UTF-8 is replaced, as the download would show it).
+        self.gcode = Arc::new(String::from_utf8(bytes).unwrap_or_else(|e| String::from_utf8_lossy(e.as_bytes()).into_owned()));
         self.preview = Arc::new(a.preview.unwrap_or_default());
         #[derive(Serialize)]
         struct Out<'a> {
@@ -539,18 +572,6 @@ impl Session {
     }
 }
 
-/// `1234567` → `1,234,567`.
-fn group(n: usize) -> String {
-    let s = n.to_string();
-    let mut out = String::new();
-    for (i, c) in s.chars().enumerate() {
-        if i > 0 && (s.len() - i) % 3 == 0 {
-            out.push(',');
-        }
-        out.push(c);
-    }
-    out
-}
 
 /// Segments (x0 y0 x1 y1, mm, centred on 0) of `pattern` (JSON, e.g. `{"kind":"voronoi"}`)
 /// cropped to a `size_mm` square: the page's pattern thumbnails.

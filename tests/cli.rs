@@ -384,6 +384,13 @@ fn huge_volumes_gcode_and_designs_are_refused_before_they_are_read() {
     let gcode = sparse("huge-2g.gcode", b"G1 X0\n", 2 << 30);
     let err = run_limited("examples/graded-phantom.json", &format!("gcode={}", gcode.display()));
     assert!(err.contains("huge-2g.gcode:") && err.contains("the G-code to edit"), "{err}");
+    // `weft analyze` of G-code over the analyzer's limit: refused from its size, not read.
+    let big = sparse("huge-analyze.gcode", b"G1 X0\n", 2 << 30);
+    let out = Command::new("sh").args(["-c", &format!("ulimit -v 400000 && exec '{}' analyze '{}'", env!("CARGO_BIN_EXE_weft"), big.display())]).output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert!(!out.status.success());
+    assert!(err.contains("huge-analyze.gcode: the file is 2,048 MiB, more than the 1,024 MiB weft analyses: split it"), "{err}");
+    let _ = std::fs::remove_file(big);
     let design = sparse("huge-design.json", b"{", 3 << 30);
     let out = Command::new("sh").args(["-c", &format!("ulimit -v 400000 && exec '{}' run '{}'", env!("CARGO_BIN_EXE_weft"), design.display())]).output().unwrap();
     let err = String::from_utf8_lossy(&out.stderr).into_owned();

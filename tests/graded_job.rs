@@ -389,3 +389,40 @@ fn cli_reads_a_series_folder_and_writes_the_surface_stl() {
     assert_eq!(std::fs::read_to_string(&gcode).unwrap(), *embedded.gcode);
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A series whose files are each under the volume limit but over it together is refused from
+/// their sizes, before any byte of them is read (the page keeps them in its blob store, where
+/// reading them all would not fit the worker's memory).
+#[test]
+fn a_series_over_the_limit_together_is_refused_before_it_is_read() {
+    use std::sync::atomic::Ordering::Relaxed;
+    /// A file of `len` zero bytes that holds none of them.
+    struct Zeros {
+        len: usize,
+        reads: std::sync::atomic::AtomicUsize,
+    }
+    impl weft::source::ByteSource for Zeros {
+        fn len(&self) -> usize {
+            self.len
+        }
+        fn read_at(&self, _: usize, buf: &mut [u8]) -> Result<(), String> {
+            self.reads.fetch_add(1, Relaxed);
+            buf.fill(0);
+            Ok(())
+        }
+    }
+    let each = (weft::volume::MAX_INPUT_BYTES / 2 + (1 << 20)) as usize;
+    let mut files = Files::new();
+    let mut sources = Vec::new();
+    for k in 0..2 {
+        let z = std::sync::Arc::new(Zeros { len: each, reads: Default::default() });
+        files.insert_source(format!("s{k}.dcm"), z.clone()).unwrap();
+        sources.push(z);
+    }
+    let read_on_loading: Vec<usize> = sources.iter().map(|z| z.reads.load(Relaxed)).collect();
+    let design = example().with_slot_input(&weft::jobs::Registry::builtin(), "volume", Input::Files(vec!["s0.dcm".into(), "s1.dcm".into()])).unwrap();
+    let e = pipeline::run(&design, &files, &RunOptions::default(), &mut |_, _| {}).err().expect("refused").to_string();
+    assert!(e.contains("the files given for 'volume':") && e.contains("MiB is more than the") && e.contains("crop or resample"), "{e}");
+    let read_later: Vec<usize> = sources.iter().map(|z| z.reads.load(Relaxed)).collect();
+    assert_eq!(read_later, read_on_loading, "a file of the series was read before the refusal");
+}

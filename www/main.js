@@ -2070,8 +2070,8 @@ async function openFile(file) {
     latestRun++;
     jobs.stages = [];
     try {
-      const bytes = await file.arrayBuffer();
-      const res = await workers.request({ type: MSG.ANALYZE, name: file.name, bytes }, (s, f) => jobs.progress(s, f));
+      // The file goes as a Blob: the worker checks its size and reads it in pieces.
+      const res = await workers.request({ type: MSG.ANALYZE, name: file.name, blob: file }, (s, f) => jobs.progress(s, f));
       showResult(res, file.name);
     } catch (err) {
       if (!err.cancelled) showError(messageOf(err));

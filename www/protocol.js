@@ -115,7 +115,8 @@ export const PREVIEW_BUFFERS = Object.freeze({
  * @property {"analyze"} type
  * @property {number} id
  * @property {string} name
- * @property {ArrayBuffer} bytes  G-code, transferred
+ * @property {Blob} [blob]        the dropped file, read in the worker in pieces (no copy here)
+ * @property {ArrayBuffer} [bytes] G-code, transferred (when there is no Blob)
  */
 /**
  * @typedef {Object} InspectRequest

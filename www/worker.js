@@ -100,7 +100,10 @@ function handle(msg) {
       case MSG.ANALYZE: {
         const t0 = performance.now();
         self.postMessage({ type: MSG.PROGRESS, id: msg.id, stage: "analyze", fraction: 0 });
-        const report = plain(session.analyzeGcode(msg.name, new Uint8Array(msg.bytes)));
+        // A Blob (a dropped file) is checked from its size, then read straight into wasm memory.
+        const report = plain(msg.blob
+          ? session.analyzeBlob(msg.name, msg.blob)
+          : session.analyzeGcode(msg.name, new Uint8Array(msg.bytes)));
         postResult(msg.id, "analyze", report, t0);
         break;
       }

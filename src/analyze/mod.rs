@@ -34,6 +34,12 @@ pub use overlap::{MAX_SPAN_MM, MAX_WALK};
 /// without it.
 pub const MAX_PEAK_BYTES: usize = 1_000_000_000;
 
+/// Largest G-code file analysed, bytes (1 GiB). The text is held whole while it is read, and
+/// in the browser it shares the worker's wasm memory with the analysis ([`MAX_PEAK_BYTES`]).
+/// A slicer's print of a desktop-sized part is well under 100 MB; 1 GiB is about 30 million
+/// moves. Checked from the size alone ([`check_size`]) before a file is read.
+pub const MAX_FILE_BYTES: u64 = 1 << 30;
+
 /// Most extrusion segments (moves, arcs by their chords) in one layer: the overlap measure
 /// holds a layer at once, at up to about 360 bytes a segment (so at most about 380 MB). A
 /// solid 300 × 300 mm layer of 0.45 mm lines is 200 m of extrusion: a million segments of
@@ -241,6 +247,23 @@ pub(crate) fn too_large(need: usize, segments: usize, layers: usize, preview: bo
     )
 }
 
+/// Refuses a G-code file of `len` bytes over [`MAX_FILE_BYTES`] from its size alone, so a
+/// caller can check before reading it ([`analyze`] checks too).
+pub fn check_size(file: &str, len: u64) -> Result<(), Error> {
+    if len <= MAX_FILE_BYTES {
+        return Ok(());
+    }
+    Err(Error::TooLarge {
+        file: file.to_string(),
+        line: 0,
+        problem: format!(
+            "the file is {} MiB, more than the {} MiB weft analyses: split it at a layer change and analyse the parts",
+            crate::import::group(len.div_ceil(1 << 20)),
+            crate::import::group(MAX_FILE_BYTES >> 20)
+        ),
+    })
+}
+
 /// Analyses G-code `bytes`; `file` names it in messages.
 ///
 /// Reads Marlin-style G-code: `G0`/`G1`, `G2`/`G3` arcs (`I J` or `R`, XY plane, helical
@@ -288,9 +311,11 @@ pub(crate) fn too_large(need: usize, segments: usize, layers: usize, preview: bo
 ///
 /// Errors: any NUL or other non-text control byte → [`Error::NotText`]; a parameter of an
 /// interpreted command whose number cannot be read or is refused (above) →
-/// [`Error::Malformed`] with its line; a file needing more than [`MAX_PEAK_BYTES`], or a layer
-/// of more than [`MAX_LAYER_SEGMENTS`] segments → [`Error::TooLarge`].
+/// [`Error::Malformed`] with its line; a file over [`MAX_FILE_BYTES`] or needing more than
+/// [`MAX_PEAK_BYTES`], or a layer of more than [`MAX_LAYER_SEGMENTS`] segments →
+/// [`Error::TooLarge`].
 pub fn analyze(file: &str, bytes: &[u8], options: &Options) -> Result<Analysis, Error> {
+    check_size(file, bytes.len() as u64)?;
     let est = estimate(bytes, options);
     if est.peak_bytes > MAX_PEAK_BYTES {
         return Err(Error::TooLarge {

@@ -553,15 +553,18 @@ struct Engine<'a, 'b> {
 }
 
 impl Engine<'_, '_> {
-    /// (E, force covectors F_i = −∇_i E, nodes, target spacing per point — empty when
-    /// uniform).
-    fn eval(&self, pts: &[[f64; 2]]) -> (f64, Vec<[f64; 2]>, Vec<Node>, Vec<f64>) {
+    /// (E, force covectors F_i = −∇_i E, the nodes given, target spacing per point — empty
+    /// when uniform) at the points whose `nodes` are given.
+    fn eval(&self, nodes: Vec<Node>) -> (f64, Vec<[f64; 2]>, Vec<Node>, Vec<f64>) {
         match self.field {
             None => {
-                let (e, f, n) = self.eval_uniform(pts);
-                (e, f, n, Vec::new())
+                let (e, f) = self.eval_uniform(&nodes);
+                (e, f, nodes, Vec::new())
             }
-            Some(field) => self.eval_graded(pts, field),
+            Some(field) => {
+                let (e, f, sp) = self.eval_graded(&nodes, field);
+                (e, f, nodes, sp)
+            }
         }
     }
 
@@ -658,11 +661,10 @@ impl Engine<'_, '_> {
     /// geodesic distance from the centre), so a small enough step always lowers this E and
     /// the descent's no-rise rule holds as in the uniform case:
     /// F_i = m·x^(−m−1)/s̄·(∇_i d − x·∇_i s̄), x = d/s̄, ∇_i s̄ = −½·s_i/ρ_i·∇ρ_i.
-    fn eval_graded(&self, pts: &[[f64; 2]], field: &Field) -> (f64, Vec<[f64; 2]>, Vec<Node>, Vec<f64>) {
-        let nodes = self.nodes(pts);
+    fn eval_graded(&self, nodes: &[Node], field: &Field) -> (f64, Vec<[f64; 2]>, Vec<f64>) {
         let mut sp = Vec::with_capacity(nodes.len());
         let mut dsp = Vec::with_capacity(nodes.len());
-        for n in &nodes {
+        for n in nodes {
             let (rho, g) = field.density_gradient(self.s, n);
             let s = field.spacing_of(rho);
             sp.push(s);
@@ -670,7 +672,7 @@ impl Engine<'_, '_> {
         }
         let c = self.cutoff_spacings;
         let shift = if c.is_finite() { libm::pow(c, -self.m) } else { 0.0 };
-        let mut f = vec![[0.0; 2]; pts.len()];
+        let mut f = vec![[0.0; 2]; nodes.len()];
         let mut e = 0.0;
         // A pair's energy and its force on each point (made on the pool), summed in pair order.
         let term = |i: usize, j: usize, pe: &PairEval| -> PairTerm {
@@ -703,20 +705,19 @@ impl Engine<'_, '_> {
                     }
                 }
             };
-            self.for_pairs(&nodes, &near, &term, &mut add);
+            self.for_pairs(nodes, &near, &term, &mut add);
         } else {
             let n = nodes.len();
             let all = |i: usize, _: &mut Vec<u32>, out: &mut Vec<(u32, u32)>| out.extend((i + 1..n).map(|j| (i as u32, j as u32)));
-            self.for_pairs(&nodes, &all, &term, &mut add);
+            self.for_pairs(nodes, &all, &term, &mut add);
         }
-        (e, f, nodes, sp)
+        (e, f, sp)
     }
 
-    /// (E, force covectors F_i = −∇_i E, nodes). The pair energy is shifted by rc^−m so it
+    /// (E, force covectors F_i = −∇_i E). The pair energy is shifted by rc^−m so it
     /// is continuous at the cutoff (a truncated, unshifted energy jumps as pairs cross it).
-    fn eval_uniform(&self, pts: &[[f64; 2]]) -> (f64, Vec<[f64; 2]>, Vec<Node>) {
-        let nodes = self.nodes(pts);
-        let mut f = vec![[0.0; 2]; pts.len()];
+    fn eval_uniform(&self, nodes: &[Node]) -> (f64, Vec<[f64; 2]>) {
+        let mut f = vec![[0.0; 2]; nodes.len()];
         let mut e = 0.0;
         let shift = if self.rc.is_finite() { libm::pow(self.rc, -self.m) } else { 0.0 };
         // A pair's energy and its force on each point (made on the pool), summed in pair order.
@@ -746,13 +747,13 @@ impl Engine<'_, '_> {
                     }
                 }
             };
-            self.for_pairs(&nodes, &near, &term, &mut add);
+            self.for_pairs(nodes, &near, &term, &mut add);
         } else {
             let n = nodes.len();
             let all = |i: usize, _: &mut Vec<u32>, out: &mut Vec<(u32, u32)>| out.extend((i + 1..n).map(|j| (i as u32, j as u32)));
-            self.for_pairs(&nodes, &all, &term, &mut add);
+            self.for_pairs(nodes, &all, &term, &mut add);
         }
-        (e, f, nodes)
+        (e, f)
     }
 }
 
@@ -788,6 +789,11 @@ fn reference_force(nodes: &[Node], forces: &[[f64; 2]]) -> f64 {
     f[((f.len() - 1) as f64 * 0.9) as usize]
 }
 
+/// Iterations of the descent run in one stretch on a pool thread ([`crate::par::on_pool`])
+/// between two progress reports. Each iteration is a few short parallel rounds (1–3 ms in
+/// all on the paper's platforms); from a pool thread they cost no wake-up of the caller.
+const ITERATIONS_PER_HOP: usize = 8;
+
 /// Repulsion descent: returns (points, iterations, stop).
 ///
 /// Energy is reported as E/E₀ and forces as |F|/F₀ (the paper's non-dimensionalisation by
@@ -796,75 +802,110 @@ fn reference_force(nodes: &[Node], forces: &[[f64; 2]]) -> f64 {
 /// steepest-descent direction, so a small enough τ always lowers E. τ grows by half after an
 /// accepted step (to at most half a spacing) and halves after a rejected one (E rising by
 /// more than the tolerance), so the energy never rises by more than the tolerance.
+///
+/// The iterations run in stretches of [`ITERATIONS_PER_HOP`] on a pool thread, with
+/// `progress` called on this thread between them.
 #[allow(clippy::too_many_arguments)]
 fn descend(eng: &Engine, d: &Domain, start: Vec<[f64; 2]>, iterations: usize, e_tol: f64, disp_tol_mm: f64, spacing: f64, progress: &mut dyn FnMut(f32)) -> (Vec<[f64; 2]>, Vec<Iteration>, StopReason) {
-    let mut pts = start;
-    if pts.len() < 2 {
-        return (pts, Vec::new(), StopReason::Trivial);
+    if start.len() < 2 {
+        return (start, Vec::new(), StopReason::Trivial);
     }
-    let (e0, mut forces, mut nodes, mut scales) = eng.eval(&pts);
-    let f0 = nodes.iter().zip(&forces).map(|(n, f)| cov_norm(n, *f)).fold(0.0, f64::max);
-    if !(e0 > 0.0 && f0 > 0.0) {
-        return (pts, Vec::new(), StopReason::Trivial);
+    let mut run = crate::par::on_pool(|| Descent::start(eng, start, e_tol, disp_tol_mm, spacing));
+    let mut it = 0;
+    while it < iterations && run.stop.is_none() {
+        let hop = ITERATIONS_PER_HOP.min(iterations - it);
+        crate::par::on_pool(|| {
+            for _ in 0..hop {
+                if run.stop.is_some() {
+                    break;
+                }
+                run.iterate(eng, d);
+            }
+        });
+        it += hop;
+        progress(run.log.len() as f32 / iterations as f32);
     }
-    let mut e_prev = 1.0;
-    let mut tau = 0.25;
-    let mut log = Vec::new();
-    let mut stop = StopReason::Iterations;
-    for it in 0..iterations {
-        let f_ref = reference_force(&nodes, &forces).max(1e-300);
+    (run.pts, run.log, run.stop.unwrap_or(StopReason::Iterations))
+}
+
+/// The descent's state between iterations (see [`descend`]).
+struct Descent {
+    pts: Vec<[f64; 2]>,
+    forces: Vec<[f64; 2]>,
+    nodes: Vec<Node>,
+    /// Target spacing per point (empty when uniform).
+    scales: Vec<f64>,
+    e0: f64,
+    f0: f64,
+    e_prev: f64,
+    tau: f64,
+    e_tol: f64,
+    disp_tol_mm: f64,
+    spacing: f64,
+    log: Vec<Iteration>,
+    /// Why it ended; `None` while it goes on.
+    stop: Option<StopReason>,
+}
+
+impl Descent {
+    /// The energy and forces at `pts`, the start.
+    fn start(eng: &Engine, pts: Vec<[f64; 2]>, e_tol: f64, disp_tol_mm: f64, spacing: f64) -> Descent {
+        let (e0, forces, nodes, scales) = eng.eval(eng.nodes(&pts));
+        let f0 = nodes.iter().zip(&forces).map(|(n, f)| cov_norm(n, *f)).fold(0.0, f64::max);
+        let stop = if e0 > 0.0 && f0 > 0.0 { None } else { Some(StopReason::Trivial) };
+        Descent { pts, forces, nodes, scales, e0, f0, e_prev: 1.0, tau: 0.25, e_tol, disp_tol_mm, spacing, log: Vec::new(), stop }
+    }
+
+    /// One iteration: a step, halved until the energy does not rise by more than the
+    /// tolerance; sets `stop` when the descent ends.
+    fn iterate(&mut self, eng: &Engine, d: &Domain) {
+        let f_ref = reference_force(&self.nodes, &self.forces).max(1e-300);
         let mut accepted = None;
         for _ in 0..=MAX_RETRIES {
-            // Each point's move on its own, side by side; the largest step is a maximum (the
-            // same whatever the order).
+            // Each point's move and its node at the new place on its own, side by side (one
+            // parallel round); the largest step is a maximum (the same whatever the order).
+            let tau = self.tau;
+            let (pts, nodes, forces, scales) = (&self.pts, &self.nodes, &self.forces, &self.scales);
             let moves = crate::par::map(pts.len(), &mut |_| {}, |i| {
                 let (q, n, f) = (pts[i], &nodes[i], forces[i]);
                 // Raise the index (vector = g⁻¹·F), then scale to τ·s·min(|F|/F_ref, 1)
                 // (s the point's own target spacing when graded).
                 let len = cov_norm(n, f);
                 if !(len > 0.0) {
-                    return (q, 0.0);
+                    return (q, 0.0, *n);
                 }
-                let s_i = scales.get(i).copied().unwrap_or(spacing);
+                let s_i = scales.get(i).copied().unwrap_or(self.spacing);
                 let k = tau * s_i * (len / f_ref).min(1.0) / len;
                 let v = [k * f[0] / n.g[0], if n.g[1] > 0.0 { k * f[1] / n.g[1] } else { 0.0 }];
                 let t = d.project_inside(eng.s, [q[0] + v[0], q[1] + v[1]]);
-                (t, (n.g[0] * (t[0] - q[0]).powi(2) + n.g[1] * (t[1] - q[1]).powi(2)).sqrt())
+                (t, (n.g[0] * (t[0] - q[0]).powi(2) + n.g[1] * (t[1] - q[1]).powi(2)).sqrt(), eng.s.node(t))
             });
             let max_step = moves.iter().map(|m| m.1).fold(0.0, f64::max);
-            let trial: Vec<[f64; 2]> = moves.into_iter().map(|m| m.0).collect();
-            let (e, f, nd, sc) = eng.eval(&trial);
-            let en = e / e0;
-            if en <= e_prev + e_tol {
+            let (trial, trial_nodes): (Vec<[f64; 2]>, Vec<Node>) = moves.into_iter().map(|m| (m.0, m.2)).unzip();
+            let (e, f, nd, sc) = eng.eval(trial_nodes);
+            let en = e / self.e0;
+            if en <= self.e_prev + self.e_tol {
                 accepted = Some((trial, f, nd, sc, en, max_step));
                 break;
             }
-            tau *= 0.5;
+            self.tau *= 0.5;
         }
         let Some((trial, f, nd, sc, en, max_step)) = accepted else {
-            stop = StopReason::Stalled;
-            break;
+            self.stop = Some(StopReason::Stalled);
+            return;
         };
-        let max_force = nd.iter().zip(&f).map(|(n, f)| cov_norm(n, *f)).fold(0.0, f64::max) / f0;
-        log.push(Iteration { energy: en, max_force, max_step_mm: max_step, step: tau });
-        progress((it + 1) as f32 / iterations as f32);
-        let rel = (e_prev - en).abs() / e_prev;
-        pts = trial;
-        forces = f;
-        nodes = nd;
-        scales = sc;
-        e_prev = en;
-        if max_step < disp_tol_mm {
-            stop = StopReason::Displacement;
-            break;
+        let max_force = nd.iter().zip(&f).map(|(n, f)| cov_norm(n, *f)).fold(0.0, f64::max) / self.f0;
+        self.log.push(Iteration { energy: en, max_force, max_step_mm: max_step, step: self.tau });
+        let rel = (self.e_prev - en).abs() / self.e_prev;
+        (self.pts, self.forces, self.nodes, self.scales, self.e_prev) = (trial, f, nd, sc, en);
+        if max_step < self.disp_tol_mm {
+            self.stop = Some(StopReason::Displacement);
+        } else if rel < self.e_tol {
+            self.stop = Some(StopReason::Energy);
+        } else {
+            self.tau = (self.tau * 1.5).min(0.5);
         }
-        if rel < e_tol {
-            stop = StopReason::Energy;
-            break;
-        }
-        tau = (tau * 1.5).min(0.5);
     }
-    (pts, log, stop)
 }
 
 /// Places N = A·ρ_c²/(n²e²) quasi-uniform points on Ω (graded: N = ∫ρ² dA/(n²e²) points
@@ -957,8 +998,8 @@ mod tests {
         for name in ["barrel-omega1", "barrel-omega2", "hourglass-omega3"] {
             let (p, d, o) = omega(name);
             let t = std::time::Instant::now();
-            let mut calls = 0;
-            let r = distribute(&p, &d, &o, 0.4, 1, &mut |_| calls += 1).unwrap();
+            let mut reported = Vec::new();
+            let r = distribute(&p, &d, &o, 0.4, 1, &mut |f| reported.push(f)).unwrap();
             let secs = t.elapsed().as_secs_f64();
             let red = 1.0 - r.metrics.nn_std_mm / r.seed_metrics.nn_std_mm;
             println!(
@@ -975,7 +1016,11 @@ mod tests {
                 100.0 * r.seed_metrics.ratio,
                 100.0 * r.metrics.ratio
             );
-            assert_eq!(calls, r.iterations.len());
+            // Progress after each stretch of iterations, the last one the fraction done.
+            let tried = r.iterations.len() + usize::from(r.stop == StopReason::Stalled);
+            assert_eq!(reported.len(), tried.div_ceil(ITERATIONS_PER_HOP), "{name}: {reported:?}");
+            assert!(reported.windows(2).all(|w| w[0] <= w[1]), "{name}: {reported:?}");
+            assert_eq!(reported.last().copied(), Some(r.iterations.len() as f32 / o.iterations as f32));
             assert!(r.metrics.nn_std_mm < r.seed_metrics.nn_std_mm, "{name}: no improvement");
             let mut prev = 1.0;
             for it in &r.iterations {

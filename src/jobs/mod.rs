@@ -431,3 +431,31 @@ impl Default for Registry {
         Registry::builtin()
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::SlotKind;
+
+    /// The browser's worker addresses files with a 32-bit `usize`: every slot must refuse a
+    /// file of 4 GiB or more from its head and size, whatever the head says.
+    #[test]
+    fn every_slot_refuses_a_file_the_worker_cannot_address() {
+        let kinds = [SlotKind::Mesh, SlotKind::Meshes, SlotKind::Volume, SlotKind::Gcode, SlotKind::Frame];
+        for kind in kinds {
+            // Fails to compile when a kind is added, so the list above is kept whole.
+            match kind {
+                SlotKind::Mesh | SlotKind::Meshes | SlotKind::Volume | SlotKind::Gcode | SlotKind::Frame => {}
+            }
+            // A binary STL's head whose count matches the length, and plain text.
+            let triangles: u32 = 86_000_000;
+            let len = 84 + 50 * u64::from(triangles);
+            let mut stl = vec![0u8; 84];
+            stl[80..84].copy_from_slice(&triangles.to_le_bytes());
+            for (head, len) in [(stl, len), (b"solid x\n".to_vec(), 4 << 30), (b"G1 X0\n".to_vec(), (4 << 30) + 1)] {
+                assert!(len >= 4 << 30);
+                let refused = kind.check_file("big", &head, len);
+                assert!(refused.as_ref().is_err_and(|m| m.starts_with("big")), "{kind:?} admits {len} bytes: {refused:?}");
+            }
+        }
+    }
+}

@@ -172,7 +172,21 @@ await check(3, "Download G-code → native `weft analyze` finds layers and extru
   const a = report.analysis ?? report;
   if (!(a.layers > 0)) throw new Error(`weft analyze: layers = ${a.layers}`);
   if (!(a.extruded_mm > 0)) throw new Error(`weft analyze: extruded_mm = ${a.extruded_mm}`);
-  return `${dl.name}: ${a.layers} layers, ${a.extruded_mm.toFixed(1)} mm extruded`;
+  // The same file dropped on the page: the worker reads it from its Blob and analyses it; its
+  // report is the CLI's and the page's G-code is the file, byte for byte.
+  const before = await page.evaluate(() => window.weft.resultCount);
+  await page.setInputFiles("#file", dl.path);
+  await waitResult(page, before, `analysing ${dl.name} on the page`);
+  const shown = await page.evaluate(async () => {
+    const r = window.weft.result;
+    const digest = new Uint8Array(await crypto.subtle.digest("SHA-256", r.gcode));
+    return { a: r.report.analysis, sha: [...digest].map((b) => b.toString(16).padStart(2, "0")).join("") };
+  });
+  for (const key of ["layers", "extrusion_paths", "retractions", "extruded_mm", "travel_mm", "overlap_mm", "gippo_score", "estimated_time_s"]) {
+    if (shown.a[key] !== a[key]) throw new Error(`the page's analysis of ${dl.name}: ${key} = ${shown.a[key]}, the CLI's ${a[key]}`);
+  }
+  if (shown.sha !== sha256(dl.bytes)) throw new Error(`the page's G-code after analysing ${dl.name} is not the file`);
+  return `${dl.name}: ${a.layers} layers, ${a.extruded_mm.toFixed(1)} mm extruded; the page's analysis of the dropped file equals the CLI's`;
 });
 
 await check(4, "Share link reproduces the G-code in a fresh browser and matches the CLI byte for byte", async () => {
@@ -247,13 +261,15 @@ await check(5, "corrupt STL → #error names the file and line; design and previ
   return `"${message.split("\n")[0].slice(0, 90)}"`;
 });
 
-await check(52, "a mesh over the limits (a 100M-triangle binary STL of 5 GB, a 5 GiB OBJ: sparse files) is refused from its head and size before a copy is made: #error names the file, the count or size, the limit and the fix; the worker is not restarted and the design is kept", async () => {
+await check(52, "a mesh or G-code over the limits (a 100M-triangle binary STL of 5 GB, a 5 GiB OBJ, 2 GiB of G-code: sparse files) is refused from its head and size before a copy is made: #error names the file, the count or size, the limit and the fix; the worker is not restarted and the design is kept", async () => {
   const designBefore = await page.evaluate(() => window.weft.design);
   const stlHead = Buffer.alloc(84);
   stlHead.writeUInt32LE(100_000_000, 80);
   const cases = [
     ["huge-100m.stl", stlHead, 84 + 50 * 100_000_000, ["100,000,000 triangles", "limit 5,000,000", "decimate"]],
     ["huge-5g.obj", Buffer.from("v 0 0 0\n"), 5 * 2 ** 30, ["5,120 MiB", "1,024 MiB", "decimate"]],
+    // G-code to analyse: refused from the Blob's size in the worker, before it is read.
+    ["huge-2g.gcode", Buffer.from("G1 X0\n"), 2 * 2 ** 30, ["2,048 MiB", "1,024 MiB", "split"]],
   ];
   const seen = [];
   for (const [name, head, size, words] of cases) {

@@ -197,12 +197,12 @@ struct Loaded {
     report: serde_json::Value,
 }
 
-/// A `Blob` read in ranges with `FileReaderSync` (synchronous, which the worker's synchronous
-/// calls need; workers only). A dropped file's bytes stay in the browser's blob store.
 /// Bytes read from a `Blob` at once when a whole file is copied in: the browser makes a
 /// JavaScript buffer of each piece, so pieces keep that second copy small.
 const BLOB_PIECE_BYTES: usize = 8 << 20;
 
+/// A `Blob` read in ranges with `FileReaderSync` (synchronous, which the worker's synchronous
+/// calls need; workers only). A dropped file's bytes stay in the browser's blob store.
 struct BlobSource {
     blob: web_sys::Blob,
     reader: web_sys::FileReaderSync,

@@ -113,8 +113,12 @@ pub fn read_all(src: &dyn ByteSource) -> Result<Cow<'_, [u8]>, String> {
     if let Some(all) = src.as_slice() {
         return Ok(Cow::Borrowed(all));
     }
+    // In pieces: a source outside the core (the browser's blob store) makes a buffer of its
+    // own for each read, which stays small this way.
     let mut v = vec![0u8; src.len()];
-    src.read_at(0, &mut v)?;
+    for (k, piece) in v.chunks_mut(CHUNK_BYTES).enumerate() {
+        src.read_at(k * CHUNK_BYTES, piece)?;
+    }
     Ok(Cow::Owned(v))
 }
 

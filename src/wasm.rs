@@ -197,10 +197,6 @@ struct Loaded {
     report: serde_json::Value,
 }
 
-/// Bytes read from a `Blob` at once when a whole file is copied in: the browser makes a
-/// JavaScript buffer of each piece, so pieces keep that second copy small.
-const BLOB_PIECE_BYTES: usize = 8 << 20;
-
 /// A `Blob` read in ranges with `FileReaderSync` (synchronous, which the worker's synchronous
 /// calls need; workers only). A dropped file's bytes stay in the browser's blob store.
 struct BlobSource {
@@ -219,15 +215,13 @@ impl BlobSource {
         let len = blob.size() as usize;
         Ok(BlobSource { blob, reader, len })
     }
+}
 
-    /// The whole file, read in pieces of [`BLOB_PIECE_BYTES`]; `name` names it in the error.
-    fn read_all(&self, name: &str) -> Result<Vec<u8>, JsError> {
-        let mut bytes = vec![0u8; self.len];
-        for (k, piece) in bytes.chunks_mut(BLOB_PIECE_BYTES).enumerate() {
-            self.read_at(k * BLOB_PIECE_BYTES, piece).map_err(|m| JsError::new(&format!("{name} could not be read ({m}); load it again")))?;
-        }
-        Ok(bytes)
-    }
+/// All of `source`, read in pieces ([`crate::source::read_all`]); `name` names it in the error.
+fn read_whole(source: &BlobSource, name: &str) -> Result<Vec<u8>, JsError> {
+    crate::source::read_all(source)
+        .map(std::borrow::Cow::into_owned)
+        .map_err(|m| JsError::new(&format!("{name} could not be read ({m}); load it again")))
 }
 
 impl ByteSource for BlobSource {
@@ -318,7 +312,7 @@ impl Session {
                 self.check_loaded(slot, name, kind)
             }
             SlotKind::Mesh | SlotKind::Meshes | SlotKind::Frame => {
-                let bytes = source.read_all(name)?;
+                let bytes = read_whole(&source, name)?;
                 self.add_file(slot, name, bytes)
             }
         }
@@ -473,7 +467,7 @@ impl Session {
         // The last result's text is let go first: two large files need not fit together.
         self.gcode = Arc::default();
         self.preview = Arc::default();
-        let bytes = source.read_all(name)?;
+        let bytes = read_whole(&source, name)?;
         self.analyze_bytes(name, bytes)
     }
 

@@ -1,7 +1,8 @@
 //! Wall time for reports (planning time), in seconds from an arbitrary start. Natively
 //! `std::time::Instant`; in the browser the host sets the clock (`wasm.rs` gives it
-//! `performance.now()`: `Instant` panics on wasm32-unknown-unknown), so the core stays free of
-//! JavaScript. Never used for a decision: output never depends on it.
+//! `Date.now()`, to the millisecond: `Instant` panics on wasm32-unknown-unknown, and
+//! `performance.now()` counts from each web worker's own start, so the pool's threads would
+//! disagree), so the core stays free of JavaScript. Never used for a decision: output never depends on it.
 
 use std::sync::OnceLock;
 

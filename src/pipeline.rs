@@ -430,8 +430,9 @@ impl<'a> Ctx<'a> {
         if let Some(e) = self.cache.entries.get_mut(id) {
             if e.key == key {
                 if let Ok(value) = e.value.clone().downcast::<T>() {
-                    // Made by an estimate and not counted yet: this run's work.
-                    let earlier = e.uncounted_ms.take();
+                    // Made before this run (on loading, or by an estimate) and not counted
+                    // yet: this run's work. An estimate leaves it for the run.
+                    let earlier = if self.counting { e.uncounted_ms.take() } else { None };
                     if let Some(mut r) = e.report.clone() {
                         if !self.reported.iter().any(|i| i == id) {
                             r.cached = true;

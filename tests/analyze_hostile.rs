@@ -196,7 +196,7 @@ fn too_large_files_are_refused_before_reading() {
     assert!(matches!(e, Error::TooLarge { line: 0, .. }), "{e:?}");
     let msg = e.to_string();
     assert!(msg.starts_with("huge.gcode: the analysis needs about 1.") && msg.contains("8.0M segments") && msg.contains("limit 1.0 GB"), "{msg}");
-    assert!(msg.contains("without the preview"), "{msg}");
+    assert!(msg.contains("without the preview") && msg.contains("command-line tool (`weft analyze`"), "{msg}");
     // Without the preview only the largest layer counts; a layer that size is refused as it
     // is read, when it passes MAX_LAYER_SEGMENTS.
     let e = analyze("huge.gcode", s.as_bytes(), &Options::default()).unwrap_err();

@@ -159,3 +159,33 @@ fn estimates_never_let_a_nan_through() {
     let e = Estimate::new("x").cost(f64::NAN, 0.0).budgets("fix");
     assert!(e.check().is_err());
 }
+
+/// A file imported when it is loaded (the page reads a dropped mesh at once), then a plan
+/// (the page's question before a big run), then the run: the run's timings count the import
+/// once, as work of this run, whatever the plan looked at in between.
+#[test]
+fn an_import_made_on_loading_is_counted_by_the_run_even_after_a_plan() {
+    use weft::design::Input;
+    let mut files = Files::new();
+    files.insert("part.stl".into(), stl(&Shape::Cylinder { radius: 20.0, height: 10.0, segments: 4096 }.mesh()));
+    let d = design_with(&[r#"job.input={"file":{"name":"part.stl"}}"#]);
+    let registry = Registry::builtin();
+    for plan_first in [false, true] {
+        let mut cache = Cache::new();
+        let loading = Design::default();
+        let mut quiet = |_: &str, _: f32| {};
+        let mut ctx = pipeline::Ctx::new(&loading, &files, &mut cache, &mut quiet);
+        ctx.mesh("mesh", &Input::File { name: "part.stl".into(), embedded: None }).unwrap();
+        let loaded_ms = ctx.timings.iter().find(|t| t.stage == "import").map(|t| t.ms).expect("timed on loading");
+        if plan_first {
+            pipeline::estimate(&registry, &mut cache, &d, &files).unwrap();
+        }
+        let out = pipeline::run_in(&registry, &mut cache, &d, &files, &RunOptions::default(), &mut |_, _| {}).unwrap();
+        let import = out.report.timings.iter().find(|t| t.stage == "import").expect("the run lists the import");
+        assert!(!import.cached && import.ms == loaded_ms, "plan first: {plan_first}: {import:?}, {loaded_ms} ms on loading");
+        // A second run reuses it: cached, no time.
+        let again = pipeline::run_in(&registry, &mut cache, &d, &files, &RunOptions::default(), &mut |_, _| {}).unwrap();
+        let import = again.report.timings.iter().find(|t| t.stage == "import").expect("listed");
+        assert!(import.cached && import.ms == 0.0, "{import:?}");
+    }
+}

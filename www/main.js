@@ -2133,9 +2133,10 @@ function timeLine(report, ms) {
   const label = (name) => jobs.stages.find((s) => s.name === name)?.label ?? name;
   const parts = times.map((t) => `${label(t.stage)} ${t.ms >= 1000 ? `${(t.ms / 1000).toFixed(2)} s` : `${Math.round(t.ms)} ms`}`);
   const threads = report?.threads ?? 1;
-  // Stages a view asked for before the run (its cache) are counted with the result they made.
+  // Stages made before the run (a dropped mesh's import, a view's stage) are counted with the
+  // result they made, so the parts can add up to more than the run's own time.
   const total = times.reduce((a, t) => a + t.ms, 0);
-  const earlier = typeof ms === "number" && total > 1.1 * ms + 50 ? ", some made earlier for the views" : "";
+  const earlier = typeof ms === "number" && total > 1.1 * ms + 50 ? ", some of it before the run (loading a file, a view)" : "";
   p.textContent = `Where the time went: ${parts.length ? parts.join(" · ") : "nothing measurable (reused)"}${earlier} — ${threads} thread${threads === 1 ? "" : "s"}`;
   p.title = threads === 1 ? `${threadsWhy()} The weft CLI uses every core (weft run --threads N) and gives the same G-code.` : "";
   return p;

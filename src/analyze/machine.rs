@@ -521,7 +521,10 @@ pub(crate) fn run(file: &str, bytes: &[u8], options: &Options, est: &Estimate) -
     let m = Machine::new(options, layer_comments, est);
     #[cfg(any(not(target_arch = "wasm32"), feature = "wasm-threads"))]
     if bytes.len() >= super::pooled::MIN_BYTES && crate::par::can_wait_on_pool() {
-        return super::pooled::run(file, bytes, m, options.default_line_width_mm);
+        // Interpreted on one of the pool's threads, which lexes and measures too while it
+        // waits, the caller asleep: from outside, the caller would be one thread more than the
+        // cores, and the interpreter, the pipeline's slowest part, would share one.
+        return crate::par::on_pool(|| super::pooled::run(file, bytes, m, options.default_line_width_mm));
     }
     parse_all(file, bytes, m)
 }

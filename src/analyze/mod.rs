@@ -237,13 +237,14 @@ pub fn estimate(bytes: &[u8], options: &Options) -> Estimate {
 /// The refusal of an analysis needing `need` bytes for `segments` segments in `layers` layers.
 pub(crate) fn too_large(need: usize, segments: usize, layers: usize, preview: bool) -> String {
     format!(
-        "the analysis needs about {} ({} segments, {} layers{}), limit {}: analyse a smaller file{}",
+        "the analysis needs about {} ({} segments, {} layers{}), limit {}: split the file at a layer change and analyse the parts{}",
         human_bytes(need),
         human_count(segments),
         human_count(layers),
         if preview { ", with the preview" } else { "" },
         human_bytes(MAX_PEAK_BYTES),
-        if preview { ", or without the preview (`weft analyze` builds none)" } else { " or split it" }
+        // The page always draws; its users may not know weft has a command-line tool.
+        if preview { ", or analyse it without the preview with weft's command-line tool (`weft analyze`, which draws none)" } else { "" }
     )
 }
 

@@ -126,14 +126,8 @@ fn settle(reply: Option<(usize, Option<Measured>)>, m: &mut Machine<'_>, in_flig
 }
 
 /// Analyses `bytes` with `m` (see the module's notes); `width` is the options' default line
-/// width.
+/// width. Called on one of the pool's threads ([`crate::par::on_pool`]).
 pub(super) fn run(file: &str, bytes: &[u8], m: Machine<'_>, width: f64) -> Result<Analysis, Error> {
-    if rayon::current_thread_index().is_none() {
-        // Interpret on one of the pool's threads, which lexes and measures too while it waits,
-        // and leave the caller asleep: from outside, the caller would be one thread more than
-        // the cores, and the interpreter, the pipeline's slowest part, would share one.
-        return rayon::scope(|_| run(file, bytes, m, width));
-    }
     let mut m = m;
     let bounds = cut_lines(bytes, BLOCK_BYTES);
     m.handed = Some(Vec::new());

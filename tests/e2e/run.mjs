@@ -160,6 +160,10 @@ await check(2, "drop an STL → result drawn in the preview", async () => {
   const px = await colouredPixels(page);
   const segs = await page.evaluate(() => (window.weft.result?.gcode?.byteLength ?? 0));
   if (px < 1500) throw new Error(`only ${px} toolpath-coloured pixels in the preview (G-code ${segs} bytes); the preview did not draw a toolpath`);
+  // The dropped file was imported when it was read, before the run: the run counts that work.
+  const timings = await page.evaluate(() => window.weft.result.report.timings);
+  const imported = timings.find((t) => t.stage === "import");
+  if (!imported || imported.cached || !(imported.ms >= 0)) throw new Error(`the run's timings do not count the dropped file's import: ${JSON.stringify(timings)}`);
   return `${px} coloured pixels`;
 });
 

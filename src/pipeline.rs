@@ -435,7 +435,8 @@ impl<'a> Ctx<'a> {
                     let earlier = if self.counting { e.uncounted_ms.take() } else { None };
                     if let Some(mut r) = e.report.clone() {
                         if !self.reported.iter().any(|i| i == id) {
-                            r.cached = true;
+                            // Reused, unless this run is the first to count it.
+                            r.cached = earlier.is_none();
                             self.reports.push(r);
                             self.reported.push(id.to_string());
                         }

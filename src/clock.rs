@@ -1,8 +1,9 @@
 //! Wall time for reports (planning time), in seconds from an arbitrary start. Natively
-//! `std::time::Instant`; in the browser the host sets the clock (`wasm.rs` gives it
-//! `Date.now()`, to the millisecond: `Instant` panics on wasm32-unknown-unknown, and
-//! `performance.now()` counts from each web worker's own start, so the pool's threads would
-//! disagree), so the core stays free of JavaScript. Never used for a decision: output never depends on it.
+//! `std::time::Instant`; in the browser the host sets the clock, so the core stays free of
+//! JavaScript: `wasm.rs` gives it `Date.now()`, to the millisecond (`Instant` panics on
+//! wasm32-unknown-unknown, and `performance.now()` counts from each web worker's own start,
+//! so the pool's threads would disagree). Never used for a decision: output never depends
+//! on it.
 
 use std::sync::OnceLock;
 

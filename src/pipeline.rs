@@ -435,8 +435,9 @@ impl<'a> Ctx<'a> {
                     let earlier = if self.counting { e.uncounted_ms.take() } else { None };
                     if let Some(mut r) = e.report.clone() {
                         if !self.reported.iter().any(|i| i == id) {
-                            // Reused, unless this run is the first to count it.
-                            r.cached = earlier.is_none();
+                            // Its card says reused (this run did not make it), even when
+                            // its time is this run's to count.
+                            r.cached = true;
                             self.reports.push(r);
                             self.reported.push(id.to_string());
                         }

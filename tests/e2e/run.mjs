@@ -164,8 +164,6 @@ await check(2, "drop an STL → result drawn in the preview", async () => {
   const timings = await page.evaluate(() => window.weft.result.report.timings);
   const imported = timings.find((t) => t.stage === "import");
   if (!imported || imported.cached || !(imported.ms >= 0)) throw new Error(`the run's timings do not count the dropped file's import: ${JSON.stringify(timings)}`);
-  const card = await page.evaluate(() => window.weft.reportCards.find((c) => c.stage === "import"));
-  if (!card || card.cached) throw new Error(`the import's card after the drop: ${JSON.stringify(card)} (made for this run, not reused)`);
   return `${px} coloured pixels`;
 });
 

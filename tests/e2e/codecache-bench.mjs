@@ -14,7 +14,7 @@
 import { existsSync, writeFileSync } from "node:fs";
 import { join } from "node:path";
 import { ROOT, serve } from "./server.mjs";
-import { confirmBigJobs, launchChromium, waitReady } from "./page-helpers.mjs";
+import { dropAndTimeFirstFrame, launchChromium, waitReady } from "./page-helpers.mjs";
 import { sphereStl } from "./threads-checks.mjs";
 
 const OUT = join(ROOT, "tests/e2e/out");
@@ -27,22 +27,10 @@ const ROUNDS = Number(process.env.BENCH_ROUNDS ?? 2);
 const server = await serve({ root: ROOT });
 const browser = await launchChromium();
 
-/** Drops `file` on the page and waits for its first frame: stage times (ms) and the frame time. */
+/** Drops `file` and waits for its first frame: the run's stage times and the frame time, ms. */
 async function drop(page, file) {
-  const before = await page.evaluate(() => {
-    window.__t0 = null;
-    document.getElementById("file").addEventListener("change", () => { window.__t0 ??= performance.now(); }, { capture: true, once: true });
-    return window.weft.resultCount;
-  });
-  await confirmBigJobs(page);
-  await page.setInputFiles("#file", file);
-  return page.waitForFunction((k) => {
-    if (window.weft.resultCount <= k || window.weft.busy) return false;
-    const f = window.weft.preview?.lastFrame;
-    if (!f || f.segments === 0 || f.at < window.__t0) return false;
-    const t = Object.fromEntries(window.weft.result.report.timings.filter((s) => !s.cached).map((s) => [s.stage, s.ms]));
-    return { frame: f.at - window.__t0, ...t };
-  }, before, { timeout: 600000, polling: 20 }).then((h) => h.jsonValue());
+  const r = await dropAndTimeFirstFrame(page, file);
+  return { frame: r.frameMs, ...Object.fromEntries(r.stages.map((s) => [s.stage, s.ms])) };
 }
 
 const rows = [];

@@ -136,3 +136,32 @@ export function confirmBigJobs(page) {
     answer();
   });
 }
+
+/**
+ * Drops `file` (a path) on the page, or picks example `example` instead when `file` is null,
+ * and waits for the result's first drawn frame (the benchmarks' timed unit). Returns the time
+ * from the drop to that frame, the page's load marks ("load" → "loaded": reading a dropped
+ * file before the run), the worker's run time and thread count, and the run report's stage
+ * times (those not reused), ms.
+ */
+export async function dropAndTimeFirstFrame(page, file, example = null) {
+  const before = await page.evaluate(() => {
+    window.__t0 = null;
+    const mark = () => { window.__t0 ??= performance.now(); };
+    document.getElementById("file").addEventListener("change", mark, { capture: true, once: true });
+    document.getElementById("examples").addEventListener("change", mark, { capture: true, once: true });
+    return window.weft.resultCount;
+  });
+  await confirmBigJobs(page); // the times include no wait for the ask
+  if (file) await page.setInputFiles("#file", file);
+  else await page.selectOption("#examples", `${example}.json`);
+  return page.waitForFunction((k) => {
+    if (window.weft.resultCount <= k || window.weft.busy) return false;
+    const f = window.weft.preview?.lastFrame;
+    if (!f || f.segments === 0 || f.at < window.__t0) return false;
+    const mark = (n) => performance.getEntriesByName(`weft:${n}`).filter((m) => m.startTime >= window.__t0 - 1)[0]?.startTime;
+    const loadMs = mark("loaded") != null && mark("load") != null ? mark("loaded") - mark("load") : 0;
+    return { frameMs: f.at - window.__t0, loadMs, ms: window.weft.result.ms, threads: window.weft.result.report.threads,
+      stages: window.weft.result.report.timings.filter((t) => !t.cached).map((t) => ({ stage: t.stage, ms: t.ms })) };
+  }, before, { timeout: 600000, polling: 20 }).then((h) => h.jsonValue());
+}

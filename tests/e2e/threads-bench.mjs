@@ -21,7 +21,7 @@ import { execFileSync } from "node:child_process";
 import { existsSync, mkdirSync, readdirSync, readFileSync, writeFileSync } from "node:fs";
 import { join, resolve } from "node:path";
 import { ROOT, serve } from "./server.mjs";
-import { confirmBigJobs, launchChromium, waitReady } from "./page-helpers.mjs";
+import { dropAndTimeFirstFrame, launchChromium, waitReady } from "./page-helpers.mjs";
 import { sphereStl } from "./threads-checks.mjs";
 
 const WEFT_BIN = resolve(ROOT, process.env.WEFT_BIN ?? "target/release/weft");
@@ -99,28 +99,8 @@ async function once(name, threads, warm) {
       else await pickExample(page, first);
       await page.waitForFunction((n) => window.weft.resultCount > n && !window.weft.busy, k, { timeout: 600000 });
     }
-    const before = await page.evaluate(() => {
-      window.__t0 = null;
-      const mark = () => { window.__t0 ??= performance.now(); };
-      document.getElementById("file").addEventListener("change", mark, { capture: true, once: true });
-      document.getElementById("examples").addEventListener("change", mark, { capture: true, once: true });
-      return window.weft.resultCount;
-    });
-    await confirmBigJobs(page); // the times include no wait for the ask
-    if (meshes[name]) await page.setInputFiles("#file", meshes[name]);
-    else {
-      await pickExample(page, name);
-    }
-    const r = await page.waitForFunction((k) => {
-      if (window.weft.resultCount <= k || window.weft.busy) return false;
-      const f = window.weft.preview?.lastFrame;
-      if (!f || f.segments === 0 || f.at < window.__t0) return false;
-      // A dropped mesh is read (imported) on its own before the run: its time from the marks.
-      const mark = (n) => performance.getEntriesByName(`weft:${n}`).filter((m) => m.startTime >= window.__t0 - 1)[0]?.startTime;
-      const loadMs = mark("loaded") != null && mark("load") != null ? mark("loaded") - mark("load") : 0;
-      return { frameMs: f.at - window.__t0, loadMs, ms: window.weft.result.ms, threads: window.weft.result.report.threads,
-        stages: window.weft.result.report.timings.filter((t) => !t.cached).map((t) => ({ stage: t.stage, ms: t.ms })) };
-    }, before, { timeout: 600000, polling: 20 }).then((h) => h.jsonValue());
+    if (!meshes[name]) await page.waitForFunction(() => document.querySelectorAll("#examples option[value]:not([value=''])").length > 0);
+    const r = await dropAndTimeFirstFrame(page, meshes[name] ?? null, name);
     r.memory = rendererPeakBytes();
     return r;
   } finally {

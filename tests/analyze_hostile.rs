@@ -3,7 +3,6 @@
 //! estimated and bounded. Inputs come from `weft::testgen::gcode`.
 
 use std::sync::Mutex;
-use std::time::Instant;
 use weft::analyze::{analyze, estimate, Error, Options, MAX_ARC_CHORDS, MAX_LAYER_SEGMENTS, MAX_PEAK_BYTES};
 use weft::testgen::gcode as gen;
 
@@ -14,16 +13,14 @@ fn preview() -> Options {
     Options { collect_preview: true, ..Default::default() }
 }
 
-/// Best of 3 wall times of analysing `bytes`, s.
+/// Best of 3 times of analysing `bytes`, s (one thread's CPU time:
+/// `weft::bench::one_thread_seconds`).
 fn best_of_3(bytes: &[u8], options: &Options) -> f64 {
-    (0..3)
-        .map(|_| {
-            let t = Instant::now();
-            let a = analyze("scaling.gcode", bytes, options).expect("analysable");
-            std::hint::black_box(a.report.overlap_mm);
-            t.elapsed().as_secs_f64()
-        })
-        .fold(f64::INFINITY, f64::min)
+    let run = || {
+        let a = analyze("scaling.gcode", bytes, options).expect("analysable");
+        std::hint::black_box(a.report.overlap_mm);
+    };
+    (0..3).map(|_| weft::bench::one_thread_seconds(&run)).fold(f64::INFINITY, f64::min)
 }
 
 /// Times the analysis of `make(n)` and `make(8n)` and asserts linear growth: the ratio must

@@ -3,7 +3,6 @@
 //! best of 3, repeated so the small size takes at least 20 ms) and checks the ratio against linear growth, 4^1.2,
 //! times a generous noise factor. A quadratic cost gives about 16.
 
-use std::time::Instant;
 use weft::design::{share, Design};
 use weft::gcode::{expand_template, MAX_TEMPLATE_BYTES};
 use weft::testgen::design as gen;
@@ -11,27 +10,11 @@ use weft::testgen::design as gen;
 /// Linear growth with room for n·log n and noise.
 const LIMIT: f64 = 2.0 * 5.278_031_643_091_577; // 2 × 4^1.2
 
-/// This thread's time on a CPU, seconds (Linux: the scheduler's count, so other processes on
-/// a busy machine do not inflate it), or None where it cannot be read.
-fn cpu_time() -> Option<f64> {
-    weft::bench::thread_cpu_seconds()
-}
-
-/// Best of 3 times of `reps` runs of `work` on `input`, seconds (CPU time when available,
-/// else wall time).
-fn best_of_3<T>(input: &T, reps: usize, work: &dyn Fn(&T)) -> f64 {
-    (0..3)
-        .map(|_| {
-            let (wall, cpu) = (Instant::now(), cpu_time());
-            for _ in 0..reps {
-                work(input);
-            }
-            match (cpu, cpu_time()) {
-                (Some(a), Some(b)) => b - a,
-                _ => wall.elapsed().as_secs_f64(),
-            }
-        })
-        .fold(f64::MAX, f64::min)
+/// Best of 3 times of `reps` runs of `work` on `input`, seconds (one thread's CPU time:
+/// `weft::bench::one_thread_seconds`).
+fn best_of_3<T: Sync>(input: &T, reps: usize, work: &(dyn Fn(&T) + Sync)) -> f64 {
+    let run = || (0..reps).for_each(|_| work(input));
+    (0..3).map(|_| weft::bench::one_thread_seconds(&run)).fold(f64::MAX, f64::min)
 }
 
 /// One measurement at a time: the tests of this file run in parallel threads, and two
@@ -42,7 +25,7 @@ static ONE_AT_A_TIME: std::sync::Mutex<()> = std::sync::Mutex::new(());
 /// size take 20 ms. Sizes are chosen so both sizes stay on the same side of the allocator's
 /// and caches' thresholds (glibc maps blocks over 128 KiB afresh, page faults included): the
 /// ratio is then the algorithm's growth, not a change of memory regime between n and 4n.
-fn ratio<T>(what: &str, n: usize, make: &dyn Fn(usize) -> T, work: &dyn Fn(&T)) -> f64 {
+fn ratio<T: Sync>(what: &str, n: usize, make: &dyn Fn(usize) -> T, work: &(dyn Fn(&T) + Sync)) -> f64 {
     let (small, large) = (make(n), make(4 * n));
     let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
     let mut reps = 1;

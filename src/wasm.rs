@@ -38,15 +38,18 @@ fn start() {
 /// whole memory.
 #[cfg(feature = "wasm-threads")]
 mod thread_pool {
-    use std::sync::{mpsc, Mutex};
+    use std::sync::{mpsc, Mutex, OnceLock};
     use wasm_bindgen::prelude::*;
 
-    type Queue = (Option<mpsc::Sender<rayon::ThreadBuilder>>, Option<mpsc::Receiver<rayon::ThreadBuilder>>);
-    /// The pool's threads, from `startThreadPool` (sender) to the pool workers (receiver).
-    static QUEUE: Mutex<Queue> = Mutex::new((None, None));
+    /// The pool's threads go from `startThreadPool` (the sender, taken once) to the pool
+    /// workers (the receiver). Two locks, not one: a pool worker that comes before
+    /// `startThreadPool` waits in `recv` holding the receiver's, which must not keep
+    /// `startThreadPool` from the sender (it would wait for ever).
+    static SENDER: Mutex<Option<mpsc::Sender<rayon::ThreadBuilder>>> = Mutex::new(None);
+    static RECEIVER: OnceLock<Mutex<mpsc::Receiver<rayon::ThreadBuilder>>> = OnceLock::new();
 
-    fn queue() -> Result<std::sync::MutexGuard<'static, Queue>, JsError> {
-        QUEUE.lock().map_err(|_| JsError::new("the thread pool's queue is poisoned"))
+    fn poisoned<T>(_: T) -> JsError {
+        JsError::new("the thread pool's queue is poisoned")
     }
 
     /// What a pool worker needs to join, and where the page sets Cancel: `[module, memory,
@@ -54,11 +57,13 @@ mod thread_pool {
     /// first: the pool workers wait on the queue it makes.
     #[wasm_bindgen(js_name = threadPoolShare)]
     pub fn thread_pool_share() -> Result<js_sys::Array, JsError> {
-        let mut q = queue()?;
-        if q.0.is_none() {
+        let mut made = Ok(());
+        RECEIVER.get_or_init(|| {
             let (tx, rx) = mpsc::channel();
-            *q = (Some(tx), Some(rx));
-        }
+            made = SENDER.lock().map(|mut s| *s = Some(tx)).map_err(poisoned);
+            Mutex::new(rx)
+        });
+        made?;
         let cancel_at = crate::par::cancel_flag() as *const std::sync::atomic::AtomicU32 as usize;
         Ok(js_sys::Array::of3(&wasm_bindgen::module(), &wasm_bindgen::memory(), &JsValue::from_f64(cancel_at as f64)))
     }
@@ -68,7 +73,7 @@ mod thread_pool {
     /// have started `threads` pool workers.
     #[wasm_bindgen(js_name = startThreadPool)]
     pub fn start_thread_pool(threads: usize) -> Result<(), JsError> {
-        let tx = queue()?.0.take().ok_or_else(|| JsError::new("threadPoolShare first, and the pool starts once"))?;
+        let tx = SENDER.lock().map_err(poisoned)?.take().ok_or_else(|| JsError::new("threadPoolShare first, and the pool starts once"))?;
         rayon::ThreadPoolBuilder::new()
             .num_threads(threads.max(1))
             .spawn_handler(move |thread| tx.send(thread).map_err(|_| std::io::Error::other("no pool queue")))
@@ -86,11 +91,9 @@ mod thread_pool {
     /// worker is terminated).
     #[wasm_bindgen(js_name = runPoolThread)]
     pub fn run_pool_thread() -> Result<(), JsError> {
-        let builder = {
-            let q = queue()?;
-            let rx = q.1.as_ref().ok_or_else(|| JsError::new("threadPoolShare was not called"))?;
-            rx.recv().map_err(|_| JsError::new("every thread of the pool has its worker"))?
-        };
+        let rx = RECEIVER.get().ok_or_else(|| JsError::new("threadPoolShare was not called"))?;
+        // Held while waiting: the pool workers take their threads one after another.
+        let builder = rx.lock().map_err(poisoned)?.recv().map_err(|_| JsError::new("every thread of the pool has its worker"))?;
         builder.run();
         Ok(())
     }

@@ -697,7 +697,7 @@ function commitField(view) {
 function setFieldError(view, message) {
   const was = !view.error.hidden;
   view.error.hidden = !message;
-  view.error.textContent = message ?? "";
+  setMessage(view.error, message);
   view.wrap.classList.toggle("invalid", Boolean(message));
   for (const el of view.inputs) {
     if (message) el.setAttribute("aria-invalid", "true");
@@ -1300,7 +1300,7 @@ async function requestInspect(v) {
     res = await workers.request({ type: MSG.INSPECT, design: state.json, view: v.view.id, index, key: `view:${v.view.id}` });
   } catch (err) {
     if (mine === v.seq && !err.cancelled) {
-      v.info.textContent = messageOf(err);
+      setMessage(v.info, messageOf(err));
       v.info.classList.add("field-error");
     }
     return;
@@ -2416,7 +2416,7 @@ async function openExample(chosen) {
 // ---------------------------------------------------------------------------------------
 let crashShownAt = 0;
 function showError(message) {
-  $("error-text").textContent = message;
+  setMessage($("error-text"), message);
   $("error").hidden = false;
   if (/^The worker (stopped|keeps)/.test(message)) crashShownAt = Date.now();
 }
@@ -2432,7 +2432,7 @@ function hideErrorUnlessCrash() {
  */
 function showNotice(message, link, action) {
   const text = $("notice-text");
-  text.textContent = message;
+  setMessage(text, message);
   for (const a of Array.isArray(action) ? action : action ? [action] : []) {
     const button = document.createElement("button");
     button.type = "button";
@@ -2469,6 +2469,25 @@ function humanBytes(n) {
     i++;
   }
   return `${n >= 100 || i === 0 ? Math.round(n) : n.toFixed(1)} ${units[i]}`;
+}
+
+/**
+ * Shows a message from the core as text. Its `quoted` parts (a command, a setting's path) are
+ * shown as code, without the backticks: made as text nodes and <code> elements, never parsed
+ * as HTML. An unpaired backtick stays as it is.
+ */
+function setMessage(el, message) {
+  const parts = String(message ?? "").split("`");
+  if (parts.length % 2 === 0) {
+    const last = parts.pop();
+    parts[parts.length - 1] += `\`${last}`;
+  }
+  el.replaceChildren(...parts.map((part, i) => {
+    if (i % 2 === 0) return part;
+    const code = document.createElement("code");
+    code.textContent = part;
+    return code;
+  }));
 }
 
 function messageOf(err) {

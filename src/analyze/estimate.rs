@@ -29,6 +29,10 @@ pub struct Estimate {
     /// working set, per-layer records), bytes, with arcs as one chord each. The analyzer
     /// checks it again with the layers and arcs it actually reads.
     pub peak_bytes: usize,
+    /// Whether the file has layer-change comments (`;LAYER:`, `;LAYER_CHANGE`): layers are
+    /// then read from them, else from Z. Found once here, for the analyzer too (a file
+    /// without them is read to its end to know).
+    pub layer_comments: bool,
 }
 
 /// Preview bytes per segment: the largest kind (an extrusion segment with a tool axis: 6
@@ -184,6 +188,7 @@ fn tally_block(text: &[u8], comment_mode: bool) -> Tally {
 /// layer, so the rest is counted in blocks of `block_bytes` side by side, whose tallies add up.
 fn lines_of(bytes: &[u8], e: &mut Estimate, block_bytes: usize) {
     let comment_mode = crate::motion::lex::has_layer_comments(bytes);
+    e.layer_comments = comment_mode;
     let mut head = Tally::default();
     let (mut layer_comments, mut chunk, mut largest) = (0usize, 0usize, 0usize);
     // Whether a move that may extrude has come after the first layer comment.

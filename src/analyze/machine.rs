@@ -71,11 +71,11 @@ pub(crate) struct Machine<'o> {
 }
 
 impl<'o> Machine<'o> {
-    pub fn new(opts: &'o Options, comment_layers: bool, est: &Estimate) -> Self {
+    pub fn new(opts: &'o Options, est: &Estimate) -> Self {
         let fd = if opts.filament_diameter_mm > 0.0 { opts.filament_diameter_mm } else { super::DEFAULT_FILAMENT_DIAMETER_MM };
         Machine {
             opts,
-            comment_layers,
+            comment_layers: est.layer_comments,
             m: Motion::default(),
             width: opts.default_line_width_mm,
             feature: 255,
@@ -517,8 +517,7 @@ pub(crate) fn run(file: &str, bytes: &[u8], options: &Options, est: &Estimate) -
     if let Some(offset) = crate::motion::lex::first_binary_byte(bytes) {
         return Err(Error::NotText { file: file.to_string(), offset });
     }
-    let layer_comments = crate::motion::lex::has_layer_comments(bytes);
-    let m = Machine::new(options, layer_comments, est);
+    let m = Machine::new(options, est);
     #[cfg(any(not(target_arch = "wasm32"), feature = "wasm-threads"))]
     if bytes.len() >= super::pooled::MIN_BYTES && crate::par::can_wait_on_pool() {
         // Interpreted on one of the pool's threads, which lexes and measures too while it

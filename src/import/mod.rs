@@ -328,6 +328,14 @@ pub(crate) fn raw_bytes(v: u64, t: u64) -> u64 {
 /// The result is cleaned (see [`ImportReport`]): vertices closer than
 /// [`Options::weld_tolerance_mm`] are welded, degenerate and duplicate triangles dropped.
 pub fn read_mesh(file: &str, bytes: &[u8], options: &Options) -> Result<Imported, Error> {
+    // Reading and cleaning are some twenty short parallel rounds: run from a pool thread, each
+    // round's first items stay on it and no caller is woken between rounds (in the browser a
+    // wake-up goes through `Atomics.wait`).
+    crate::par::on_pool(|| read_mesh_on(file, bytes, options))
+}
+
+/// [`read_mesh`], on the calling thread.
+fn read_mesh_on(file: &str, bytes: &[u8], options: &Options) -> Result<Imported, Error> {
     let format = detect_format(file, bytes)?;
     let mut unit_scale = 1.0;
     let input = bytes.len() as u64;

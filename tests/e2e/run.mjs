@@ -15,6 +15,7 @@
 import { closeSync, existsSync, ftruncateSync, mkdirSync, openSync, readFileSync, unlinkSync, writeFileSync, writeSync } from "node:fs";
 import { createHash } from "node:crypto";
 import { execFileSync } from "node:child_process";
+import { deflateRawSync } from "node:zlib";
 import { join, resolve } from "node:path";
 import { ROOT, serve } from "./server.mjs";
 import { axisymChecks } from "./axisym-checks.mjs";
@@ -309,7 +310,19 @@ await check(6, "damaged share fragment #d=!!!! → clear error, page still works
   if ((await p.$$("#schema-fields input")).length === 0) throw new Error("the form is empty");
   await p.click("#slice");
   await waitResult(p, 0, "slicing the default design after the damaged link");
-  return `"${message.split("\n")[0].slice(0, 90)}"`;
+  // A link whose design lacks its job: the message's `quoted` command is shown as code, as
+  // text, without the backticks.
+  const noJob = deflateRawSync(JSON.stringify({ version: 1, name: "no job" })).toString("base64url");
+  await p.goto(`${base}/www/#d=${noJob}`);
+  await p.waitForSelector("#error:not([hidden])", { timeout: 10000 });
+  const missing = await p.evaluate(() => ({
+    text: document.getElementById("error-text").textContent,
+    code: [...document.querySelectorAll("#error-text code")].map((c) => c.textContent),
+  }));
+  if (!/job/.test(missing.text) || missing.text.includes("`") || missing.code.join("|") !== "weft new") {
+    throw new Error(`the missing job's message is not shown with its command as code: ${JSON.stringify(missing)}`);
+  }
+  return `"${message.split("\n")[0].slice(0, 90)}"; "${missing.text.slice(0, 90)}" (code: ${missing.code.join(", ")})`;
 }));
 
 await check(7, "Cancel stops a long job, restarts the worker, and a short run works after", () => inFreshPage("/www/", async (p, errors) => {

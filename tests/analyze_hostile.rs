@@ -14,13 +14,12 @@ fn preview() -> Options {
 }
 
 /// Best of 3 times of analysing `bytes`, s (one thread's CPU time:
-/// `weft::bench::one_thread_seconds`).
+/// `weft::bench::best_of_3_one_thread_seconds`).
 fn best_of_3(bytes: &[u8], options: &Options) -> f64 {
-    let run = || {
+    weft::bench::best_of_3_one_thread_seconds(&|| {
         let a = analyze("scaling.gcode", bytes, options).expect("analysable");
         std::hint::black_box(a.report.overlap_mm);
-    };
-    (0..3).map(|_| weft::bench::one_thread_seconds(&run)).fold(f64::INFINITY, f64::min)
+    })
 }
 
 /// Times the analysis of `make(n)` and `make(8n)` and asserts linear growth: the ratio must

@@ -11,10 +11,9 @@ use weft::testgen::design as gen;
 const LIMIT: f64 = 2.0 * 5.278_031_643_091_577; // 2 × 4^1.2
 
 /// Best of 3 times of `reps` runs of `work` on `input`, seconds (one thread's CPU time:
-/// `weft::bench::one_thread_seconds`).
+/// `weft::bench::best_of_3_one_thread_seconds`).
 fn best_of_3<T: Sync>(input: &T, reps: usize, work: &(dyn Fn(&T) + Sync)) -> f64 {
-    let run = || (0..reps).for_each(|_| work(input));
-    (0..3).map(|_| weft::bench::one_thread_seconds(&run)).fold(f64::MAX, f64::min)
+    weft::bench::best_of_3_one_thread_seconds(&|| (0..reps).for_each(|_| work(input)))
 }
 
 /// One measurement at a time: the tests of this file run in parallel threads, and two

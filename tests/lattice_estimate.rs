@@ -13,6 +13,7 @@ use weft::lattice::{self, Domain, DomainSize, Options, Pattern, MAX_STRUTS_PER_L
 use weft::nonplanar::{self, Surface, SurfaceSize};
 use weft::paths::{self, Method, Order, MAX_GIPPO_STEPS};
 use weft::pipeline::{Cache, Ctx, Files};
+use weft::bench::best_of_3_one_thread_seconds;
 use weft::testgen::lattice as gen;
 use weft::Design;
 
@@ -339,18 +340,13 @@ fn a_cone_fan_surface_is_bucketed_within_its_budget() {
 /// Timed sections run one at a time (the test harness runs tests on parallel threads).
 static TIMING: Mutex<()> = Mutex::new(());
 
-/// Best of 3 times of `f` (one thread's CPU time: `weft::bench::one_thread_seconds`).
-fn best_of_3(f: &(dyn Fn() + Sync)) -> f64 {
-    (0..3).map(|_| weft::bench::one_thread_seconds(f)).fold(f64::INFINITY, f64::min)
-}
-
 /// Asserts linear growth of `run(k)` from k = n to k = 4n (inputs prepared by `prepare`,
 /// untimed).
 fn assert_linear<T: Sync>(name: &str, n: usize, prepare: impl Fn(usize) -> T, run: impl Fn(&T) + Sync) {
     let (small, big) = (prepare(n), prepare(4 * n));
     let _guard = TIMING.lock().unwrap_or_else(|e| e.into_inner());
-    let t1 = best_of_3(&|| run(&small));
-    let t4 = best_of_3(&|| run(&big));
+    let t1 = best_of_3_one_thread_seconds(&|| run(&small));
+    let t4 = best_of_3_one_thread_seconds(&|| run(&big));
     let ratio = t4 / t1;
     let exponent = ratio.ln() / 4f64.ln();
     println!("{name}: {:.1} ms, 4× area {:.1} ms, ratio {ratio:.1} (exponent {exponent:.2})", t1 * 1e3, t4 * 1e3);

@@ -78,10 +78,12 @@ function handle(msg) {
   try {
     switch (msg.type) {
       case MSG.LOAD: {
+        markStage("load");
         // A Blob (a dropped file) stays where it is and is read in pieces; bytes are copied in.
         const info = plain(msg.blob
           ? session.addBlob(msg.slot, msg.name, msg.blob)
           : session.addFile(msg.slot, msg.name, new Uint8Array(msg.bytes)));
+        markStage(null);
         self.postMessage({ type: MSG.LOADED, id: msg.id, slot: msg.slot, name: msg.name, info });
         break;
       }
@@ -91,6 +93,7 @@ function handle(msg) {
       case MSG.RUN: {
         const t0 = performance.now();
         const report = plain(session.run(msg.design, progressReporter(msg.id), aheadReporter(msg.id)));
+        markStage(null);
         postResult(msg.id, "run", report, t0);
         break;
       }
@@ -143,11 +146,27 @@ function handle(msg) {
   }
 }
 
+const MAX_MARKS = 1000;
+
+/**
+ * Marks in this worker's performance timeline where each stage of a run (or a file's load)
+ * begins, `weft:stage:<name>` (`<name> (reused)` for one made before), and where the work
+ * ends, `weft:stage-end` (`stage` null). DevTools shows them, and
+ * tests/e2e/threads-bench.mjs reads them to tell which threads had the cores during each
+ * stage. At most MAX_MARKS are kept.
+ */
+function markStage(stage) {
+  if (performance.getEntriesByType("mark").length >= MAX_MARKS) performance.clearMarks();
+  performance.mark(stage == null ? "weft:stage-end" : `weft:stage:${stage}`);
+}
+
 /** Progress callback for Session.run, posting at most ~100 messages per stage. */
 function progressReporter(id) {
   let lastStage = "";
   let lastFraction = -1;
   return (stage, fraction) => {
+    // A stage made before this run reports only its end.
+    if (stage !== lastStage) markStage(fraction === 0 ? stage : `${stage} (reused)`);
     if (stage === lastStage && fraction < 1 && fraction - lastFraction < 0.01) return;
     lastStage = stage;
     lastFraction = fraction;

@@ -176,7 +176,7 @@ pub enum Error {
         found: String,
     },
     /// No `version`: not a design (or not a JSON object at all).
-    #[error("{source_name}: this is not a weft design: it has no \"version\" (a design starts {{\"version\": {DESIGN_VERSION}, \"name\": …}}; `weft new` prints one)")]
+    #[error("{source_name}: this is not a weft design: it has no \"version\" (a design starts {{\"version\": {DESIGN_VERSION}, \"name\": …}}; start from an example on the page, or `weft new`)")]
     NotADesign {
         /// Where it came from.
         source_name: String,
@@ -551,10 +551,10 @@ mod tests {
         assert_eq!(Design::from_json("d.json", "{\"version\": 1, name: 2}").unwrap_err().to_string(), "d.json: line 1, column 16: not valid JSON: field names must be in double quotes");
         assert_eq!(Design::from_json("d.json", "{\"version\": 1,}").unwrap_err().to_string(), "d.json: line 1, column 15: not valid JSON: there is a ',' before a closing bracket: remove it");
         assert_eq!(Design::from_json("d.json", "{\"version\": 1}").unwrap_err().to_string(), "d.json: name: Name is missing: add it (text in double quotes)");
-        assert_eq!(Design::from_json("d.json", "{\"version\": 1, \"name\": \"x\"}").unwrap_err().to_string(), "d.json: job: is missing: add it (`weft new` prints a complete design)");
+        assert_eq!(Design::from_json("d.json", "{\"version\": 1, \"name\": \"x\"}").unwrap_err().to_string(), "d.json: job: is missing: add it (start from a complete design: an example on the page, or `weft new`)");
         assert_eq!(
             Design::from_json("d.json", "{\"name\": \"x\"}").unwrap_err().to_string(),
-            "d.json: this is not a weft design: it has no \"version\" (a design starts {\"version\": 1, \"name\": …}; `weft new` prints one)"
+            "d.json: this is not a weft design: it has no \"version\" (a design starts {\"version\": 1, \"name\": …}; start from an example on the page, or `weft new`)"
         );
         // Nothing of serde's vocabulary is left in any of them.
         for a in ["job.paths.iterations=2.5", "job.paths.method=x", "job.paths.x=1", "job={}", "printer.bed_size_mm=[1]", "seed=\"s\"", "job.lattice.contour=2"] {

@@ -294,7 +294,7 @@ pub(crate) fn problem(err: &serde_path_to_error::Error<serde_json::Error>, prefi
             path = join(&path, &clip(name, QUOTE));
             match row_of(rows, root, &path) {
                 Some(r) => format!("{} is missing: add it ({})", r.field.label, r.field.must_be()),
-                None => "is missing: add it (`weft new` prints a complete design)".into(),
+                None => "is missing: add it (start from a complete design: an example on the page, or `weft new`)".into(),
             }
         }
         Said::Duplicate { name } => {

@@ -431,6 +431,15 @@ await check(9, "temperature change → re-run reuses every stage before gcode; G
   const badges = cards.filter((c) => c.cached).map((c) => c.stage);
   const shouldShow = stages.map((s) => s.stage).filter((st) => cards.some((c) => c.stage === st));
   if (shouldShow.some((st) => !badges.includes(st))) throw new Error(`cards without the reused badge: ${JSON.stringify(cards)}`);
+  // The worker marks each stage of the run in its performance timeline, a reused one as such
+  // (DevTools shows the marks; threads-bench places its stages by them).
+  const worker = page.workers().find((w) => /\/worker\.js/.test(w.url()));
+  const marks = await worker.evaluate(() => performance.getEntriesByType("mark").map((m) => m.name).filter((n) => n.startsWith("weft:stage")));
+  const ends = marks.flatMap((n, k) => (n === "weft:stage-end" ? [k] : []));
+  const runMarks = marks.slice((ends.at(-2) ?? -1) + 1, ends.at(-1));
+  const timings = await page.evaluate(() => window.weft.result.report.timings);
+  const expected = timings.map((t) => `weft:stage:${t.stage}${t.cached ? " (reused)" : ""}`);
+  if (JSON.stringify(runMarks) !== JSON.stringify(expected)) throw new Error(`the worker's stage marks ${JSON.stringify(runMarks)} are not the run's timings ${JSON.stringify(expected)}`);
   const b = await download(page, "temp-b.gcode");
   const la = a.bytes.toString("utf8").split("\n");
   const lb = b.bytes.toString("utf8").split("\n");

@@ -17,7 +17,12 @@
 //   BENCH_BIG=1       also the 4M-triangle sphere (a 200 MB STL dropped on the page)
 //   BENCH_WARM        page states, comma-separated (default 0,1): 0 a fresh page runs the workload
 //                     first (cold: V8 optimises the code on the way), 1 it runs WARMUP first
-import { execFileSync } from "node:child_process";
+//   BENCH_PERF=1      also which threads had the machine's cores during each stage (Linux perf,
+//                     `perf record -e cpu-clock -a`, as root or with perf_event_paranoid ≤ 0): the
+//                     share the worker and its pool got, and what took the rest (the page's own
+//                     threads, the GPU process's software renderer, other programs). The stages are
+//                     placed by the worker's `weft:stage:*` performance marks.
+import { execFileSync, spawn } from "node:child_process";
 import { existsSync, mkdirSync, readdirSync, readFileSync, writeFileSync } from "node:fs";
 import { join, resolve } from "node:path";
 import { ROOT, serve } from "./server.mjs";
@@ -46,6 +51,63 @@ const meshes = { "sphere-1m": sphere, "sphere-4m": bigSphere, "sphere-250k": war
 /** The design a warm page runs first: another of the workload's kind (graded has one example). */
 const WARMUP = { "ball-burst-disc-48mm": "honeycomb-10mm", "hourglass-omega3": "barrel-omega1", "sphere-30mm": "cube-20mm", "sphere-1m": "sphere-250k", "sphere-4m": "sphere-250k" };
 const WARM = (process.env.BENCH_WARM ?? "0,1").split(",").map((w) => w === "1");
+const PERF = process.env.BENCH_PERF === "1";
+/** perf's sampling rate per core, Hz. */
+const PERF_HZ = 999;
+const CORES = Number(execFileSync("nproc", { encoding: "utf8" }).trim());
+
+/**
+ * Runs `work()` while perf samples every core, then returns, for each stage of the computing
+ * worker that began during the recording (the windows between its `weft:stage:*` marks), the
+ * share of the cores each group of threads had: worker (the worker and its pool), page (the
+ * page's other threads), renderer (the GPU process's software renderer and compositor),
+ * other, idle.
+ */
+async function coresDuring(page, work) {
+  const path = join(OUT, "threads-bench.perf");
+  // CLOCK_REALTIME: the clock of performance.timeOrigin + performance.now().
+  const perf = spawn("perf", ["record", "-q", "-e", "cpu-clock", "-F", String(PERF_HZ), "-a", "-k", "CLOCK_REALTIME", "-o", path], { stdio: "ignore" });
+  await new Promise((r) => setTimeout(r, 500));
+  const result = await work();
+  await new Promise((r) => { perf.on("exit", r); perf.kill("SIGINT"); });
+  const worker = page.workers().find((w) => /\/worker\.js/.test(w.url()));
+  const marks = await worker.evaluate(() => performance.getEntriesByType("mark")
+    .filter((m) => m.name.startsWith("weft:stage"))
+    .map((m) => [m.name.replace(/^weft:stage:?/, ""), performance.timeOrigin + m.startTime]));
+  const windows = [];
+  for (let k = 0; k + 1 < marks.length; k++) {
+    if (marks[k][0] !== "-end" && !marks[k][0].endsWith("(reused)")) windows.push([marks[k][0], marks[k][1], marks[k + 1][1]]);
+  }
+  const text = execFileSync("perf", ["script", "-i", path, "-F", "comm,pid,time"], { encoding: "utf8", maxBuffer: 1 << 28, stdio: ["ignore", "pipe", "ignore"] });
+  const renderer = new Set(); // pids of the processes holding a worker: the page's renderers
+  const samples = [];
+  for (const line of text.split("\n")) {
+    const m = line.match(/^\s*(.*?)\s+(\d+)\s+([\d.]+):/);
+    if (!m) continue;
+    if (m[1] === "DedicatedWorker") renderer.add(m[2]);
+    samples.push([m[1], m[2], Number(m[3]) * 1000]);
+  }
+  if (process.env.BENCH_PERF_DEBUG) log(`perf samples ${samples[0]?.[2]?.toFixed(0)}..${samples.at(-1)?.[2]?.toFixed(0)}; windows ${JSON.stringify(windows.map(([n, a, b]) => [n, a.toFixed(0), (b - a).toFixed(0)]))}`);
+  const shares = new Map();
+  for (const [name, lo, hi] of windows) {
+    // Stages of earlier runs (the warm-up) began before the recording; too short a stage has
+    // too few samples to count.
+    if (!(lo >= (samples[0]?.[2] ?? Infinity)) || hi - lo < 20) continue;
+    const by = { worker: 0, page: 0, renderer: 0, idle: 0, other: 0 };
+    for (const [comm, pid, at] of samples) {
+      if (at < lo || at >= hi) continue;
+      const group = comm === "DedicatedWorker" ? "worker" : comm === "swapper" ? "idle" : renderer.has(pid) ? "page"
+        : /^Thread<\d+>$|^VizCompositor|^CrGpuMain/.test(comm) ? "renderer" : "other";
+      by[group] += 1;
+    }
+    const total = ((hi - lo) / 1000) * PERF_HZ * CORES;
+    const share = Object.fromEntries(Object.entries(by).map(([k, v]) => [k, v / total]));
+    // An idle core may take no samples at all (a tickless kernel): idle is what the rest leave.
+    share.idle = Math.max(0, 1 - share.worker - share.page - share.renderer - share.other);
+    shares.set(name, share);
+  }
+  return { result, shares };
+}
 
 // WEFT_PKG_DIR: serve another build of the modules as /pkg/ (as run.mjs does).
 const server = await serve({ root: ROOT, ...(process.env.WEFT_PKG_DIR ? { pkgDir: resolve(process.env.WEFT_PKG_DIR) } : {}) });
@@ -100,7 +162,15 @@ async function once(name, threads, warm) {
       await page.waitForFunction((n) => window.weft.resultCount > n && !window.weft.busy, k, { timeout: 600000 });
     }
     if (!meshes[name]) await page.waitForFunction(() => document.querySelectorAll("#examples option[value]:not([value=''])").length > 0);
-    const r = await dropAndTimeFirstFrame(page, meshes[name] ?? null, name);
+    const drop = () => dropAndTimeFirstFrame(page, meshes[name] ?? null, name);
+    let r;
+    if (PERF) {
+      const { result, shares } = await coresDuring(page, drop);
+      r = result;
+      r.shares = shares;
+    } else {
+      r = await drop();
+    }
     r.memory = rendererPeakBytes();
     return r;
   } finally {
@@ -108,11 +178,21 @@ async function once(name, threads, warm) {
   }
 }
 
-/** Best of REPEATS per stage and for the whole; memory the largest seen. */
+/** Best of REPEATS per stage and for the whole; memory the largest seen; cores' shares of the best run of each stage. */
 function best(runs) {
   const stages = new Map();
-  for (const r of runs) for (const s of r.stages) stages.set(s.stage, Math.min(stages.get(s.stage) ?? Infinity, s.ms));
+  const shares = new Map();
+  for (const r of runs) {
+    for (const s of r.stages) {
+      if (s.ms < (stages.get(s.stage) ?? Infinity)) {
+        stages.set(s.stage, s.ms);
+        if (r.shares?.has(s.stage)) shares.set(s.stage, r.shares.get(s.stage));
+      }
+    }
+    if (r.shares?.has("load") && (r.loadMs ?? Infinity) <= Math.min(...runs.map((q) => q.loadMs ?? Infinity))) shares.set("load", r.shares.get("load"));
+  }
   return {
+    shares,
     ms: Math.min(...runs.map((r) => r.ms)), frameMs: Math.min(...runs.map((r) => r.frameMs)),
     loadMs: Math.min(...runs.map((r) => r.loadMs ?? 0)),
     memory: Math.max(...runs.map((r) => r.memory ?? 0)), stages,
@@ -148,7 +228,9 @@ for (const name of names) {
     for (let i = 0; i < REPEATS; i++) {
       for (const c of COUNTS) {
         log(`${name}: worker at ${c} thread(s), ${warm ? "warm" : "cold"} page, run ${i + 1}/${REPEATS}`);
-        runs.get(c).push(await once(name, c, warm));
+        const r = await once(name, c, warm);
+        runs.get(c).push(r);
+        log(`  ${r.stages.map((t) => `${t.stage} ${t.ms.toFixed(0)} ms`).join(", ")}; drop → first frame ${r.frameMs.toFixed(0)} ms`);
       }
     }
     for (const c of COUNTS) worker.set(c, best(runs.get(c)));
@@ -184,4 +266,22 @@ for (const { name, worker, cli } of rows) {
   line("**whole run**", (b) => b.ms);
   console.log(`| ${name} | drop → first frame | ${COUNTS.map((c) => f(worker.get(c).frameMs)).join(" | ")} | ${more.map((c) => x(worker.get(one).frameMs, worker.get(c).frameMs)).join(" | ")} | ${COUNTS.map(() => "").join(" | ")} | ${more.map(() => "").join(" | ")} | |`);
   console.log(`| ${name} | renderer peak RSS (page + worker + pool) | ${COUNTS.map((c) => `${(worker.get(c).memory / 1048576).toFixed(0)} MiB`).join(" | ")} | ${more.map(() => "").join(" | ")} | ${COUNTS.map(() => "").join(" | ")} | ${more.map(() => "").join(" | ")} | |`);
+}
+
+if (PERF) {
+  // Which threads had the cores during each stage, in the run that gave the stage's best time.
+  const pct = (v) => (v == null ? "" : `${(100 * v).toFixed(0)} %`);
+  console.log(`\nShare of the ${CORES} cores during each stage (perf, all threads of the machine; worker: the computing worker and its pool; page: the page's other threads; renderer: the GPU process's software renderer and compositor):\n`);
+  console.log(`| workload | stage | ${COUNTS.map((c) => `${c}T: worker · page · renderer · other · idle`).join(" | ")} |`);
+  console.log(`|${"---|".repeat(2 + COUNTS.length)}`);
+  for (const { name, worker } of rows) {
+    const names = new Set(COUNTS.flatMap((c) => [...worker.get(c).shares.keys()]));
+    for (const s of names) {
+      const cell = (c) => {
+        const v = worker.get(c).shares.get(s);
+        return v ? [v.worker, v.page, v.renderer, v.other, v.idle].map(pct).join(" · ") : "";
+      };
+      console.log(`| ${name} | ${s === "load" ? "dropping the file (the worker's load)" : s} | ${COUNTS.map(cell).join(" | ")} |`);
+    }
+  }
 }

@@ -15,7 +15,12 @@
 // Samples are wall-clock: a thread the machine deschedules still counts as busy, so profile
 // a quiet machine. BENCH_MESH / BENCH_WARM_MESH choose the files (default the spheres that
 // threads-bench.mjs writes to tests/e2e/out/).
+// PERF=1 also records which threads of the whole machine were on the cores during the stage
+// (Linux `perf record -e cpu-clock -a`, as root or with perf_event_paranoid ≤ 0): the share of
+// the cores the worker's threads got, and what else took the rest (the page's own threads,
+// the GPU process's software renderer, other programs).
 
+import { execFileSync, spawn } from "node:child_process";
 import { readFileSync, rmSync } from "node:fs";
 import { join, resolve } from "node:path";
 import { ROOT, serve } from "./server.mjs";
@@ -26,6 +31,9 @@ const stage = process.argv[3] ?? "import";
 const mesh = process.env.BENCH_MESH ?? join(ROOT, "tests/e2e/out/sphere-1m.stl");
 const warmMesh = process.env.BENCH_WARM_MESH ?? join(ROOT, "tests/e2e/out/sphere-250k.stl");
 const tracePath = join(ROOT, "tests/e2e/out/worker-profile.json");
+const perfPath = process.env.PERF === "1" ? join(ROOT, "tests/e2e/out/worker-profile.perf") : null;
+/** perf's sampling rate per core, Hz: each sample stands for 1000 / PERF_HZ ms on a core. */
+const PERF_HZ = 1999;
 
 const server = await serve({ root: ROOT, ...(process.env.WEFT_PKG_DIR ? { pkgDir: resolve(process.env.WEFT_PKG_DIR) } : {}) });
 const browser = await launchChromium();
@@ -36,7 +44,11 @@ try {
   await waitReady(page);
   await dropAndTimeFirstFrame(page, warmMesh);
   await browser.startTracing(page, { path: tracePath, categories: ["disabled-by-default-v8.cpu_profiler"] });
+  // CLOCK_MONOTONIC: the clock of the trace's timestamps (Chromium's TimeTicks on Linux).
+  const perf = perfPath && spawn("perf", ["record", "-q", "-e", "cpu-clock", "-F", String(PERF_HZ), "-a", "-k", "CLOCK_MONOTONIC", "-o", perfPath], { stdio: "ignore" });
+  if (perf) await new Promise((r) => setTimeout(r, 500)); // perf starts sampling
   timed = await dropAndTimeFirstFrame(page, mesh);
+  if (perf) await new Promise((r) => { perf.on("exit", r); perf.kill("SIGINT"); });
   await browser.stopTracing();
 } finally {
   await browser.close();
@@ -109,4 +121,23 @@ if (busiest.length === 2) {
   }
   console.log(`while the second thread waited (${[...meanwhile.values()].reduce((x, y) => x + y, 0).toFixed(0)} ms), the first was in:`);
   for (const [k, ms] of top(meanwhile, 12)) console.log(`  ${ms.toFixed(1).padStart(7)} ms  ${k}`);
+}
+
+if (perfPath) {
+  // On-core samples of every thread of the machine within the stage's window.
+  const text = execFileSync("perf", ["script", "-i", perfPath, "-F", "comm,tid,time"], { encoding: "utf8", maxBuffer: 1 << 28, stdio: ["ignore", "pipe", "ignore"] });
+  rmSync(perfPath);
+  const onCore = new Map();
+  for (const line of text.split("\n")) {
+    const m = line.match(/^\s*(.*?)\s+(\d+)\s+([\d.]+):/);
+    if (!m) continue;
+    const at = Number(m[3]) * 1e6; // µs, as the trace
+    if (at < lo || at > hi) continue;
+    const who = m[1] === "swapper" ? "(idle core)" : m[1] === "DedicatedWorker" ? `worker thread ${m[2]}` : /^Thread<\d+>$/.test(m[1]) ? "GPU process: software renderer" : m[1];
+    add(onCore, who, 1000 / PERF_HZ);
+  }
+  const cores = ((hi - lo) / 1000) * Number(execFileSync("nproc", { encoding: "utf8" }).trim());
+  const workers = [...onCore].filter(([k]) => k.startsWith("worker thread")).reduce((a, [, ms]) => a + ms, 0);
+  console.log(`on the cores during the stage (perf, ${cores.toFixed(0)} core-ms in the window): the worker's threads ${workers.toFixed(0)} ms (${((100 * workers) / cores).toFixed(0)} %)`);
+  for (const [k, ms] of top(onCore, 12)) console.log(`  ${ms.toFixed(1).padStart(7)} ms  ${(100 * ms / cores).toFixed(0).padStart(3)} %  ${k}`);
 }

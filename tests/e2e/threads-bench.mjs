@@ -191,8 +191,17 @@ function best(runs) {
     }
     if (r.shares?.has("load") && (r.loadMs ?? Infinity) <= Math.min(...runs.map((q) => q.loadMs ?? Infinity))) shares.set("load", r.shares.get("load"));
   }
+  // Medians too: on a shared machine one lucky run can make the best of a few look better (or
+  // a ratio of bests worse) than the runs are.
+  const median = (xs) => {
+    const v = xs.filter((x) => Number.isFinite(x)).sort((a, b) => a - b);
+    return v.length ? (v.length % 2 ? v[(v.length - 1) / 2] : (v[v.length / 2 - 1] + v[v.length / 2]) / 2) : NaN;
+  };
+  const medians = new Map([...stages.keys()].map((st) => [st, median(runs.map((r) => r.stages.find((s) => s.stage === st)?.ms))]));
+  medians.set("**whole run**", median(runs.map((r) => r.ms)));
+  medians.set("drop → first frame", median(runs.map((r) => r.frameMs || NaN)));
   return {
-    shares,
+    shares, medians,
     ms: Math.min(...runs.map((r) => r.ms)), frameMs: Math.min(...runs.map((r) => r.frameMs)),
     loadMs: Math.min(...runs.map((r) => r.loadMs ?? 0)),
     memory: Math.max(...runs.map((r) => r.memory ?? 0)), stages,
@@ -266,6 +275,21 @@ for (const { name, worker, cli } of rows) {
   line("**whole run**", (b) => b.ms);
   console.log(`| ${name} | drop → first frame | ${COUNTS.map((c) => f(worker.get(c).frameMs)).join(" | ")} | ${more.map((c) => x(worker.get(one).frameMs, worker.get(c).frameMs)).join(" | ")} | ${COUNTS.map(() => "").join(" | ")} | ${more.map(() => "").join(" | ")} | |`);
   console.log(`| ${name} | renderer peak RSS (page + worker + pool) | ${COUNTS.map((c) => `${(worker.get(c).memory / 1048576).toFixed(0)} MiB`).join(" | ")} | ${more.map(() => "").join(" | ")} | ${COUNTS.map(() => "").join(" | ")} | ${more.map(() => "").join(" | ")} | |`);
+}
+
+if (REPEATS >= 3) {
+  console.log(`\nMedians of the ${REPEATS} runs (the table above takes the best):\n`);
+  console.log(`| workload | stage | ${COUNTS.map((c) => `worker ${c}T`).join(" | ")} | ${more.map((c) => `worker ${one}T ÷ ${c}T`).join(" | ")} | ${COUNTS.map((c) => `native ${c}T`).join(" | ")} | ${more.map((c) => `native ${one}T ÷ ${c}T`).join(" | ")} |`);
+  console.log(`|${"---|".repeat(2 + COUNTS.length * 2 + more.length * 2)}`);
+  for (const { name, worker, cli } of rows) {
+    for (const st of worker.get(one).medians.keys()) {
+      const w = COUNTS.map((c) => worker.get(c).medians.get(st));
+      const n = COUNTS.map((c) => cli.get(c).medians.get(st) ?? NaN);
+      if (!(w[0] >= 5)) continue;
+      const cell = (v) => (Number.isFinite(v) ? f(v) : "");
+      console.log(`| ${name} | ${st} | ${w.map(cell).join(" | ")} | ${w.slice(1).map((v) => x(w[0], v)).join(" | ")} | ${n.map(cell).join(" | ")} | ${n.slice(1).map((v) => (Number.isFinite(v) ? x(n[0], v) : "")).join(" | ")} |`);
+    }
+  }
 }
 
 if (PERF) {

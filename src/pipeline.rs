@@ -180,7 +180,7 @@ impl Key {
         let len = source.len();
         let mut h = Hasher::new(len);
         // A multiple of 8, so every piece but the last is whole words.
-        let mut buf = vec![0u8; crate::source::CHUNK_BYTES.min(len)];
+        let mut buf = vec![0u8; crate::source::WHOLE_PIECE_BYTES.min(len)];
         let mut offset = 0;
         while offset < len {
             let n = buf.len().min(len - offset);

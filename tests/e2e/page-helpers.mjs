@@ -1,5 +1,6 @@
 // Page helpers shared by the end-to-end checks (run.mjs, lattice-checks.mjs, ui-mock.mjs).
-import { readFileSync } from "node:fs";
+import { execFileSync, spawn } from "node:child_process";
+import { readFileSync, rmSync } from "node:fs";
 import { chromium } from "playwright-core";
 
 /**
@@ -164,4 +165,30 @@ export async function dropAndTimeFirstFrame(page, file, example = null) {
     return { frameMs: f.at - window.__t0, loadMs, ms: window.weft.result.ms, threads: window.weft.result.report.threads,
       stages: window.weft.result.report.timings.filter((t) => !t.cached).map((t) => ({ stage: t.stage, ms: t.ms })) };
   }, before, { timeout: 600000, polling: 20 }).then((h) => h.jsonValue());
+}
+
+/**
+ * Starts sampling every core of the machine with Linux perf (`perf record -e cpu-clock -a`, as
+ * root or with perf_event_paranoid ≤ 0) at `hz` a core, timestamps on `clock` ("CLOCK_REALTIME"
+ * or "CLOCK_MONOTONIC"), into `path`. Resolves once sampling has begun to an object whose
+ * `stop()` ends the recording, deletes `path` and resolves to every sample as
+ * `{ comm, id, ms }`: the thread's name, its process id (`id: "pid"`) or thread id
+ * (`id: "tid"`), and the time in milliseconds on `clock`.
+ */
+export async function recordCores(path, { hz, clock, id = "pid" }) {
+  const perf = spawn("perf", ["record", "-q", "-e", "cpu-clock", "-F", String(hz), "-a", "-k", clock, "-o", path], { stdio: "ignore" });
+  await new Promise((r) => setTimeout(r, 500)); // perf starts sampling
+  return {
+    async stop() {
+      await new Promise((r) => { perf.on("exit", r); perf.kill("SIGINT"); });
+      const text = execFileSync("perf", ["script", "-i", path, "-F", `comm,${id},time`], { encoding: "utf8", maxBuffer: 1 << 28, stdio: ["ignore", "pipe", "ignore"] });
+      rmSync(path);
+      const samples = [];
+      for (const line of text.split("\n")) {
+        const m = line.match(/^\s*(.*?)\s+(\d+)\s+([\d.]+):/);
+        if (m) samples.push({ comm: m[1], id: m[2], ms: Number(m[3]) * 1000 });
+      }
+      return samples;
+    },
+  };
 }

@@ -22,11 +22,11 @@
 //                     share the worker and its pool got, and what took the rest (the page's own
 //                     threads, the GPU process's software renderer, other programs). The stages are
 //                     placed by the worker's `weft:stage:*` performance marks.
-import { execFileSync, spawn } from "node:child_process";
+import { execFileSync } from "node:child_process";
 import { existsSync, mkdirSync, readdirSync, readFileSync, writeFileSync } from "node:fs";
 import { join, resolve } from "node:path";
 import { ROOT, serve } from "./server.mjs";
-import { dropAndTimeFirstFrame, launchChromium, waitReady } from "./page-helpers.mjs";
+import { dropAndTimeFirstFrame, launchChromium, recordCores, waitReady } from "./page-helpers.mjs";
 import { sphereStl } from "./threads-checks.mjs";
 
 const WEFT_BIN = resolve(ROOT, process.env.WEFT_BIN ?? "target/release/weft");
@@ -64,12 +64,10 @@ const CORES = Number(execFileSync("nproc", { encoding: "utf8" }).trim());
  * other, idle.
  */
 async function coresDuring(page, work) {
-  const path = join(OUT, "threads-bench.perf");
   // CLOCK_REALTIME: the clock of performance.timeOrigin + performance.now().
-  const perf = spawn("perf", ["record", "-q", "-e", "cpu-clock", "-F", String(PERF_HZ), "-a", "-k", "CLOCK_REALTIME", "-o", path], { stdio: "ignore" });
-  await new Promise((r) => setTimeout(r, 500));
+  const perf = await recordCores(join(OUT, "threads-bench.perf"), { hz: PERF_HZ, clock: "CLOCK_REALTIME" });
   const result = await work();
-  await new Promise((r) => { perf.on("exit", r); perf.kill("SIGINT"); });
+  const samples = await perf.stop();
   const worker = page.workers().find((w) => /\/worker\.js/.test(w.url()));
   const marks = await worker.evaluate(() => performance.getEntriesByType("mark")
     .filter((m) => m.name.startsWith("weft:stage"))
@@ -78,25 +76,17 @@ async function coresDuring(page, work) {
   for (let k = 0; k + 1 < marks.length; k++) {
     if (marks[k][0] !== "-end" && !marks[k][0].endsWith("(reused)")) windows.push([marks[k][0], marks[k][1], marks[k + 1][1]]);
   }
-  const text = execFileSync("perf", ["script", "-i", path, "-F", "comm,pid,time"], { encoding: "utf8", maxBuffer: 1 << 28, stdio: ["ignore", "pipe", "ignore"] });
-  const renderer = new Set(); // pids of the processes holding a worker: the page's renderers
-  const samples = [];
-  for (const line of text.split("\n")) {
-    const m = line.match(/^\s*(.*?)\s+(\d+)\s+([\d.]+):/);
-    if (!m) continue;
-    if (m[1] === "DedicatedWorker") renderer.add(m[2]);
-    samples.push([m[1], m[2], Number(m[3]) * 1000]);
-  }
-  if (process.env.BENCH_PERF_DEBUG) log(`perf samples ${samples[0]?.[2]?.toFixed(0)}..${samples.at(-1)?.[2]?.toFixed(0)}; windows ${JSON.stringify(windows.map(([n, a, b]) => [n, a.toFixed(0), (b - a).toFixed(0)]))}`);
+  // The processes holding a worker: the page's renderers.
+  const renderer = new Set(samples.filter((s) => s.comm === "DedicatedWorker").map((s) => s.id));
   const shares = new Map();
   for (const [name, lo, hi] of windows) {
     // Stages of earlier runs (the warm-up) began before the recording; too short a stage has
     // too few samples to count.
-    if (!(lo >= (samples[0]?.[2] ?? Infinity)) || hi - lo < 20) continue;
+    if (!(lo >= (samples[0]?.ms ?? Infinity)) || hi - lo < 20) continue;
     const by = { worker: 0, page: 0, renderer: 0, idle: 0, other: 0 };
-    for (const [comm, pid, at] of samples) {
+    for (const { comm, id, ms: at } of samples) {
       if (at < lo || at >= hi) continue;
-      const group = comm === "DedicatedWorker" ? "worker" : comm === "swapper" ? "idle" : renderer.has(pid) ? "page"
+      const group = comm === "DedicatedWorker" ? "worker" : comm === "swapper" ? "idle" : renderer.has(id) ? "page"
         : /^Thread<\d+>$|^VizCompositor|^CrGpuMain/.test(comm) ? "renderer" : "other";
       by[group] += 1;
     }

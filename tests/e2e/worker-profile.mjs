@@ -20,11 +20,11 @@
 // the cores the worker's threads got, and what else took the rest (the page's own threads,
 // the GPU process's software renderer, other programs).
 
-import { execFileSync, spawn } from "node:child_process";
+import { execFileSync } from "node:child_process";
 import { readFileSync, rmSync } from "node:fs";
 import { join, resolve } from "node:path";
 import { ROOT, serve } from "./server.mjs";
-import { dropAndTimeFirstFrame, launchChromium, waitReady } from "./page-helpers.mjs";
+import { dropAndTimeFirstFrame, launchChromium, recordCores, waitReady } from "./page-helpers.mjs";
 
 const threads = Number(process.argv[2] ?? 2);
 const stage = process.argv[3] ?? "import";
@@ -38,6 +38,8 @@ const PERF_HZ = 1999;
 const server = await serve({ root: ROOT, ...(process.env.WEFT_PKG_DIR ? { pkgDir: resolve(process.env.WEFT_PKG_DIR) } : {}) });
 const browser = await launchChromium();
 let timed;
+/** perf's samples of every core during the stage's drop (PERF=1). */
+let onCoreSamples = null;
 try {
   const page = await (await browser.newContext({ viewport: { width: 1280, height: 800 } })).newPage();
   await page.goto(`${server.url}/www/?threads=${threads}`);
@@ -45,10 +47,9 @@ try {
   await dropAndTimeFirstFrame(page, warmMesh);
   await browser.startTracing(page, { path: tracePath, categories: ["disabled-by-default-v8.cpu_profiler"] });
   // CLOCK_MONOTONIC: the clock of the trace's timestamps (Chromium's TimeTicks on Linux).
-  const perf = perfPath && spawn("perf", ["record", "-q", "-e", "cpu-clock", "-F", String(PERF_HZ), "-a", "-k", "CLOCK_MONOTONIC", "-o", perfPath], { stdio: "ignore" });
-  if (perf) await new Promise((r) => setTimeout(r, 500)); // perf starts sampling
+  const perf = perfPath && (await recordCores(perfPath, { hz: PERF_HZ, clock: "CLOCK_MONOTONIC", id: "tid" }));
   timed = await dropAndTimeFirstFrame(page, mesh);
-  if (perf) await new Promise((r) => { perf.on("exit", r); perf.kill("SIGINT"); });
+  if (perf) onCoreSamples = await perf.stop();
   await browser.stopTracing();
 } finally {
   await browser.close();
@@ -123,17 +124,13 @@ if (busiest.length === 2) {
   for (const [k, ms] of top(meanwhile, 12)) console.log(`  ${ms.toFixed(1).padStart(7)} ms  ${k}`);
 }
 
-if (perfPath) {
+if (onCoreSamples) {
   // On-core samples of every thread of the machine within the stage's window.
-  const text = execFileSync("perf", ["script", "-i", perfPath, "-F", "comm,tid,time"], { encoding: "utf8", maxBuffer: 1 << 28, stdio: ["ignore", "pipe", "ignore"] });
-  rmSync(perfPath);
   const onCore = new Map();
-  for (const line of text.split("\n")) {
-    const m = line.match(/^\s*(.*?)\s+(\d+)\s+([\d.]+):/);
-    if (!m) continue;
-    const at = Number(m[3]) * 1e6; // µs, as the trace
+  for (const { comm, id, ms } of onCoreSamples) {
+    const at = ms * 1000; // µs, as the trace
     if (at < lo || at > hi) continue;
-    const who = m[1] === "swapper" ? "(idle core)" : m[1] === "DedicatedWorker" ? `worker thread ${m[2]}` : /^Thread<\d+>$/.test(m[1]) ? "GPU process: software renderer" : m[1];
+    const who = comm === "swapper" ? "(idle core)" : comm === "DedicatedWorker" ? `worker thread ${id}` : /^Thread<\d+>$/.test(comm) ? "GPU process: software renderer" : comm;
     add(onCore, who, 1000 / PERF_HZ);
   }
   const cores = ((hi - lo) / 1000) * Number(execFileSync("nproc", { encoding: "utf8" }).trim());

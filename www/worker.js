@@ -102,11 +102,13 @@ function handle(msg) {
         break;
       case MSG.ANALYZE: {
         const t0 = performance.now();
+        markStage("analyze");
         self.postMessage({ type: MSG.PROGRESS, id: msg.id, stage: "analyze", fraction: 0 });
         // A Blob (a dropped file) is checked from its size, then read straight into wasm memory.
         const report = plain(msg.blob
           ? session.analyzeBlob(msg.name, msg.blob)
           : session.analyzeGcode(msg.name, new Uint8Array(msg.bytes)));
+        markStage(null);
         postResult(msg.id, "analyze", report, t0);
         break;
       }
@@ -136,6 +138,7 @@ function handle(msg) {
         throw new Error(`unknown message type ${JSON.stringify(msg.type)}`);
     }
   } catch (err) {
+    if (openStage) markStage(null);
     // A trap (panic → unreachable, stack overflow) or a failed memory.grow leaves the wasm
     // instance unusable: ask the page to replace this worker.
     const fatal = err instanceof WebAssembly.RuntimeError || err instanceof RangeError;
@@ -147,16 +150,24 @@ function handle(msg) {
 }
 
 const MAX_MARKS = 1000;
+/** Marks made since the timeline was last cleared, and whether a stage's work is under way. */
+let marks = 0;
+let openStage = false;
 
 /**
- * Marks in this worker's performance timeline where each stage of a run (or a file's load)
- * begins, `weft:stage:<name>` (`<name> (reused)` for one made before), and where the work
- * ends, `weft:stage-end` (`stage` null). DevTools shows them, and
- * tests/e2e/threads-bench.mjs reads them to tell which threads had the cores during each
- * stage. At most MAX_MARKS are kept.
+ * Marks in this worker's performance timeline where each stage of a run, a file's load or a
+ * G-code analysis begins, `weft:stage:<name>` (`<name> (reused)` for one made before), and
+ * where the work ends or fails, `weft:stage-end` (`stage` null). DevTools shows them, and the
+ * end-to-end checks and tests/e2e/threads-bench.mjs read them (page-helpers.mjs,
+ * `stageMarks`). At most MAX_MARKS are kept.
  */
 function markStage(stage) {
-  if (performance.getEntriesByType("mark").length >= MAX_MARKS) performance.clearMarks();
+  if (marks >= MAX_MARKS) {
+    performance.clearMarks();
+    marks = 0;
+  }
+  marks += 1;
+  openStage = stage != null;
   performance.mark(stage == null ? "weft:stage-end" : `weft:stage:${stage}`);
 }
 

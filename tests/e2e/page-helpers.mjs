@@ -192,3 +192,16 @@ export async function recordCores(path, { hz, clock, id = "pid" }) {
     },
   };
 }
+
+/**
+ * The computing worker's stage marks (www/worker.js, `markStage`), oldest first:
+ * `{ name, at }` with `name` the stage ("slice", "import (reused)") or null where the work
+ * ended, and `at` in milliseconds since the epoch (performance.timeOrigin + the mark's time).
+ */
+export async function stageMarks(page) {
+  const worker = page.workers().find((w) => /\/worker\.js/.test(w.url()));
+  if (!worker) throw new Error("the page has no computing worker (www/worker.js)");
+  return worker.evaluate(() => performance.getEntriesByType("mark")
+    .filter((m) => m.name.startsWith("weft:stage"))
+    .map((m) => ({ name: m.name === "weft:stage-end" ? null : m.name.slice("weft:stage:".length), at: performance.timeOrigin + m.startTime })));
+}

@@ -27,7 +27,7 @@ import { newcomerChecks } from "./newcomer-checks.mjs";
 import { previewChecks } from "./preview-checks.mjs";
 import { threadsChecks } from "./threads-checks.mjs";
 import {
-  boxStl, collectErrors, colouredPixels, downloadGcode, launchChromium, waitReady, waitResult as waitResultWithin,
+  boxStl, collectErrors, colouredPixels, downloadGcode, launchChromium, stageMarks, waitReady, waitResult as waitResultWithin,
 } from "./page-helpers.mjs";
 
 const OUT = join(ROOT, "tests/e2e/out");
@@ -433,12 +433,11 @@ await check(9, "temperature change → re-run reuses every stage before gcode; G
   if (shouldShow.some((st) => !badges.includes(st))) throw new Error(`cards without the reused badge: ${JSON.stringify(cards)}`);
   // The worker marks each stage of the run in its performance timeline, a reused one as such
   // (DevTools shows the marks; threads-bench places its stages by them).
-  const worker = page.workers().find((w) => /\/worker\.js/.test(w.url()));
-  const marks = await worker.evaluate(() => performance.getEntriesByType("mark").map((m) => m.name).filter((n) => n.startsWith("weft:stage")));
-  const ends = marks.flatMap((n, k) => (n === "weft:stage-end" ? [k] : []));
+  const marks = (await stageMarks(page)).map((m) => m.name);
+  const ends = marks.flatMap((n, k) => (n === null ? [k] : []));
   const runMarks = marks.slice((ends.at(-2) ?? -1) + 1, ends.at(-1));
   const timings = await page.evaluate(() => window.weft.result.report.timings);
-  const expected = timings.map((t) => `weft:stage:${t.stage}${t.cached ? " (reused)" : ""}`);
+  const expected = timings.map((t) => `${t.stage}${t.cached ? " (reused)" : ""}`);
   if (JSON.stringify(runMarks) !== JSON.stringify(expected)) throw new Error(`the worker's stage marks ${JSON.stringify(runMarks)} are not the run's timings ${JSON.stringify(expected)}`);
   const b = await download(page, "temp-b.gcode");
   const la = a.bytes.toString("utf8").split("\n");

@@ -26,7 +26,7 @@ import { execFileSync } from "node:child_process";
 import { existsSync, mkdirSync, readdirSync, readFileSync, writeFileSync } from "node:fs";
 import { join, resolve } from "node:path";
 import { ROOT, serve } from "./server.mjs";
-import { dropAndTimeFirstFrame, launchChromium, recordCores, waitReady } from "./page-helpers.mjs";
+import { dropAndTimeFirstFrame, launchChromium, recordCores, stageMarks, waitReady } from "./page-helpers.mjs";
 import { sphereStl } from "./threads-checks.mjs";
 
 const WEFT_BIN = resolve(ROOT, process.env.WEFT_BIN ?? "target/release/weft");
@@ -68,13 +68,11 @@ async function coresDuring(page, work) {
   const perf = await recordCores(join(OUT, "threads-bench.perf"), { hz: PERF_HZ, clock: "CLOCK_REALTIME" });
   const result = await work();
   const samples = await perf.stop();
-  const worker = page.workers().find((w) => /\/worker\.js/.test(w.url()));
-  const marks = await worker.evaluate(() => performance.getEntriesByType("mark")
-    .filter((m) => m.name.startsWith("weft:stage"))
-    .map((m) => [m.name.replace(/^weft:stage:?/, ""), performance.timeOrigin + m.startTime]));
+  const marks = await stageMarks(page);
   const windows = [];
   for (let k = 0; k + 1 < marks.length; k++) {
-    if (marks[k][0] !== "-end" && !marks[k][0].endsWith("(reused)")) windows.push([marks[k][0], marks[k][1], marks[k + 1][1]]);
+    const { name, at } = marks[k];
+    if (name !== null && !name.endsWith("(reused)")) windows.push([name, at, marks[k + 1].at]);
   }
   // The processes holding a worker: the page's renderers.
   const renderer = new Set(samples.filter((s) => s.comm === "DedicatedWorker").map((s) => s.id));

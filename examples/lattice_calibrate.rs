@@ -157,10 +157,9 @@ fn main() {
     let sides = if sides.is_empty() { vec![80.0, 160.0] } else { sides };
     for &side in &sides {
         for p in patterns(1.0) {
-            for (domain, contour, layers, rot) in [
-                (Domain::Rectangle { width_mm: side, height_mm: side }, false, 1, 0.0),
-                (Domain::Disc { diameter_mm: side }, true, 2, 30.0),
-            ] {
+            for (domain, contour, layers, rot) in
+                [(Domain::Rectangle { width_mm: side, height_mm: side }, false, 1, 0.0), (Domain::Disc { diameter_mm: side }, true, 2, 30.0)]
+            {
                 let o = Options { pattern: p.clone(), contour, layers, rotation_deg: rot, ..Options::default() };
                 let d = lattice::planar_domains(&domain, &o).unwrap();
                 let est = lattice::estimate(&DomainSize::planar(&domain, &o), &o, 0.2);
@@ -180,7 +179,8 @@ fn main() {
                 let odd: f64 = g.layers.iter().map(|l| weft::paths::build_graph(l, 0.005).odd_nodes() as f64).sum();
                 let r = |a: f64, b: f64| if b > 0.0 { a / b } else { f64::NAN };
                 let per = if what == "lattice" { dt / est.get("generated_struts") / layers as f64 } else { 0.0 };
-                if what == "lattice" { println!(
+                if what == "lattice" {
+                    println!(
                     "{side:>5} {:<18} {:<5} est/real struts {:.2} total {:.2} edges {:.2} length {:.2} odd {:.2} | {:.3} s, {:.2} µs/generated strut, est {:.3} s ({:.2}×) bytes {:.0} MB",
                     name(&p),
                     if contour { "disc" } else { "rect" },
@@ -194,7 +194,8 @@ fn main() {
                     est.seconds,
                     r(est.seconds, dt),
                     est.bytes / 1e6,
-                ); }
+                );
+                }
                 if what == "paths" {
                     paths_row(&g.layers, &est, side, &name(&p), contour);
                 }

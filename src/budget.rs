@@ -167,7 +167,15 @@ pub fn human(value: f64, unit: &str) -> String {
     }
     match unit {
         "bytes" => {
-            let (v, u) = if value >= GIB { (value / GIB, "GiB") } else if value >= MIB { (value / MIB, "MiB") } else if value >= 1024.0 { (value / 1024.0, "KiB") } else { (value, "bytes") };
+            let (v, u) = if value >= GIB {
+                (value / GIB, "GiB")
+            } else if value >= MIB {
+                (value / MIB, "MiB")
+            } else if value >= 1024.0 {
+                (value / 1024.0, "KiB")
+            } else {
+                (value, "bytes")
+            };
             format!("{} {u}", sig(v))
         }
         "s" => {
@@ -180,7 +188,15 @@ pub fn human(value: f64, unit: &str) -> String {
             }
         }
         _ => {
-            let (v, s) = if value >= 1e9 { (value / 1e9, "G") } else if value >= 1e6 { (value / 1e6, "M") } else if value >= 1e4 { (value / 1e3, "k") } else { (value, "") };
+            let (v, s) = if value >= 1e9 {
+                (value / 1e9, "G")
+            } else if value >= 1e6 {
+                (value / 1e6, "M")
+            } else if value >= 1e4 {
+                (value / 1e3, "k")
+            } else {
+                (value, "")
+            };
             let unit = if unit.is_empty() { String::new() } else { format!(" {unit}") };
             format!("{}{s}{unit}", sig(v))
         }
@@ -189,9 +205,19 @@ pub fn human(value: f64, unit: &str) -> String {
 
 /// Three significant figures at most, without trailing zeros.
 fn sig(v: f64) -> String {
-    let digits = if v >= 100.0 { 0 } else if v >= 10.0 { 1 } else { 2 };
+    let digits = if v >= 100.0 {
+        0
+    } else if v >= 10.0 {
+        1
+    } else {
+        2
+    };
     let s = format!("{v:.digits$}");
-    if s.contains('.') { s.trim_end_matches('0').trim_end_matches('.').to_string() } else { s }
+    if s.contains('.') {
+        s.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        s
+    }
 }
 
 /// A whole run's estimate: every stage's, in run order, and the totals the page and

@@ -15,12 +15,12 @@
 //! voronoi-10mm, whose joints crowd, it made 23 pairs of struts 0.208–0.279 mm apart (beads
 //! that do not touch) touch in the STL. So two prisms of struts sharing no node touch only where
 //! the struts' centrelines are within one width, i.e. where weft's own beads touch too
-//! (`tests/export_stl.rs`). A curved strut (one graph edge with bend points) is one prism per
+//! (`tests/it/export_stl.rs`). A curved strut (one graph edge with bend points) is one prism per
 //! sampled segment. Prisms are not unioned (slicers union the overlapping volumes themselves).
 
 use crate::design::Design;
-use crate::jobs::lattice::LatticeJob;
 use crate::geom::{DVec2, Mesh};
+use crate::jobs::lattice::LatticeJob;
 use crate::pipeline::{self, Files};
 
 /// An exported lattice.
@@ -132,9 +132,7 @@ pub fn convex_touch(a: &[DVec2], b: &[DVec2], gap: f64) -> bool {
                 continue;
             }
             let n = DVec2::new(-d.y, d.x) / len;
-            let span = |p: &[DVec2]| {
-                p.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| (lo.min(n.dot(*v)), hi.max(n.dot(*v))))
-            };
+            let span = |p: &[DVec2]| p.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| (lo.min(n.dot(*v)), hi.max(n.dot(*v))));
             let (alo, ahi) = span(a);
             let (blo, bhi) = span(b);
             if alo > bhi + gap || blo > ahi + gap {

@@ -408,7 +408,8 @@ fn cmd_inspect(design: &str, view: &str, index: usize, inputs: &[String], set: &
     let mut files = Files::new();
     apply_inputs(&mut design, inputs, &mut files)?;
     let registry = Registry::builtin();
-    let found = weft::pipeline::inspect(&registry, &mut weft::pipeline::Cache::disabled(), &design, &files, view, index.saturating_sub(1)).map_err(|e| e.to_string())?;
+    let found = weft::pipeline::inspect(&registry, &mut weft::pipeline::Cache::disabled(), &design, &files, view, index.saturating_sub(1))
+        .map_err(|e| e.to_string())?;
     if found.shape == weft::jobs::Shape::Mesh {
         let mesh = weft::geom::Mesh::from_triangle_floats(&found.data);
         let path = output_path(Some(&out), &format!("{}-{view}", design.name), "stl");
@@ -497,7 +498,13 @@ fn cmd_run(
                 Some(Ok(p)) => format!(" → {}", p.display()),
                 _ => " (--ahead FILE writes it)".into(),
             };
-            errln!("\r{}: sent ahead {} ({} of G-code) at {:.2} s{to}", a.stage, a.label, weft::budget::human(a.gcode.len() as f64, "bytes"), started.elapsed().as_secs_f64());
+            errln!(
+                "\r{}: sent ahead {} ({} of G-code) at {:.2} s{to}",
+                a.stage,
+                a.label,
+                weft::budget::human(a.gcode.len() as f64, "bytes"),
+                started.elapsed().as_secs_f64()
+            );
         }
         if let Some(Err(e)) = written {
             *ahead_failed.borrow_mut() = Some(e);
@@ -562,7 +569,8 @@ fn plan_table(plan: &weft::budget::Plan) -> String {
     let mut out = format!("{:<10} {:>10} {:>9} {:>10}  {}\n", "stage", "memory", "1 thread", threads(n), "work");
     for e in &plan.stages {
         let work: Vec<String> = e.quantities.iter().map(|q| format!("{} {}", q.label.to_lowercase(), human(q.value, q.unit))).collect();
-        out += &format!("{:<10} {:>10} {:>9} {:>10}  {}\n", e.stage, human(e.bytes, "bytes"), human(e.seconds, "s"), human(e.seconds_on(n), "s"), work.join(", "));
+        out +=
+            &format!("{:<10} {:>10} {:>9} {:>10}  {}\n", e.stage, human(e.bytes, "bytes"), human(e.seconds, "s"), human(e.seconds_on(n), "s"), work.join(", "));
     }
     out += &format!(
         "total: about {} on {} ({} on 1), peak {}, {} segments, {} of G-code\n",
@@ -649,10 +657,8 @@ fn scaling_bench() -> Result<(), String> {
     use weft::bench::scaling::{cases, exponent, MAX_EXPONENT, SCALES};
     let exe = std::env::current_exe().map_err(|e| e.to_string())?;
     let child = |name: &str, scale: usize| -> Result<(f64, f64, f64), String> {
-        let out = std::process::Command::new(&exe)
-            .args(["bench", "--scaling-case", name, "--scale", &scale.to_string()])
-            .output()
-            .map_err(|e| e.to_string())?;
+        let out =
+            std::process::Command::new(&exe).args(["bench", "--scaling-case", name, "--scale", &scale.to_string()]).output().map_err(|e| e.to_string())?;
         if !out.status.success() {
             return Err(format!("{name} ×{scale}: {}", String::from_utf8_lossy(&out.stderr).trim()));
         }
@@ -664,7 +670,8 @@ fn scaling_bench() -> Result<(), String> {
         }
     };
     let idle = std::process::Command::new(&exe).args(["bench", "--scaling-case", "none"]).output().ok();
-    let idle_bytes = idle.and_then(|o| String::from_utf8_lossy(&o.stdout).split_whitespace().nth(2).and_then(|w| w.parse::<f64>().ok())).unwrap_or(0.0) * 1024.0;
+    let idle_bytes =
+        idle.and_then(|o| String::from_utf8_lossy(&o.stdout).split_whitespace().nth(2).and_then(|w| w.parse::<f64>().ok())).unwrap_or(0.0) * 1024.0;
     outln!("scaling: best of 3 per size; memory = peak resident above an idle process ({:.1} MiB)", idle_bytes / 1048576.0);
     outln!("{:<20} {:>10} {:>22} {:>22} {:>22} {:>6} {:>6}", "case", "unit", "1×: size, s, MiB", "4×", "16×", "t exp", "m exp");
     let mut over = Vec::new();

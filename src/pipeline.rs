@@ -14,8 +14,8 @@ use crate::geom::{DVec3, Mesh, Toolpath};
 use crate::import::{self, ImportReport};
 use crate::jobs::{Inspection, Product, Registry};
 use crate::report::StageReport;
-use crate::volume;
 use crate::source::ByteSource;
+use crate::volume;
 use serde::Serialize;
 use std::any::Any;
 use std::collections::BTreeMap;
@@ -538,7 +538,13 @@ impl<'a> Ctx<'a> {
                 let stage = report.as_ref().map(|r| {
                     StageReport::new("import", "Reading the mesh", r)
                         .metric("triangles", "Triangles", r.triangles as f64, "", "Facets in the mesh after repairs.")
-                        .metric("open_edges", "Open edges", r.open_edges as f64, "", "Edges with one facet: holes in the surface (0 for a closed, printable mesh).")
+                        .metric(
+                            "open_edges",
+                            "Open edges",
+                            r.open_edges as f64,
+                            "",
+                            "Edges with one facet: holes in the surface (0 for a closed, printable mesh).",
+                        )
                 });
                 Ok((mesh, stage))
             },
@@ -649,7 +655,13 @@ impl<'a> Ctx<'a> {
                 .metric("max", "Highest value", r.max as f64, unit, "The volume's largest value after rescale.")
                 .metric("files", "Files read", r.files_read as f64, "", "Files that made the volume.");
             if !r.skipped.is_empty() {
-                report = report.metric("skipped", "Files skipped", r.skipped.len() as f64, "", "Files in the drop that are not images of the series (listed in the report's data).");
+                report = report.metric(
+                    "skipped",
+                    "Files skipped",
+                    r.skipped.len() as f64,
+                    "",
+                    "Files in the drop that are not images of the series (listed in the report's data).",
+                );
             }
             Ok((imported.volume, Some(report)))
         })
@@ -898,9 +910,7 @@ pub fn run_sending(
     progress: &mut dyn FnMut(&str, f32),
     ahead: &dyn Fn(&Ahead),
 ) -> Result<RunOutput, Error> {
-    let kind = registry
-        .get(design.job.kind())
-        .ok_or_else(|| Error::UnknownKind { kind: design.job.kind().into(), known: registry.names().join(", ") })?;
+    let kind = registry.get(design.job.kind()).ok_or_else(|| Error::UnknownKind { kind: design.job.kind().into(), known: registry.names().join(", ") })?;
     let mut ctx = Ctx::new(design, files, cache, progress);
     ctx.ahead = ahead;
     ctx.counting = true;
@@ -944,9 +954,7 @@ fn stats_of(a: &analyze::Report) -> GcodeStats {
 /// stage's estimate in run order, made before running any stage but the imports (which are
 /// bounded by their own estimates and kept for the run).
 pub fn estimate(registry: &Registry, cache: &mut Cache, design: &Design, files: &Files) -> Result<Plan, Error> {
-    let kind = registry
-        .get(design.job.kind())
-        .ok_or_else(|| Error::UnknownKind { kind: design.job.kind().into(), known: registry.names().join(", ") })?;
+    let kind = registry.get(design.job.kind()).ok_or_else(|| Error::UnknownKind { kind: design.job.kind().into(), known: registry.names().join(", ") })?;
     let mut quiet = |_: &str, _: f32| {};
     let mut ctx = Ctx::new(design, files, cache, &mut quiet);
     plan(kind, &mut ctx)
@@ -976,12 +984,7 @@ fn plan(kind: &dyn crate::jobs::JobKind, ctx: &mut Ctx) -> Result<Plan, Error> {
 /// The printer, material, speeds and name: what the writer reads of the design (also for
 /// a job that writes a toolpath itself, e.g. to compare routes).
 pub fn writer_options(design: &Design) -> gcode::Options {
-    gcode::Options {
-        printer: design.printer.clone(),
-        material: design.material.clone(),
-        speeds: design.speeds.clone(),
-        design_name: design.name.clone(),
-    }
+    gcode::Options { printer: design.printer.clone(), material: design.material.clone(), speeds: design.speeds.clone(), design_name: design.name.clone() }
 }
 
 fn write_stage(ctx: &mut Ctx, toolpath: &Out<Toolpath>) -> Result<Out<Written>, Error> {
@@ -1021,9 +1024,7 @@ fn analyze_stage(ctx: &mut Ctx, written: &Out<Written>, options: &RunOptions) ->
 /// Data of view `view` at `index` of the design's job (the page's extra views), computed
 /// through the same cached stages as a run.
 pub fn inspect(registry: &Registry, cache: &mut Cache, design: &Design, files: &Files, view: &str, index: usize) -> Result<Inspection, Error> {
-    let kind = registry
-        .get(design.job.kind())
-        .ok_or_else(|| Error::UnknownKind { kind: design.job.kind().into(), known: registry.names().join(", ") })?;
+    let kind = registry.get(design.job.kind()).ok_or_else(|| Error::UnknownKind { kind: design.job.kind().into(), known: registry.names().join(", ") })?;
     let mut quiet = |_: &str, _: f32| {};
     let mut ctx = Ctx::new(design, files, cache, &mut quiet);
     kind.inspect(&mut ctx, view, index)

@@ -105,31 +105,169 @@ pub const MAX_POINTS: usize = 1000;
 
 /// A real number in `min..=max` with a form `step`.
 #[allow(clippy::too_many_arguments)] // a table row constructor: one argument per column
-pub const fn num(path: &'static str, section: &'static str, label: &'static str, unit: &'static str, min: f64, max: f64, step: f64, doc: &'static str) -> Field {
-    Field { path, section, label, unit, kind: Kind::Number, min: Some(min), max: Some(max), step: Some(step), choices: &[], choice_docs: &[], percent: false, doc, default: None, when: None, widget: None, max_len: None }
+pub const fn num(
+    path: &'static str,
+    section: &'static str,
+    label: &'static str,
+    unit: &'static str,
+    min: f64,
+    max: f64,
+    step: f64,
+    doc: &'static str,
+) -> Field {
+    Field {
+        path,
+        section,
+        label,
+        unit,
+        kind: Kind::Number,
+        min: Some(min),
+        max: Some(max),
+        step: Some(step),
+        choices: &[],
+        choice_docs: &[],
+        percent: false,
+        doc,
+        default: None,
+        when: None,
+        widget: None,
+        max_len: None,
+    }
 }
 /// A whole number in `min..=max`.
 pub const fn int(path: &'static str, section: &'static str, label: &'static str, min: f64, max: f64, doc: &'static str) -> Field {
-    Field { path, section, label, unit: "", kind: Kind::Integer, min: Some(min), max: Some(max), step: Some(1.0), choices: &[], choice_docs: &[], percent: false, doc, default: None, when: None, widget: None, max_len: None }
+    Field {
+        path,
+        section,
+        label,
+        unit: "",
+        kind: Kind::Integer,
+        min: Some(min),
+        max: Some(max),
+        step: Some(1.0),
+        choices: &[],
+        choice_docs: &[],
+        percent: false,
+        doc,
+        default: None,
+        when: None,
+        widget: None,
+        max_len: None,
+    }
 }
 /// A field without a numeric range (bool, text, choice, section).
 pub const fn other(path: &'static str, section: &'static str, label: &'static str, kind: Kind, choices: &'static [&'static str], doc: &'static str) -> Field {
-    Field { path, section, label, unit: "", kind, min: None, max: None, step: None, choices, choice_docs: &[], percent: false, doc, default: None, when: None, widget: None, max_len: None }
+    Field {
+        path,
+        section,
+        label,
+        unit: "",
+        kind,
+        min: None,
+        max: None,
+        step: None,
+        choices,
+        choice_docs: &[],
+        percent: false,
+        doc,
+        default: None,
+        when: None,
+        widget: None,
+        max_len: None,
+    }
 }
 /// Three numbers, each in `min..=max`.
 #[allow(clippy::too_many_arguments)] // a table row constructor: one argument per column
-pub const fn vec3(path: &'static str, section: &'static str, label: &'static str, unit: &'static str, min: f64, max: f64, step: f64, doc: &'static str) -> Field {
-    Field { path, section, label, unit, kind: Kind::Vec3, min: Some(min), max: Some(max), step: Some(step), choices: &[], choice_docs: &[], percent: false, doc, default: None, when: None, widget: None, max_len: None }
+pub const fn vec3(
+    path: &'static str,
+    section: &'static str,
+    label: &'static str,
+    unit: &'static str,
+    min: f64,
+    max: f64,
+    step: f64,
+    doc: &'static str,
+) -> Field {
+    Field {
+        path,
+        section,
+        label,
+        unit,
+        kind: Kind::Vec3,
+        min: Some(min),
+        max: Some(max),
+        step: Some(step),
+        choices: &[],
+        choice_docs: &[],
+        percent: false,
+        doc,
+        default: None,
+        when: None,
+        widget: None,
+        max_len: None,
+    }
 }
 /// A list of 2-D points, each number in `min..=max`, at most `max_points` of them.
 #[allow(clippy::too_many_arguments)] // a table row constructor: one argument per column
-pub const fn points(path: &'static str, section: &'static str, label: &'static str, unit: &'static str, min: f64, max: f64, max_points: usize, doc: &'static str) -> Field {
-    Field { path, section, label, unit, kind: Kind::Points, min: Some(min), max: Some(max), step: None, choices: &[], choice_docs: &[], percent: false, doc, default: None, when: None, widget: None, max_len: Some(max_points) }
+pub const fn points(
+    path: &'static str,
+    section: &'static str,
+    label: &'static str,
+    unit: &'static str,
+    min: f64,
+    max: f64,
+    max_points: usize,
+    doc: &'static str,
+) -> Field {
+    Field {
+        path,
+        section,
+        label,
+        unit,
+        kind: Kind::Points,
+        min: Some(min),
+        max: Some(max),
+        step: None,
+        choices: &[],
+        choice_docs: &[],
+        percent: false,
+        doc,
+        default: None,
+        when: None,
+        widget: None,
+        max_len: Some(max_points),
+    }
 }
 /// Several rings of 2-D points, each number in `min..=max`, at most `max_points` in all.
 #[allow(clippy::too_many_arguments)] // a table row constructor: one argument per column
-pub const fn rings(path: &'static str, section: &'static str, label: &'static str, unit: &'static str, min: f64, max: f64, max_points: usize, doc: &'static str) -> Field {
-    Field { path, section, label, unit, kind: Kind::Rings, min: Some(min), max: Some(max), step: None, choices: &[], choice_docs: &[], percent: false, doc, default: None, when: None, widget: None, max_len: Some(max_points) }
+pub const fn rings(
+    path: &'static str,
+    section: &'static str,
+    label: &'static str,
+    unit: &'static str,
+    min: f64,
+    max: f64,
+    max_points: usize,
+    doc: &'static str,
+) -> Field {
+    Field {
+        path,
+        section,
+        label,
+        unit,
+        kind: Kind::Rings,
+        min: Some(min),
+        max: Some(max),
+        step: None,
+        choices: &[],
+        choice_docs: &[],
+        percent: false,
+        doc,
+        default: None,
+        when: None,
+        widget: None,
+        max_len: Some(max_points),
+    }
 }
 /// `f` with one line of plain words per choice.
 pub const fn choice_docs(mut f: Field, docs: &'static [&'static str]) -> Field {
@@ -178,7 +316,15 @@ pub struct Row {
 
 /// `fields` mounted under `prefix` (e.g. `job.slice`; empty for the root).
 pub fn mount(prefix: &str, fields: &[Field]) -> Vec<Row> {
-    let join = |p: &str| if prefix.is_empty() { p.to_string() } else if p.is_empty() { prefix.to_string() } else { format!("{prefix}.{p}") };
+    let join = |p: &str| {
+        if prefix.is_empty() {
+            p.to_string()
+        } else if p.is_empty() {
+            prefix.to_string()
+        } else {
+            format!("{prefix}.{p}")
+        }
+    };
     fields
         .iter()
         .map(|f| Row {
@@ -208,7 +354,11 @@ pub fn describe(problems: &[Problem]) -> String {
 
 /// Formats a limit the way people write it (`0.01`, `2`, `1e20`).
 pub fn fmt(x: f64) -> String {
-    if x.abs() >= 1e15 { format!("{x:e}") } else { format!("{x}") }
+    if x.abs() >= 1e15 {
+        format!("{x:e}")
+    } else {
+        format!("{x}")
+    }
 }
 
 fn lookup<'a>(root: &'a Value, path: &str) -> Option<&'a Value> {
@@ -238,7 +388,9 @@ impl Field {
             Kind::Choice => format!("one of: {}", self.choices.join(", ")),
             Kind::Vec3 => format!("three numbers [x, y, z], each from {lo} to {hi}{unit}"),
             Kind::Points => format!("a list of points [[a, b], …] (at most {}), each number from {lo} to {hi}{unit}", self.max_len.unwrap_or(MAX_POINTS)),
-            Kind::Rings => format!("a list of rings [[[a, b], …], …] (at most {} points in all), each number from {lo} to {hi}{unit}", self.max_len.unwrap_or(MAX_POINTS)),
+            Kind::Rings => {
+                format!("a list of rings [[[a, b], …], …] (at most {} points in all), each number from {lo} to {hi}{unit}", self.max_len.unwrap_or(MAX_POINTS))
+            }
             Kind::Section => "a group of settings { … }, or left out to switch it off".into(),
         }
     }
@@ -248,7 +400,8 @@ fn check_number(path: &str, v: f64, f: &Field, out: &mut Vec<Problem>) {
     let (lo, hi) = (f.min.unwrap_or(f64::MIN), f.max.unwrap_or(f64::MAX));
     if !v.is_finite() || v < lo || v > hi {
         // A Vec3 component is one number of the row's range.
-        let f = Field { kind: if matches!(f.kind, Kind::Vec3 | Kind::Points | Kind::Rings) { Kind::Number } else { f.kind }, min: Some(lo), max: Some(hi), ..*f };
+        let f =
+            Field { kind: if matches!(f.kind, Kind::Vec3 | Kind::Points | Kind::Rings) { Kind::Number } else { f.kind }, min: Some(lo), max: Some(hi), ..*f };
         let message = format!("{} is out of range: {} must be {}", fmt(v), f.label, f.must_be());
         out.push(Problem { path: path.to_string(), message });
     } else if f.kind == Kind::Integer && v.fract() != 0.0 {
@@ -324,7 +477,10 @@ fn check_one(root: &Value, path: &str, f: &Field, out: &mut Vec<Problem>) {
             for (r, ring) in rings.iter().enumerate() {
                 match ring.as_array() {
                     Some(points) => check_pairs(&format!("{path}.{r}"), points, f, &format!(" of ring {}", r + 1), out),
-                    None => out.push(Problem { path: format!("{path}.{r}"), message: format!("ring {} of {} must be a list of points [[a, b], …]", r + 1, f.label) }),
+                    None => out
+                        .push(Problem {
+                            path: format!("{path}.{r}"), message: format!("ring {} of {} must be a list of points [[a, b], …]", r + 1, f.label)
+                        }),
                 }
             }
         }
@@ -370,10 +526,8 @@ pub fn not_a_choice(given: &str, label: &str, choices: &[&str]) -> String {
 
 /// The problem of a string `s` at `path` longer than `limit` bytes (`what` names it).
 pub fn text_too_long(path: &str, s: &str, limit: usize, what: &str) -> Option<Problem> {
-    (s.len() > limit).then(|| Problem {
-        path: path.to_string(),
-        message: format!("{what} is {} bytes long, over the limit of {limit} bytes: shorten it", s.len()),
-    })
+    (s.len() > limit)
+        .then(|| Problem { path: path.to_string(), message: format!("{what} is {} bytes long, over the limit of {limit} bytes: shorten it", s.len()) })
 }
 
 /// `s` cut to at most `chars` characters (with `…` when cut), to quote a value in a message.

@@ -197,10 +197,8 @@ mod tests {
     #[test]
     fn blocks_keep_their_contents_across_threads() {
         // Blocks made before the caches are enabled, freed after.
-        let early: Vec<(*mut u8, Layout)> = (1..200)
-            .map(|s| Layout::from_size_align(s * 7, 8).unwrap())
-            .map(|l| (unsafe { ThreadCache.alloc(l) }, l))
-            .collect();
+        let early: Vec<(*mut u8, Layout)> =
+            (1..200).map(|s| Layout::from_size_align(s * 7, 8).unwrap()).map(|l| (unsafe { ThreadCache.alloc(l) }, l)).collect();
         enable();
         for (p, l) in early {
             unsafe { ThreadCache.dealloc(p, l) };

@@ -10,9 +10,9 @@
 use crate::analyze::{self, Preview};
 use crate::design::{schema, share, Design, Input};
 
+use crate::gcode_edit;
 use crate::import::group;
 use crate::jobs::{Registry, SlotKind};
-use crate::gcode_edit;
 use crate::pipeline::{self, Cache, Files, RunOptions};
 use crate::source::ByteSource;
 use serde::Serialize;
@@ -214,7 +214,8 @@ fn js_message(v: JsValue) -> String {
 
 impl BlobSource {
     fn new(blob: web_sys::Blob) -> Result<BlobSource, JsError> {
-        let reader = web_sys::FileReaderSync::new().map_err(|e| JsError::new(&format!("files cannot be read here ({}): weft reads them in its worker", js_message(e))))?;
+        let reader = web_sys::FileReaderSync::new()
+            .map_err(|e| JsError::new(&format!("files cannot be read here ({}): weft reads them in its worker", js_message(e))))?;
         let len = blob.size() as usize;
         Ok(BlobSource { blob, reader, len })
     }
@@ -222,9 +223,7 @@ impl BlobSource {
 
 /// All of `source`, read in pieces ([`crate::source::read_all`]); `name` names it in the error.
 fn read_whole(source: &BlobSource, name: &str) -> Result<Vec<u8>, JsError> {
-    crate::source::read_all(source)
-        .map(std::borrow::Cow::into_owned)
-        .map_err(|m| JsError::new(&format!("{name} could not be read ({m}); load it again")))
+    crate::source::read_all(source).map(std::borrow::Cow::into_owned).map_err(|m| JsError::new(&format!("{name} could not be read ({m}); load it again")))
 }
 
 impl ByteSource for BlobSource {
@@ -311,7 +310,9 @@ impl Session {
         kind.check_file(name, &head, size as u64).map_err(|m| JsError::new(&m))?;
         match kind {
             SlotKind::Volume | SlotKind::Gcode => {
-                self.files.insert_source(name.to_string(), Arc::new(source)).map_err(|m| JsError::new(&format!("{name} could not be read ({m}); load it again")))?;
+                self.files
+                    .insert_source(name.to_string(), Arc::new(source))
+                    .map_err(|m| JsError::new(&format!("{name} could not be read ({m}); load it again")))?;
                 self.check_loaded(slot, name, kind)
             }
             SlotKind::Mesh | SlotKind::Meshes | SlotKind::Frame => {
@@ -384,7 +385,18 @@ impl Session {
                         let first = w.joints.first().copied().unwrap_or_default();
                         let (lo, hi) = w.joints.iter().fold((first, first), |(a, b), p| (a.min(*p), b.max(*p)));
                         let d = hi - lo;
-                        (format!("{} beams, {} joints ({} grounded), {:.1} × {:.1} × {:.1} mm", group(w.beams.len() as u64), group(w.joints.len() as u64), group(grounded as u64), d.x, d.y, d.z), serde_json::Value::Null)
+                        (
+                            format!(
+                                "{} beams, {} joints ({} grounded), {:.1} × {:.1} × {:.1} mm",
+                                group(w.beams.len() as u64),
+                                group(w.joints.len() as u64),
+                                group(grounded as u64),
+                                d.x,
+                                d.y,
+                                d.z
+                            ),
+                            serde_json::Value::Null,
+                        )
                     }
                     Err(e) => {
                         self.files.remove(name);
@@ -568,7 +580,6 @@ impl Session {
         self.bed.to_vec()
     }
 }
-
 
 /// Segments (x0 y0 x1 y1, mm, centred on 0) of `pattern` (JSON, e.g. `{"kind":"voronoi"}`)
 /// cropped to a `size_mm` square: the page's pattern thumbnails.
@@ -765,4 +776,3 @@ mod bench_exports {
         }
     }
 }
-

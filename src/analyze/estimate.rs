@@ -55,10 +55,7 @@ pub fn peak_bytes(text_bytes: usize, segments: usize, layers: usize, largest_lay
     let _ = text_bytes;
     #[cfg(all(target_arch = "wasm32", not(feature = "wasm-threads")))]
     let parallel = 0;
-    preview_bytes
-        .saturating_add(layers.saturating_mul(LAYER_BYTES))
-        .saturating_add(overlap::layer_bytes(largest_layer))
-        .saturating_add(parallel)
+    preview_bytes.saturating_add(layers.saturating_mul(LAYER_BYTES)).saturating_add(overlap::layer_bytes(largest_layer)).saturating_add(parallel)
 }
 
 /// Scans `bytes` (see [`super::estimate`]).
@@ -394,7 +391,13 @@ mod tests {
         for layer in 0..300 {
             big.extend_from_slice(format!(";LAYER:{layer}\nG0 X0 Y0 Z{}\n", layer as f64 * 0.2).as_bytes());
             for k in 0..(layer % 17) * 3 {
-                let cmd = if k % 5 == 0 { "G2" } else if k % 3 == 0 { "" } else { "G1" };
+                let cmd = if k % 5 == 0 {
+                    "G2"
+                } else if k % 3 == 0 {
+                    ""
+                } else {
+                    "G1"
+                };
                 big.extend_from_slice(format!("{cmd} X{k} Y{layer} I1 J1 E{k}.5 ; k\n").as_bytes());
             }
         }

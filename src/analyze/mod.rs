@@ -8,9 +8,9 @@ use serde::Serialize;
 mod estimate;
 mod machine;
 mod overlap;
-mod poses;
 #[cfg(any(not(target_arch = "wasm32"), feature = "wasm-threads"))]
 mod pooled;
+mod poses;
 /// The G-code lexer (shared with the writer; lives in [`crate::motion::lex`]).
 pub use crate::motion::lex as parse;
 /// The time model (shared with the writer; lives in [`crate::motion::time`]).
@@ -213,18 +213,30 @@ pub enum Error {
 }
 
 fn at_line(line: usize) -> String {
-    if line == 0 { String::new() } else { format!("line {line}: ") }
+    if line == 0 {
+        String::new()
+    } else {
+        format!("line {line}: ")
+    }
 }
 
 /// Bytes as "1.3 GB" / "12.0 MB".
 pub(crate) fn human_bytes(n: usize) -> String {
     let n = n as f64;
-    if n >= 1e9 { format!("{:.1} GB", n / 1e9) } else { format!("{:.1} MB", n / 1e6) }
+    if n >= 1e9 {
+        format!("{:.1} GB", n / 1e9)
+    } else {
+        format!("{:.1} MB", n / 1e6)
+    }
 }
 
 /// Counts as "12.8M" / "3,200".
 pub(crate) fn human_count(n: usize) -> String {
-    if n >= 1_000_000 { format!("{:.1}M", n as f64 / 1e6) } else { n.to_string() }
+    if n >= 1_000_000 {
+        format!("{:.1}M", n as f64 / 1e6)
+    } else {
+        n.to_string()
+    }
 }
 
 /// Scans `bytes` for what [`analyze`] would need, without reading any number: lines, moves,
@@ -319,11 +331,7 @@ pub fn analyze(file: &str, bytes: &[u8], options: &Options) -> Result<Analysis, 
     check_size(file, bytes.len() as u64)?;
     let est = estimate(bytes, options);
     if est.peak_bytes > MAX_PEAK_BYTES {
-        return Err(Error::TooLarge {
-            file: file.to_string(),
-            line: 0,
-            problem: too_large(est.peak_bytes, est.moves, est.layers, options.collect_preview),
-        });
+        return Err(Error::TooLarge { file: file.to_string(), line: 0, problem: too_large(est.peak_bytes, est.moves, est.layers, options.collect_preview) });
     }
     if poses::is_poses(bytes) {
         return poses::run(file, bytes, options);

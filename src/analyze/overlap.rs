@@ -80,7 +80,11 @@ fn cell_of(v: f64, inv: f64) -> i64 {
     // floor without a libm call; `as` saturates and maps NaN to 0.
     let t = v * inv;
     let c = t as i64;
-    if (c as f64) > t { c - 1 } else { c }
+    if (c as f64) > t {
+        c - 1
+    } else {
+        c
+    }
 }
 
 #[inline]
@@ -211,7 +215,11 @@ fn on_segment(a: &Prep, b: &Prep) -> Option<(f64, f64)> {
     let mut hi = 1.0f64;
     clip(&mut lo, &mut hi, d0, dd, -tol, tol)?;
     clip(&mut lo, &mut hi, s0, ds, 0.0, la)?;
-    if hi - lo > 1e-12 { Some((lo, hi)) } else { None }
+    if hi - lo > 1e-12 {
+        Some((lo, hi))
+    } else {
+        None
+    }
 }
 
 /// [`on_segment`] in space, for segments not in one horizontal plane (a path over a curved
@@ -254,7 +262,11 @@ fn on_segment_3d(a: &Prep, b: &Prep) -> Option<(f64, f64)> {
     } else if qc > 0.0 {
         return None;
     }
-    if hi - lo > 1e-12 { Some((lo, hi)) } else { None }
+    if hi - lo > 1e-12 {
+        Some((lo, hi))
+    } else {
+        None
+    }
 }
 
 /// Narrows `[lo, hi]` to where `v0 + t·dv` lies in `[min, max]`.
@@ -270,7 +282,11 @@ fn clip(lo: &mut f64, hi: &mut f64, v0: f64, dv: f64, min: f64, max: f64) -> Opt
     }
     *lo = lo.max(t0);
     *hi = hi.min(t1);
-    if *hi > *lo { Some(()) } else { None }
+    if *hi > *lo {
+        Some(())
+    } else {
+        None
+    }
 }
 
 /// Whether a parameter interval covers a whole segment but for rounding: the search stops
@@ -356,9 +372,12 @@ impl Overlap {
             let bp = &self.prep[j];
             let (head, nodes, stamp, bstamp, intervals, prep) =
                 (&self.head, &self.nodes, &mut self.stamp, &mut self.bucket_stamp, &mut self.intervals, &self.prep);
+            // Cells and links visited (the growth checks count them).
+            let mut visited = 0usize;
             if !nodes.is_empty() {
                 let mut merge_at = 16;
                 for_piece_cells(b, cs, grow, |cx, cy| {
+                    visited += 1;
                     let k = bucket(cx, cy, probe_mask) as usize;
                     if bstamp[k] == q_mark {
                         return true;
@@ -368,6 +387,7 @@ impl Overlap {
                     let mut walked = 0;
                     while link != u32::MAX && walked < MAX_WALK {
                         walked += 1;
+                        visited += 1;
                         let [next, i] = nodes[link as usize];
                         link = next;
                         let i = i as usize;
@@ -396,6 +416,7 @@ impl Overlap {
             {
                 let (head, nodes, bstamp) = (&mut self.head, &mut self.nodes, &mut self.bucket_stamp);
                 for_piece_cells(b, cs, 0.0, |cx, cy| {
+                    visited += 1;
                     let k = bucket(cx, cy, probe_mask) as usize;
                     if bstamp[k] != r_mark {
                         bstamp[k] = r_mark;
@@ -405,6 +426,7 @@ impl Overlap {
                     true
                 });
             }
+            crate::work::add(visited);
             if self.intervals.is_empty() {
                 continue;
             }

@@ -23,8 +23,8 @@ use super::machine::{cut_lines, find_newline, Machine};
 use super::overlap::{Overlap, Seg};
 use super::{Analysis, Error};
 use crate::motion::lex::{lex_line, Command, Line, Words};
-use std::sync::atomic::{AtomicBool, Ordering};
 use crate::par::Reply;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::channel;
 
 /// Files of at least this many bytes are analysed on the pool; smaller ones on the calling

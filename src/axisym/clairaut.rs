@@ -362,7 +362,11 @@ pub fn solve<P: Profile + ?Sized>(p: &P, a: [f64; 2], b: [f64; 2], min_r: f64) -
                 }
                 return None;
             }
-            if g > 0.0 { r_lo = r } else { r_hi = r }
+            if g > 0.0 {
+                r_lo = r
+            } else {
+                r_hi = r
+            }
             // dΔθ/dr = −dΔθ/dc · 2r.
             let slope = -s.dtheta_dc * 2.0 * r;
             let next = r - g / slope;
@@ -514,8 +518,8 @@ fn turning<P: Profile + ?Sized>(p: &P, a: [f64; 2], b: [f64; 2], min_r: f64, st:
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::axisym::testing::{great_circle, Sphere};
     use crate::axisym::platform::Platform;
+    use crate::axisym::testing::{great_circle, Sphere};
 
     /// Unit tangent of the great circle from a towards b, in (du/ds, dθ/ds).
     fn great_circle_start(r: f64, a: [f64; 2], b: [f64; 2]) -> [f64; 2] {

@@ -430,16 +430,22 @@ fn no_contact(mesh: &Mesh, g: &Generatrix, dist: &[f64], used: &[bool], offset_m
 /// Wraps an angle difference into (−π, π].
 fn wrap(d: f64) -> f64 {
     let w = d - 2.0 * PI * libm::round(d / (2.0 * PI));
-    if w <= -PI { w + 2.0 * PI } else { w }
+    if w <= -PI {
+        w + 2.0 * PI
+    } else {
+        w
+    }
 }
 
 /// Twice the signed area in the (u, θ) plane (positive: counter-clockwise, u horizontal).
 fn shoelace(p: &[[f64; 2]]) -> f64 {
     let n = p.len();
-    (0..n).map(|i| {
-        let (a, b) = (p[i], p[(i + 1) % n]);
-        a[0] * b[1] - b[0] * a[1]
-    }).sum()
+    (0..n)
+        .map(|i| {
+            let (a, b) = (p[i], p[(i + 1) % n]);
+            a[0] * b[1] - b[0] * a[1]
+        })
+        .sum()
 }
 
 /// Even-odd point-in-polygon test in (u, θ).

@@ -261,7 +261,11 @@ impl Domain {
     pub fn theta_intervals(&self, u: f64) -> Vec<[f64; 2]> {
         match self {
             Domain::Rectangle { u: ur, theta } => {
-                if u >= ur[0] && u <= ur[1] { vec![*theta] } else { Vec::new() }
+                if u >= ur[0] && u <= ur[1] {
+                    vec![*theta]
+                } else {
+                    Vec::new()
+                }
             }
             Domain::Polygon { .. } => {
                 // Even–odd over the outline and the holes together: the holes lie apart inside
@@ -579,10 +583,7 @@ mod tests {
 
     /// [0.5, 1.5] × [0, 1] on the cylinder with the hole [0.8, 1.2] × [0.3, 0.7].
     fn square_with_hole() -> Domain {
-        Domain::Polygon {
-            points: vec![[0.5, 0.0], [1.5, 0.0], [1.5, 1.0], [0.5, 1.0]],
-            holes: vec![vec![[0.8, 0.3], [0.8, 0.7], [1.2, 0.7], [1.2, 0.3]]],
-        }
+        Domain::Polygon { points: vec![[0.5, 0.0], [1.5, 0.0], [1.5, 1.0], [0.5, 1.0]], holes: vec![vec![[0.8, 0.3], [0.8, 0.7], [1.2, 0.7], [1.2, 0.3]]] }
     }
 
     #[test]
@@ -650,7 +651,12 @@ mod tests {
             }
             // Repulsion pushes points up to the hole's edge: some lie within a spacing of it.
             let near = r.points.iter().filter(|q| q[0] > 0.78 && q[0] < 1.22 && q[1] > 0.28 && q[1] < 0.72).count();
-            eprintln!("{method:?}: N {}, {near} points within ~0.6 mm of the hole, std {:.3} → {:.3} mm", r.points.len(), r.seed_metrics.nn_std_mm, r.metrics.nn_std_mm);
+            eprintln!(
+                "{method:?}: N {}, {near} points within ~0.6 mm of the hole, std {:.3} → {:.3} mm",
+                r.points.len(),
+                r.seed_metrics.nn_std_mm,
+                r.metrics.nn_std_mm
+            );
             assert!(near > 10);
             assert!(r.metrics.nn_std_mm < r.seed_metrics.nn_std_mm);
         }

@@ -335,7 +335,10 @@ mod tests {
         }
         let smooth = dynamics(&tips, &s.axes, &m, 30.0).unwrap();
         for (r, q) in raw.axes.iter().zip(&smooth.axes) {
-            println!("{}: speed {:.1} → {:.1} °/s, accel {:.0} → {:.0} °/s²", r.axis, r.max_speed_deg_s, q.max_speed_deg_s, r.max_accel_deg_s2, q.max_accel_deg_s2);
+            println!(
+                "{}: speed {:.1} → {:.1} °/s, accel {:.0} → {:.0} °/s²",
+                r.axis, r.max_speed_deg_s, q.max_speed_deg_s, r.max_accel_deg_s2, q.max_accel_deg_s2
+            );
         }
         // The tool axis's acceleration at the corner drops by more than half.
         assert!(smooth.axes[0].max_accel_deg_s2 < 0.5 * raw.axes[0].max_accel_deg_s2, "{raw:?} → {smooth:?}");
@@ -345,7 +348,12 @@ mod tests {
     #[test]
     fn bad_options_are_named() {
         let (tips, normals) = equator(3, 0.1);
-        for o in [Options { max_tilt_deg: -1.0, ..Options::default() }, Options { max_tilt_deg: 31.0, ..Options::default() }, Options { max_tilt_deg: 5.0, window_mm: 0.0 }, Options { max_tilt_deg: f64::NAN, ..Options::default() }] {
+        for o in [
+            Options { max_tilt_deg: -1.0, ..Options::default() },
+            Options { max_tilt_deg: 31.0, ..Options::default() },
+            Options { max_tilt_deg: 5.0, window_mm: 0.0 },
+            Options { max_tilt_deg: f64::NAN, ..Options::default() },
+        ] {
             assert!(matches!(smooth_axes(&tips, &normals, &o), Err(Error::BadOption { .. })), "{o:?}");
         }
         let mut bad = normals.clone();

@@ -118,7 +118,11 @@ pub fn geodesic<P: Profile + ?Sized>(p: &P, a: [f64; 2], b: [f64; 2], o: &Option
 
 impl Options {
     fn method_used(&self) -> Method {
-        if self.method == Method::Ode { Method::Ode } else { Method::Clairaut }
+        if self.method == Method::Ode {
+            Method::Ode
+        } else {
+            Method::Clairaut
+        }
     }
 }
 
@@ -144,7 +148,13 @@ fn clairaut<P: Profile + ?Sized>(p: &P, a: [f64; 2], b: [f64; 2], o: &Options) -
     };
     if sol.min_radius_mm < o.min_pole_radius_mm {
         let (lo, hi) = super::platform::pole_clearance(p, o.min_pole_radius_mm).unwrap_or((f64::NAN, f64::NAN));
-        return Err(Error::TooNearPole { u: sol.turn.unwrap_or(a[0]), radius_mm: sol.min_radius_mm, min_radius_mm: o.min_pole_radius_mm, u_allowed_min: lo, u_allowed_max: hi });
+        return Err(Error::TooNearPole {
+            u: sol.turn.unwrap_or(a[0]),
+            radius_mm: sol.min_radius_mm,
+            min_radius_mm: o.min_pole_radius_mm,
+            u_allowed_min: lo,
+            u_allowed_max: hi,
+        });
     }
     let v = [sol.length_mm * sol.start[0], sol.length_mm * sol.start[1]];
     let per = (64 + o.path_samples - 2) / (o.path_samples - 1);
@@ -161,7 +171,11 @@ fn clairaut<P: Profile + ?Sized>(p: &P, a: [f64; 2], b: [f64; 2], o: &Options) -
                     .map(|i| {
                         let q = path[i * per];
                         let f = i as f64 / (o.path_samples - 1) as f64;
-                        if i + 1 == o.path_samples { b } else { [q[0] + f * miss[0], q[1] + f * miss[1]] }
+                        if i + 1 == o.path_samples {
+                            b
+                        } else {
+                            [q[0] + f * miss[0], q[1] + f * miss[1]]
+                        }
                     })
                     .collect();
                 return Ok(Geodesic { length_mm: sol.length_mm, path: out, method: Method::Clairaut });
@@ -281,8 +295,8 @@ fn ode<P: Profile + ?Sized>(p: &P, a: [f64; 2], b: [f64; 2], o: &Options, v: [f6
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::axisym::testing::{great_circle, Sphere};
     use crate::axisym::platform::Platform;
+    use crate::axisym::testing::{great_circle, Sphere};
 
     /// Exact cylinder of radius 20 mm from two collinear degree-6 segments: z = 60 − 30u.
     fn cylinder() -> Platform {
@@ -343,7 +357,10 @@ mod tests {
             }
         }
         // Turning points (same latitude, or bulging past an end): both methods.
-        for (a, b, m) in [([1.2, 0.0], [1.2, 1.0]), ([0.9, 0.0], [1.0, 1.5]), ([2.3, 0.2], [2.1, 1.9])].into_iter().flat_map(|(a, b)| [(a, b, Method::Clairaut), (a, b, Method::Ode)]) {
+        for (a, b, m) in [([1.2, 0.0], [1.2, 1.0]), ([0.9, 0.0], [1.0, 1.5]), ([2.3, 0.2], [2.1, 1.9])]
+            .into_iter()
+            .flat_map(|(a, b)| [(a, b, Method::Clairaut), (a, b, Method::Ode)])
+        {
             let exact = great_circle(10.0, a, b);
             let g = geodesic(&s, a, b, &opts(m)).unwrap();
             assert_eq!(g.method, m, "{a:?}→{b:?}");

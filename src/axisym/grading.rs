@@ -56,7 +56,13 @@ pub struct Grading {
 
 impl Default for Grading {
     fn default() -> Self {
-        Grading { along: Along::U, density_to: DEFAULT_DENSITY_TO, centre_u: DEFAULT_CENTRE_U, centre_theta_rad: DEFAULT_CENTRE_THETA_RAD, radius_mm: DEFAULT_RADIUS_MM }
+        Grading {
+            along: Along::U,
+            density_to: DEFAULT_DENSITY_TO,
+            centre_u: DEFAULT_CENTRE_U,
+            centre_theta_rad: DEFAULT_CENTRE_THETA_RAD,
+            radius_mm: DEFAULT_RADIUS_MM,
+        }
     }
 }
 

@@ -27,13 +27,13 @@
 
 pub mod clairaut;
 pub mod contour;
+pub mod domain;
 pub mod dynamics;
 pub mod geodesic;
 pub mod grading;
-pub mod platform;
-pub mod domain;
 pub mod metrics;
 pub mod offset;
+pub mod platform;
 pub mod surface;
 #[cfg(test)]
 mod testing;

@@ -45,11 +45,7 @@ pub struct Options {
 
 impl Default for Options {
     fn default() -> Self {
-        Options {
-            continuity_rel_tol: DEFAULT_CONTINUITY_REL_TOL,
-            samples_per_segment: DEFAULT_SAMPLES_PER_SEGMENT,
-            min_speed_rel: DEFAULT_MIN_SPEED_REL,
-        }
+        Options { continuity_rel_tol: DEFAULT_CONTINUITY_REL_TOL, samples_per_segment: DEFAULT_SAMPLES_PER_SEGMENT, min_speed_rel: DEFAULT_MIN_SPEED_REL }
     }
 }
 
@@ -86,7 +82,11 @@ pub trait Profile: Sync {
                 let rising = d > 0.0;
                 for _ in 0..60 {
                     let m = 0.5 * (l + h);
-                    if (self.radius_speed(m)[1] > 0.0) == rising { h = m } else { l = m }
+                    if (self.radius_speed(m)[1] > 0.0) == rising {
+                        h = m
+                    } else {
+                        l = m
+                    }
                 }
                 let r = 0.5 * (l + h);
                 if r > lo && r < hi {
@@ -137,11 +137,7 @@ pub fn christoffel<P: Profile + ?Sized>(p: &P, u: f64) -> Christoffel {
 
 pub(crate) fn christoffel_of(j: &Jet) -> Christoffel {
     let g = j.x[1] * j.x[1] + j.z[1] * j.z[1];
-    Christoffel {
-        u_uu: (j.x[1] * j.x[2] + j.z[1] * j.z[2]) / g,
-        u_tt: -j.x[0] * j.x[1] / g,
-        t_ut: j.x[1] / j.x[0],
-    }
+    Christoffel { u_uu: (j.x[1] * j.x[2] + j.z[1] * j.z[2]) / g, u_tt: -j.x[0] * j.x[1] / g, t_ut: j.x[1] / j.x[0] }
 }
 
 /// Signed curvature κ of the generatrix at u, 1/mm (positive when it turns counter-clockwise
@@ -183,7 +179,11 @@ pub fn pole_clearance<P: Profile + ?Sized>(p: &P, min_radius_mm: f64) -> Option<
     let refine = |mut bad: f64, mut good: f64| {
         for _ in 0..60 {
             let m = 0.5 * (bad + good);
-            if ok(m) { good = m } else { bad = m }
+            if ok(m) {
+                good = m
+            } else {
+                bad = m
+            }
         }
         good
     };
@@ -459,7 +459,11 @@ impl Platform {
                 let g = 0.5 * (5f64.sqrt() - 1.0);
                 for _ in 0..80 {
                     let (c, d) = (b - g * (b - a), a + g * (b - a));
-                    if speed(c) < speed(d) { b = d } else { a = c }
+                    if speed(c) < speed(d) {
+                        b = d
+                    } else {
+                        a = c
+                    }
                 }
                 let u = 0.5 * (a + b);
                 let s = speed(u);
@@ -508,7 +512,11 @@ impl Platform {
     /// [`Platform::check`] as a result: the continuity report, or every problem.
     pub fn validate(&self, options: &Options) -> Result<Continuity, Error> {
         let c = self.check(options);
-        if c.problems.is_empty() { Ok(c.continuity) } else { Err(Error::Invalid { problems: c.problems }) }
+        if c.problems.is_empty() {
+            Ok(c.continuity)
+        } else {
+            Err(Error::Invalid { problems: c.problems })
+        }
     }
 }
 
@@ -571,7 +579,11 @@ fn cross(a: [f64; 2], b: [f64; 2], c: [f64; 2], d: [f64; 2]) -> Option<(f64, f64
     let q = [c[0] - a[0], c[1] - a[1]];
     let t = (q[0] * s[1] - q[1] * s[0]) / den;
     let v = (q[0] * r[1] - q[1] * r[0]) / den;
-    if t > 0.0 && t < 1.0 && v > 0.0 && v < 1.0 { Some((t, v)) } else { None }
+    if t > 0.0 && t < 1.0 && v > 0.0 && v < 1.0 {
+        Some((t, v))
+    } else {
+        None
+    }
 }
 
 #[cfg(test)]

@@ -154,7 +154,18 @@ impl<'a> Surface<'a> {
                 [x[0], x[1], x[2], x[3], x1[0], x1[1], x1[2], x1[3], z1[0], z1[1], z1[2], z1[3]]
             })
             .collect();
-        let mut s = Surface { profile, chord_rel_tol: DEFAULT_CHORD_REL_TOL, geodesic: geodesic::Options::default(), u_lo, u_hi, jets, rs, turns: Vec::new(), jet_h, scale };
+        let mut s = Surface {
+            profile,
+            chord_rel_tol: DEFAULT_CHORD_REL_TOL,
+            geodesic: geodesic::Options::default(),
+            u_lo,
+            u_hi,
+            jets,
+            rs,
+            turns: Vec::new(),
+            jet_h,
+            scale,
+        };
         // x′ changes sign within a cell: bisect on the cell's cubic.
         for i in 0..s.jets.len() {
             let (d0, d1) = (s.jets[i][0].x[1], s.jets[i][1].x[1]);
@@ -163,7 +174,11 @@ impl<'a> Surface<'a> {
                 let rising = d1 > 0.0;
                 for _ in 0..60 {
                     let m = 0.5 * (l + h);
-                    if (s.radius_speed(m)[1] > 0.0) == rising { h = m } else { l = m }
+                    if (s.radius_speed(m)[1] > 0.0) == rising {
+                        h = m
+                    } else {
+                        l = m
+                    }
                 }
                 s.turns.push(0.5 * (l + h));
             }
@@ -252,7 +267,11 @@ impl<'a> Surface<'a> {
         let b = dot(d, n.r_t);
         let (a2, b2) = (a * a / n.g[0], if n.g[1] > 0.0 { b * b / n.g[1] } else { 0.0 });
         let t = a2 + b2;
-        if t > 0.0 { (n.k[0] * a2 + n.k[1] * b2) / t } else { 0.0 }
+        if t > 0.0 {
+            (n.k[0] * a2 + n.k[1] * b2) / t
+        } else {
+            0.0
+        }
     }
 
     /// The chord estimate: (distance, bound on its relative error).
@@ -319,12 +338,7 @@ impl<'a> Surface<'a> {
         }
         // ∂d/∂a = −(unit tangent leaving a), ∂d/∂b = +(unit tangent arriving at b), lowered
         // by the metric.
-        Some(PairEval {
-            d: sol.length_mm,
-            ga: [-a.g[0] * sol.start[0], -a.g[1] * sol.start[1]],
-            gb: [b.g[0] * sol.end[0], b.g[1] * sol.end[1]],
-            exact: true,
-        })
+        Some(PairEval { d: sol.length_mm, ga: [-a.g[0] * sol.start[0], -a.g[1] * sol.start[1]], gb: [b.g[0] * sol.end[0], b.g[1] * sol.end[1]], exact: true })
     }
 
     /// Geodesic by shooting: the geodesic equation integrated by RK4 over τ ∈ [0, 1] with
@@ -341,10 +355,7 @@ impl<'a> Surface<'a> {
         let delta = [b.q[0] - a.q[0], dt];
         let ja = self.jet(a.q[0]);
         let ch = super::platform::christoffel_of(&ja);
-        let mut v = [
-            delta[0] + 0.5 * (ch.u_uu * delta[0] * delta[0] + ch.u_tt * delta[1] * delta[1]),
-            delta[1] + ch.t_ut * delta[0] * delta[1],
-        ];
+        let mut v = [delta[0] + 0.5 * (ch.u_uu * delta[0] * delta[0] + ch.u_tt * delta[1] * delta[1]), delta[1] + ch.t_ut * delta[0] * delta[1]];
         // (cK)⁴·C = bound; steps so that (cK/steps)⁴ is ~1e-14.
         let ck = libm::sqrt(libm::sqrt(bound / CHORD_ERROR_CONSTANT));
         // RK4's error is ∝ (cK/steps)⁴ with a small constant; the test checks 1e-6 holds.
@@ -410,12 +421,7 @@ impl<'a> Surface<'a> {
         if !(speed > 0.0 && speed_b > 0.0) {
             return None;
         }
-        Some(PairEval {
-            d: speed,
-            ga: [-a.g[0] * v[0] / speed, -a.g[1] * v[1] / speed],
-            gb: [b.g[0] * y[2] / speed_b, b.g[1] * y[3] / speed_b],
-            exact: true,
-        })
+        Some(PairEval { d: speed, ga: [-a.g[0] * v[0] / speed, -a.g[1] * v[1] / speed], gb: [b.g[0] * y[2] / speed_b, b.g[1] * y[3] / speed_b], exact: true })
     }
 
     /// The 3-D chord and its exact gradients (the Euclidean energy of the ERE seed).

@@ -78,9 +78,32 @@ pub const FIELDS: &[crate::settings::Field] = {
         ),
         when(num("start.u", "Path", "Start near u", "", 0.0, 64.0, 0.01, "Parameter along the profile of the wanted start."), "start.kind", "nearest"),
         when(num("start.theta", "Path", "Start near θ", "rad", -7.0, 7.0, 0.01, "Angle around the axis of the wanted start."), "start.kind", "nearest"),
-        num("step_mm", "Path", "Sample step", "mm", MIN_STEP_MM, MAX_STEP_MM, 0.1, "Each segment follows the surface's shortest curve, written as points this far apart."),
-        int("two_opt_passes", "Path", "2-opt passes", 0.0, 10_000.0, "Most rounds of segment swaps that shorten the path (0 keeps the nearest-neighbour path)."),
-        int("neighbours", "Path", "Swap candidates", 1.0, MAX_NEIGHBOURS as f64, "How many nearest points each point tries to swap towards (8–10 finds nearly every gain)."),
+        num(
+            "step_mm",
+            "Path",
+            "Sample step",
+            "mm",
+            MIN_STEP_MM,
+            MAX_STEP_MM,
+            0.1,
+            "Each segment follows the surface's shortest curve, written as points this far apart.",
+        ),
+        int(
+            "two_opt_passes",
+            "Path",
+            "2-opt passes",
+            0.0,
+            10_000.0,
+            "Most rounds of segment swaps that shorten the path (0 keeps the nearest-neighbour path).",
+        ),
+        int(
+            "neighbours",
+            "Path",
+            "Swap candidates",
+            1.0,
+            MAX_NEIGHBOURS as f64,
+            "How many nearest points each point tries to swap towards (8–10 finds nearly every gain).",
+        ),
         int("uncross_rounds", "Path", "Uncrossing rounds", 0.0, 100_000.0, "Most moves spent removing places where the path crosses itself."),
     ]
 };
@@ -249,7 +272,14 @@ pub type Avoid<'a> = &'a dyn Fn([f64; 2], [f64; 2]) -> bool;
 /// Plans the path through `points` (u, θ) on `p` (the platform, or an offset of it). `dist` is
 /// the geodesic distance (mm) between two points; `avoid`, when given, marks pairs whose
 /// segment would cross a hole (see the module notes); `progress` gets 0..=1.
-pub fn plan(p: &dyn Profile, points: &[[f64; 2]], o: &Options, dist: &dyn Fn([f64; 2], [f64; 2]) -> f64, avoid: Option<Avoid>, progress: &mut dyn FnMut(f32)) -> Result<Tour, Error> {
+pub fn plan(
+    p: &dyn Profile,
+    points: &[[f64; 2]],
+    o: &Options,
+    dist: &dyn Fn([f64; 2], [f64; 2]) -> f64,
+    avoid: Option<Avoid>,
+    progress: &mut dyn FnMut(f32),
+) -> Result<Tour, Error> {
     check_options(o)?;
     if points.is_empty() {
         return Err(Error::NoPoints);
@@ -298,7 +328,11 @@ pub fn plan(p: &dyn Profile, points: &[[f64; 2]], o: &Options, dist: &dyn Fn([f6
         }
         let v = dist(points[a], points[b]);
         if v.is_finite() && v >= 0.0 {
-            if crosses(a, b) { v + HOLE_PENALTY_MM } else { v }
+            if crosses(a, b) {
+                v + HOLE_PENALTY_MM
+            } else {
+                v
+            }
         } else {
             if bad.get().is_none() {
                 bad.set(Some((a, b, v)));
@@ -388,7 +422,8 @@ pub fn plan(p: &dyn Profile, points: &[[f64; 2]], o: &Options, dist: &dyn Fn([f6
     let segment = |i: usize, j: usize, cache: &mut BTreeMap<(usize, usize), (f64, Vec<[f64; 2]>)>| -> Result<(f64, Vec<[f64; 2]>), Error> {
         let (a, b) = if i < j { (i, j) } else { (j, i) };
         if !cache.contains_key(&(a, b)) {
-            let s = sample_geodesic(p, points[a], points[b], raw(a, b) - if crosses(a, b) { HOLE_PENALTY_MM } else { 0.0 }, o.step_mm, &gopts).map_err(|source| Error::Geodesic { from: a, to: b, source })?;
+            let s = sample_geodesic(p, points[a], points[b], raw(a, b) - if crosses(a, b) { HOLE_PENALTY_MM } else { 0.0 }, o.step_mm, &gopts)
+                .map_err(|source| Error::Geodesic { from: a, to: b, source })?;
             cache.insert((a, b), s);
         }
         let (len, path) = &cache[&(a, b)];
@@ -424,7 +459,11 @@ pub fn plan(p: &dyn Profile, points: &[[f64; 2]], o: &Options, dist: &dyn Fn([f6
     for _ in 0..o.uncross_rounds {
         // Two consecutive segments cannot be swapped by 2-opt: take the first other pair
         // whose swap does not bring in a segment over a hole (without holes: the first).
-        let Some(&(i, j)) = now.iter().find(|&&(i, j)| j > i + 1 && !crosses(order[i], order[j]) && (j + 1 >= order.len() || !crosses(order[i + 1], order[j + 1]))) else { break };
+        let Some(&(i, j)) =
+            now.iter().find(|&&(i, j)| j > i + 1 && !crosses(order[i], order[j]) && (j + 1 >= order.len() || !crosses(order[i + 1], order[j + 1])))
+        else {
+            break;
+        };
         order[i + 1..=j].reverse();
         (geodesic_length_mm, samples) = build(&order, &mut cache)?;
         now = crossings(&samples);
@@ -524,7 +563,11 @@ fn outward_sign(p: &dyn Profile) -> f64 {
         let (a, b) = (curve[w], curve[(w + 1) % curve.len()]);
         area2 += a[0] * b[1] - b[0] * a[1];
     }
-    if area2 <= 0.0 { 1.0 } else { -1.0 }
+    if area2 <= 0.0 {
+        1.0
+    } else {
+        -1.0
+    }
 }
 
 /// Geodesic a → b sampled so that consecutive samples are ≤ `step` apart in 3-D, ends exact.
@@ -577,7 +620,15 @@ fn chord(a: [f64; 3], b: [f64; 3]) -> f64 {
 
 /// Neighbour-list 2-opt on the open path `t` (t[0] fixed), first improvement. Returns
 /// (passes, moves).
-fn two_opt(t: &mut [usize], pos: &mut [usize], cand: &[usize], k: usize, dd: &dyn Fn(usize, usize) -> f64, passes: usize, progress: &mut dyn FnMut(f32)) -> (usize, usize) {
+fn two_opt(
+    t: &mut [usize],
+    pos: &mut [usize],
+    cand: &[usize],
+    k: usize,
+    dd: &dyn Fn(usize, usize) -> f64,
+    passes: usize,
+    progress: &mut dyn FnMut(f32),
+) -> (usize, usize) {
     let n = t.len();
     let mut moves = 0;
     let mut used = 0;
@@ -818,7 +869,11 @@ impl<'a> Kd<'a> {
             if mid == s {
                 break;
             }
-            if s < mid { hi = mid } else { lo = mid + 1 }
+            if s < mid {
+                hi = mid
+            } else {
+                lo = mid + 1
+            }
         }
     }
 

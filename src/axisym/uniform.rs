@@ -67,37 +67,138 @@ pub const OMEGA2_POLYGON: &[[f64; 2]] = &[
 pub const FIELDS: &[crate::settings::Field] = {
     use crate::settings::{choice_docs, int, num, other, percent, when, Kind};
     &[
-        percent(num("density", "Infill points", "Command density", "%", 0.01, 1.0, 0.01, "How much of the patch the infill covers: more density, more points closer together.")),
-        int("rasters", "Infill points", "Lines through each point", 1.0, 16.0, "n of the paper: how many equally angled rasters cross at each point (1 for a single path)."),
+        percent(num(
+            "density",
+            "Infill points",
+            "Command density",
+            "%",
+            0.01,
+            1.0,
+            0.01,
+            "How much of the patch the infill covers: more density, more points closer together.",
+        )),
+        int(
+            "rasters",
+            "Infill points",
+            "Lines through each point",
+            1.0,
+            16.0,
+            "n of the paper: how many equally angled rasters cross at each point (1 for a single path).",
+        ),
         choice_docs(
-            other("seed_method", "Infill points", "Starting points", Kind::Choice, &["ebns", "ere", "gbns"], "How the points are scattered before the repulsion evens them out."),
+            other(
+                "seed_method",
+                "Infill points",
+                "Starting points",
+                Kind::Choice,
+                &["ebns", "ere", "gbns"],
+                "How the points are scattered before the repulsion evens them out.",
+            ),
             &[
                 "Euclidean blue noise: random points kept a straight-line distance apart (fastest).",
                 "Euclidean repulsion: random points pushed apart with straight-line distances (suits odd outlines).",
                 "Geodesic blue noise: random points kept a distance along the surface apart (closest to the answer).",
             ],
         ),
-        num("exponent", "Infill points", "Repulsion exponent", "", 1.01, 32.0, 0.5, "m of the pair energy d⁻ᵐ: larger pushes hardest on the closest pairs (the paper uses 5)."),
-        int("iterations", "Infill points", "Repulsion iterations", 0.0, MAX_ITERATIONS as f64, "Most steps of the geodesic repulsion (the paper runs 50); it stops earlier once settled."),
+        num(
+            "exponent",
+            "Infill points",
+            "Repulsion exponent",
+            "",
+            1.01,
+            32.0,
+            0.5,
+            "m of the pair energy d⁻ᵐ: larger pushes hardest on the closest pairs (the paper uses 5).",
+        ),
+        int(
+            "iterations",
+            "Infill points",
+            "Repulsion iterations",
+            0.0,
+            MAX_ITERATIONS as f64,
+            "Most steps of the geodesic repulsion (the paper runs 50); it stops earlier once settled.",
+        ),
         num("energy_tolerance", "Infill points", "Energy tolerance", "", 0.0, 0.5, 1e-6, "Stop when the energy changes by less than this fraction in a step."),
-        num("displacement_tolerance", "Infill points", "Movement tolerance", "spacings", 0.0, 0.5, 1e-4, "Stop when no point moves more than this fraction of the target spacing."),
-        num("cutoff_spacings", "Infill points", "Interaction range", "spacings", 0.0, 100.0, 0.5, "Pairs farther apart than this many target spacings are ignored (0 = every pair, as the paper; slower)."),
+        num(
+            "displacement_tolerance",
+            "Infill points",
+            "Movement tolerance",
+            "spacings",
+            0.0,
+            0.5,
+            1e-4,
+            "Stop when no point moves more than this fraction of the target spacing.",
+        ),
+        num(
+            "cutoff_spacings",
+            "Infill points",
+            "Interaction range",
+            "spacings",
+            0.0,
+            100.0,
+            0.5,
+            "Pairs farther apart than this many target spacings are ignored (0 = every pair, as the paper; slower).",
+        ),
         crate::settings::Field {
             default: Some("{\"along\":\"u\",\"density_to\":0.25,\"centre_u\":1.0,\"centre_theta_rad\":0.5,\"radius_mm\":10.0}"),
-            ..other("grading", "Infill points", "Graded density", Kind::Section, &[], "Let the density change over the patch instead of staying at the command density.")
+            ..other(
+                "grading",
+                "Infill points",
+                "Graded density",
+                Kind::Section,
+                &[],
+                "Let the density change over the patch instead of staying at the command density.",
+            )
         },
         choice_docs(
-            other("grading.along", "Infill points", "Grade along", Kind::Choice, &["u", "theta", "radial"], "Which way the density changes, from the command density to the end density."),
+            other(
+                "grading.along",
+                "Infill points",
+                "Grade along",
+                Kind::Choice,
+                &["u", "theta", "radial"],
+                "Which way the density changes, from the command density to the end density.",
+            ),
             &[
                 "Along the profile: the command density at the patch's lowest u, the end density at its highest.",
                 "Around the axis: the command density at the patch's lowest θ, the end density at its highest.",
                 "Outwards from a centre: the command density there, the end density at the radius (distance along the surface) and beyond.",
             ],
         ),
-        percent(num("grading.density_to", "Infill points", "End density", "%", 0.01, 1.0, 0.01, "The density at the far end of the grading (the command density is the near end).")),
-        when(num("grading.centre_u", "Infill points", "Centre u", "", 0.0, 64.0, 0.01, "Where the radial grading is centred along the profile."), "grading.along", "radial"),
-        when(num("grading.centre_theta_rad", "Infill points", "Centre θ", "rad", -7.0, 7.0, 0.01, "Where the radial grading is centred around the axis."), "grading.along", "radial"),
-        when(num("grading.radius_mm", "Infill points", "Grading radius", "mm", 0.1, 10000.0, 0.1, "Distance along the surface over which the density goes from the command to the end density."), "grading.along", "radial"),
+        percent(num(
+            "grading.density_to",
+            "Infill points",
+            "End density",
+            "%",
+            0.01,
+            1.0,
+            0.01,
+            "The density at the far end of the grading (the command density is the near end).",
+        )),
+        when(
+            num("grading.centre_u", "Infill points", "Centre u", "", 0.0, 64.0, 0.01, "Where the radial grading is centred along the profile."),
+            "grading.along",
+            "radial",
+        ),
+        when(
+            num("grading.centre_theta_rad", "Infill points", "Centre θ", "rad", -7.0, 7.0, 0.01, "Where the radial grading is centred around the axis."),
+            "grading.along",
+            "radial",
+        ),
+        when(
+            num(
+                "grading.radius_mm",
+                "Infill points",
+                "Grading radius",
+                "mm",
+                0.1,
+                10000.0,
+                0.1,
+                "Distance along the surface over which the density goes from the command to the end density.",
+            ),
+            "grading.along",
+            "radial",
+        ),
     ]
 };
 
@@ -178,7 +279,9 @@ pub enum Error {
     #[error(transparent)]
     TooBig(OverBudget),
     /// Dart throwing could not place the points.
-    #[error("could not place {wanted} seed points (placed {placed}); the domain may be too thin for the spacing: lower the density or use seed_method \"ere\"")]
+    #[error(
+        "could not place {wanted} seed points (placed {placed}); the domain may be too thin for the spacing: lower the density or use seed_method \"ere\""
+    )]
     SeedFailed {
         /// Points wanted.
         wanted: usize,
@@ -306,7 +409,11 @@ pub fn check_centre(p: &dyn Profile, o: &Options) -> Result<(), Error> {
     let clear = super::platform::pole_clearance(p, super::platform::DEFAULT_MIN_POLE_RADIUS_MM);
     match clear {
         Some((a, b)) if g.centre_u >= a && g.centre_u <= b => Ok(()),
-        _ => Err(Error::BadOption { name: "grading.centre_u", value: g.centre_u, hint: "the centre must lie on the platform clear of the poles: pick a u inside the range a domain may use (the platform stage's report states it)" }),
+        _ => Err(Error::BadOption {
+            name: "grading.centre_u",
+            value: g.centre_u,
+            hint: "the centre must lie on the platform clear of the poles: pick a u inside the range a domain may use (the platform stage's report states it)",
+        }),
     }
 }
 
@@ -345,7 +452,11 @@ pub fn target_points(area_mm2: f64, o: &Options, line_width_mm: f64) -> f64 {
 }
 
 fn pairs_per_eval(n: f64, o: &Options) -> f64 {
-    if o.cutoff_spacings > 0.0 { (n * std::f64::consts::PI * o.cutoff_spacings * o.cutoff_spacings / 2.0).min(n * (n - 1.0) / 2.0) } else { n * (n - 1.0) / 2.0 }
+    if o.cutoff_spacings > 0.0 {
+        (n * std::f64::consts::PI * o.cutoff_spacings * o.cutoff_spacings / 2.0).min(n * (n - 1.0) / 2.0)
+    } else {
+        n * (n - 1.0) / 2.0
+    }
 }
 
 /// The stage's work before running it.
@@ -584,13 +695,7 @@ impl Engine<'_, '_> {
     /// [`AHEAD_ITEMS`] ahead). The first evaluation has no counts yet: it goes in windows of
     /// about [`WINDOW_PAIRS`] pairs, each made in one parallel round then summed, starting at
     /// one point and growing at most 4× a window, so all-pairs runs stay bounded too.
-    fn for_pairs<T: Send>(
-        &self,
-        nodes: &[Node],
-        near: &Near<'_>,
-        term: &(dyn Fn(usize, usize, &PairEval) -> T + Sync),
-        add: &mut dyn FnMut(usize, usize, T),
-    ) {
+    fn for_pairs<T: Send>(&self, nodes: &[Node], near: &Near<'_>, term: &(dyn Fn(usize, usize, &PairEval) -> T + Sync), add: &mut dyn FnMut(usize, usize, T)) {
         let n = nodes.len();
         let last = self.pairs_per_point.lock().map(|mut c| std::mem::take(&mut *c)).unwrap_or_default();
         let mut counts = vec![0u32; n];
@@ -632,10 +737,15 @@ impl Engine<'_, '_> {
                     (start, pairs) = (i + 1, 0);
                 }
             }
-            let _ = crate::par::ordered(items.len(), AHEAD_ITEMS, |k| make(items[k].clone()), |_, part| -> Result<(), ()> {
-                sum(part, &mut counts);
-                Ok(())
-            });
+            let _ = crate::par::ordered(
+                items.len(),
+                AHEAD_ITEMS,
+                |k| make(items[k].clone()),
+                |_, part| -> Result<(), ()> {
+                    sum(part, &mut counts);
+                    Ok(())
+                },
+            );
         } else {
             let runs = 4 * crate::par::threads();
             let (mut start, mut span) = (0usize, 1usize);
@@ -806,7 +916,16 @@ const ITERATIONS_PER_HOP: usize = 8;
 /// The iterations run in stretches of [`ITERATIONS_PER_HOP`] on a pool thread, with
 /// `progress` called on this thread between them.
 #[allow(clippy::too_many_arguments)]
-fn descend(eng: &Engine, d: &Domain, start: Vec<[f64; 2]>, iterations: usize, e_tol: f64, disp_tol_mm: f64, spacing: f64, progress: &mut dyn FnMut(f32)) -> (Vec<[f64; 2]>, Vec<Iteration>, StopReason) {
+fn descend(
+    eng: &Engine,
+    d: &Domain,
+    start: Vec<[f64; 2]>,
+    iterations: usize,
+    e_tol: f64,
+    disp_tol_mm: f64,
+    spacing: f64,
+    progress: &mut dyn FnMut(f32),
+) -> (Vec<[f64; 2]>, Vec<Iteration>, StopReason) {
     if start.len() < 2 {
         return (start, Vec::new(), StopReason::Trivial);
     }
@@ -947,14 +1066,20 @@ pub fn distribute(p: &dyn Profile, domain: &Domain, o: &Options, line_width_mm: 
         None => (metrics(&s, &seed_points, o.rasters, o.density, line_width_mm), metrics(&s, &points, o.rasters, o.density, line_width_mm), None),
         Some(f) => {
             // Per point: the grading coordinate and the target spacing there.
-            let at = |v: &[[f64; 2]]| -> (Vec<f64>, Vec<f64>) { v.iter().map(|&q| s.node(q)).map(|n| f.coordinate(&s, &n)).map(|c| (c, f.spacing_of(f.density_at(c)))).unzip() };
+            let at = |v: &[[f64; 2]]| -> (Vec<f64>, Vec<f64>) {
+                v.iter().map(|&q| s.node(q)).map(|n| f.coordinate(&s, &n)).map(|c| (c, f.spacing_of(f.density_at(c)))).unzip()
+            };
             let (seed_c, seed_s) = at(&seed_points);
             let (pts_c, pts_s) = at(&points);
             let lo = pts_c.iter().chain(&seed_c).copied().fold(f64::INFINITY, f64::min);
             let hi = pts_c.iter().chain(&seed_c).copied().fold(f64::NEG_INFINITY, f64::max);
             let commanded = (0..=GRADED_BINS).map(|k| lo + (hi - lo) * k as f64 / GRADED_BINS as f64).map(|c| [c, f.density_at(c)]).collect();
             let graded = GradedPoints { label: f.coordinate_label(), range: f.range(), seed: seed_c, points: pts_c, commanded };
-            (graded_metrics(&s, &seed_points, o.rasters, line_width_mm, sp, &seed_s), graded_metrics(&s, &points, o.rasters, line_width_mm, sp, &pts_s), Some(graded))
+            (
+                graded_metrics(&s, &seed_points, o.rasters, line_width_mm, sp, &seed_s),
+                graded_metrics(&s, &points, o.rasters, line_width_mm, sp, &pts_s),
+                Some(graded),
+            )
         }
     };
     Ok(Distribution { area_mm2: area, target_points: n, seed_points, points, iterations, stop, seed_metrics, metrics: m, graded })
@@ -971,9 +1096,17 @@ mod tests {
     fn omega(name: &str) -> (Platform, Domain, Options) {
         let base = Options::default();
         match name {
-            "barrel-omega1" => (Platform::barrel(), Domain::Rectangle { u: [0.8, 1.2], theta: [0.0, 1.0] }, Options { density: 0.5, seed_method: SeedMethod::Ebns, ..base }),
-            "barrel-omega2" => (Platform::barrel(), Domain::Polygon { holes: Vec::new(), points: OMEGA2_POLYGON.to_vec() }, Options { density: 0.25, seed_method: SeedMethod::Ere, ..base }),
-            _ => (Platform::hourglass(), Domain::Rectangle { u: [1.0, 3.0], theta: [0.0, 1.0] }, Options { density: 0.1, seed_method: SeedMethod::Gbns, ..base }),
+            "barrel-omega1" => {
+                (Platform::barrel(), Domain::Rectangle { u: [0.8, 1.2], theta: [0.0, 1.0] }, Options { density: 0.5, seed_method: SeedMethod::Ebns, ..base })
+            }
+            "barrel-omega2" => (
+                Platform::barrel(),
+                Domain::Polygon { holes: Vec::new(), points: OMEGA2_POLYGON.to_vec() },
+                Options { density: 0.25, seed_method: SeedMethod::Ere, ..base },
+            ),
+            _ => {
+                (Platform::hourglass(), Domain::Rectangle { u: [1.0, 3.0], theta: [0.0, 1.0] }, Options { density: 0.1, seed_method: SeedMethod::Gbns, ..base })
+            }
         }
     }
 
@@ -1043,7 +1176,10 @@ mod tests {
             let cut = distribute(&p, &d, &o, 0.4, 1, &mut |_| {}).unwrap();
             let all = distribute(&p, &d, &Options { cutoff_spacings: 0.0, ..o.clone() }, 0.4, 1, &mut |_| {}).unwrap();
             let (a, b) = (cut.metrics.nn_std_mm, all.metrics.nn_std_mm);
-            println!("{name}: 2n-NN std {a:.4} mm with the cutoff, {b:.4} mm with all pairs; mean {:.4} vs {:.4} mm", cut.metrics.nn_mean_mm, all.metrics.nn_mean_mm);
+            println!(
+                "{name}: 2n-NN std {a:.4} mm with the cutoff, {b:.4} mm with all pairs; mean {:.4} vs {:.4} mm",
+                cut.metrics.nn_mean_mm, all.metrics.nn_mean_mm
+            );
             assert!((a - b).abs() <= 0.25 * b, "{name}: {a} vs {b}");
             assert!((cut.metrics.nn_mean_mm - all.metrics.nn_mean_mm).abs() <= 0.03 * all.metrics.nn_mean_mm);
         }

@@ -5,8 +5,8 @@
 //! axisymmetric examples: the paper's Ω1–Ω3).
 
 use crate::design::Design;
-use crate::pipeline::{self, Cache, Files, RunOptions, RunOutput};
 use crate::jobs::Registry;
+use crate::pipeline::{self, Cache, Files, RunOptions, RunOutput};
 use std::time::Instant;
 
 /// One design's best run.
@@ -25,7 +25,13 @@ pub struct DesignTiming {
 /// One run of `design` through `cache`: (total s, (stage, s) in run order, the output). A
 /// stage's time runs from its first progress report to the next stage's (the last one to the
 /// end); a stage reported twice (estimated, then reused from the cache) is summed.
-pub fn timed_run(registry: &Registry, cache: &mut Cache, design: &Design, files: &Files, options: &RunOptions) -> Result<(f64, Vec<(String, f64)>, RunOutput), String> {
+pub fn timed_run(
+    registry: &Registry,
+    cache: &mut Cache,
+    design: &Design,
+    files: &Files,
+    options: &RunOptions,
+) -> Result<(f64, Vec<(String, f64)>, RunOutput), String> {
     let start = Instant::now();
     let mut marks: Vec<(String, f64)> = Vec::new();
     let mut progress = |stage: &str, _: f32| {

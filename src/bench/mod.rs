@@ -2,9 +2,9 @@
 //! (timed with `performance.now()` in `tests/e2e/bench.mjs`), so both measure the same work.
 
 use crate::design::{Design, Input};
-use crate::jobs::{lattice::LatticeJob, slice::SliceJob};
 use crate::geom::shapes::uv_sphere;
 use crate::geom::Mesh;
+use crate::jobs::{lattice::LatticeJob, slice::SliceJob};
 
 /// Radius of the benchmark sphere, mm (500 layers at 0.2 mm).
 pub const BENCH_SPHERE_RADIUS_MM: f64 = 50.0;
@@ -39,34 +39,12 @@ pub mod scaling;
 
 /// CPU time of the calling thread, seconds (Linux: the scheduler's count in nanoseconds, so
 /// other processes on a busy machine do not inflate it); `None` where it cannot be read. The
-/// one clock of the benchmarks, the calibration examples and the tests' growth checks.
+/// one clock of the benchmarks and the calibration examples (the tests' growth checks count
+/// work instead: `crate::work`).
 pub fn thread_cpu_seconds() -> Option<f64> {
     let s = std::fs::read_to_string("/proc/thread-self/schedstat").ok()?;
     let ns: u64 = s.split_whitespace().next()?.parse().ok()?;
     (ns > 0).then_some(ns as f64 * 1e-9)
-}
-
-/// The best of three times of `f`, seconds, each on a pool of its own with one thread: every
-/// parallel loop of weft then runs on that thread, and its CPU time ([`thread_cpu_seconds`])
-/// is what counts, so neither the global pool's threads nor other work on the machine skew
-/// it. Wall time when either reading of the CPU time fails (a thread's count reads 0 until
-/// the scheduler first charges it): never one clock minus the other. For the tests' growth
-/// checks.
-#[cfg(not(target_arch = "wasm32"))]
-pub fn best_of_3_one_thread_seconds(f: &(dyn Fn() + Sync)) -> f64 {
-    let timed = || {
-        let (wall, cpu) = (std::time::Instant::now(), thread_cpu_seconds());
-        f();
-        match (cpu, thread_cpu_seconds()) {
-            (Some(a), Some(b)) => b - a,
-            _ => wall.elapsed().as_secs_f64(),
-        }
-    };
-    let once = || match rayon::ThreadPoolBuilder::new().num_threads(1).build() {
-        Ok(pool) => pool.install(timed),
-        Err(_) => timed(),
-    };
-    (0..3).map(|_| once()).fold(f64::INFINITY, f64::min)
 }
 
 /// The honeycomb-10mm example (embedded so the wasm build has it).
@@ -134,8 +112,7 @@ impl LatticeBench {
 
     /// The timed part: `paths::optimise` of the prepared layer.
     pub fn run(&self) -> Result<LatticeRunStats, String> {
-        let o = crate::paths::optimise(&self.strokes, &self.options, self.line_width_mm, self.seed, &mut |_| {})
-            .map_err(|e| e.to_string())?;
+        let o = crate::paths::optimise(&self.strokes, &self.options, self.line_width_mm, self.seed, &mut |_| {}).map_err(|e| e.to_string())?;
         let l = o.report.layers.first().ok_or("no layer")?;
         Ok(LatticeRunStats { edges: l.edges, paths: l.paths, score: l.score })
     }
@@ -161,9 +138,9 @@ impl LatticeBench {
 }
 
 #[cfg(not(target_arch = "wasm32"))]
-pub use native::{run_all, run_lattice};
-#[cfg(not(target_arch = "wasm32"))]
 pub use cache_native::run_cache;
+#[cfg(not(target_arch = "wasm32"))]
+pub use native::{run_all, run_lattice};
 
 #[cfg(not(target_arch = "wasm32"))]
 mod native {
@@ -195,7 +172,6 @@ mod native {
     pub(super) fn reset_peak_rss() -> bool {
         std::fs::write("/proc/self/clear_refs", "5").is_ok()
     }
-
 
     struct Timed {
         stages: Vec<(String, f64)>,
@@ -263,9 +239,7 @@ mod native {
         let same = output.gcode == gcode;
         drop(output);
 
-        out.push_str(&format!(
-            "## slice: {n_triangles} triangles ({stl_mb:.1} MB binary STL, generated in {gen_s:.2} s), 0.2 mm layers\n\n"
-        ));
+        out.push_str(&format!("## slice: {n_triangles} triangles ({stl_mb:.1} MB binary STL, generated in {gen_s:.2} s), 0.2 mm layers\n\n"));
         out.push_str("| stage | seconds (no preview, CLI) | seconds (with preview, as the page) |\n|---|---|---|\n");
         for ((stage, a), (_, b)) in plain.stages.iter().zip(&preview.stages) {
             out.push_str(&format!("| {} | {a:.3} | {b:.3} |\n", stage));
@@ -304,9 +278,7 @@ mod native {
     /// The lattice path-optimisation benchmarks as a Markdown table.
     pub fn run_lattice() -> Result<String, String> {
         let mut out = String::new();
-        out.push_str(&format!(
-            "## lattice path optimisation (`paths::optimise` of one prepared layer; best and median of {LATTICE_REPEATS})\n\n"
-        ));
+        out.push_str(&format!("## lattice path optimisation (`paths::optimise` of one prepared layer; best and median of {LATTICE_REPEATS})\n\n"));
         out.push_str("| workload | method | edges | paths | score | best ms | median ms | target ms |\n|---|---|---|---|---|---|---|---|\n");
         for which in LATTICE_WORKLOADS {
             let b = LatticeBench::prepare(which)?;
@@ -422,9 +394,7 @@ mod cache_native {
             run_pair(&format!("mesh-{triangles}"), &bench_design().to_json_pretty(), &files, Some("mesh"))?,
         ];
         let mut out = String::new();
-        out.push_str(&format!(
-            "## stage cache: full run, then re-run after material.bed_temp_c +10 (native, preview on; mesh: {stl_mb:.1} MB STL)\n\n"
-        ));
+        out.push_str(&format!("## stage cache: full run, then re-run after material.bed_temp_c +10 (native, preview on; mesh: {stl_mb:.1} MB STL)\n\n"));
         out.push_str("| workload | addFile s | first run s | re-run s | re-run / first | stages before gcode cached |\n|---|---|---|---|---|---|\n");
         for r in &rows {
             out.push_str(&format!(

@@ -98,10 +98,8 @@ impl PairingStats {
 impl PairingBench {
     /// Prepares case `name`, heuristic only or with the exact budget.
     pub fn prepare(name: &str, exact: bool) -> Result<PairingBench, String> {
-        let case = *CASES
-            .iter()
-            .find(|c| c.name == name)
-            .ok_or_else(|| format!("unknown pairing case '{name}' (one of {})", CASES.map(|c| c.name).join(", ")))?;
+        let case =
+            *CASES.iter().find(|c| c.name == name).ok_or_else(|| format!("unknown pairing case '{name}' (one of {})", CASES.map(|c| c.name).join(", ")))?;
         let json = if case.square_mm.is_some() { HONEYCOMB_10MM_JSON } else { DISC_48MM_JSON };
         let mut design = Design::from_json(case.name, json).map_err(|e| e.to_string())?;
         let mut job: LatticeJob = design.job.settings().ok_or("not a lattice design")?;
@@ -121,8 +119,7 @@ impl PairingBench {
 
     /// The timed part: `paths::optimise` of the layer.
     pub fn run(&self) -> Result<PairingStats, String> {
-        let o = crate::paths::optimise(&self.strokes, &self.options, self.line_width_mm, self.seed, &mut |_| {})
-            .map_err(|e| e.to_string())?;
+        let o = crate::paths::optimise(&self.strokes, &self.options, self.line_width_mm, self.seed, &mut |_| {}).map_err(|e| e.to_string())?;
         let l = o.report.layers.first().ok_or("no layer")?;
         Ok(PairingStats {
             edges: l.edges,

@@ -77,11 +77,19 @@ fn box_toolpath(scale: usize) -> Result<(Toolpath, f64), String> {
 /// Every case, in the order printed.
 pub fn cases() -> Vec<Case> {
     vec![
-        Case { name: "import/stl-binary", unit: "triangles", prepare: |k| Ok(mesh_case(testgen::mesh::binary_stl_sphere(50_000 * k), "a.stl", (50_000 * k) as f64)) },
+        Case {
+            name: "import/stl-binary",
+            unit: "triangles",
+            prepare: |k| Ok(mesh_case(testgen::mesh::binary_stl_sphere(50_000 * k), "a.stl", (50_000 * k) as f64)),
+        },
         Case { name: "import/stl-ascii", unit: "triangles", prepare: |k| Ok(mesh_case(testgen::mesh::ascii_stl(20_000 * k), "a.stl", (20_000 * k) as f64)) },
         Case { name: "import/obj", unit: "triangles", prepare: |k| Ok(mesh_case(testgen::mesh::obj(20_000 * k), "a.obj", (20_000 * k) as f64)) },
         Case { name: "import/3mf", unit: "triangles", prepare: |k| Ok(mesh_case(testgen::mesh::three_mf(20_000 * k), "a.3mf", (20_000 * k) as f64)) },
-        Case { name: "import/3mf-objects", unit: "objects", prepare: |k| Ok(mesh_case(testgen::mesh::three_mf_siblings(2_000 * k), "a.3mf", (2_000 * k) as f64)) },
+        Case {
+            name: "import/3mf-objects",
+            unit: "objects",
+            prepare: |k| Ok(mesh_case(testgen::mesh::three_mf_siblings(2_000 * k), "a.3mf", (2_000 * k) as f64)),
+        },
         Case {
             name: "gcode/template",
             unit: "bytes",
@@ -143,8 +151,13 @@ pub fn cases() -> Vec<Case> {
             prepare: |k| {
                 let side = 60.0 * (k as f64).sqrt();
                 let strokes = honeycomb_strokes(side)?;
-                let tp = paths::optimise(&strokes, &paths::Options { method: paths::Method::Euler, ..Default::default() }, 0.4, 1, &mut |_| {}).map_err(err)?.toolpath;
-                let o = nonplanar::Options { surface: nonplanar::Surface::Sphere { radius_mm: 200.0, center_mm: [0.0, 0.0, -190.0] }, max_segment_mm: nonplanar::DEFAULT_MAX_SEGMENT_MM };
+                let tp = paths::optimise(&strokes, &paths::Options { method: paths::Method::Euler, ..Default::default() }, 0.4, 1, &mut |_| {})
+                    .map_err(err)?
+                    .toolpath;
+                let o = nonplanar::Options {
+                    surface: nonplanar::Surface::Sphere { radius_mm: 200.0, center_mm: [0.0, 0.0, -190.0] },
+                    max_segment_mm: nonplanar::DEFAULT_MAX_SEGMENT_MM,
+                };
                 Ok(Prepared { size: side * side, run: Box::new(move || nonplanar::project(&tp, None, &o).map(drop).map_err(err)) })
             },
         },

@@ -10,12 +10,12 @@ mod words;
 
 use crate::gcode::{Material, Printer, Speeds};
 use crate::geom::shapes::Shape;
+use crate::jobs::Registry;
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
-use crate::jobs::Registry;
 
-pub use crate::settings::Problem;
 use crate::settings::clip;
+pub use crate::settings::Problem;
 
 /// The only version this build reads and writes.
 pub const DESIGN_VERSION: u32 = 1;
@@ -210,7 +210,11 @@ pub enum Error {
 
 /// "line L, column C: ", or nothing for a value without a text.
 fn at(line: usize, column: usize) -> String {
-    if line == 0 { String::new() } else { format!("line {line}, column {column}: ") }
+    if line == 0 {
+        String::new()
+    } else {
+        format!("line {line}, column {column}: ")
+    }
 }
 
 impl Default for Design {
@@ -271,9 +275,9 @@ impl Design {
         }
         let invalid = |p: Problem| Error::Invalid { source_name: source_name.into(), problems: vec![p] };
         let mut design: Design = serde_path_to_error::deserialize(&value).map_err(|e| invalid(words::problem(&e, "", &value, &rows)))?;
-        let kind = registry.get(design.job.kind()).ok_or_else(|| {
-            invalid(Problem { path: "job.kind".into(), message: words::not_a_choice(design.job.kind(), "the job kind", &registry.names()) })
-        })?;
+        let kind = registry
+            .get(design.job.kind())
+            .ok_or_else(|| invalid(Problem { path: "job.kind".into(), message: words::not_a_choice(design.job.kind(), "the job kind", &registry.names()) }))?;
         design.job.value = kind.normalize(&design.job.value).map_err(|e| invalid(words::problem(&e, "job", &value, &rows)))?;
         design.validated(registry, source_name)
     }
@@ -305,16 +309,12 @@ impl Design {
 
     /// [`Design::with_overrides`] with the job kinds of `registry`.
     pub fn with_overrides_in(&self, registry: &Registry, assignments: &[String]) -> Result<Design, Error> {
-        let mut value = serde_json::to_value(self).map_err(|e| Error::Override {
-            assignment: String::new(),
-            message: e.to_string(),
-        })?;
+        let mut value = serde_json::to_value(self).map_err(|e| Error::Override { assignment: String::new(), message: e.to_string() })?;
         for a in assignments {
             let assignment = || clip(a, 200).into_owned();
-            let (path, raw) = a.split_once('=').ok_or_else(|| Error::Override {
-                assignment: assignment(),
-                message: "expected PATH=VALUE, e.g. job.slice.layer_height_mm=0.1".into(),
-            })?;
+            let (path, raw) = a
+                .split_once('=')
+                .ok_or_else(|| Error::Override { assignment: assignment(), message: "expected PATH=VALUE, e.g. job.slice.layer_height_mm=0.1".into() })?;
             let new: Value = serde_json::from_str(raw).unwrap_or_else(|_| Value::String(raw.to_string()));
             set_path(&mut value, path.trim(), new).map_err(|message| Error::Override { assignment: assignment(), message })?;
         }
@@ -440,9 +440,7 @@ pub(crate) fn set_path(root: &mut Value, path: &str, new: Value) -> Result<(), S
     }
     let keys = path.bytes().filter(|&b| b == b'.').count() + 1;
     if keys > MAX_PATH_DEPTH {
-        return Err(format!(
-            "the path has {keys} keys, over the limit of {MAX_PATH_DEPTH}; design paths are a few keys long, e.g. job.slice.layer_height_mm"
-        ));
+        return Err(format!("the path has {keys} keys, over the limit of {MAX_PATH_DEPTH}; design paths are a few keys long, e.g. job.slice.layer_height_mm"));
     }
     let mut cur = root;
     let parts: Vec<&str> = path.split('.').collect();
@@ -462,16 +460,12 @@ pub(crate) fn set_path(root: &mut Value, path: &str, new: Value) -> Result<(), S
                 cur = map.entry((*part).to_string()).or_insert_with(|| Value::Object(Default::default()));
             }
             Value::Array(items) => {
-                let idx: usize = part
-                    .parse()
-                    .map_err(|_| {
-                        let list = clip(&parts[..i].join("."), 200).into_owned();
-                        format!("'{list}' is a list; use an index like {list}.0")
-                    })?;
+                let idx: usize = part.parse().map_err(|_| {
+                    let list = clip(&parts[..i].join("."), 200).into_owned();
+                    format!("'{list}' is a list; use an index like {list}.0")
+                })?;
                 let len = items.len();
-                let slot = items
-                    .get_mut(idx)
-                    .ok_or_else(|| format!("index {idx} is outside the list of {len}"))?;
+                let slot = items.get_mut(idx).ok_or_else(|| format!("index {idx} is outside the list of {len}"))?;
                 if last {
                     *slot = new;
                     return Ok(());
@@ -544,20 +538,36 @@ mod tests {
         // From a file: the same words; a JSON syntax error keeps its line and column.
         let mut v = serde_json::to_value(&cube).unwrap();
         v["job"]["slice"]["perimeters"] = 2.5.into();
-        assert_eq!(Design::from_json("cube.json", &v.to_string()).unwrap_err().to_string(), "cube.json: job.slice.perimeters: Perimeters must be a whole number from 0 to 50 (got 2.5)");
+        assert_eq!(
+            Design::from_json("cube.json", &v.to_string()).unwrap_err().to_string(),
+            "cube.json: job.slice.perimeters: Perimeters must be a whole number from 0 to 50 (got 2.5)"
+        );
         let text = cube.to_json_pretty();
         let cut = &text[..text.len() / 2];
-        assert_eq!(Design::from_json("cube.json", cut).unwrap_err().to_string().split_once(": not valid JSON: ").map(|(_, m)| m.to_string()).unwrap(), "the text ends before the design does: the file was cut short; save or copy it again");
-        assert_eq!(Design::from_json("d.json", "{\"version\": 1, name: 2}").unwrap_err().to_string(), "d.json: line 1, column 16: not valid JSON: field names must be in double quotes");
-        assert_eq!(Design::from_json("d.json", "{\"version\": 1,}").unwrap_err().to_string(), "d.json: line 1, column 15: not valid JSON: there is a ',' before a closing bracket: remove it");
+        assert_eq!(
+            Design::from_json("cube.json", cut).unwrap_err().to_string().split_once(": not valid JSON: ").map(|(_, m)| m.to_string()).unwrap(),
+            "the text ends before the design does: the file was cut short; save or copy it again"
+        );
+        assert_eq!(
+            Design::from_json("d.json", "{\"version\": 1, name: 2}").unwrap_err().to_string(),
+            "d.json: line 1, column 16: not valid JSON: field names must be in double quotes"
+        );
+        assert_eq!(
+            Design::from_json("d.json", "{\"version\": 1,}").unwrap_err().to_string(),
+            "d.json: line 1, column 15: not valid JSON: there is a ',' before a closing bracket: remove it"
+        );
         assert_eq!(Design::from_json("d.json", "{\"version\": 1}").unwrap_err().to_string(), "d.json: name: Name is missing: add it (text in double quotes)");
-        assert_eq!(Design::from_json("d.json", "{\"version\": 1, \"name\": \"x\"}").unwrap_err().to_string(), "d.json: job: is missing: add it (start from a complete design: an example on the page, or `weft new`)");
+        assert_eq!(
+            Design::from_json("d.json", "{\"version\": 1, \"name\": \"x\"}").unwrap_err().to_string(),
+            "d.json: job: is missing: add it (start from a complete design: an example on the page, or `weft new`)"
+        );
         assert_eq!(
             Design::from_json("d.json", "{\"name\": \"x\"}").unwrap_err().to_string(),
             "d.json: this is not a weft design: it has no \"version\" (a design starts {\"version\": 1, \"name\": …}; start from an example on the page, or `weft new`)"
         );
         // Nothing of serde's vocabulary is left in any of them.
-        for a in ["job.paths.iterations=2.5", "job.paths.method=x", "job.paths.x=1", "job={}", "printer.bed_size_mm=[1]", "seed=\"s\"", "job.lattice.contour=2"] {
+        for a in ["job.paths.iterations=2.5", "job.paths.method=x", "job.paths.x=1", "job={}", "printer.bed_size_mm=[1]", "seed=\"s\"", "job.lattice.contour=2"]
+        {
             let e = set(a);
             for word in ["invalid type", "invalid value", "unknown variant", "unknown field", "missing field", "expected", "u32", "u64", "f64", "line 0", "`"] {
                 assert!(!e.contains(word), "{a}: {e}");
@@ -589,9 +599,7 @@ mod tests {
 
     #[test]
     fn overrides_apply_and_validate() {
-        let d = Design::default()
-            .with_overrides(&["job.slice.layer_height_mm=0.1".into(), "name=part 2".into()])
-            .unwrap();
+        let d = Design::default().with_overrides(&["job.slice.layer_height_mm=0.1".into(), "name=part 2".into()]).unwrap();
         let j: crate::jobs::slice::SliceJob = d.job.settings().expect("slice job expected");
         assert_eq!(j.slice.layer_height_mm, 0.1);
         assert_eq!(d.name, "part 2");

@@ -3,14 +3,14 @@
 //! slots and views, and the menus' default values. [`validate`] checks a design with the same
 //! rows plus each job kind's own rules.
 
-use super::{Design, Input, Problem, MAX_DESCRIPTION_BYTES, MAX_FILE_NAME_BYTES, MAX_INPUT_FILES, MAX_NAME_BYTES};
 use super::share::MAX_EMBEDDED_CHARS;
+use super::{Design, Input, Problem, MAX_DESCRIPTION_BYTES, MAX_FILE_NAME_BYTES, MAX_INPUT_FILES, MAX_NAME_BYTES};
 use crate::geom::shapes::Shape;
 use crate::geom::Feature;
 use crate::jobs::{Registry, Slot, StageInfo, ViewInfo};
 use crate::settings::{self, int, max_len, mount, other, Field, Kind, Row, MAX_TEXT_BYTES};
-use serde_json::Value;
 use serde::Serialize;
+use serde_json::Value;
 
 /// Rows of the design's own fields.
 pub const DESIGN_FIELDS: &[Field] = &[
@@ -20,10 +20,7 @@ pub const DESIGN_FIELDS: &[Field] = &[
 ];
 
 /// Stages every job ends with (the pipeline's own).
-pub const WRITER_STAGES: &[StageInfo] = &[
-    StageInfo { name: "gcode", label: "Writing G-code" },
-    StageInfo { name: "analyze", label: "Measuring the G-code" },
-];
+pub const WRITER_STAGES: &[StageInfo] = &[StageInfo { name: "gcode", label: "Writing G-code" }, StageInfo { name: "analyze", label: "Measuring the G-code" }];
 
 /// The rows shared by every job kind (design, printer, material, speeds).
 pub fn common_rows() -> Vec<Row> {
@@ -131,10 +128,8 @@ pub struct FlavorInfo {
 
 /// The schema of `registry`'s job kinds.
 pub fn schema(registry: &Registry) -> Schema {
-    let features = Feature::ALL
-        .iter()
-        .map(|f| FeatureInfo { code: f.code(), key: f.key(), name: f.gcode_name(), label: f.gcode_name(), color: f.color() })
-        .collect();
+    let features =
+        Feature::ALL.iter().map(|f| FeatureInfo { code: f.code(), key: f.key(), name: f.gcode_name(), label: f.gcode_name(), color: f.color() }).collect();
     let job_kinds = registry
         .kinds()
         .iter()
@@ -164,7 +159,10 @@ pub fn schema(registry: &Registry) -> Schema {
         .collect();
     let flavors = [crate::gcode::Flavor::Marlin, crate::gcode::Flavor::Pneumatic, crate::gcode::Flavor::PosesCsv]
         .into_iter()
-        .map(|f| FlavorInfo { name: serde_json::to_value(f).ok().and_then(|v| v.as_str().map(String::from)).unwrap_or_default(), extension: f.file_extension() })
+        .map(|f| FlavorInfo {
+            name: serde_json::to_value(f).ok().and_then(|v| v.as_str().map(String::from)).unwrap_or_default(),
+            extension: f.file_extension(),
+        })
         .collect();
     let printer_presets = crate::gcode::presets::presets();
     Schema { version: super::DESIGN_VERSION, fields: rows(registry), features, job_kinds, builtin_shapes, patterns, flavors, printer_presets }
@@ -237,7 +235,10 @@ fn check_strings(root: &Value, rows: &[Row], out: &mut Vec<Problem>) {
                 if key == "files" && items.len() > MAX_INPUT_FILES {
                     out.push(Problem {
                         path: path.clone(),
-                        message: format!("{} files, over the limit of {MAX_INPUT_FILES} in one input: load fewer (e.g. every other slice of a series)", items.len()),
+                        message: format!(
+                            "{} files, over the limit of {MAX_INPUT_FILES} in one input: load fewer (e.g. every other slice of a series)",
+                            items.len()
+                        ),
                     });
                 }
                 let join = |i: usize| if path.is_empty() { i.to_string() } else { format!("{path}.{i}") };

@@ -4,8 +4,8 @@
 //! [`MAX_EMBED_BYTES`]; larger meshes stay out of the link and the note says so.
 
 use super::{Design, Input};
-use base64::Engine;
 use base64::engine::general_purpose::URL_SAFE_NO_PAD;
+use base64::Engine;
 
 /// Largest total size of the files embedded in a share link, bytes (256 KiB).
 pub const MAX_EMBED_BYTES: usize = 256 * 1024;
@@ -166,10 +166,7 @@ pub fn decode(fragment: &str) -> Result<Design, Error> {
     if frag.len() > MAX_FRAGMENT_CHARS {
         return Err(Error::TooLong { chars: frag.len() });
     }
-    let data = frag
-        .split('&')
-        .find_map(|kv| kv.strip_prefix(FRAGMENT_KEY))
-        .ok_or(Error::Missing)?;
+    let data = frag.split('&').find_map(|kv| kv.strip_prefix(FRAGMENT_KEY)).ok_or(Error::Missing)?;
     let bytes = unpack_limited(data, super::MAX_DESIGN_BYTES)?;
     let text = std::str::from_utf8(&bytes).map_err(|_| Error::Damaged)?;
     Ok(Design::from_json("share link", text)?)

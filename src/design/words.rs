@@ -176,7 +176,6 @@ fn row_of<'a>(rows: &'a [Row], root: &Value, path: &str) -> Option<&'a Row> {
     rows.iter().find(|r| r.path == parent && r.field.kind == Kind::Vec3)
 }
 
-
 pub(crate) use crate::settings::not_a_choice;
 
 /// The closest of `names` to `name` when it is a likely typo (at most a third of it differs).
@@ -196,16 +195,15 @@ fn closest<'a>(name: &str, names: &[&'a str]) -> Option<&'a str> {
     if name.chars().count() > 64 {
         return None;
     }
-    names
-        .iter()
-        .map(|n| (distance(name, n), *n))
-        .filter(|(d, n)| *d > 0 && *d * 3 <= n.chars().count().max(3))
-        .min_by_key(|(d, _)| *d)
-        .map(|(_, n)| n)
+    names.iter().map(|n| (distance(name, n), *n)).filter(|(d, n)| *d > 0 && *d * 3 <= n.chars().count().max(3)).min_by_key(|(d, _)| *d).map(|(_, n)| n)
 }
 
 fn join(path: &str, key: &str) -> String {
-    if path.is_empty() { key.to_string() } else { format!("{path}.{key}") }
+    if path.is_empty() {
+        key.to_string()
+    } else {
+        format!("{path}.{key}")
+    }
 }
 
 /// The dotted design path of serde's error (`prefix` first: `job` for a job's settings).
@@ -253,7 +251,8 @@ pub(crate) fn problem(err: &serde_path_to_error::Error<serde_json::Error>, prefi
             }
             Said::Type { got, .. } => {
                 let want = got_words(got);
-                let hits: Vec<&String> = map.iter().filter(|(_, v)| !v.is_object() && shown(v).trim_matches('"') == want.trim_matches('"')).map(|(k, _)| k).collect();
+                let hits: Vec<&String> =
+                    map.iter().filter(|(_, v)| !v.is_object() && shown(v).trim_matches('"') == want.trim_matches('"')).map(|(k, _)| k).collect();
                 (hits.len() == 1).then(|| hits[0].clone())
             }
             _ => None,

@@ -18,7 +18,7 @@
 //! pair there and its weight is 0), on each shared boundary (that boundary's weight dominates,
 //! and both sides see the same blend), and where the nearest boundary changes; it may only
 //! jump on the lines where boundaries meet. Taking the nearest boundary's blend instead
-//! ([`Junction::Nearest`]) jumps along the bisector of two boundaries; `tests/foam_model.rs`
+//! ([`Junction::Nearest`]) jumps along the bisector of two boundaries; `tests/it/foam_model.rs`
 //! measures both. With one transition in reach both give exactly the paper's π.
 
 use super::{Pair, Weighting};
@@ -82,7 +82,17 @@ pub fn pair_at(region: usize, distances: &[f64], transitions: &[Transition], pai
 /// their boundary (|x| = 0) share the whole weight.
 fn blend(items: &[(f64, Pair)]) -> Pair {
     let on = items.iter().filter(|(x, _)| *x == 0.0).count();
-    let weight = |x: f64| if on > 0 { if x == 0.0 { 1.0 } else { 0.0 } } else { (1.0 - 2.0 * x) / x.max(1e-12) };
+    let weight = |x: f64| {
+        if on > 0 {
+            if x == 0.0 {
+                1.0
+            } else {
+                0.0
+            }
+        } else {
+            (1.0 - 2.0 * x) / x.max(1e-12)
+        }
+    };
     let (mut sw, mut sv, mut sh) = (0.0, 0.0, 0.0);
     for &(x, p) in items {
         let w = weight(x);
@@ -93,7 +103,11 @@ fn blend(items: &[(f64, Pair)]) -> Pair {
     // Equal values stay exact (a constant H* prints at one height).
     let same = |f: fn(&Pair) -> f64, s: f64| {
         let first = f(&items[0].1);
-        if items.iter().all(|(_, p)| f(p) == first) { first } else { s / sw }
+        if items.iter().all(|(_, p)| f(p) == first) {
+            first
+        } else {
+            s / sw
+        }
     };
     Pair { v_star: same(|p| p.v_star, sv), h_star: same(|p| p.h_star, sh) }
 }

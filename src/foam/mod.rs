@@ -11,9 +11,9 @@
 //! transitions where regions meet along lines.
 
 pub mod blend;
-pub mod raster;
 pub mod field;
 pub mod models;
+pub mod raster;
 pub mod regions;
 pub mod stiffness;
 pub mod vtp;

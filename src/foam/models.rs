@@ -73,7 +73,14 @@ impl Default for Model {
 /// Form rows (paths relative to the model).
 pub const FIELDS: &[crate::settings::Field] = &[
     crate::settings::choice_docs(
-        crate::settings::other("kind", "Model", "Shape", crate::settings::Kind::Choice, &["dogbone", "hinge_cube", "insole", "blocks", "sectors"], "Region meshes made by weft instead of loaded files."),
+        crate::settings::other(
+            "kind",
+            "Model",
+            "Shape",
+            crate::settings::Kind::Choice,
+            &["dogbone", "hinge_cube", "insole", "blocks", "sectors"],
+            "Region meshes made by weft instead of loaded files.",
+        ),
         &[
             "A dogbone split at the middle of its neck: two regions (the paper's test piece).",
             "A cube's net: six stiff panels joined by soft hinge strips (two regions).",
@@ -105,7 +112,13 @@ pub fn problems(model: &Model) -> Vec<String> {
     };
     match *model {
         Model::Dogbone { neck_length_mm, neck_width_mm, grip_length_mm, grip_width_mm, thickness_mm } => {
-            for (n, v) in [("the neck length", neck_length_mm), ("the neck width", neck_width_mm), ("the grip length", grip_length_mm), ("the grip width", grip_width_mm), ("the thickness", thickness_mm)] {
+            for (n, v) in [
+                ("the neck length", neck_length_mm),
+                ("the neck width", neck_width_mm),
+                ("the grip length", grip_length_mm),
+                ("the grip width", grip_width_mm),
+                ("the thickness", thickness_mm),
+            ] {
                 positive(n, v, &mut out);
             }
             if grip_width_mm < neck_width_mm {
@@ -161,7 +174,8 @@ pub fn build(model: &Model) -> Vec<(String, Mesh)> {
             // A cross: a column of four panels (x = 0) and one panel each side of the second.
             let pitch = p + h;
             let cells = [(0, 0), (0, 1), (0, 2), (0, 3), (-1, 1), (1, 1)];
-            let square = |x0: f64, y0: f64, sx: f64, sy: f64| vec![DVec2::new(x0, y0), DVec2::new(x0 + sx, y0), DVec2::new(x0 + sx, y0 + sy), DVec2::new(x0, y0 + sy)];
+            let square =
+                |x0: f64, y0: f64, sx: f64, sy: f64| vec![DVec2::new(x0, y0), DVec2::new(x0 + sx, y0), DVec2::new(x0 + sx, y0 + sy), DVec2::new(x0, y0 + sy)];
             let panels: Vec<Vec<DVec2>> = cells.iter().map(|&(i, j)| square(i as f64 * pitch - p / 2.0, j as f64 * pitch, p, p)).collect();
             let mut hinges = Vec::new();
             for j in 0..3 {

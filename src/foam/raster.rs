@@ -104,7 +104,9 @@ pub enum Error {
         reason: String,
     },
     /// No scan line runs inside the polygon for any length.
-    #[error("the polygon is {width_mm:.4} mm wide at most across the scan lines and no scan line at {spacing_mm} mm spacing runs inside it; lower the line spacing")]
+    #[error(
+        "the polygon is {width_mm:.4} mm wide at most across the scan lines and no scan line at {spacing_mm} mm spacing runs inside it; lower the line spacing"
+    )]
     TooNarrow {
         /// The polygon's extent across the scan lines, mm.
         width_mm: f64,
@@ -394,9 +396,8 @@ struct Cut {
 impl Graph {
     fn build(polygon: &Polygon, options: &Options) -> Result<Graph, Error> {
         let frame = Frame::new(options.angle_deg);
-        let (y_min, y_max) = y_range(polygon, &frame).ok_or_else(|| Error::Degenerate {
-            reason: "its coordinates are too large to turn to the scan direction".to_string(),
-        })?;
+        let (y_min, y_max) =
+            y_range(polygon, &frame).ok_or_else(|| Error::Degenerate { reason: "its coordinates are too large to turn to the scan direction".to_string() })?;
         let spacing = options.spacing_mm;
         let lines = Lines::new(y_min, y_max, spacing).map_err(|n| too_much_work(n, spacing))?;
 
@@ -451,9 +452,7 @@ impl Graph {
 
         // Intervals: the cuts of each line by x (ties as just above the line), taken pairwise.
         // Every ring crosses every line an even number of times under the half-open rule.
-        cuts.sort_by(|p, q| {
-            p.line.cmp(&q.line).then(p.x.total_cmp(&q.x)).then(p.dxdy.total_cmp(&q.dxdy)).then(p.node.cmp(&q.node))
-        });
+        cuts.sort_by(|p, q| p.line.cmp(&q.line).then(p.x.total_cmp(&q.x)).then(p.dxdy.total_cmp(&q.dxdy)).then(p.node.cmp(&q.node)));
         let mut longest: f64 = 0.0;
         for line in cuts.chunk_by(|p, q| p.line == q.line) {
             debug_assert!(line.len() % 2 == 0, "odd crossings on a scan line");
@@ -586,12 +585,20 @@ impl Graph {
 
     fn ring_next(&self, n: u32) -> u32 {
         let (first, end) = self.ring_span[self.ring_of[n as usize] as usize];
-        if n + 1 == end { first } else { n + 1 }
+        if n + 1 == end {
+            first
+        } else {
+            n + 1
+        }
     }
 
     fn ring_prev(&self, n: u32) -> u32 {
         let (first, end) = self.ring_span[self.ring_of[n as usize] as usize];
-        if n == first { end - 1 } else { n - 1 }
+        if n == first {
+            end - 1
+        } else {
+            n - 1
+        }
     }
 
     fn length(&self, a: u32, b: u32) -> f64 {
@@ -831,13 +838,7 @@ struct Search {
 
 impl Search {
     fn new(nodes: usize) -> Search {
-        Search {
-            dist: vec![f64::INFINITY; nodes],
-            pred: vec![(NONE, NONE); nodes],
-            settled: vec![false; nodes],
-            touched: Vec::new(),
-            heap: BinaryHeap::new(),
-        }
+        Search { dist: vec![f64::INFINITY; nodes], pred: vec![(NONE, NONE); nodes], settled: vec![false; nodes], touched: Vec::new(), heap: BinaryHeap::new() }
     }
 
     fn reach(&mut self, node: u32, d: f64, from: u32, via: u32) {
@@ -855,14 +856,7 @@ impl Search {
 
     /// The goal node nearest to `from` (ties: lowest goal key, then lowest node), walking ring
     /// pieces and printed intervals (and the others when `any_interval`).
-    fn run(
-        &mut self,
-        g: &Graph,
-        printed: &[bool],
-        from: u32,
-        any_interval: bool,
-        goal: impl Fn(u32) -> Option<u32>,
-    ) -> Option<u32> {
+    fn run(&mut self, g: &Graph, printed: &[bool], from: u32, any_interval: bool, goal: impl Fn(u32) -> Option<u32>) -> Option<u32> {
         for &n in &self.touched {
             self.dist[n as usize] = f64::INFINITY;
             self.pred[n as usize] = (NONE, NONE);

@@ -167,7 +167,11 @@ impl Region {
     pub fn signed_distance(&self, p: DVec3) -> f64 {
         let q = self.solid.project_local_point(v(p), false);
         let d = (from_v(q.point) - p).length();
-        if q.is_inside { -d } else { d }
+        if q.is_inside {
+            -d
+        } else {
+            d
+        }
     }
 
     /// Distance from `p` to the region's surface, mm.
@@ -259,7 +263,8 @@ pub fn regions(input: Vec<(String, Mesh)>, options: &Options) -> Result<Regions,
     let mut out = Vec::with_capacity(input.len());
     for (name, mesh) in input {
         let points: Vec<Vector> = mesh.vertices.iter().map(|p| Vector::new(p[0] as f64, p[1] as f64, p[2] as f64)).collect();
-        let bounds = bounds_of(points.iter().map(|p| from_v(*p))).ok_or_else(|| Error::BadMesh { region: name.clone(), message: "the mesh has no vertices".into() })?;
+        let bounds =
+            bounds_of(points.iter().map(|p| from_v(*p))).ok_or_else(|| Error::BadMesh { region: name.clone(), message: "the mesh has no vertices".into() })?;
         let triangles = mesh.triangles.len();
         let solid = TriMesh::with_flags(points, mesh.triangles, TriMeshFlags::ORIENTED | TriMeshFlags::MERGE_DUPLICATE_VERTICES)
             .map_err(|e| Error::BadMesh { region: name.clone(), message: format!("it cannot be read as a solid ({e})") })?;
@@ -304,7 +309,8 @@ pub fn regions(input: Vec<(String, Mesh)>, options: &Options) -> Result<Regions,
             let bounds = bounds_of(tris.iter().flatten().copied()).unwrap_or(all);
             let verts: Vec<Vector> = tris.iter().flatten().map(|p| v(*p)).collect();
             let idx: Vec<[u32; 3]> = (0..tris.len() as u32).map(|i| [3 * i, 3 * i + 1, 3 * i + 2]).collect();
-            let surface = TriMesh::new(verts, idx).map_err(|e| Error::BadMesh { region: out[a].name.clone(), message: format!("its boundary with {} cannot be built ({e})", out[b].name) })?;
+            let surface = TriMesh::new(verts, idx)
+                .map_err(|e| Error::BadMesh { region: out[a].name.clone(), message: format!("its boundary with {} cannot be built ({e})", out[b].name) })?;
             boundaries.push(Boundary { a, b, triangles: tris, area_mm2, surface, bounds });
         }
     }

@@ -94,7 +94,11 @@ impl Calibration {
     pub fn modulus_problem(&self, modulus_kpa: f64) -> Option<String> {
         let (lo, hi) = self.range_kpa();
         if !modulus_kpa.is_finite() || modulus_kpa < lo * (1.0 - 1e-9) || modulus_kpa > hi * (1.0 + 1e-9) {
-            let (v_soft, v_stiff) = if self.modulus_kpa(self.v_star_from) < self.modulus_kpa(self.v_star_to) { (self.v_star_from, self.v_star_to) } else { (self.v_star_to, self.v_star_from) };
+            let (v_soft, v_stiff) = if self.modulus_kpa(self.v_star_from) < self.modulus_kpa(self.v_star_to) {
+                (self.v_star_from, self.v_star_to)
+            } else {
+                (self.v_star_to, self.v_star_from)
+            };
             return Some(format!(
                 "a modulus of {modulus_kpa} kPa is outside the calibration, which covers {lo:.2} kPa (V* {v_soft}) to {hi:.2} kPa (V* {v_stiff}); ask for a modulus in that range, or measure a wider V* sweep and enter its fit"
             ));

@@ -84,7 +84,11 @@ impl Process {
 
     /// The numbers of a piece `len_mm` long printed with `pair` on layers of `layer_mm`.
     pub fn piece(&self, pair: Pair, len_mm: f64, layer_mm: f64) -> Piece {
-        Piece { e_mm: len_mm * self.filament_per_mm(pair.v_star), speed_mm_s: self.speed_mm_s(pair.v_star), z_offset_mm: self.z_offset_mm(pair.h_star, layer_mm) }
+        Piece {
+            e_mm: len_mm * self.filament_per_mm(pair.v_star),
+            speed_mm_s: self.speed_mm_s(pair.v_star),
+            z_offset_mm: self.z_offset_mm(pair.h_star, layer_mm),
+        }
     }
 
     /// Every problem with the process, each saying how to fix it (empty when usable).

@@ -87,7 +87,11 @@ impl<'de> Deserialize<'de> for Weighting {
         use serde::de::Error;
         let r = Raw::deserialize(d)?;
         let given = |names: &[&str]| -> Vec<&'static str> {
-            [("slope", r.slope), ("intercept", r.intercept), ("f", r.f), ("b", r.b)].into_iter().filter(|(n, v)| v.is_some() && !names.contains(n)).map(|(n, _)| n).collect()
+            [("slope", r.slope), ("intercept", r.intercept), ("f", r.f), ("b", r.b)]
+                .into_iter()
+                .filter(|(n, v)| v.is_some() && !names.contains(n))
+                .map(|(n, _)| n)
+                .collect()
         };
         let (w, allowed): (Weighting, &[&str]) = match r.kind.as_str() {
             "linear" => (Weighting::Linear, &[]),
@@ -108,7 +112,12 @@ impl<'de> Deserialize<'de> for Weighting {
         };
         match given(allowed).as_slice() {
             [] => Ok(w),
-            extra => Err(D::Error::custom(format!("a {} weighting takes no {} (remove it{})", r.kind, extra.join(", "), if allowed.is_empty() { "" } else { ", or choose another kind" }))),
+            extra => Err(D::Error::custom(format!(
+                "a {} weighting takes no {} (remove it{})",
+                r.kind,
+                extra.join(", "),
+                if allowed.is_empty() { "" } else { ", or choose another kind" }
+            ))),
         }
     }
 }
@@ -152,9 +161,9 @@ impl Weighting {
     pub fn problems(&self) -> Vec<String> {
         let mut out = Vec::new();
         match *self {
-            Weighting::Cubic { slope } if !(0.0..=1.5).contains(&slope) => {
-                out.push(format!("the cubic's slope at the boundary is {slope}: use 0 to 1.5 (outside that range the weight is not monotone; 1.5 also makes the ends smooth)"))
-            }
+            Weighting::Cubic { slope } if !(0.0..=1.5).contains(&slope) => out.push(format!(
+                "the cubic's slope at the boundary is {slope}: use 0 to 1.5 (outside that range the weight is not monotone; 1.5 also makes the ends smooth)"
+            )),
             Weighting::Logarithmic { slope, intercept, f, b } => {
                 if ![slope, intercept, f, b].iter().all(|v| v.is_finite()) {
                     out.push("the logarithmic function's numbers must be finite".into());

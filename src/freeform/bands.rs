@@ -172,7 +172,15 @@ pub fn plan(d: &Assembly, o: &plan::Options, band_of: &[usize], progress: &mut d
 /// Plans the beams `beams` (global indices) with every `printed` beam standing: the joints
 /// they leave stable are clamped (grounded for this plan). Returns the plan in global indices
 /// and the number of joints clamped.
-fn plan_band(d: &Assembly, o: &plan::Options, inc: &[Vec<usize>], printed: &[bool], beams: &[usize], budget_s: f64, progress: &mut dyn FnMut(usize, usize)) -> Result<(Plan, usize), Unconstructable> {
+fn plan_band(
+    d: &Assembly,
+    o: &plan::Options,
+    inc: &[Vec<usize>],
+    printed: &[bool],
+    beams: &[usize],
+    budget_s: f64,
+    progress: &mut dyn FnMut(usize, usize),
+) -> Result<(Plan, usize), Unconstructable> {
     let stable = stable_joints(d.joints, d.beams, d.grounded, inc, printed);
     // The bands below must end clean: no printed beam hangs (a joint not yet stable) where a
     // beam is still to come, or this band's plan, which sees those joints clamped, would heat

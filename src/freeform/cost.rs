@@ -33,7 +33,15 @@ pub fn costs(joints: &[DVec3], beams: &[[usize; 2]], grounded: &[bool], steps: &
 /// second: the exact cost's compliance updates and the stability searches): past it nothing
 /// more is measured (NaN from the step returned on). A wide frame's compliance grows as the
 /// square of its open joints, so this bounds the replay.
-pub fn costs_within(joints: &[DVec3], beams: &[[usize; 2]], grounded: &[bool], steps: &[Step], section: &Section, load_n: f64, budget_work: f64) -> (Vec<Costs>, Option<usize>) {
+pub fn costs_within(
+    joints: &[DVec3],
+    beams: &[[usize; 2]],
+    grounded: &[bool],
+    steps: &[Step],
+    section: &Section,
+    load_n: f64,
+    budget_work: f64,
+) -> (Vec<Costs>, Option<usize>) {
     let n = joints.len();
     let mut open = vec![0u32; n];
     for &[a, b] in beams {

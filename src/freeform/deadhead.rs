@@ -141,7 +141,8 @@ fn greedy(joints: &[DVec3], plan: &Plan, constraints: &Constraints, o: &Options,
     let mut current = 0usize;
     let mut done = vec![false; n];
     let mut available: Vec<usize> = Vec::new();
-    let is_ready = |i: usize, waiting: &[usize], blocks_waiting: &[usize], current: usize| waiting[i] == 0 && blocks_waiting[block_of[i]] == 0 && band_of[i] == current;
+    let is_ready =
+        |i: usize, waiting: &[usize], blocks_waiting: &[usize], current: usize| waiting[i] == 0 && blocks_waiting[block_of[i]] == 0 && band_of[i] == current;
     for i in 0..n {
         if is_ready(i, &waiting, &blocks_waiting, current) {
             available.push(i);
@@ -228,7 +229,15 @@ fn greedy(joints: &[DVec3], plan: &Plan, constraints: &Constraints, o: &Options,
 /// design can leave one there. Returns the steps whose deadhead does, ascending. Only a
 /// vertical nozzle is checked: a deadhead next to a beam printed tilted (`axis` per beam, +Z
 /// when upright) is skipped, and counted in the second number returned.
-pub fn blocked(joints: &[DVec3], beams: &[[usize; 2]], axis: &[DVec3], ordered: &Ordered, nozzle_radius_mm: f64, body_top_mm: f64, beam_radius_mm: f64) -> (Vec<usize>, usize) {
+pub fn blocked(
+    joints: &[DVec3],
+    beams: &[[usize; 2]],
+    axis: &[DVec3],
+    ordered: &Ordered,
+    nozzle_radius_mm: f64,
+    body_top_mm: f64,
+    beam_radius_mm: f64,
+) -> (Vec<usize>, usize) {
     use parry3d_f64::bounding_volume::Aabb;
     use parry3d_f64::math::Vector;
     use parry3d_f64::partitioning::{Bvh, BvhBuildStrategy};

@@ -16,10 +16,10 @@
 //!
 //! Units: mm, N, MPa (N/mm²); displacements in mm, rotations in radians.
 
+use faer::linalg::solvers::Solve;
 use faer::sparse::linalg::solvers::{Llt, SymbolicLlt};
 use faer::sparse::{SparseColMat, Triplet};
 use faer::{Mat, Side};
-use faer::linalg::solvers::Solve;
 use glam::DVec3;
 
 /// Young's modulus of isomalt, MPa (the paper's 2.6 GPa).

@@ -61,20 +61,43 @@ impl Default for Model {
 /// Form rows (paths relative to the model).
 pub const FIELDS: &[crate::settings::Field] = &[
     crate::settings::choice_docs(
-        crate::settings::other("kind", "Model", "Design", crate::settings::Kind::Choice, &["tower", "dome", "bridge"], "A wireframe made by weft instead of a loaded file."),
-        &["A square lattice tower that narrows upward (like the paper's Eiffel tower).", "A dome of triangles: rings of joints, each joined to the two below it.", "Two truss girders over a span, joined by cross beams."],
+        crate::settings::other(
+            "kind",
+            "Model",
+            "Design",
+            crate::settings::Kind::Choice,
+            &["tower", "dome", "bridge"],
+            "A wireframe made by weft instead of a loaded file.",
+        ),
+        &[
+            "A square lattice tower that narrows upward (like the paper's Eiffel tower).",
+            "A dome of triangles: rings of joints, each joined to the two below it.",
+            "Two truss girders over a span, joined by cross beams.",
+        ],
     ),
     crate::settings::when(crate::settings::int("cells", "Model", "Bays per side", 1.0, 60.0, "Tower: bays along each side of a level."), "kind", "tower"),
     crate::settings::when(crate::settings::int("levels", "Model", "Levels", 1.0, 400.0, "Tower: storeys."), "kind", "tower"),
     crate::settings::when(crate::settings::num("cell_mm", "Model", "Bay width", "mm", 0.1, 1000.0, 0.5, "Tower: width of a bay at the base."), "kind", "tower"),
     crate::settings::when(crate::settings::num("level_mm", "Model", "Level height", "mm", 0.1, 1000.0, 0.5, "Tower: height of a storey."), "kind", "tower"),
-    crate::settings::when(crate::settings::num("taper", "Model", "Taper", "", 0.1, 1.0, 0.05, "Tower: top width ÷ base width (1: straight sides)."), "kind", "tower"),
+    crate::settings::when(
+        crate::settings::num("taper", "Model", "Taper", "", 0.1, 1.0, 0.05, "Tower: top width ÷ base width (1: straight sides)."),
+        "kind",
+        "tower",
+    ),
     crate::settings::when(crate::settings::num("radius_mm", "Model", "Radius", "mm", 0.1, 1000.0, 0.5, "Dome: radius of the base circle."), "kind", "dome"),
     crate::settings::when(crate::settings::int("rings", "Model", "Rings", 1.0, 200.0, "Dome: rings of joints above the base."), "kind", "dome"),
     crate::settings::when(crate::settings::int("segments", "Model", "Segments", 3.0, 400.0, "Dome: joints around each ring."), "kind", "dome"),
-    crate::settings::when(crate::settings::num("span_mm", "Model", "Span", "mm", 0.1, 5000.0, 1.0, "Bridge: length between the ends it stands on."), "kind", "bridge"),
+    crate::settings::when(
+        crate::settings::num("span_mm", "Model", "Span", "mm", 0.1, 5000.0, 1.0, "Bridge: length between the ends it stands on."),
+        "kind",
+        "bridge",
+    ),
     crate::settings::when(crate::settings::int("panels", "Model", "Panels", 1.0, 2000.0, "Bridge: triangles along each truss."), "kind", "bridge"),
-    crate::settings::when(crate::settings::num("width_mm", "Model", "Width", "mm", 0.1, 1000.0, 0.5, "Bridge: distance between the two trusses."), "kind", "bridge"),
+    crate::settings::when(
+        crate::settings::num("width_mm", "Model", "Width", "mm", 0.1, 1000.0, 0.5, "Bridge: distance between the two trusses."),
+        "kind",
+        "bridge",
+    ),
     crate::settings::when(crate::settings::num("height_mm", "Model", "Height", "mm", 0.1, 1000.0, 0.5, "Bridge: height of the trusses."), "kind", "bridge"),
 ];
 

@@ -100,7 +100,20 @@ pub fn optimum(d: &Assembly, o: &Options, progress: &mut dyn FnMut(usize, usize)
     }
     let preds: Vec<u64> = (0..m).map(|b| d.constraints.preds(b).iter().fold(0u64, |s, &p| s | 1 << p)).collect();
     let full = if m == 64 { u64::MAX } else { (1u64 << m) - 1 };
-    let mut s = Search { d, o, inc, preds, full, failed: HashSet::new(), states: 0, limit: f64::INFINITY, path: Vec::with_capacity(m), found: None, exhausted: false, progress };
+    let mut s = Search {
+        d,
+        o,
+        inc,
+        preds,
+        full,
+        failed: HashSet::new(),
+        states: 0,
+        limit: f64::INFINITY,
+        path: Vec::with_capacity(m),
+        found: None,
+        exhausted: false,
+        progress,
+    };
     let mut out = Optimum { best_mm: o.known_mm, ..Optimum::default() };
     if let Some(k) = o.known_mm {
         s.limit = k * (1.0 - TIE);
@@ -190,10 +203,12 @@ impl Search<'_, '_> {
                 }
             }
         }
-        mine.into_iter().filter(|&b| {
-            let x = d.other(b, j);
-            !d.grounded[x] && !seen[x]
-        }).count()
+        mine.into_iter()
+            .filter(|&b| {
+                let x = d.other(b, j);
+                !d.grounded[x] && !seen[x]
+            })
+            .count()
     }
 
     /// The children of `node`: per beam that may come next, its cheapest allowed direction

@@ -703,7 +703,6 @@ impl<'a> Planner<'a> {
         self.plan.blocks.push(Block { start, end, after, chain, key_mm: key });
     }
 
-
     /// Checks the exact cost's running compliance against faer's sparse Cholesky of the
     /// printed frame (measures only: see [`frame::Flex::check`]).
     fn refresh(&mut self) {
@@ -753,7 +752,13 @@ pub fn plan(d: &Assembly, o: &Options, progress: &mut dyn FnMut(usize, usize)) -
 /// [`plan`], sending its beginning ahead: once `send_at` beams (> 0) are fixed and some are
 /// left, `ahead` gets the plan so far. The search only adds to a plan, so those steps are the
 /// final plan's first ones; the finished plan records how many were sent ([`Plan::sent`]).
-pub fn plan_sending(d: &Assembly, o: &Options, send_at: usize, progress: &mut dyn FnMut(usize, usize), ahead: &mut dyn FnMut(&Plan)) -> Result<Plan, Unconstructable> {
+pub fn plan_sending(
+    d: &Assembly,
+    o: &Options,
+    send_at: usize,
+    progress: &mut dyn FnMut(usize, usize),
+    ahead: &mut dyn FnMut(&Plan),
+) -> Result<Plan, Unconstructable> {
     let inc = incidence(d);
     let (_, hang) = proofs(d, &inc, o.mode, o.connection)?;
     let n = d.joints.len();

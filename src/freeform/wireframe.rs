@@ -144,7 +144,8 @@ pub fn read(name: &str, bytes: &[u8], options: &Options) -> Result<Wireframe, Er
         return Err(Error::TooBig { file: name.into(), bytes: bytes.len() });
     }
     let not_read = |place: &str, message: String| Error::NotRead { file: name.into(), place: place.into(), message };
-    let text = std::str::from_utf8(bytes).map_err(|e| not_read(&format!("byte {}", e.valid_up_to()), "the file is not text (UTF-8); export the design as JSON, OBJ or CSV".into()))?;
+    let text = std::str::from_utf8(bytes)
+        .map_err(|e| not_read(&format!("byte {}", e.valid_up_to()), "the file is not text (UTF-8); export the design as JSON, OBJ or CSV".into()))?;
     let lower = name.to_ascii_lowercase();
     // A cheap count first, so a design far over the limit is refused before it is parsed.
     let counted = beams_counted(text, &lower);
@@ -188,7 +189,9 @@ fn unit_scale(unit: &str) -> Option<f64> {
 }
 
 fn json(text: &str) -> Result<Raw, (String, String)> {
-    let v: Value = serde_json::from_str(text).map_err(|e| (format!("line {}, column {}", e.line(), e.column()), format!("not JSON ({e}); a wireframe design is assembly_instances or conmech JSON, OBJ or CSV")))?;
+    let v: Value = serde_json::from_str(text).map_err(|e| {
+        (format!("line {}, column {}", e.line(), e.column()), format!("not JSON ({e}); a wireframe design is assembly_instances or conmech JSON, OBJ or CSV"))
+    })?;
     let scale = |default: f64| -> Result<f64, (String, String)> {
         match v.get("unit").and_then(Value::as_str) {
             None => Ok(default),
@@ -199,8 +202,19 @@ fn json(text: &str) -> Result<Raw, (String, String)> {
     let flag = |x: Option<&Value>| x.is_some_and(|g| g.as_bool().unwrap_or(false) || g.as_f64().is_some_and(|f| f != 0.0));
     if let Some(nodes) = v.get("node_list").and_then(Value::as_array) {
         let s = scale(1.0)?;
-        let elements = v.get("element_list").and_then(Value::as_array).ok_or(("element_list".to_string(), "an assembly_instances design needs its element_list (the beams)".to_string()))?;
-        let mut raw = Raw { joints: Vec::new(), joint_place: Vec::new(), beams: Vec::new(), beam_place: Vec::new(), grounded: Some(Vec::new()), format: Format::AssemblyInstances, dangling: Vec::new() };
+        let elements = v
+            .get("element_list")
+            .and_then(Value::as_array)
+            .ok_or(("element_list".to_string(), "an assembly_instances design needs its element_list (the beams)".to_string()))?;
+        let mut raw = Raw {
+            joints: Vec::new(),
+            joint_place: Vec::new(),
+            beams: Vec::new(),
+            beam_place: Vec::new(),
+            grounded: Some(Vec::new()),
+            format: Format::AssemblyInstances,
+            dangling: Vec::new(),
+        };
         let mut by_id = BTreeMap::new();
         for (i, n) in nodes.iter().enumerate() {
             let place = format!("node_list[{i}]");
@@ -222,8 +236,17 @@ fn json(text: &str) -> Result<Raw, (String, String)> {
     }
     if let Some(nodes) = v.get("nodes").and_then(Value::as_array) {
         let s = scale(1000.0)?;
-        let elements = v.get("elements").and_then(Value::as_array).ok_or(("elements".to_string(), "a conmech design needs its elements (the beams)".to_string()))?;
-        let mut raw = Raw { joints: Vec::new(), joint_place: Vec::new(), beams: Vec::new(), beam_place: Vec::new(), grounded: None, format: Format::Conmech, dangling: Vec::new() };
+        let elements =
+            v.get("elements").and_then(Value::as_array).ok_or(("elements".to_string(), "a conmech design needs its elements (the beams)".to_string()))?;
+        let mut raw = Raw {
+            joints: Vec::new(),
+            joint_place: Vec::new(),
+            beams: Vec::new(),
+            beam_place: Vec::new(),
+            grounded: None,
+            format: Format::Conmech,
+            dangling: Vec::new(),
+        };
         let mut by_id = BTreeMap::new();
         let mut grounded = Vec::new();
         for (i, n) in nodes.iter().enumerate() {
@@ -255,7 +278,12 @@ fn json(text: &str) -> Result<Raw, (String, String)> {
 /// The beams of a JSON design's element list: `keys` names the list, the two ends' key, the
 /// id's key and what an end is called, as the format spells them. Ends naming missing joints
 /// are kept as dangling (listed with every other problem).
-fn json_beams(raw: &mut Raw, elements: &[Value], by_id: &std::collections::BTreeMap<i64, usize>, keys: (&str, &str, &str, &str)) -> Result<(), (String, String)> {
+fn json_beams(
+    raw: &mut Raw,
+    elements: &[Value],
+    by_id: &std::collections::BTreeMap<i64, usize>,
+    keys: (&str, &str, &str, &str),
+) -> Result<(), (String, String)> {
     let (list, ends_key, id_key, what) = keys;
     for (i, e) in elements.iter().enumerate() {
         let place = format!("{list}[{i}]");
@@ -301,7 +329,15 @@ fn numbers(line: &str) -> Vec<&str> {
 }
 
 fn obj(text: &str) -> Result<Raw, (usize, String)> {
-    let mut raw = Raw { joints: Vec::new(), joint_place: Vec::new(), beams: Vec::new(), beam_place: Vec::new(), grounded: None, format: Format::Obj, dangling: Vec::new() };
+    let mut raw = Raw {
+        joints: Vec::new(),
+        joint_place: Vec::new(),
+        beams: Vec::new(),
+        beam_place: Vec::new(),
+        grounded: None,
+        format: Format::Obj,
+        dangling: Vec::new(),
+    };
     for (k, line) in text.lines().enumerate() {
         let n = k + 1;
         let mut it = line.split_whitespace();
@@ -349,7 +385,15 @@ fn obj(text: &str) -> Result<Raw, (usize, String)> {
 }
 
 fn csv(text: &str, merge_mm: f64) -> Result<Raw, (usize, String)> {
-    let mut raw = Raw { joints: Vec::new(), joint_place: Vec::new(), beams: Vec::new(), beam_place: Vec::new(), grounded: None, format: Format::Csv, dangling: Vec::new() };
+    let mut raw = Raw {
+        joints: Vec::new(),
+        joint_place: Vec::new(),
+        beams: Vec::new(),
+        beam_place: Vec::new(),
+        grounded: None,
+        format: Format::Csv,
+        dangling: Vec::new(),
+    };
     // Joints by position on a grid of the merge tolerance (ends within it are one joint; the
     // neighbouring cells are looked at too, so a pair across a cell edge still merges).
     let cell = merge_mm.max(1e-9);
@@ -419,7 +463,10 @@ fn finish(name: &str, raw: Raw, options: &Options) -> Result<Wireframe, Error> {
             problems.push(format!("{} has length {len:.4} mm (from {} to {}): remove it", raw.beam_place[b], raw.joint_place[i], raw.joint_place[j]));
         }
         if let Some(&first) = seen.get(&(i.min(j), i.max(j))) {
-            problems.push(format!("{} repeats {} (both join {} and {}): remove one", raw.beam_place[b], raw.beam_place[first], raw.joint_place[i], raw.joint_place[j]));
+            problems.push(format!(
+                "{} repeats {} (both join {} and {}): remove one",
+                raw.beam_place[b], raw.beam_place[first], raw.joint_place[i], raw.joint_place[j]
+            ));
         } else {
             seen.insert((i.min(j), i.max(j)), b);
         }
@@ -475,7 +522,10 @@ fn finish(name: &str, raw: Raw, options: &Options) -> Result<Wireframe, Error> {
         let mut parts: Vec<(usize, usize)> = parts.into_values().collect();
         parts.sort_unstable();
         for (first, count) in parts {
-            problems.push(format!("{count} beam(s) starting with {} are not connected to any grounded joint: join them to the rest, ground one of their joints, or remove them", raw.beam_place[first]));
+            problems.push(format!(
+                "{count} beam(s) starting with {} are not connected to any grounded joint: join them to the rest, ground one of their joints, or remove them",
+                raw.beam_place[first]
+            ));
         }
     }
     if !problems.is_empty() {
@@ -486,7 +536,15 @@ fn finish(name: &str, raw: Raw, options: &Options) -> Result<Wireframe, Error> {
         }
         return Err(Error::Invalid { file: name.into(), problems });
     }
-    Ok(Wireframe { joints: raw.joints, beams: raw.beams, grounded, grounded_by_file, format: raw.format, joint_names: raw.joint_place, beam_names: raw.beam_place })
+    Ok(Wireframe {
+        joints: raw.joints,
+        beams: raw.beams,
+        grounded,
+        grounded_by_file,
+        format: raw.format,
+        joint_names: raw.joint_place,
+        beam_names: raw.beam_place,
+    })
 }
 
 impl Wireframe {

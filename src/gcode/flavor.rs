@@ -247,7 +247,11 @@ impl Dialect for PneumaticDialect {
 
     fn end_lead_mm(&self, options: &Options, path: &PathCtx) -> f64 {
         let lead = options.material.flow.post_flow_s * path.speed_mm_s;
-        if lead.is_finite() && lead > 0.0 { lead } else { 0.0 }
+        if lead.is_finite() && lead > 0.0 {
+            lead
+        } else {
+            0.0
+        }
     }
 
     fn segment(&mut self, out: &mut Out, to: DVec3, _e: f64, feed: u64) {

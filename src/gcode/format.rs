@@ -6,7 +6,11 @@ const POW10: [f64; 10] = [1.0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9];
 /// `None` when it prints as `0` (zero, non-finite, or ≥ 9·10^18 after scaling).
 fn scaled(v: f64, decimals: usize) -> Option<f64> {
     let r = (v * POW10[decimals]).round();
-    if !r.is_finite() || r.abs() >= 9.0e18 || r == 0.0 { None } else { Some(r) }
+    if !r.is_finite() || r.abs() >= 9.0e18 || r == 0.0 {
+        None
+    } else {
+        Some(r)
+    }
 }
 
 /// Appends `v` rounded half away from zero to `decimals` (≤ 9) decimal places, trailing

@@ -197,7 +197,8 @@ pub struct Flow {
 }
 
 /// Default start G-code (Marlin).
-pub const DEFAULT_START_GCODE: &str = "M140 S{bed_temp_c} ; bed\nM104 S{first_layer_nozzle_temp_c} ; nozzle\nG28 ; home\nM190 S{bed_temp_c}\nM109 S{first_layer_nozzle_temp_c}\nG92 E0\n";
+pub const DEFAULT_START_GCODE: &str =
+    "M140 S{bed_temp_c} ; bed\nM104 S{first_layer_nozzle_temp_c} ; nozzle\nG28 ; home\nM190 S{bed_temp_c}\nM109 S{first_layer_nozzle_temp_c}\nG92 E0\n";
 /// Default end G-code (Marlin).
 pub const DEFAULT_END_GCODE: &str = "M107 ; fan off\nM104 S0\nM140 S0\nG91\nG1 Z5 F600\nG90\nM84 ; motors off\n";
 /// Start code of the pneumatic flavour, written instead of [`DEFAULT_START_GCODE`] when the
@@ -321,14 +322,7 @@ pub struct Speeds {
 
 impl Default for Speeds {
     fn default() -> Self {
-        Speeds {
-            external_perimeter_mm_s: 30.0,
-            perimeter_mm_s: 45.0,
-            infill_mm_s: 60.0,
-            solid_infill_mm_s: 45.0,
-            lattice_mm_s: 20.0,
-            first_layer_mm_s: 20.0,
-        }
+        Speeds { external_perimeter_mm_s: 30.0, perimeter_mm_s: 45.0, infill_mm_s: 60.0, solid_infill_mm_s: 45.0, lattice_mm_s: 20.0, first_layer_mm_s: 20.0 }
     }
 }
 
@@ -404,7 +398,9 @@ pub enum Error {
         known: String,
     },
     /// A start or end template over [`MAX_TEMPLATE_BYTES`].
-    #[error("printer.{template}: the template is {bytes} bytes, over the limit of {limit} bytes; shorten it (start and end codes are normally a few dozen lines)")]
+    #[error(
+        "printer.{template}: the template is {bytes} bytes, over the limit of {limit} bytes; shorten it (start and end codes are normally a few dozen lines)"
+    )]
     TemplateTooLong {
         /// start_gcode or end_gcode.
         template: &'static str,
@@ -524,7 +520,11 @@ pub fn check_fits(size_mm: [f64; 3], printer: &Printer) -> Result<(), Error> {
     let bed = printer.bed_size_mm;
     let eps = 1e-6;
     let fits = size_mm.iter().all(|v| v.is_finite()) && (0..3).all(|k| size_mm[k] <= bed[k] + eps);
-    if fits { Ok(()) } else { Err(Error::OutsideBed { size_mm, bed_mm: bed, below_plate_mm: 0.0 }) }
+    if fits {
+        Ok(())
+    } else {
+        Err(Error::OutsideBed { size_mm, bed_mm: bed, below_plate_mm: 0.0 })
+    }
 }
 
 /// Retractions the writer makes for each pass of `toolpath` on `printer` (the same rule as
@@ -661,12 +661,32 @@ pub const MATERIAL_FIELDS: &[Field] = &[
     int("fan_start_layer", "Material", "Fan from layer", 0.0, 1000.0, "0-based layer index."),
     num("extrusion_multiplier", "Material", "Extrusion multiplier EM", "", 0.1, 3.0, 0.01, "EM in GIPPO equation 4."),
     num("k", "Material", "Cross-section correction k", "", 0.1, 3.0, 0.01, "k in GIPPO equation 4 (elliptical rather than rectangular strands)."),
-    num("swell_ratio", "Material", "Die swell ratio", "×", MIN_SWELL_RATIO, MAX_SWELL_RATIO, 0.01, "How much wider than the nozzle the strand comes out (1 = none; elastic TPU swells more than PLA)."),
-    other("compensate_swell", "Material", "Extrude for the swollen width", Kind::Bool, &[], "Feed filament for the predicted (swollen) width instead of the nozzle width."),
+    num(
+        "swell_ratio",
+        "Material",
+        "Die swell ratio",
+        "×",
+        MIN_SWELL_RATIO,
+        MAX_SWELL_RATIO,
+        0.01,
+        "How much wider than the nozzle the strand comes out (1 = none; elastic TPU swells more than PLA).",
+    ),
+    other(
+        "compensate_swell",
+        "Material",
+        "Extrude for the swollen width",
+        Kind::Bool,
+        &[],
+        "Feed filament for the predicted (swollen) width instead of the nozzle width.",
+    ),
     when(num("flow.pre_flow_mm", "Material", "Pre-flow", "mm", 0.0, 50.0, 0.01, "Filament pushed at each path start (Marlin)."), "/printer.flavor", "marlin"),
     when(num("flow.post_flow_mm", "Material", "Post-flow", "mm", 0.0, 50.0, 0.01, "Filament pushed at each path end (Marlin)."), "/printer.flavor", "marlin"),
     when(num("flow.pre_flow_s", "Material", "Pre-flow time", "s", 0.0, 60.0, 0.01, "Valve open before moving (pneumatic)."), "/printer.flavor", "pneumatic"),
-    when(num("flow.post_flow_s", "Material", "Post-flow time", "s", 0.0, 60.0, 0.01, "Valve closed this long before the path end (pneumatic)."), "/printer.flavor", "pneumatic"),
+    when(
+        num("flow.post_flow_s", "Material", "Post-flow time", "s", 0.0, 60.0, 0.01, "Valve closed this long before the path end (pneumatic)."),
+        "/printer.flavor",
+        "pneumatic",
+    ),
 ];
 
 /// Rows of [`Speeds`] (paths relative to `speeds`).

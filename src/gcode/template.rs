@@ -3,8 +3,7 @@
 use super::Error;
 
 /// Placeholders a template may use, in the order the error message lists them.
-pub const PLACEHOLDERS: [&str; 7] =
-    ["nozzle_temp_c", "first_layer_nozzle_temp_c", "bed_temp_c", "bed_x_mm", "bed_y_mm", "fan_pwm", "design_name"];
+pub const PLACEHOLDERS: [&str; 7] = ["nozzle_temp_c", "first_layer_nozzle_temp_c", "bed_temp_c", "bed_x_mm", "bed_y_mm", "fan_pwm", "design_name"];
 
 /// Longest start or end template, bytes (64 KiB). Real start codes are a few dozen lines
 /// (well under 4 KiB, even with mesh bed levelling and purge lines); a template is part of the
@@ -58,11 +57,7 @@ fn unknown(which: &'static str, name: &str) -> Error {
         Some((i, _)) => format!("{}…", &name[..i]),
         None => name.to_string(),
     };
-    Error::UnknownPlaceholder {
-        template: which,
-        name,
-        known: PLACEHOLDERS.iter().map(|p| format!("{{{p}}}")).collect::<Vec<_>>().join(", "),
-    }
+    Error::UnknownPlaceholder { template: which, name, known: PLACEHOLDERS.iter().map(|p| format!("{{{p}}}")).collect::<Vec<_>>().join(", ") }
 }
 
 /// The expansion as a sequence of text pieces (literal runs and placeholder values); an
@@ -78,14 +73,19 @@ fn pieces<'a>(template: &'a str, vars: &'a [(&str, String)]) -> impl Iterator<It
             return None;
         }
         let Some(open) = rest.find('{') else {
+            crate::work::add(rest.len());
             return Some(Ok(std::mem::take(&mut rest)));
         };
         let after = &rest[open + 1..];
-        match after.find(['}', '\n']) {
+        let close = after.find(['}', '\n']);
+        // Bytes scanned (the growth checks count them).
+        crate::work::add(open + 1 + close.map_or(after.len(), |c| c + 1));
+        match close {
             Some(c) if after.as_bytes()[c] == b'}' => {
                 let name = &after[..c];
                 let literal = &rest[..open];
                 rest = &after[c + 1..];
+                crate::work::add(vars.len());
                 let value = vars.iter().find(|(n, _)| *n == name.trim()).map(|(_, v)| v.as_str()).ok_or(name);
                 if literal.is_empty() {
                     Some(value)

@@ -7,7 +7,7 @@ use super::out::{AxisWords, Out};
 use super::template::expand;
 use super::{Error, Flavor, Gcode, GcodeStats, Options, Origin};
 use super::{DEFAULT_END_GCODE, DEFAULT_PNEUMATIC_END_GCODE, DEFAULT_PNEUMATIC_START_GCODE, DEFAULT_START_GCODE};
-use crate::geom::{DVec3, Feature, Path, PassKind, PointFlow, Toolpath};
+use crate::geom::{DVec3, Feature, PassKind, Path, PointFlow, Toolpath};
 use crate::machine::{AxisOutput, Machine};
 
 /// Speed of `feature` in mm/s, before the path's speed factor.
@@ -88,7 +88,11 @@ fn plan_five_axis(toolpath: &Toolpath, options: &Options, offset: DVec3) -> Resu
         Origin::Center => ([-bed[0] / 2.0, -bed[1] / 2.0, 0.0], [bed[0] / 2.0, bed[1] / 2.0, bed[2]]),
     };
     let (tlo, thi) = (m.travel_min_mm.unwrap_or(lo), m.travel_max_mm.unwrap_or(hi));
-    let travel_setting = if m.travel_min_mm.is_some() || m.travel_max_mm.is_some() { "printer.machine.travel_min_mm / travel_max_mm" } else { "the bed size, printer.bed_size_mm" };
+    let travel_setting = if m.travel_min_mm.is_some() || m.travel_max_mm.is_some() {
+        "printer.machine.travel_min_mm / travel_max_mm"
+    } else {
+        "the bed size, printer.bed_size_mm"
+    };
     let idx = m.rotary_indices();
     let letters = m.rotary_letters();
     let hop = options.printer.retraction.z_hop_mm.max(0.0);
@@ -109,7 +113,16 @@ fn plan_five_axis(toolpath: &Toolpath, options: &Options, offset: DVec3) -> Resu
             };
             let check_xyz = |point: usize, p: DVec3| -> Result<(), Error> {
                 for (k, axis) in ['X', 'Y', 'Z'].into_iter().enumerate() {
-                    limit(point, axis, p[k], tlo[k] - 1e-6, thi[k] + 1e-6, "mm", travel_setting, "move the part, change the rotary centre or pivot, or widen the travel limits if the machine allows it")?;
+                    limit(
+                        point,
+                        axis,
+                        p[k],
+                        tlo[k] - 1e-6,
+                        thi[k] + 1e-6,
+                        "mm",
+                        travel_setting,
+                        "move the part, change the rotary centre or pivot, or widen the travel limits if the machine allows it",
+                    )?;
                 }
                 Ok(())
             };
@@ -119,7 +132,16 @@ fn plan_five_axis(toolpath: &Toolpath, options: &Options, offset: DVec3) -> Resu
                 prev = Some(a);
                 for j in 0..2 {
                     let (rlo, rhi) = (m.rotary_min_deg[idx[j]], m.rotary_max_deg[idx[j]]);
-                    limit(k, letters[j] as char, a[j], rlo, rhi, "°", "printer.machine.rotary_min_deg / rotary_max_deg", "tilt the part or its tool axes less, pick the other layout or rotary pair, or widen the limit if the machine allows it")?;
+                    limit(
+                        k,
+                        letters[j] as char,
+                        a[j],
+                        rlo,
+                        rhi,
+                        "°",
+                        "printer.machine.rotary_min_deg / rotary_max_deg",
+                        "tilt the part or its tool axes less, pick the other layout or rotary pair, or widen the limit if the machine allows it",
+                    )?;
                 }
                 let q = m.to_machine(*p + offset, a);
                 check_xyz(k, q)?;
@@ -146,7 +168,11 @@ fn one_line(s: &str) -> String {
 
 fn fan_pwm(percent: f64) -> u64 {
     let v = (percent.clamp(0.0, 100.0) * 255.0 / 100.0).round();
-    if v.is_finite() { v as u64 } else { 0 }
+    if v.is_finite() {
+        v as u64
+    } else {
+        0
+    }
 }
 
 /// Offset from model to printer coordinates: printer point = model point + this.
@@ -378,14 +404,7 @@ pub(crate) fn write(toolpath: &Toolpath, options: &Options) -> Result<Gcode, Err
     // header, stats and `weft analyze` agree; nothing when a user code makes the file unreadable.
     out.motion.timer.stop();
     let (time_s, travel_mm) = if out.motion_ok { (out.motion.timer.total(), out.motion.travel_mm) } else { (0.0, 0.0) };
-    let stats = GcodeStats {
-        layers: layers_written,
-        extruded_mm,
-        filament_mm: out.e_total,
-        travel_mm,
-        retractions: out.retractions,
-        estimated_time_s: time_s,
-    };
+    let stats = GcodeStats { layers: layers_written, extruded_mm, filament_mm: out.e_total, travel_mm, retractions: out.retractions, estimated_time_s: time_s };
 
     let fd = printer.filament_diameter_mm;
     let volume_cm3 = out.e_total * std::f64::consts::PI * fd * fd / 4.0 / 1000.0;

@@ -52,13 +52,13 @@ pub mod dialect;
 pub mod rewrite;
 
 use crate::budget::{Estimate, OverBudget, MAX_STAGE_BYTES};
-use crate::source::{for_each_line_chunk, ByteSource, ChunkError};
 use crate::geom::{Aabb, DVec3};
 use crate::motion::lex::{self, lex_line, Command, Line, MAX_WORD_MAGNITUDE};
 use crate::motion::{Motion, Step, MOTION_EPS};
+use crate::scaffold::{max_bead_area, mean_along, width_of_area};
+use crate::source::{for_each_line_chunk, ByteSource, ChunkError};
 use dialect::{Dialect, InfillTypes};
 use rewrite::{find_word, write_number, Found, Style};
-use crate::scaffold::{max_bead_area, mean_along, width_of_area};
 use serde::{Deserialize, Serialize};
 
 /// Infill density the file was sliced with: the paper's femur case (table 3), 47 %.
@@ -319,7 +319,11 @@ fn validate(o: &Options) -> Result<(), Error> {
         return bad("target_step_mm", o.target_step_mm, "the report's sampling step must be at least 0.001 mm");
     }
     if InfillTypes::new(&o.infill_types).is_empty() {
-        return Err(Error::BadOption { option: "infill_types", value: format!("{:?}", o.infill_types), problem: "name at least one feature (\"Internal infill\", \"FILL\")".into() });
+        return Err(Error::BadOption {
+            option: "infill_types",
+            value: format!("{:?}", o.infill_types),
+            problem: "name at least one feature (\"Internal infill\", \"FILL\")".into(),
+        });
     }
     Ok(())
 }
@@ -347,7 +351,12 @@ pub fn estimate(gcode_len: usize, options: &Options) -> Estimate {
 /// `lines_before` lines) with its 1-based number in the file, its byte offset in the piece, the
 /// whole line (with its newline) and its lexed content; maps the lexer's refusals to [`Error`].
 /// Returns the number of the piece's last line.
-fn for_each_line<'a>(name: &str, gcode: &'a [u8], lines_before: usize, mut f: impl FnMut(usize, usize, &'a [u8], &'a [u8], &Line<'a>) -> Result<(), Error>) -> Result<usize, Error> {
+fn for_each_line<'a>(
+    name: &str,
+    gcode: &'a [u8],
+    lines_before: usize,
+    mut f: impl FnMut(usize, usize, &'a [u8], &'a [u8], &Line<'a>) -> Result<(), Error>,
+) -> Result<usize, Error> {
     if let Some(offset) = lex::first_binary_byte(gcode) {
         let line = lines_before + 1 + gcode[..offset].iter().filter(|&&b| b == b'\n').count();
         return Err(Error::NotText { file: name.to_string(), line });
@@ -476,7 +485,13 @@ struct LayerAcc {
 /// or out-of-range word → [`Error::Malformed`]; a line over [`MAX_LINE_BYTES`] →
 /// [`Error::LineTooLong`]; an infill line with a checksum → [`Error::Checksum`]; no infill
 /// move → [`Error::NoInfill`] with the feature names the file has.
-pub fn edit(name: &str, gcode: &dyn ByteSource, density: &dyn Fn(DVec3) -> Option<f64>, options: &Options, progress: &mut dyn FnMut(f32)) -> Result<Edited, Error> {
+pub fn edit(
+    name: &str,
+    gcode: &dyn ByteSource,
+    density: &dyn Fn(DVec3) -> Option<f64>,
+    options: &Options,
+    progress: &mut dyn FnMut(f32),
+) -> Result<Edited, Error> {
     validate(options)?;
     let total = gcode.len();
     let est = estimate(total, options);
@@ -560,14 +575,16 @@ pub fn edit(name: &str, gcode: &dyn ByteSource, density: &dyn Fn(DVec3) -> Optio
                 }
                 let (dx, dy) = (mv.to[0] - mv.from[0], mv.to[1] - mv.from[1]);
                 let xy = dx * dx + dy * dy > MOTION_EPS * MOTION_EPS;
-                let infill = mv.de > 0.0 && xy && match type_infill {
-                    Some(b) => b,
-                    None => l.comment.is_some_and(|c| {
-                        let d = dialect::line_description(c);
-                        note_type(&mut types_seen, d);
-                        types.matches(d)
-                    }),
-                };
+                let infill = mv.de > 0.0
+                    && xy
+                    && match type_infill {
+                        Some(b) => b,
+                        None => l.comment.is_some_and(|c| {
+                            let d = dialect::line_description(c);
+                            note_type(&mut types_seen, d);
+                            types.matches(d)
+                        }),
+                    };
                 // Where the E word is, and the file's number style (learnt from the first moves
                 // and every infill move; other lines need no search).
                 let found = if infill || n_rel + n_abs <= STYLE_MOVES { find_word(content, b'E') } else { Found { word: None, checksum: false } };
@@ -624,7 +641,10 @@ pub fn edit(name: &str, gcode: &dyn ByteSource, density: &dyn Fn(DVec3) -> Optio
                                 return Err(Error::Malformed {
                                     file: name.to_string(),
                                     line: line_no,
-                                    problem: format!("the edited E would be {}, beyond the {MAX_WORD_MAGNITUDE:.0} a G-code number may have (check rho_s)", String::from_utf8_lossy(&num)),
+                                    problem: format!(
+                                        "the edited E would be {}, beyond the {MAX_WORD_MAGNITUDE:.0} a G-code number may have (check rho_s)",
+                                        String::from_utf8_lossy(&num)
+                                    ),
                                 });
                             }
                             let d_printed = if rel { printed } else { printed - e_prev_out };
@@ -645,7 +665,8 @@ pub fn edit(name: &str, gcode: &dyn ByteSource, density: &dyn Fn(DVec3) -> Optio
                             if let Some(a) = layers.last_mut() {
                                 // The target along the whole move, as weft's own grading measures it.
                                 let from = DVec3::from(mv.from) + translation;
-                                let along = mean_along(from, DVec3::from(mv.to) + translation, o.target_step_mm, density).unwrap_or(t).clamp(o.rho_min, o.rho_max);
+                                let along =
+                                    mean_along(from, DVec3::from(mv.to) + translation, o.target_step_mm, density).unwrap_or(t).clamp(o.rho_min, o.rho_max);
                                 a.moves += 1;
                                 a.len += mv.len;
                                 a.target += mv.len * along;

@@ -179,7 +179,11 @@ pub fn write_number(out: &mut Vec<u8>, scratch: &mut Vec<u8>, v: f64, style: Sty
         scratch.remove(neg);
     }
     out.extend_from_slice(scratch);
-    if value == 0.0 { 0.0 } else { value }
+    if value == 0.0 {
+        0.0
+    } else {
+        value
+    }
 }
 
 #[cfg(test)]
@@ -219,7 +223,7 @@ mod tests {
             state ^= state << 13;
             state ^= state >> 7;
             state ^= state << 17;
-            let v = f64::from_bits(state) ;
+            let v = f64::from_bits(state);
             let v = if v.is_finite() { v.rem_euclid(2e4) - 1e4 } else { 0.0 };
             ties.push(if k % 2 == 0 { v } else { (v * 1e5).round() / 1e5 + 0.000005 });
         }

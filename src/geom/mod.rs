@@ -8,12 +8,12 @@
 mod mesh;
 mod polygon;
 pub mod shapes;
-pub mod tolerance;
 mod stroke;
+pub mod tolerance;
 mod toolpath;
 
 pub use glam::{DVec2, DVec3};
 pub use mesh::{Aabb, Mesh};
-pub use polygon::{Polygon, signed_area};
+pub use polygon::{signed_area, Polygon};
 pub use stroke::{Stroke, StrokeLayer};
 pub use toolpath::{Feature, Pass, PassKind, Path, PointData, PointFlow, Toolpath};

@@ -85,17 +85,20 @@ impl Shape {
 fn cube(s: [f64; 3]) -> Mesh {
     let (hx, hy, z) = (s[0] / 2.0, s[1] / 2.0, s[2]);
     let v = |x: f64, y: f64, z: f64| [x as f32, y as f32, z as f32];
-    let vertices = vec![
-        v(-hx, -hy, 0.0), v(hx, -hy, 0.0), v(hx, hy, 0.0), v(-hx, hy, 0.0),
-        v(-hx, -hy, z), v(hx, -hy, z), v(hx, hy, z), v(-hx, hy, z),
-    ];
+    let vertices = vec![v(-hx, -hy, 0.0), v(hx, -hy, 0.0), v(hx, hy, 0.0), v(-hx, hy, 0.0), v(-hx, -hy, z), v(hx, -hy, z), v(hx, hy, z), v(-hx, hy, z)];
     let triangles = vec![
-        [0, 2, 1], [0, 3, 2], // bottom (facing -Z)
-        [4, 5, 6], [4, 6, 7], // top
-        [0, 1, 5], [0, 5, 4], // -Y
-        [1, 2, 6], [1, 6, 5], // +X
-        [2, 3, 7], [2, 7, 6], // +Y
-        [3, 0, 4], [3, 4, 7], // -X
+        [0, 2, 1],
+        [0, 3, 2], // bottom (facing -Z)
+        [4, 5, 6],
+        [4, 6, 7], // top
+        [0, 1, 5],
+        [0, 5, 4], // -Y
+        [1, 2, 6],
+        [1, 6, 5], // +X
+        [2, 3, 7],
+        [2, 7, 6], // +Y
+        [3, 0, 4],
+        [3, 4, 7], // -X
     ];
     Mesh { vertices, triangles }
 }
@@ -110,11 +113,7 @@ pub fn uv_sphere(r: f64, seg: u32) -> Mesh {
         let (sp, cp) = (libm::sin(phi), libm::cos(phi));
         for j in 0..seg {
             let th = 2.0 * std::f64::consts::PI * j as f64 / seg as f64;
-            m.vertices.push([
-                (r * sp * libm::cos(th)) as f32,
-                (r * sp * libm::sin(th)) as f32,
-                (r - r * cp) as f32,
-            ]);
+            m.vertices.push([(r * sp * libm::cos(th)) as f32, (r * sp * libm::sin(th)) as f32, (r - r * cp) as f32]);
         }
     }
     let north = m.vertices.len() as u32;

@@ -2,7 +2,7 @@
 //!
 //! Entry: [`read_mesh`]. Every problem is a typed [`Error`] naming the file, the place in it
 //! and the fix; nothing here panics on any input (fuzzed: `fuzz/`, and a seeded mutation
-//! smoke test in `tests/fuzz_smoke.rs`).
+//! smoke test in `tests/it/fuzz_smoke.rs`).
 //!
 //! Pipeline: detect the format from the content ([`detect_format`]), parse into a raw indexed
 //! triangle list (a binary STL's records are checked and read in place), then clean it
@@ -11,7 +11,7 @@
 //! on every run and platform, at any thread count (the checks and the cleaning work on every
 //! core through `crate::par`).
 //!
-//! Bounded: every parser and the cleaner are linear in the input (`tests/import_hostile.rs`
+//! Bounded: every parser and the cleaner are linear in the input (`tests/it/import_hostile.rs`
 //! checks the growth of each), and the counts are checked against [`MAX_TRIANGLES`] and
 //! [`MAX_IMPORT_BYTES`] before mesh memory is allocated; [`estimate`] gives the same counts
 //! and the memory peak without reading. Strings from files reach messages only through
@@ -35,7 +35,7 @@ pub use threemf::{MAX_MODEL_PART_BYTES, MAX_XML_DEPTH};
 ///
 /// Why 5 M: the browser worker has about 2 GB of wasm memory for a whole run and slicing
 /// follows import, so import should peak under about 1 GB ([`MAX_IMPORT_BYTES`]).
-/// Measured (`memory_per_triangle` in `tests/import_hostile.rs`: resident high-water mark
+/// Measured (`memory_per_triangle` in `tests/it/import_hostile.rs`: resident high-water mark
 /// of `read_mesh` in a fresh process, glibc unmapping every freed block, 2 M-triangle
 /// spheres), beyond the file's own bytes: binary STL 44 B/triangle (its records are read in
 /// place), ASCII STL 72, OBJ 32, 3MF 42, a binary-STL soup where nothing welds 85;
@@ -232,12 +232,7 @@ pub enum Error {
 }
 
 /// Builds an [`Error::Malformed`].
-pub(crate) fn malformed(
-    file: &str,
-    place: impl Into<String>,
-    problem: impl Into<String>,
-    fix: impl Into<String>,
-) -> Error {
+pub(crate) fn malformed(file: &str, place: impl Into<String>, problem: impl Into<String>, fix: impl Into<String>) -> Error {
     Error::Malformed { file: file.to_string(), place: place.into(), problem: problem.into(), fix: fix.into() }
 }
 
@@ -492,10 +487,8 @@ fn describe_start(bytes: &[u8], text: bool) -> String {
     let body = skip_bom_and_space(bytes);
     let guess = describe_guess(bytes, text);
     let shown = if text {
-        let head: String = String::from_utf8_lossy(body.get(..body.len().min(24)).unwrap_or(body))
-            .chars()
-            .map(|c| if c.is_control() { ' ' } else { c })
-            .collect();
+        let head: String =
+            String::from_utf8_lossy(body.get(..body.len().min(24)).unwrap_or(body)).chars().map(|c| if c.is_control() { ' ' } else { c }).collect();
         format!("it starts with \"{}\"", head.trim_end())
     } else {
         let hex: Vec<String> = bytes.iter().take(8).map(|b| format!("{b:02x}")).collect();

@@ -92,9 +92,10 @@ pub(super) fn read_obj(file: &str, bytes: &[u8], (v, t): (u64, u64)) -> Result<R
 fn face_index(file: &str, line: usize, token: &[u8], defined: usize) -> Result<u32, Error> {
     let v = token.split(|&b| b == b'/').next().unwrap_or_default();
     let place = || format!("line {line}");
-    let idx: i64 = std::str::from_utf8(v).ok().and_then(|s| s.parse().ok()).ok_or_else(|| {
-        malformed(file, place(), format!("expected a vertex index in the face, found \"{}\"", show(token)), FIX)
-    })?;
+    let idx: i64 = std::str::from_utf8(v)
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .ok_or_else(|| malformed(file, place(), format!("expected a vertex index in the face, found \"{}\"", show(token)), FIX))?;
     let resolved = if idx > 0 {
         (idx - 1) as u64
     } else if idx < 0 {
@@ -103,12 +104,7 @@ fn face_index(file: &str, line: usize, token: &[u8], defined: usize) -> Result<u
         return Err(malformed(file, place(), "a face refers to vertex 0; OBJ indices start at 1", FIX));
     };
     if resolved >= defined as u64 {
-        return Err(malformed(
-            file,
-            place(),
-            format!("a face refers to vertex {idx} but only {defined} vertices are defined before this line"),
-            FIX,
-        ));
+        return Err(malformed(file, place(), format!("a face refers to vertex {idx} but only {defined} vertices are defined before this line"), FIX));
     }
     Ok(resolved as u32)
 }

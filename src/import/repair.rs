@@ -794,16 +794,25 @@ impl Table {
     #[inline]
     fn slot(&self, h: u64, same: impl Fn(u32) -> bool) -> usize {
         let mut at = h as usize & self.mask;
+        // Slots probed past the first (the growth checks count them: a table that fills up
+        // or hashes badly probes more per record).
+        let mut probes = 0;
         loop {
             match self.slots.get(at).copied() {
-                Some(NONE) | None => return at,
-                Some(other) if same(other) => return at,
-                Some(_) => at = (at + 1) & self.mask,
+                Some(NONE) | None => break,
+                Some(other) if same(other) => break,
+                Some(_) => {
+                    at = (at + 1) & self.mask;
+                    probes += 1;
+                }
             }
         }
+        if probes > 0 {
+            crate::work::add(probes);
+        }
+        at
     }
 }
-
 
 #[inline]
 fn finish(mut h: u64) -> u64 {

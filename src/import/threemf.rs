@@ -63,11 +63,7 @@ const NO_XF: u32 = u32::MAX;
 
 #[inline]
 fn apply(m: &Affine, p: [f64; 3]) -> [f64; 3] {
-    [
-        p[0] * m[0] + p[1] * m[3] + p[2] * m[6] + m[9],
-        p[0] * m[1] + p[1] * m[4] + p[2] * m[7] + m[10],
-        p[0] * m[2] + p[1] * m[5] + p[2] * m[8] + m[11],
-    ]
+    [p[0] * m[0] + p[1] * m[3] + p[2] * m[6] + m[9], p[0] * m[1] + p[1] * m[4] + p[2] * m[7] + m[10], p[0] * m[2] + p[1] * m[5] + p[2] * m[8] + m[11]]
 }
 
 /// The transform applying `first`, then `then`.
@@ -248,7 +244,11 @@ impl Load<'_> {
         if s.vertices > 3 * MAX_TRIANGLES as u64 {
             return Err(self.too_large(
                 &cx.place(),
-                format!("the objects hold more than {} vertices (3 per triangle of the {} triangle limit)", group(3 * MAX_TRIANGLES as u64), group(MAX_TRIANGLES as u64)),
+                format!(
+                    "the objects hold more than {} vertices (3 per triangle of the {} triangle limit)",
+                    group(3 * MAX_TRIANGLES as u64),
+                    group(MAX_TRIANGLES as u64)
+                ),
             ));
         }
         if s.objects > MAX_INSTANCES as u64 || s.refs > MAX_INSTANCES as u64 {
@@ -258,23 +258,14 @@ impl Load<'_> {
         if need > MAX_IMPORT_BYTES {
             return Err(self.too_large(
                 &cx.place(),
-                format!(
-                    "reading the objects so far needs about {} MiB of memory, limit {} MiB",
-                    group(need >> 20),
-                    group(MAX_IMPORT_BYTES >> 20)
-                ),
+                format!("reading the objects so far needs about {} MiB of memory, limit {} MiB", group(need >> 20), group(MAX_IMPORT_BYTES >> 20)),
             ));
         }
         Ok(())
     }
 
     fn too_many_refs(&self, cx: &Ctx) -> Error {
-        malformed(
-            self.file,
-            cx.place(),
-            format!("more than {} objects, components or build items", group(MAX_INSTANCES as u64)),
-            "simplify the assembly",
-        )
+        malformed(self.file, cx.place(), format!("more than {} objects, components or build items", group(MAX_INSTANCES as u64)), "simplify the assembly")
     }
 }
 
@@ -315,10 +306,9 @@ pub(super) fn count_3mf(file: &str, bytes: &[u8]) -> Result<Counts, Error> {
 fn check_build(ld: &mut Load, root: u32, v: u64, t: u64) -> Result<(), Error> {
     let place = ld.names.show(root);
     if t > MAX_TRIANGLES as u64 {
-        return Err(ld.too_large(
-            &place,
-            format!("the build places {} triangles (every item and component counted), limit {}", group(t), group(MAX_TRIANGLES as u64)),
-        ));
+        return Err(
+            ld.too_large(&place, format!("the build places {} triangles (every item and component counted), limit {}", group(t), group(MAX_TRIANGLES as u64)))
+        );
     }
     if v > 3 * MAX_TRIANGLES as u64 {
         return Err(ld.too_large(&place, format!("the build places {} vertices, limit {}", group(v), group(3 * MAX_TRIANGLES as u64))));
@@ -327,12 +317,7 @@ fn check_build(ld: &mut Load, root: u32, v: u64, t: u64) -> Result<(), Error> {
     if need > MAX_IMPORT_BYTES {
         return Err(ld.too_large(
             &place,
-            format!(
-                "placing the build ({} triangles) needs about {} MiB of memory, limit {} MiB",
-                group(t),
-                group(need >> 20),
-                group(MAX_IMPORT_BYTES >> 20)
-            ),
+            format!("placing the build ({} triangles) needs about {} MiB of memory, limit {} MiB", group(t), group(need >> 20), group(MAX_IMPORT_BYTES >> 20)),
         ));
     }
     Ok(())
@@ -359,9 +344,8 @@ fn load<'a>(file: &'a str, bytes: &[u8], counting: bool) -> Result<(Loaded, Load
     }
     // zip's own words ("Could not find EOCD") say nothing to a user: a 3MF is an archive and
     // this one cannot be opened.
-    let mut zip = zip::ZipArchive::new(Cursor::new(bytes)).map_err(|_| {
-        malformed(file, "the archive", "a 3MF is an archive of parts and this one cannot be opened: it was cut short or damaged", REEXPORT)
-    })?;
+    let mut zip = zip::ZipArchive::new(Cursor::new(bytes))
+        .map_err(|_| malformed(file, "the archive", "a 3MF is an archive of parts and this one cannot be opened: it was cut short or damaged", REEXPORT))?;
     let mut ld = Load { file, input: bytes.len() as u64, counting, names: Names::default(), stored: Stored::default() };
     ld.stored.zip_entries = zip.len() as u64;
     let mut budget = MAX_MODEL_PART_BYTES;
@@ -420,12 +404,7 @@ fn load<'a>(file: &'a str, bytes: &[u8], counting: bool) -> Result<(Loaded, Load
         // No build: every object that is not a component of another one, in file order.
         _ => {
             let used: BTreeSet<u32> = root_part.components.iter().filter(|c| c.part == root).map(|c| c.id).collect();
-            root_part
-                .objects
-                .iter()
-                .filter(|o| !used.contains(&o.id))
-                .map(|o| Ref { part: root, id: o.id, xf: NO_XF, line: o.line })
-                .collect()
+            root_part.objects.iter().filter(|o| !used.contains(&o.id)).map(|o| Ref { part: root, id: o.id, xf: NO_XF, line: o.line }).collect()
         }
     };
     Ok((Loaded { parts, root, scale, items }, ld))
@@ -612,6 +591,7 @@ impl<R: Read> BufRead for Source<R> {
         let amt = amt.min(self.end.saturating_sub(self.pos));
         let taken = self.buf.get(self.pos..self.pos + amt).unwrap_or_default();
         self.lines += taken.iter().filter(|&&b| b == b'\n').count();
+        crate::work::add(taken.len());
         self.pos += amt;
         self.token += amt as u64;
     }
@@ -638,9 +618,7 @@ fn stream_entry<'b, T>(
     parse: impl FnOnce(&mut Load, &mut Xml<'_, 'b>) -> Result<T, Error>,
 ) -> Result<T, Error> {
     let file = ld.file;
-    let entry = zip
-        .by_index(index)
-        .map_err(|_| malformed(file, shown.as_str(), "the part cannot be read: the archive is damaged", REEXPORT))?;
+    let entry = zip.by_index(index).map_err(|_| malformed(file, shown.as_str(), "the part cannot be read: the archive is damaged", REEXPORT))?;
     if entry.size() > *budget {
         return Err(bomb(file, &shown));
     }
@@ -680,13 +658,7 @@ fn xml_error<R>(file: &str, part: &str, reader: &Reader<Source<R>>, e: &quick_xm
 }
 
 /// Reads the next event, tracking element depth against [`MAX_XML_DEPTH`].
-fn next_event<'b, R: Read>(
-    file: &str,
-    part: &str,
-    reader: &mut Reader<Source<R>>,
-    buf: &'b mut Vec<u8>,
-    depth: &mut usize,
-) -> Result<Event<'b>, Error> {
+fn next_event<'b, R: Read>(file: &str, part: &str, reader: &mut Reader<Source<R>>, buf: &'b mut Vec<u8>, depth: &mut usize) -> Result<Event<'b>, Error> {
     buf.clear();
     reader.get_mut().token = 0;
     let ev = match reader.read_event_into(buf) {
@@ -811,9 +783,7 @@ impl Ctx<'_> {
     }
     fn id(&self, el: &str, name: &str, v: Option<&str>) -> Result<u32, Error> {
         let v = v.ok_or_else(|| self.err(format!("<{el}> has no {name} attribute")))?;
-        v.trim()
-            .parse::<u32>()
-            .map_err(|_| self.err(format!("<{el}> {name}=\"{}\" is not a valid index", super::show(v.as_bytes()))))
+        v.trim().parse::<u32>().map_err(|_| self.err(format!("<{el}> {name}=\"{}\" is not a valid index", super::show(v.as_bytes()))))
     }
     fn transform(&self, el: &str, v: Option<&str>) -> Result<Option<Affine>, Error> {
         let Some(v) = v else { return Ok(None) };
@@ -823,12 +793,7 @@ impl Ctx<'_> {
             let x = t.parse::<f64>().ok().filter(|x| x.is_finite());
             match (x, m.get_mut(n)) {
                 (Some(x), Some(slot)) => *slot = x,
-                _ => {
-                    return Err(self.err(format!(
-                        "<{el}> transform must be 12 finite numbers, found \"{}\"",
-                        super::show(v.as_bytes())
-                    )))
-                }
+                _ => return Err(self.err(format!("<{el}> transform must be 12 finite numbers, found \"{}\"", super::show(v.as_bytes())))),
             }
             n += 1;
         }
@@ -907,11 +872,7 @@ fn parse_part<R: Read>(ld: &mut Load, id: u32, reader: &mut Reader<Source<R>>) -
                     ld.stored.vertices += 1;
                     if !ld.counting {
                         let [x, y, z] = attrs(&cx, &e, ["x", "y", "z"])?;
-                        let p = [
-                            cx.float("vertex", "x", x.as_deref())?,
-                            cx.float("vertex", "y", y.as_deref())?,
-                            cx.float("vertex", "z", z.as_deref())?,
-                        ];
+                        let p = [cx.float("vertex", "x", x.as_deref())?, cx.float("vertex", "y", y.as_deref())?, cx.float("vertex", "z", z.as_deref())?];
                         part.vertices.push(p);
                         ld.check_stored(&cx)?;
                     }
@@ -925,10 +886,7 @@ fn parse_part<R: Read>(ld: &mut Load, id: u32, reader: &mut Reader<Source<R>>) -
                         for ((key, v), slot) in ["v1", "v2", "v3"].iter().zip(vs).zip(t.iter_mut()) {
                             let v = cx.id("triangle", key, v.as_deref())?;
                             if v as usize >= o.nv {
-                                return Err(cx.err(format!(
-                                    "<triangle> {key}=\"{v}\" but object {} has {} vertices (indices start at 0)",
-                                    o.id, o.nv
-                                )));
+                                return Err(cx.err(format!("<triangle> {key}=\"{v}\" but object {} has {} vertices (indices start at 0)", o.id, o.nv)));
                             }
                             *slot = v;
                         }
@@ -961,15 +919,7 @@ fn parse_part<R: Read>(ld: &mut Load, id: u32, reader: &mut Reader<Source<R>>) -
                 let [oid, kind] = attrs(&cx, &e, ["id", "type"])?;
                 let oid = cx.id("object", "id", oid.as_deref())?;
                 let other = kind.is_some_and(|t| t.trim() == "other");
-                let o = Object {
-                    id: oid,
-                    line,
-                    other,
-                    v0: part.vertices.len(),
-                    t0: part.triangles.len(),
-                    c0: part.components.len(),
-                    ..Object::default()
-                };
+                let o = Object { id: oid, line, other, v0: part.vertices.len(), t0: part.triangles.len(), c0: part.components.len(), ..Object::default() };
                 ld.stored.objects += 1;
                 ld.check_stored(&cx)?;
                 if empty {

@@ -25,7 +25,7 @@
 //! fan diagonal or centroid spoke (two triangles of one disk, opposite directions; a fan
 //! diagonal joins two vertices with no common face, so no other cube has it). The grid is
 //! padded with empty voxels, so no segment lies on the grid's outer faces. Tested on random
-//! noise in `tests/isosurface.rs`.
+//! noise in `tests/it/isosurface.rs`.
 //!
 //! Every crossed grid edge makes one vertex, shared by the (up to four) cubes around it:
 //! vertex indices of the current and previous layer of points are kept in two layer caches.
@@ -49,8 +49,7 @@ pub(super) const SOLID: u8 = 1;
 
 /// The 12 cube edges as (low corner, axis). Corner `c` sits at offset
 /// `(c & 1, (c >> 1) & 1, (c >> 2) & 1)`.
-const EDGES: [(usize, usize); 12] =
-    [(0, 0), (2, 0), (4, 0), (6, 0), (0, 1), (1, 1), (4, 1), (5, 1), (0, 2), (1, 2), (2, 2), (3, 2)];
+const EDGES: [(usize, usize); 12] = [(0, 0), (2, 0), (4, 0), (6, 0), (0, 1), (1, 1), (4, 1), (5, 1), (0, 2), (1, 2), (2, 2), (3, 2)];
 
 fn corner_offset(c: usize) -> [usize; 3] {
     [c & 1, (c >> 1) & 1, (c >> 2) & 1]

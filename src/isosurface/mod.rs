@@ -33,7 +33,7 @@
 //! through the ROI's end faces reaches them: a tunnel in 3D, not a cavity. So after the 3D
 //! fill, the holes of each slice across k (below-isovalue regions enclosed within the slice)
 //! are filled too, which closes the canal as the paper does before slicing (its Figure 10b);
-//! both count in `cavities_filled` (`ct_phantom_is_closed` in tests/isosurface.rs).
+//! both count in `cavities_filled` (`ct_phantom_is_closed` in tests/it/isosurface.rs).
 //!
 //! **Why our own implementation.** The pure-Rust crates found (`mcubes`, `marching-cubes`)
 //! polygonise cube by cube with the classic Bourke table: triangle soups, not welded, with the
@@ -53,9 +53,9 @@ mod smooth;
 
 use crate::budget::{Estimate, OverBudget};
 use crate::geom::Mesh;
+use crate::settings::{int, num, other, Field, Kind as FieldKind};
 use crate::volume::{Roi, Volume};
 use marching_cubes::{Grid, Table, EDGE_MARGIN, SOLID};
-use crate::settings::{int, num, other, Field, Kind as FieldKind};
 use serde::{Deserialize, Serialize};
 
 /// Default isovalue, HU: the paper's threshold for bone (its §3, after the literature's HU
@@ -87,7 +87,7 @@ const BYTES_PER_TRIANGLE: f64 = 80.0;
 /// (4, when every voxel is pushed once).
 const BYTES_PER_VOXEL: f64 = 5.0;
 /// Time per ROI voxel, s (classification, cavity fill, counting, marching): the 182×197×107
-/// phantom of `ct_phantom_is_closed` in tests/isosurface.rs (3.8 M voxels, 31 k triangles)
+/// phantom of `ct_phantom_is_closed` in tests/it/isosurface.rs (3.8 M voxels, 31 k triangles)
 /// takes 0.12–0.17 s in a release build (measured on a loaded 2-core machine).
 const SECONDS_PER_VOXEL: f64 = 30e-9;
 /// Time per triangle, s (vertex placement, triangles, report): `large_surface_timing`'s 3.6 M
@@ -154,7 +154,9 @@ pub enum Error {
     /// The region of interest holds no voxel centre.
     #[error(
         "surface: the region of interest {} – {} mm holds no voxel centre of the volume, which spans 0 – {} mm; draw the box over the volume",
-        mm3(roi_min_mm), mm3(roi_max_mm), mm3(volume_extent_mm)
+        mm3(roi_min_mm),
+        mm3(roi_max_mm),
+        mm3(volume_extent_mm)
     )]
     EmptyRoi {
         /// The ROI's smallest corner, mm.
@@ -441,7 +443,23 @@ pub fn write_stl(mesh: &Mesh, name: &str) -> Vec<u8> {
 
 /// Form rows of [`Options`] (paths relative to it).
 pub const FIELDS: &[Field] = &[
-    num("iso", "Surface model", "Isovalue", "HU", -100000.0, 100000.0, 1.0, "The boundary of the tissue: voxels at or above it are solid (the paper's bone threshold: 350 HU)."),
-    other("fill_cavities", "Surface model", "Fill cavities", FieldKind::Bool, &[], "Close voids inside the solid (the medullary canal) so the part is one solid."),
+    num(
+        "iso",
+        "Surface model",
+        "Isovalue",
+        "HU",
+        -100000.0,
+        100000.0,
+        1.0,
+        "The boundary of the tissue: voxels at or above it are solid (the paper's bone threshold: 350 HU).",
+    ),
+    other(
+        "fill_cavities",
+        "Surface model",
+        "Fill cavities",
+        FieldKind::Bool,
+        &[],
+        "Close voids inside the solid (the medullary canal) so the part is one solid.",
+    ),
     int("smoothing_iterations", "Surface model", "Smoothing", 0.0, 200.0, "Taubin smoothing passes over the mesh (0: the raw marching-cubes surface)."),
 ];

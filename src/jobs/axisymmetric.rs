@@ -19,11 +19,11 @@
 //! job (its stage ids, seed and bytes).
 
 use super::{Inspection, Kind, Product, Shape, Slot, SlotKind, StageInfo, ViewInfo};
+use crate::axisym::contour;
 use crate::axisym::domain::Domain;
 use crate::axisym::offset::Offset;
 use crate::axisym::platform::{self, Platform, Profile};
 use crate::axisym::{dynamics, surface::Surface, tour, uniform};
-use crate::axisym::contour;
 use crate::design::{Design, Input};
 use crate::geom::{DVec3, Feature, Pass, PassKind, Path, PointData, Toolpath};
 use crate::pipeline::{Ctx, Error, Out};
@@ -83,7 +83,16 @@ fn default_layers() -> usize {
 
 impl Default for AxisymJob {
     fn default() -> Self {
-        AxisymJob { platform: PlatformSpec::default(), domain: DomainSpec::default(), points: uniform::Options::default(), path: tour::Options::default(), layer_height_mm: DEFAULT_LAYER_HEIGHT_MM, part: None, tool_axis: dynamics::Options::default(), layers: DEFAULT_LAYERS }
+        AxisymJob {
+            platform: PlatformSpec::default(),
+            domain: DomainSpec::default(),
+            points: uniform::Options::default(),
+            path: tour::Options::default(),
+            layer_height_mm: DEFAULT_LAYER_HEIGHT_MM,
+            part: None,
+            tool_axis: dynamics::Options::default(),
+            layers: DEFAULT_LAYERS,
+        }
     }
 }
 
@@ -208,7 +217,15 @@ struct RawDomain {
 impl Default for RawDomain {
     fn default() -> Self {
         let d = DomainSpec::default();
-        RawDomain { kind: d.kind, u_min: d.u_min, u_max: d.u_max, theta_min_rad: d.theta_min_rad, theta_max_rad: d.theta_max_rad, polygon: d.polygon, holes: d.holes }
+        RawDomain {
+            kind: d.kind,
+            u_min: d.u_min,
+            u_max: d.u_max,
+            theta_min_rad: d.theta_min_rad,
+            theta_max_rad: d.theta_max_rad,
+            polygon: d.polygon,
+            holes: d.holes,
+        }
     }
 }
 
@@ -274,11 +291,31 @@ const VIEWS: &[ViewInfo] = &[
 
 const PLATFORM_FIELDS: &[Field] = &[
     choice_docs(
-        other("preset", "Build platform", "Platform", FieldKind::Choice, &["barrel", "hourglass", "custom"], "The curved surface printed on, revolved about Z."),
-        &["The paper's barrel (table 2): 50 mm tall, radius 25 mm at u = 1.", "The paper's hourglass (table 3): 100 mm tall, a 25 mm neck at u = 2.", "Your own control polygon (below)."],
+        other(
+            "preset",
+            "Build platform",
+            "Platform",
+            FieldKind::Choice,
+            &["barrel", "hourglass", "custom"],
+            "The curved surface printed on, revolved about Z.",
+        ),
+        &[
+            "The paper's barrel (table 2): 50 mm tall, radius 25 mm at u = 1.",
+            "The paper's hourglass (table 3): 100 mm tall, a 25 mm neck at u = 2.",
+            "Your own control polygon (below).",
+        ],
     ),
     when(
-        points("control_points", "Build platform", "Control points x z", "mm", -10000.0, 10000.0, 6 * 64 + 1, "6·k + 1 points (x = radius, z = height), one pair per line: each 7 make a degree-6 Bézier segment, the next starts at the last."),
+        points(
+            "control_points",
+            "Build platform",
+            "Control points x z",
+            "mm",
+            -10000.0,
+            10000.0,
+            6 * 64 + 1,
+            "6·k + 1 points (x = radius, z = height), one pair per line: each 7 make a degree-6 Bézier segment, the next starts at the last.",
+        ),
         "preset",
         "custom",
     ),
@@ -286,27 +323,98 @@ const PLATFORM_FIELDS: &[Field] = &[
 
 const DOMAIN_FIELDS: &[Field] = &[
     choice_docs(
-        other("kind", "Domain Ω", "Domain", FieldKind::Choice, &["rectangle", "polygon", "part"], "The patch of the platform to fill, in the embedded map (u along the profile, θ around the axis)."),
-        &["A u × θ rectangle.", "An outline of (u, θ) corners, optionally with holes.", "Where a loaded part meets the platform (its largest outline and the holes in it)."],
+        other(
+            "kind",
+            "Domain Ω",
+            "Domain",
+            FieldKind::Choice,
+            &["rectangle", "polygon", "part"],
+            "The patch of the platform to fill, in the embedded map (u along the profile, θ around the axis).",
+        ),
+        &[
+            "A u × θ rectangle.",
+            "An outline of (u, θ) corners, optionally with holes.",
+            "Where a loaded part meets the platform (its largest outline and the holes in it).",
+        ],
     ),
-    when(num("u_min", "Domain Ω", "u from", "", 0.0, 64.0, 0.01, "Where the patch starts along the profile (u counts Bézier segments: 0 to their number)."), "kind", "rectangle"),
+    when(
+        num("u_min", "Domain Ω", "u from", "", 0.0, 64.0, 0.01, "Where the patch starts along the profile (u counts Bézier segments: 0 to their number)."),
+        "kind",
+        "rectangle",
+    ),
     when(num("u_max", "Domain Ω", "u to", "", 0.0, 64.0, 0.01, "Where the patch ends along the profile."), "kind", "rectangle"),
     when(num("theta_min_rad", "Domain Ω", "θ from", "rad", -7.0, 7.0, 0.01, "Where the patch starts around the axis."), "kind", "rectangle"),
-    when(num("theta_max_rad", "Domain Ω", "θ to", "rad", -7.0, 7.0, 0.01, "Where the patch ends around the axis (at most one turn, 6.283 rad, wider than the start)."), "kind", "rectangle"),
-    when(points("polygon", "Domain Ω", "Polygon u θ", "", -64.0, 64.0, 1000, "The outline's corners, one 'u θ' pair per line (θ in rad), in order; concave outlines are fine."), "kind", "polygon"),
-    when(rings("holes", "Domain Ω", "Holes u θ", "", -64.0, 64.0, 1000, "Openings left empty inside the outline: each hole's corners one 'u θ' pair per line, a blank line between holes."), "kind", "polygon"),
+    when(
+        num(
+            "theta_max_rad",
+            "Domain Ω",
+            "θ to",
+            "rad",
+            -7.0,
+            7.0,
+            0.01,
+            "Where the patch ends around the axis (at most one turn, 6.283 rad, wider than the start).",
+        ),
+        "kind",
+        "rectangle",
+    ),
+    when(
+        points(
+            "polygon",
+            "Domain Ω",
+            "Polygon u θ",
+            "",
+            -64.0,
+            64.0,
+            1000,
+            "The outline's corners, one 'u θ' pair per line (θ in rad), in order; concave outlines are fine.",
+        ),
+        "kind",
+        "polygon",
+    ),
+    when(
+        rings(
+            "holes",
+            "Domain Ω",
+            "Holes u θ",
+            "",
+            -64.0,
+            64.0,
+            1000,
+            "Openings left empty inside the outline: each hole's corners one 'u θ' pair per line, a blank line between holes.",
+        ),
+        "kind",
+        "polygon",
+    ),
 ];
 
 const JOB_FIELDS: &[Field] = &[
-    num("layer_height_mm", "Path", "Layer height", "mm", 0.01, 5.0, 0.01, "How thick the strand is: the nozzle tip rides this far out along the surface normal."),
-    int("layers", "Path", "Layers", 1.0, MAX_LAYERS as f64, "How many layers to stack: each lies one layer height further out along the normal, with its own points and path."),
+    num(
+        "layer_height_mm",
+        "Path",
+        "Layer height",
+        "mm",
+        0.01,
+        5.0,
+        0.01,
+        "How thick the strand is: the nozzle tip rides this far out along the surface normal.",
+    ),
+    int(
+        "layers",
+        "Path",
+        "Layers",
+        1.0,
+        MAX_LAYERS as f64,
+        "How many layers to stack: each lies one layer height further out along the normal, with its own points and path.",
+    ),
 ];
 
 impl Kind for AxisymKind {
     type Settings = AxisymJob;
     const NAME: &'static str = "axisymmetric";
     const LABEL: &'static str = "Uniform infill on a curved platform";
-    const DOC: &'static str = "Quasi-uniform infill points on an axisymmetric build platform, joined by geodesics and printed by a 5-axis head along the surface normal.";
+    const DOC: &'static str =
+        "Quasi-uniform infill points on an axisymmetric build platform, joined by geodesics and printed by a 5-axis head along the surface normal.";
     const SLOTS: &'static [Slot] = SLOTS;
     const STAGES: &'static [StageInfo] = STAGES;
     const VIEWS: &'static [ViewInfo] = VIEWS;
@@ -360,7 +468,11 @@ impl Kind for AxisymKind {
                     }
                 }
             }
-            None if j.part.is_none() => out.push(Problem { path: path.into(), message: "the domain is where a part meets the platform: load the part (its drop zone, or --input part=FILE) or pick a rectangle or polygon".into() }),
+            None if j.part.is_none() => out.push(Problem {
+                path: path.into(),
+                message: "the domain is where a part meets the platform: load the part (its drop zone, or --input part=FILE) or pick a rectangle or polygon"
+                    .into(),
+            }),
             None => {}
         }
         // A radial grading's centre needs the metric too (the form's range allows the poles).
@@ -405,7 +517,11 @@ impl Kind for AxisymKind {
             paths.push(tour::estimate(e.get("points") as usize, &j.path, uniform::largest_spacing(&j.points, width)));
             points.push(e);
         }
-        Ok(vec![crate::budget::Estimate::new("platform"), sum_layers(points, "lower the density, the iterations, cutoff_spacings or the layers"), sum_layers(paths, "lower the infill density, the layers or split the domain")])
+        Ok(vec![
+            crate::budget::Estimate::new("platform"),
+            sum_layers(points, "lower the density, the iterations, cutoff_spacings or the layers"),
+            sum_layers(paths, "lower the infill density, the layers or split the domain"),
+        ])
     }
 
     fn run(j: &AxisymJob, ctx: &mut Ctx) -> Result<Product, Error> {
@@ -479,7 +595,11 @@ fn check_layers(j: &AxisymJob) -> Result<(), Error> {
 /// The stage cache id of `stage` for layer k: the plain name for layer 0 (so a one-layer job
 /// keeps its ids, keys and reports), `name@k` above.
 fn layer_id(stage: &str, k: usize) -> String {
-    if k == 0 { stage.to_string() } else { format!("{stage}@{k}") }
+    if k == 0 {
+        stage.to_string()
+    } else {
+        format!("{stage}@{k}")
+    }
 }
 
 /// The seed of layer k: the design seed for layer 0, a fixed odd multiple of k mixed in above.
@@ -521,7 +641,11 @@ fn layer_offset<'a>(p: &'a Platform, j: &AxisymJob, k: usize, domain: &Domain) -
     }
     let h = k as f64 * j.layer_height_mm;
     let b = domain.bounds();
-    Offset::new(p, h, [b[0][0], b[1][0]], platform::DEFAULT_MIN_POLE_RADIUS_MM).map(LayerSurface::Offset).map_err(|source| LayerError { layer: k + 1, offset_mm: h, source })
+    Offset::new(p, h, [b[0][0], b[1][0]], platform::DEFAULT_MIN_POLE_RADIUS_MM).map(LayerSurface::Offset).map_err(|source| LayerError {
+        layer: k + 1,
+        offset_mm: h,
+        source,
+    })
 }
 
 /// Sums per-layer estimates of one stage: counts and times add, the peak memory is the
@@ -545,7 +669,11 @@ fn sum_layers(layers: Vec<crate::budget::Estimate>, fix: &str) -> crate::budget:
         }
     }
     // One layer: exactly its own estimate.
-    if more { total.budgets(fix) } else { total }
+    if more {
+        total.budgets(fix)
+    } else {
+        total
+    }
 }
 
 /// One layer's stages.
@@ -617,11 +745,19 @@ fn below_plate(p: &dyn platform::Profile, u_lo: f64, u_hi: f64, h: f64) -> Resul
     let (mut a, mut b) = (at(k.saturating_sub(1)), at((k + 1).min(n)));
     for _ in 0..60 {
         let (c, d) = (b - 0.618_033_988_749_895 * (b - a), a + 0.618_033_988_749_895 * (b - a));
-        if tip_z(c) < tip_z(d) { b = d } else { a = c }
+        if tip_z(c) < tip_z(d) {
+            b = d
+        } else {
+            a = c
+        }
     }
     let (u, z) = [at(k), 0.5 * (a + b)].into_iter().map(|u| (u, tip_z(u))).min_by(|x, y| x.1.total_cmp(&y.1)).unwrap_or((u_lo, 0.0));
     // The writer's tolerance (1e-6 mm).
-    if z < -1e-6 { Err(BelowPlate { z_mm: z, u, raise_mm: -z }) } else { Ok(()) }
+    if z < -1e-6 {
+        Err(BelowPlate { z_mm: z, u, raise_mm: -z })
+    } else {
+        Ok(())
+    }
 }
 
 /// Ω of layer k: the settings' rectangle or polygon (every layer the same (u, θ) region), or
@@ -631,9 +767,21 @@ fn domain_of(j: &AxisymJob, ctx: &mut Ctx, platform: &Out<Platform>, k: usize) -
     if let Some(d) = j.domain.domain() {
         return ctx.stage("domain", "domain", &d, &[platform.key], |_| {
             let corners = d.ring().len();
-            let mut r = StageReport::new("domain", "Finding the domain Ω", &d).metric("corners", "Outline corners", corners as f64, "", "Corners of Ω in the embedded map (a rectangle has 4).");
+            let mut r = StageReport::new("domain", "Finding the domain Ω", &d).metric(
+                "corners",
+                "Outline corners",
+                corners as f64,
+                "",
+                "Corners of Ω in the embedded map (a rectangle has 4).",
+            );
             if !d.holes().is_empty() {
-                r = r.metric("holes", "Holes kept", d.holes().len() as f64, "", "Openings inside the outline, left unfilled: the points and the path keep out of them.");
+                r = r.metric(
+                    "holes",
+                    "Holes kept",
+                    d.holes().len() as f64,
+                    "",
+                    "Openings inside the outline, left unfilled: the points and the path keep out of them.",
+                );
             }
             Ok((d.clone(), Some(r)))
         });
@@ -643,18 +791,39 @@ fn domain_of(j: &AxisymJob, ctx: &mut Ctx, platform: &Out<Platform>, k: usize) -
     let mesh = ctx.mesh_in_place("part", input)?;
     let offset_mm = k as f64 * j.layer_height_mm;
     ctx.stage("domain", &layer_id("domain", k), &offset_mm, &[platform.key, mesh.key], |_| {
-        let c = contour::platform_contours(&mesh.value, &platform.value, &contour::Options { offset_mm, ..contour::Options::default() }).map_err(|e| Error::stage("domain", e))?;
+        let c = contour::platform_contours(&mesh.value, &platform.value, &contour::Options { offset_mm, ..contour::Options::default() })
+            .map_err(|e| Error::stage("domain", e))?;
         // (A hole always lies in an outline, so an outline exists whenever a loop does.)
-        let outline = (0..c.loops.len()).find(|&i| !c.is_hole[i]).ok_or_else(|| Error::NoInput("the part meets the platform in no closed outline (an open mesh?): repair the part or move it onto the platform".into()))?;
+        let outline = (0..c.loops.len()).find(|&i| !c.is_hole[i]).ok_or_else(|| {
+            Error::NoInput("the part meets the platform in no closed outline (an open mesh?): repair the part or move it onto the platform".into())
+        })?;
         let kept: Vec<usize> = (0..c.loops.len()).filter(|&i| c.is_hole[i] && c.parent[i] == Some(outline)).collect();
         let outlines = c.is_hole.iter().filter(|h| !**h).count();
         let d = Domain::Polygon { points: c.loops[outline].clone(), holes: kept.iter().map(|&i| c.loops[i].clone()).collect() };
         let r = StageReport::new("domain", "Finding the domain Ω", &d)
-            .metric("corners", "Outline corners", c.loops[outline].len() as f64, "", "Points of the outline where the part meets the platform, in the embedded map.")
+            .metric(
+                "corners",
+                "Outline corners",
+                c.loops[outline].len() as f64,
+                "",
+                "Points of the outline where the part meets the platform, in the embedded map.",
+            )
             .metric("area", "Outline area", c.area_mm2[outline], "mm²", "The area the outline encloses on the platform (its holes not taken off).")
             .metric("holes", "Holes kept", kept.len() as f64, "", "Openings inside the outline, left unfilled: the points and the path keep out of them.")
-            .metric("other_outlines", "Smaller outlines left out", (outlines - 1) as f64, "", "Other places the part meets the platform; only the largest is filled.")
-            .metric("open_chains", "Open cuts dropped", c.open_chains as f64, "", "Cuts that did not close because the mesh is open there: repair the mesh if this is not 0.");
+            .metric(
+                "other_outlines",
+                "Smaller outlines left out",
+                (outlines - 1) as f64,
+                "",
+                "Other places the part meets the platform; only the largest is filled.",
+            )
+            .metric(
+                "open_chains",
+                "Open cuts dropped",
+                c.open_chains as f64,
+                "",
+                "Cuts that did not close because the mesh is open there: repair the mesh if this is not 0.",
+            );
         // Only layer 0 reports; the others are in the per-layer table.
         Ok((d, (k == 0).then_some(r)))
     })
@@ -663,7 +832,15 @@ fn domain_of(j: &AxisymJob, ctx: &mut Ctx, platform: &Out<Platform>, k: usize) -
 /// The path of layer k through its points (with its report for layer 0), starting nearest
 /// `start` when given (where the layer below ended); the toolpath is made from it by the run.
 #[allow(clippy::too_many_arguments)]
-fn path_stage(j: &AxisymJob, ctx: &mut Ctx, platform: &Out<Platform>, domain: &Out<Domain>, distribution: &Out<uniform::Distribution>, k: usize, start: Option<[f64; 2]>) -> Result<Out<tour::Tour>, Error> {
+fn path_stage(
+    j: &AxisymJob,
+    ctx: &mut Ctx,
+    platform: &Out<Platform>,
+    domain: &Out<Domain>,
+    distribution: &Out<uniform::Distribution>,
+    k: usize,
+    start: Option<[f64; 2]>,
+) -> Result<Out<tour::Tour>, Error> {
     let mut o = j.path.clone();
     if let Some([u, theta]) = start {
         o.start = tour::Start::Nearest { u, theta };
@@ -698,7 +875,11 @@ fn axes_stage(j: &AxisymJob, ctx: &mut Ctx, tours: &[&tour::Tour], keys: &[crate
             let smoothed = dynamics::smooth_axes(&positions, &normals, &j.tool_axis).map_err(|e| Error::stage("axes", e))?;
             let raw = dynamics::dynamics(&tips, &normals, machine, feed).map_err(|e| Error::stage("axes", e))?;
             // Smoothing off (the default): the axes are the normals, the same dynamics.
-            let after = if smoothed.axes == normals { raw.clone() } else { dynamics::dynamics(&tips, &smoothed.axes, machine, feed).map_err(|e| Error::stage("axes", e))? };
+            let after = if smoothed.axes == normals {
+                raw.clone()
+            } else {
+                dynamics::dynamics(&tips, &smoothed.axes, machine, feed).map_err(|e| Error::stage("axes", e))?
+            };
             raw_all.push(raw);
             after_all.push(after);
             tilt = tilt.max(smoothed.max_tilt_deg);
@@ -748,7 +929,13 @@ fn axes_report(o: &dynamics::Options, max_tilt_deg: f64, raw: &dynamics::Dynamic
     if let Some(b) = after.axes.first() {
         r = r
             .metric("tool_speed", "Tool-axis turn, fastest", b.max_speed_deg_s, "°/s", "How fast the tool axis turns at the infill speed (smoothed, when on).")
-            .metric("tool_accel", "Tool-axis acceleration, largest", b.max_accel_deg_s2, "°/s²", "Its hardest change of turning speed: the raster's corners set it.");
+            .metric(
+                "tool_accel",
+                "Tool-axis acceleration, largest",
+                b.max_accel_deg_s2,
+                "°/s²",
+                "Its hardest change of turning speed: the raster's corners set it.",
+            );
     }
     if on {
         for (a, b) in raw.axes.iter().zip(&after.axes) {
@@ -771,7 +958,13 @@ fn axes_report(o: &dynamics::Options, max_tilt_deg: f64, raw: &dynamics::Dynamic
             .zip(&after.axes)
             .map(|(a, b)| crate::report::Row {
                 group_index: None,
-                cells: vec![a.axis.clone().into(), round(a.max_speed_deg_s).into(), round(a.max_accel_deg_s2).into(), round(b.max_speed_deg_s).into(), round(b.max_accel_deg_s2).into()],
+                cells: vec![
+                    a.axis.clone().into(),
+                    round(a.max_speed_deg_s).into(),
+                    round(a.max_accel_deg_s2).into(),
+                    round(b.max_speed_deg_s).into(),
+                    round(b.max_accel_deg_s2).into(),
+                ],
             })
             .collect(),
     });
@@ -813,14 +1006,33 @@ fn layer_table(layers: &[Layer], h: f64) -> crate::report::Table {
             // Against the local target spacing (the same ratio as in mm when the density is uniform).
             let reduction = if s.rel_std > 0.0 { 100.0 * (1.0 - m.rel_std / s.rel_std) } else { 0.0 };
             let (length, over) = l.tour.as_ref().map_or((0.0, 0), |t| (t.length_mm, t.hole_crossings));
-            TableRow { group_index: None, cells: vec![(k + 1).into(), l.offset_mm.into(), ((k + 1) as f64 * h).into(), l.points.points.len().into(), reduction.into(), length.into(), over.into()] }
+            TableRow {
+                group_index: None,
+                cells: vec![
+                    (k + 1).into(),
+                    l.offset_mm.into(),
+                    ((k + 1) as f64 * h).into(),
+                    l.points.points.len().into(),
+                    reduction.into(),
+                    length.into(),
+                    over.into(),
+                ],
+            }
         })
         .collect();
     Table {
         key: "layers".into(),
         title: "Layers: each on the platform offset by the layers below".into(),
         group: None,
-        columns: vec![col("Layer", ""), col("Surface offset", "mm"), col("Tip offset", "mm"), col("Points", ""), col("Spread reduced by", "%"), col("Path length", "mm"), col("Hops over a hole (not printed)", "")],
+        columns: vec![
+            col("Layer", ""),
+            col("Surface offset", "mm"),
+            col("Tip offset", "mm"),
+            col("Points", ""),
+            col("Spread reduced by", "%"),
+            col("Path length", "mm"),
+            col("Hops over a hole (not printed)", ""),
+        ],
         rows,
     }
 }
@@ -847,19 +1059,29 @@ fn platform_report(p: &Platform, c: &platform::Continuity) -> StageReport {
         g_utt.push(c.u_tt);
         g_tut.push(if inside { c.t_ut } else { f64::NAN });
     }
-    let line = |key: &str, title: &str, y: &str, unit: &str, series: Vec<Series>| Plot { key: key.into(), title: title.into(), kind: PlotKind::Line, x: Axis::new("u", ""), y: Axis::new(y, unit), group: None, series };
+    let line = |key: &str, title: &str, y: &str, unit: &str, series: Vec<Series>| Plot {
+        key: key.into(),
+        title: title.into(),
+        kind: PlotKind::Line,
+        x: Axis::new("u", ""),
+        y: Axis::new(y, unit),
+        group: None,
+        series,
+    };
     let mut r = StageReport::new("platform", "Checking the build platform", c)
         .metric("segments", "Bézier segments", p.segments.len() as f64, "", "Degree-6 segments of the generatrix; u runs from 0 to this number.")
-        .metric("max_jump", "Largest C³ jump at a knot", c.worst_rel.iter().fold(0.0, |a: f64, b| a.max(*b)), "", "The largest jump of x, z or their first three derivatives across a knot, relative to their size (0: C³).")
+        .metric(
+            "max_jump",
+            "Largest C³ jump at a knot",
+            c.worst_rel.iter().fold(0.0, |a: f64, b| a.max(*b)),
+            "",
+            "The largest jump of x, z or their first three derivatives across a knot, relative to their size (0: C³).",
+        )
         .metric("max_curvature", "Largest |κ|", max_kappa, "1/mm", "The sharpest bend of the profile: 1/κ is the smallest radius of curvature.");
     if let Some((a, b)) = clearance {
-        r = r.metric("u_clear_min", "Domain may start at u", a, "", "Closer to the top pole the metric degenerates (g_θθ → 0): keep Ω at or above this u.").metric(
-            "u_clear_max",
-            "Domain may end at u",
-            b,
-            "",
-            "Closer to the bottom pole the metric degenerates: keep Ω at or below this u.",
-        );
+        r = r
+            .metric("u_clear_min", "Domain may start at u", a, "", "Closer to the top pole the metric degenerates (g_θθ → 0): keep Ω at or above this u.")
+            .metric("u_clear_max", "Domain may end at u", b, "", "Closer to the bottom pole the metric degenerates: keep Ω at or below this u.");
     }
     r.plots.push(line("curvature", "Curvature κ of the generatrix", "κ", "1/mm", vec![Series::xy("κ", us.clone(), kappa)]));
     r.plots.push(line("metric", "Metric components", "g", "mm²", vec![Series::xy("g_uu", us.clone(), guu), Series::xy("g_θθ", us.clone(), gtt)]));
@@ -965,11 +1187,27 @@ fn points_report(d: &uniform::Distribution, o: &uniform::Options, width: f64) ->
             "Spread reduced by",
             reduction,
             "%",
-            if o.grading.is_some() { "In mm, which a graded density spreads on purpose: see the spread against the target below." } else { "How much repulsion evened the spacing (the paper: 71.7 %, 71.6 %, 44 % on its three cases)." },
+            if o.grading.is_some() {
+                "In mm, which a graded density spreads on purpose: see the spread against the target below."
+            } else {
+                "How much repulsion evened the spacing (the paper: 71.7 %, 71.6 %, 44 % on its three cases)."
+            },
         )
         .metric("mean", "Mean neighbour distance", m.nn_mean_mm, "mm", "Mean distance to the 2n nearest neighbours after repulsion.")
-        .metric("ratio", "e / mean distance", 100.0 * m.ratio, "%", "Line width over the mean spacing: the density the points give, to compare with the command density.")
-        .metric("command", "Command density ρ_c", 100.0 * o.density, "%", if o.grading.is_some() { "The density asked for at the near end of the grading." } else { "The density asked for." });
+        .metric(
+            "ratio",
+            "e / mean distance",
+            100.0 * m.ratio,
+            "%",
+            "Line width over the mean spacing: the density the points give, to compare with the command density.",
+        )
+        .metric(
+            "command",
+            "Command density ρ_c",
+            100.0 * o.density,
+            "%",
+            if o.grading.is_some() { "The density asked for at the near end of the grading." } else { "The density asked for." },
+        );
     if let (Some(g), Some(gp)) = (&o.grading, &d.graded) {
         r = graded_report(r, d, g, gp);
     }
@@ -1029,10 +1267,34 @@ fn graded_report(mut r: StageReport, d: &uniform::Distribution, g: &crate::axisy
     let reduction = if s.rel_std > 0.0 { 100.0 * (1.0 - m.rel_std / s.rel_std) } else { 0.0 };
     r = r
         .metric("end_density", "End density", 100.0 * g.density_to, "%", "The density asked for at the far end of the grading.")
-        .metric("rel_std_seed", "Spread against the target, seed", 100.0 * s.rel_std, "%", "Standard deviation of the 2n-nearest-neighbour distances, each over its point's target spacing n·e/ρ(q), before repulsion.")
-        .metric("rel_std", "Spread against the target, result", 100.0 * m.rel_std, "%", "The same after repulsion: lower follows the graded target more evenly.")
-        .metric("rel_std_reduction", "Spread against the target reduced by", reduction, "%", "How much repulsion evened the spacing relative to the graded target.")
-        .metric("rel_mean", "Mean distance over target", m.rel_mean, "", "Mean of the neighbour distances over their target spacings: near 1 (a hexagonal packing gives 1.07).");
+        .metric(
+            "rel_std_seed",
+            "Spread against the target, seed",
+            100.0 * s.rel_std,
+            "%",
+            "Standard deviation of the 2n-nearest-neighbour distances, each over its point's target spacing n·e/ρ(q), before repulsion.",
+        )
+        .metric(
+            "rel_std",
+            "Spread against the target, result",
+            100.0 * m.rel_std,
+            "%",
+            "The same after repulsion: lower follows the graded target more evenly.",
+        )
+        .metric(
+            "rel_std_reduction",
+            "Spread against the target reduced by",
+            reduction,
+            "%",
+            "How much repulsion evened the spacing relative to the graded target.",
+        )
+        .metric(
+            "rel_mean",
+            "Mean distance over target",
+            m.rel_mean,
+            "",
+            "Mean of the neighbour distances over their target spacings: near 1 (a hexagonal packing gives 1.07).",
+        );
     let (label, unit) = gp.label;
     let lo = gp.commanded.first().map_or(0.0, |c| c[0]);
     let hi = gp.commanded.last().map_or(0.0, |c| c[0]);
@@ -1060,7 +1322,10 @@ fn graded_report(mut r: StageReport, d: &uniform::Distribution, g: &crate::axisy
         x: Axis::new("Point (sorted)", ""),
         y: Axis::new("KDF / target", ""),
         group: None,
-        series: vec![Series::xy("seed", rank(&s.kdf_relative_sorted), s.kdf_relative_sorted.clone()), Series::xy("repulsion", rank(&m.kdf_relative_sorted), m.kdf_relative_sorted.clone())],
+        series: vec![
+            Series::xy("seed", rank(&s.kdf_relative_sorted), s.kdf_relative_sorted.clone()),
+            Series::xy("repulsion", rank(&m.kdf_relative_sorted), m.kdf_relative_sorted.clone()),
+        ],
     });
     let (edges, seed_counts, counts) = crate::axisym::metrics::shared_histogram(&s.nn_relative, &m.nn_relative, HISTOGRAM_BINS);
     r.plots.push(Plot {
@@ -1094,7 +1359,17 @@ fn path_report(t: &tour::Tour, d: &uniform::Distribution, holes: bool) -> StageR
         .metric("crossings", "Crossings left", t.crossings_left as f64, "", "Places the path crosses itself in the map: 0 is a clean raster.")
         .metric("poses", "Poses", t.poses.len() as f64, "", "Tool positions with their normal, along the sampled geodesics.")
         .metric("points_in", "Points from the previous stage", d.points.len() as f64, "", "The repulsion's points the path joins.");
-    if holes { r.metric("hole_crossings", "Hops over a hole", t.hole_crossings as f64, "", "Path segments that would cross a hole of Ω: the nozzle travels over them without extruding (0 when the path goes around every hole).") } else { r }
+    if holes {
+        r.metric(
+            "hole_crossings",
+            "Hops over a hole",
+            t.hole_crossings as f64,
+            "",
+            "Path segments that would cross a hole of Ω: the nozzle travels over them without extruding (0 when the path goes around every hole).",
+        )
+    } else {
+        r
+    }
 }
 
 /// The nozzle tip of a pose: `h` out along the normal from the layer's surface.
@@ -1210,7 +1485,8 @@ fn platform_view(p: &Platform, tours: &[&tour::Tour], h: f64) -> Inspection {
     let code = Feature::Contour.code() as f32;
     let k = p.segments.len();
     let steps = k * 32;
-    let mut push = |a: [f64; 3], b: [f64; 3], c: f32| data.extend_from_slice(&[a[0] as f32, a[1] as f32, a[2] as f32, b[0] as f32, b[1] as f32, b[2] as f32, c]);
+    let mut push =
+        |a: [f64; 3], b: [f64; 3], c: f32| data.extend_from_slice(&[a[0] as f32, a[1] as f32, a[2] as f32, b[0] as f32, b[1] as f32, b[2] as f32, c]);
     for m in 0..MERIDIANS {
         let th = std::f64::consts::TAU * m as f64 / MERIDIANS as f64;
         for i in 0..steps {

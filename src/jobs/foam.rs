@@ -238,8 +238,22 @@ const STAGES: &[StageInfo] = &[
 ];
 
 const VIEWS: &[ViewInfo] = &[
-    ViewInfo { id: "boundaries", stage: "regions", label: "Shared boundaries", shape: Shape::Mesh, index_label: "Boundary", doc: "The faces two regions share (highlighted), where transitions are centred (mm)." },
-    ViewInfo { id: "layer", stage: "raster", label: "Layer path", shape: Shape::Lines2d, index_label: "Layer", doc: "One layer's continuous path: scan lines, turns along the outline, and the outline (mm)." },
+    ViewInfo {
+        id: "boundaries",
+        stage: "regions",
+        label: "Shared boundaries",
+        shape: Shape::Mesh,
+        index_label: "Boundary",
+        doc: "The faces two regions share (highlighted), where transitions are centred (mm).",
+    },
+    ViewInfo {
+        id: "layer",
+        stage: "raster",
+        label: "Layer path",
+        shape: Shape::Lines2d,
+        index_label: "Layer",
+        doc: "One layer's continuous path: scan lines, turns along the outline, and the outline (mm).",
+    },
 ];
 
 const OPTION_FIELDS: &[Row0] = &[
@@ -247,30 +261,121 @@ const OPTION_FIELDS: &[Row0] = &[
     num("line_spacing_mm", "Foam", "Line spacing", "mm", 0.1, 50.0, 0.1, "Distance between neighbouring raster lines of a layer."),
     num("raster_angle_deg", "Foam", "Raster angle", "°", -360.0, 360.0, 1.0, "Direction of the raster lines on the first layer."),
     other("alternate", "Foam", "Cross the layers", FieldKind::Bool, &[], "Turn the raster 90° on every other layer."),
-    percent(num("inset", "Foam", "Turns inside the outline", "", 0.0, 1.0, 0.05, "How far inside the outline the path turns, in line spacings (50 %: half a spacing).")),
+    percent(num(
+        "inset",
+        "Foam",
+        "Turns inside the outline",
+        "",
+        0.0,
+        1.0,
+        0.05,
+        "How far inside the outline the path turns, in line spacings (50 %: half a spacing).",
+    )),
     num("piece_mm", "Foam", "Piece length", "mm", 0.01, 100.0, 0.05, "The path is cut into pieces this long; each gets the V* and H* of its end."),
-    num("feed_mm_s", "Foam", "Filament feed C", "mm/s", 0.01, 100.0, 0.1, "Filament fed into the extruder per second, the same everywhere (constant extrusion)."),
+    num(
+        "feed_mm_s",
+        "Foam",
+        "Filament feed C",
+        "mm/s",
+        0.01,
+        100.0,
+        0.1,
+        "Filament fed into the extruder per second, the same everywhere (constant extrusion).",
+    ),
     other("many_neighbours", "Foam", "Several neighbours", FieldKind::Bool, &[], "Let a region touch several others (the paper allows one)."),
     when(
         crate::settings::choice_docs(
-            other("junction", "Foam", "Near several boundaries", FieldKind::Choice, &["blend", "nearest"], "How a point within reach of several transitions of its region takes V* and H*."),
-            &["Average the transitions' blends, weighted by closeness: no jumps where boundaries meet.", "Take the nearest boundary's blend only: jumps where the nearest changes."],
+            other(
+                "junction",
+                "Foam",
+                "Near several boundaries",
+                FieldKind::Choice,
+                &["blend", "nearest"],
+                "How a point within reach of several transitions of its region takes V* and H*.",
+            ),
+            &[
+                "Average the transitions' blends, weighted by closeness: no jumps where boundaries meet.",
+                "Take the nearest boundary's blend only: jumps where the nearest changes.",
+            ],
         ),
         "many_neighbours",
         "true",
     ),
-    num("calibration.f_kpa", "Stiffness", "Modulus fit F", "kPa", 1e-6, 1e6, 0.01, "F of the modulus measured along a linear V* sweep, E = F·e^(b·u) (the paper's 4.79)."),
-    num("calibration.b", "Stiffness", "Modulus fit b", "", -100.0, 100.0, 0.01, "b of that fit; u runs from −½ at the sweep's first V* to ½ at its last (the paper's −3.11)."),
+    num(
+        "calibration.f_kpa",
+        "Stiffness",
+        "Modulus fit F",
+        "kPa",
+        1e-6,
+        1e6,
+        0.01,
+        "F of the modulus measured along a linear V* sweep, E = F·e^(b·u) (the paper's 4.79).",
+    ),
+    num(
+        "calibration.b",
+        "Stiffness",
+        "Modulus fit b",
+        "",
+        -100.0,
+        100.0,
+        0.01,
+        "b of that fit; u runs from −½ at the sweep's first V* to ½ at its last (the paper's −3.11).",
+    ),
     num("calibration.v_star_from", "Stiffness", "Sweep from V*", "", 0.01, 10.0, 0.01, "V* where the measured sweep started (the paper's 0.15)."),
-    num("calibration.v_star_to", "Stiffness", "Sweep to V*", "", 0.01, 10.0, 0.01, "V* where it ended (the paper's 0.4); moduli outside the sweep are refused."),
-    other("probe_axis", "Probe", "Probe line along", FieldKind::Choice, &["x", "y", "z"], "The report plots V*, H* and ΔE/mm along this axis through the middle of the part."),
+    num(
+        "calibration.v_star_to",
+        "Stiffness",
+        "Sweep to V*",
+        "",
+        0.01,
+        10.0,
+        0.01,
+        "V* where it ended (the paper's 0.4); moduli outside the sweep are refused.",
+    ),
+    other(
+        "probe_axis",
+        "Probe",
+        "Probe line along",
+        FieldKind::Choice,
+        &["x", "y", "z"],
+        "The report plots V*, H* and ΔE/mm along this axis through the middle of the part.",
+    ),
 ];
 
-const REGION_V: [&str; MAX_REGIONS] = ["Region 1: V*", "Region 2: V*", "Region 3: V*", "Region 4: V*", "Region 5: V*", "Region 6: V*", "Region 7: V*", "Region 8: V*"];
-const REGION_SET: [&str; MAX_REGIONS] = ["Region 1: set by", "Region 2: set by", "Region 3: set by", "Region 4: set by", "Region 5: set by", "Region 6: set by", "Region 7: set by", "Region 8: set by"];
-const REGION_E: [&str; MAX_REGIONS] = ["Region 1: modulus", "Region 2: modulus", "Region 3: modulus", "Region 4: modulus", "Region 5: modulus", "Region 6: modulus", "Region 7: modulus", "Region 8: modulus"];
-const REGION_H: [&str; MAX_REGIONS] = ["Region 1: H*", "Region 2: H*", "Region 3: H*", "Region 4: H*", "Region 5: H*", "Region 6: H*", "Region 7: H*", "Region 8: H*"];
-const T_FROM: [&str; MAX_TRANSITIONS] = ["Transition 1: from region", "Transition 2: from region", "Transition 3: from region", "Transition 4: from region", "Transition 5: from region", "Transition 6: from region", "Transition 7: from region", "Transition 8: from region"];
+const REGION_V: [&str; MAX_REGIONS] =
+    ["Region 1: V*", "Region 2: V*", "Region 3: V*", "Region 4: V*", "Region 5: V*", "Region 6: V*", "Region 7: V*", "Region 8: V*"];
+const REGION_SET: [&str; MAX_REGIONS] = [
+    "Region 1: set by",
+    "Region 2: set by",
+    "Region 3: set by",
+    "Region 4: set by",
+    "Region 5: set by",
+    "Region 6: set by",
+    "Region 7: set by",
+    "Region 8: set by",
+];
+const REGION_E: [&str; MAX_REGIONS] = [
+    "Region 1: modulus",
+    "Region 2: modulus",
+    "Region 3: modulus",
+    "Region 4: modulus",
+    "Region 5: modulus",
+    "Region 6: modulus",
+    "Region 7: modulus",
+    "Region 8: modulus",
+];
+const REGION_H: [&str; MAX_REGIONS] =
+    ["Region 1: H*", "Region 2: H*", "Region 3: H*", "Region 4: H*", "Region 5: H*", "Region 6: H*", "Region 7: H*", "Region 8: H*"];
+const T_FROM: [&str; MAX_TRANSITIONS] = [
+    "Transition 1: from region",
+    "Transition 2: from region",
+    "Transition 3: from region",
+    "Transition 4: from region",
+    "Transition 5: from region",
+    "Transition 6: from region",
+    "Transition 7: from region",
+    "Transition 8: from region",
+];
 
 /// The form rows of region `i` and transition `i` (paths with their index).
 fn indexed_rows() -> Vec<Row> {
@@ -278,11 +383,44 @@ fn indexed_rows() -> Vec<Row> {
     for i in 0..MAX_REGIONS {
         let f = [
             crate::settings::choice_docs(
-                other("set_by", "Regions", REGION_SET[i], FieldKind::Choice, &["v_star", "modulus"], "Give the region's V* directly, or the stiffness it should have."),
+                other(
+                    "set_by",
+                    "Regions",
+                    REGION_SET[i],
+                    FieldKind::Choice,
+                    &["v_star", "modulus"],
+                    "Give the region's V* directly, or the stiffness it should have.",
+                ),
                 &["V* as given.", "The V* whose foam has this modulus, by the calibration under Stiffness."],
             ),
-            when(num("v_star", "Regions", REGION_V[i], "", 0.01, 10.0, 0.01, "Nozzle speed ÷ thread speed: lower lays more coils per mm (denser, stiffer foam); the paper prints 0.15–0.4."), "set_by", "v_star"),
-            when(num("modulus_kpa", "Regions", REGION_E[i], "kPa", 1e-6, 1e6, 0.1, "Target compressive modulus; weft picks the V* that prints it (the paper's TPU: 1.01 to 22.68 kPa)."), "set_by", "modulus"),
+            when(
+                num(
+                    "v_star",
+                    "Regions",
+                    REGION_V[i],
+                    "",
+                    0.01,
+                    10.0,
+                    0.01,
+                    "Nozzle speed ÷ thread speed: lower lays more coils per mm (denser, stiffer foam); the paper prints 0.15–0.4.",
+                ),
+                "set_by",
+                "v_star",
+            ),
+            when(
+                num(
+                    "modulus_kpa",
+                    "Regions",
+                    REGION_E[i],
+                    "kPa",
+                    1e-6,
+                    1e6,
+                    0.1,
+                    "Target compressive modulus; weft picks the V* that prints it (the paper's TPU: 1.01 to 22.68 kPa).",
+                ),
+                "set_by",
+                "modulus",
+            ),
             num("h_star", "Regions", REGION_H[i], "", 0.1, 100.0, 0.5, "Nozzle height in swollen thread diameters: higher gives wider coils."),
         ];
         rows.extend(mount(&format!("job.regions.{i}"), &f));
@@ -293,7 +431,14 @@ fn indexed_rows() -> Vec<Row> {
             num("to", "Transitions", "to region", "", 1.0, MAX_REGIONS as f64, 1.0, "The region where the weight is 1."),
             num("length_mm", "Transitions", "length", "mm", 0.0, 10000.0, 0.5, "Width of the blend, centred on the shared boundary (0: a sharp step)."),
             crate::settings::choice_docs(
-                other("weighting.kind", "Transitions", "weighting", FieldKind::Choice, &["linear", "cubic", "logarithmic", "cube_root", "sinusoidal", "linear_modulus"], "How V* and H* blend across the transition."),
+                other(
+                    "weighting.kind",
+                    "Transitions",
+                    "weighting",
+                    FieldKind::Choice,
+                    &["linear", "cubic", "logarithmic", "cube_root", "sinusoidal", "linear_modulus"],
+                    "How V* and H* blend across the transition.",
+                ),
                 &[
                     "w = x + ½: V* and H* change at a constant rate.",
                     "w = 4(1 − s)x³ + s·x + ½: slope s at the boundary (1.5: smooth ends).",
@@ -303,7 +448,16 @@ fn indexed_rows() -> Vec<Row> {
                     "The modulus changes linearly from region to region by the calibration, exact at both ends.",
                 ],
             ),
-            num("weighting.slope", "Transitions", "slope", "", -1000.0, 1000.0, 0.01, "Cubic: slope at the boundary (0 to 1.5). Logarithmic: slope of the modulus line E(x)."),
+            num(
+                "weighting.slope",
+                "Transitions",
+                "slope",
+                "",
+                -1000.0,
+                1000.0,
+                0.01,
+                "Cubic: slope at the boundary (0 to 1.5). Logarithmic: slope of the modulus line E(x).",
+            ),
             num("weighting.intercept", "Transitions", "intercept", "", -1000.0, 1000.0, 0.01, "Intercept of the modulus line E(x) (the paper's 13.26)."),
             num("weighting.f", "Transitions", "F", "", 1e-6, 1000.0, 0.01, "Factor of the modulus fit E = F·e^(b·u) (the paper's 4.79)."),
             num("weighting.b", "Transitions", "b", "", -100.0, 100.0, 0.01, "Exponent of the modulus fit (the paper's −3.11)."),
@@ -320,7 +474,12 @@ fn indexed_rows() -> Vec<Row> {
 
 /// The die swell, nozzle and filament of the design with the feed C.
 fn process(design: &Design, j: &FoamJob) -> Process {
-    Process { nozzle_mm: design.printer.nozzle_diameter_mm, die_swell: design.material.swell_ratio, filament_mm: design.printer.filament_diameter_mm, feed_mm_s: j.foam.feed_mm_s }
+    Process {
+        nozzle_mm: design.printer.nozzle_diameter_mm,
+        die_swell: design.material.swell_ratio,
+        filament_mm: design.printer.filament_diameter_mm,
+        feed_mm_s: j.foam.feed_mm_s,
+    }
 }
 
 /// How many meshes the design names (None: a built-in model, whose count is its own).
@@ -374,7 +533,10 @@ impl Kind for FoamKind {
     fn fields() -> Vec<Row> {
         let mut rows = mount(
             "job",
-            &[crate::settings::Field { default: Some(r#"{"kind":"dogbone","neck_length_mm":60,"neck_width_mm":12,"grip_length_mm":30,"grip_width_mm":25,"thickness_mm":10}"#), ..other("model", "Model", "Built-in model", FieldKind::Section, &[], "Use region meshes made by weft instead of loaded files.") }],
+            &[crate::settings::Field {
+                default: Some(r#"{"kind":"dogbone","neck_length_mm":60,"neck_width_mm":12,"grip_length_mm":30,"grip_width_mm":25,"thickness_mm":10}"#),
+                ..other("model", "Model", "Built-in model", FieldKind::Section, &[], "Use region meshes made by weft instead of loaded files.")
+            }],
         );
         rows.extend(mount("job.model", models::FIELDS));
         rows.extend(indexed_rows());
@@ -397,7 +559,10 @@ impl Kind for FoamKind {
             out.push(Problem { path: "job.foam.feed_mm_s".into(), message: m });
         }
         if j.model.is_none() && j.meshes.is_none() {
-            out.push(Problem { path: "job.meshes".into(), message: "a foam needs its region meshes: load one file per region, or switch on a built-in model".into() });
+            out.push(Problem {
+                path: "job.meshes".into(),
+                message: "a foam needs its region meshes: load one file per region, or switch on a built-in model".into(),
+            });
         }
         if let Some(m) = &j.model {
             for message in models::problems(m) {
@@ -414,7 +579,10 @@ impl Kind for FoamKind {
             if n != j.regions.len() {
                 out.push(Problem {
                     path: "job.regions".into(),
-                    message: format!("the model has {n} region(s) but the design gives {} V*/H* pair(s): give one pair per region, in the order of the meshes", j.regions.len()),
+                    message: format!(
+                        "the model has {n} region(s) but the design gives {} V*/H* pair(s): give one pair per region, in the order of the meshes",
+                        j.regions.len()
+                    ),
                 });
             }
         }
@@ -445,7 +613,10 @@ impl Kind for FoamKind {
                 }
             }
             if t.from == t.to {
-                out.push(Problem { path: format!("{path}.to"), message: format!("a transition joins two different regions (both ends are region {})", t.from) });
+                out.push(Problem {
+                    path: format!("{path}.to"),
+                    message: format!("a transition joins two different regions (both ends are region {})", t.from),
+                });
             }
             if !(t.length_mm.is_finite() && t.length_mm >= 0.0) {
                 out.push(Problem { path: format!("{path}.length_mm"), message: format!("{} mm: the length must be 0 (a step) or more", t.length_mm) });
@@ -507,7 +678,15 @@ impl Kind for FoamKind {
         let design = ctx.design;
         let p = process(design, j);
         let f = &j.foam;
-        let parts = (&j.regions, &j.transitions, (f.piece_mm, f.layer_height_mm, f.probe_axis, f.junction, f.calibration), p.nozzle_mm, p.die_swell, p.filament_mm, p.feed_mm_s);
+        let parts = (
+            &j.regions,
+            &j.transitions,
+            (f.piece_mm, f.layer_height_mm, f.probe_axis, f.junction, f.calibration),
+            p.nozzle_mm,
+            p.die_swell,
+            p.filament_mm,
+            p.feed_mm_s,
+        );
         let toolpath = ctx.stage("grade", "grade", &parts, &[regions.key, paths.key], |progress| grade(j, &p, &regions, &layers, &paths, progress))?;
         Ok(Product::Toolpath(toolpath))
     }
@@ -578,7 +757,9 @@ pub struct Placed {
 fn placed_stage(j: &FoamJob, ctx: &mut Ctx) -> Result<Out<Placed>, Error> {
     let mut items: Vec<(String, Out<Mesh>)> = Vec::new();
     if j.model.is_none() {
-        let input = j.meshes.as_ref().ok_or_else(|| Error::NoInput("a foam needs its region meshes: load one file per region (--input regions=FILE, repeated), or switch on a built-in model".into()))?;
+        let input = j.meshes.as_ref().ok_or_else(|| {
+            Error::NoInput("a foam needs its region meshes: load one file per region (--input regions=FILE, repeated), or switch on a built-in model".into())
+        })?;
         let inputs: Vec<Input> = match input {
             Input::Files(names) => names.iter().map(|n| Input::File { name: n.clone(), embedded: None }).collect(),
             other => vec![other.clone()],
@@ -626,13 +807,24 @@ fn regions_stage(j: &FoamJob, ctx: &mut Ctx) -> Result<Out<Regions>, Error> {
     let placed = placed_stage(j, ctx)?;
     let options = regions::Options { many_neighbours: j.foam.many_neighbours, ..regions::Options::default() };
     ctx.stage("regions", "regions", &(j.foam.many_neighbours,), &[placed.key], |_| {
-        let r = regions::regions(placed.names.iter().cloned().zip(placed.meshes.iter().cloned()).collect(), &options).map_err(|e| Error::stage("regions", e))?;
+        let r =
+            regions::regions(placed.names.iter().cloned().zip(placed.meshes.iter().cloned()).collect(), &options).map_err(|e| Error::stage("regions", e))?;
         let shared: f64 = r.boundaries.iter().map(|b| b.area_mm2).sum();
-        let report = StageReport::new("regions", "Finding shared boundaries", &serde_json::json!({ "regions": r.names(), "boundaries": r.boundaries.iter().map(|b| [b.a + 1, b.b + 1]).collect::<Vec<_>>() }))
-            .metric("regions", "Regions", r.regions.len() as f64, "", "Region meshes, each with its own V* and H*.")
-            .metric("boundaries", "Shared boundaries", r.boundaries.len() as f64, "", "Pairs of regions that share a face; transitions are centred on these.")
-            .metric("shared_area", "Shared area", shared, "mm²", "Total area of the shared boundaries.")
-            .metric("epsilon", "Contact tolerance ε", r.epsilon_mm, "mm", "Faces closer than this count as touching (10⁻⁶ of the model's size, at least 0.1 µm).");
+        let report = StageReport::new(
+            "regions",
+            "Finding shared boundaries",
+            &serde_json::json!({ "regions": r.names(), "boundaries": r.boundaries.iter().map(|b| [b.a + 1, b.b + 1]).collect::<Vec<_>>() }),
+        )
+        .metric("regions", "Regions", r.regions.len() as f64, "", "Region meshes, each with its own V* and H*.")
+        .metric("boundaries", "Shared boundaries", r.boundaries.len() as f64, "", "Pairs of regions that share a face; transitions are centred on these.")
+        .metric("shared_area", "Shared area", shared, "mm²", "Total area of the shared boundaries.")
+        .metric(
+            "epsilon",
+            "Contact tolerance ε",
+            r.epsilon_mm,
+            "mm",
+            "Faces closer than this count as touching (10⁻⁶ of the model's size, at least 0.1 µm).",
+        );
         Ok((r, Some(report)))
     })
 }
@@ -660,7 +852,13 @@ fn slice_stage(j: &FoamJob, ctx: &mut Ctx, regions: &Out<Regions>) -> Result<Out
         }
         let names: Vec<&str> = placed.names.iter().map(String::as_str).collect();
         let layers = check_layers(&sliced.layers, &per_region, &names).map_err(|e| Error::stage("slicing", e))?;
-        let report = super::slice_report(&sliced.report, "Slicing the union").metric("layers", "Layers", layers.len() as f64, "", "Layers of the foam, each one outline.");
+        let report = super::slice_report(&sliced.report, "Slicing the union").metric(
+            "layers",
+            "Layers",
+            layers.len() as f64,
+            "",
+            "Layers of the foam, each one outline.",
+        );
         Ok((layers, Some(report)))
     })
 }
@@ -773,7 +971,8 @@ fn raster_stage(j: &FoamJob, ctx: &mut Ctx, layers: &Out<Vec<Layer>>) -> Result<
             let angle = o.raster_angle_deg + if o.alternate && k % 2 == 1 { 90.0 } else { 0.0 };
             let area = inset(&layer.polygon, o.inset * o.line_spacing_mm, layer.z).map_err(|e| Error::stage("raster", e))?;
             let start = out.last().and_then(|p: &LayerPath| p.points.last().copied());
-            let r = raster::raster(&area, start, &raster::Options { spacing_mm: o.line_spacing_mm, angle_deg: angle }).map_err(|e| Error::stage("raster", RasterAt { z: layer.z, source: e }))?;
+            let r = raster::raster(&area, start, &raster::Options { spacing_mm: o.line_spacing_mm, angle_deg: angle })
+                .map_err(|e| Error::stage("raster", RasterAt { z: layer.z, source: e }))?;
             scan += r.raster_mm;
             boundary += r.boundary_mm;
             retraced += r.retraced_mm;
@@ -784,7 +983,13 @@ fn raster_stage(j: &FoamJob, ctx: &mut Ctx, layers: &Out<Vec<Layer>>) -> Result<
         let report = StageReport::new("raster", "One continuous path per layer", &serde_json::json!({ "layers": out.len() }))
             .metric("raster", "Raster lines", scan, "mm", "Length of the scan lines of every layer.")
             .metric("turns", "Turns along the outline", boundary, "mm", "Length of the links that run along the outline between lines and cells.")
-            .metric("retraced", "Lines run twice", retraced, "mm", "Links that cross a part already printed to reach the next cell (printed twice: denser there); 0 for simple outlines.")
+            .metric(
+                "retraced",
+                "Lines run twice",
+                retraced,
+                "mm",
+                "Links that cross a part already printed to reach the next cell (printed twice: denser there); 0 for simple outlines.",
+            )
             .metric("cells", "Cells", cells as f64, "", "Boustrophedon cells over all layers (each a zig-zag); more where outlines are concave or have holes.");
         Ok((out, Some(report)))
     })
@@ -835,10 +1040,21 @@ fn inset(polygon: &Polygon, d: f64, z: f64) -> Result<Polygon, InsetError> {
 /// The toolpath: each layer's path cut into pieces, each piece with the pair of its end, as
 /// one free pass per layer whose first point is the last layer's end (one uninterrupted
 /// extrusion), and the report with its plots.
-fn grade(j: &FoamJob, p: &Process, regions: &Regions, layers: &[Layer], paths: &[LayerPath], progress: &mut dyn FnMut(f32)) -> Result<(Toolpath, Option<StageReport>), Error> {
+fn grade(
+    j: &FoamJob,
+    p: &Process,
+    regions: &Regions,
+    layers: &[Layer],
+    paths: &[LayerPath],
+    progress: &mut dyn FnMut(f32),
+) -> Result<(Toolpath, Option<StageReport>), Error> {
     let pairs = pairs(j);
     if pairs.len() != regions.regions.len() {
-        return Err(Error::NoInput(format!("the foam has {} regions but the design gives {} V*/H* pairs: give one per region", regions.regions.len(), pairs.len())));
+        return Err(Error::NoInput(format!(
+            "the foam has {} regions but the design gives {} V*/H* pairs: give one per region",
+            regions.regions.len(),
+            pairs.len()
+        )));
     }
     let transitions = transitions(j);
     for t in &transitions {
@@ -898,7 +1114,14 @@ fn grade(j: &FoamJob, p: &Process, regions: &Regions, layers: &[Layer], paths: &
         pieces += pts.len() - 1;
         prev_end = pts.last().copied();
         let data = PointData { flow: Some(PointFlow::FilamentPerMm(flow)), feed_mm_s: Some(feed), tool_axis: None, dwell_s: None };
-        let path = Path { points: pts, feature: Feature::Infill, width, speed_factor: 1.0, approach: if k == 0 { None } else { Some(Vec::new()) }, data: Some(Box::new(data)) };
+        let path = Path {
+            points: pts,
+            feature: Feature::Infill,
+            width,
+            speed_factor: 1.0,
+            approach: if k == 0 { None } else { Some(Vec::new()) },
+            data: Some(Box::new(data)),
+        };
         passes.push(Pass { kind: PassKind::Free, z: layer.z, height: h, paths: vec![path] });
         progress((k + 1) as f32 / paths.len() as f32);
     }
@@ -908,19 +1131,60 @@ fn grade(j: &FoamJob, p: &Process, regions: &Regions, layers: &[Layer], paths: &
 }
 
 #[allow(clippy::too_many_arguments)] // the report of one stage: its numbers
-fn grade_report(j: &FoamJob, p: &Process, field: &Field, regions: &Regions, transitions: &[Transition], pieces: usize, queries: usize, v: (f64, f64)) -> StageReport {
+fn grade_report(
+    j: &FoamJob,
+    p: &Process,
+    field: &Field,
+    regions: &Regions,
+    transitions: &[Transition],
+    pieces: usize,
+    queries: usize,
+    v: (f64, f64),
+) -> StageReport {
     let (v_lo, v_hi) = if v.0 <= v.1 { v } else { (0.0, 0.0) };
     let mut r = StageReport::new("grade", "Grading V* and H* along the path", &serde_json::json!({ "pieces": pieces, "queries": queries }))
         .metric("pieces", "Pieces", pieces as f64, "", "Pieces of path, each printed with the V* and H* of its end point.")
-        .metric("queries", "Exact evaluations", queries as f64, "", "Pieces whose pair needed parry's distance queries; the others were known far from every boundary.")
+        .metric(
+            "queries",
+            "Exact evaluations",
+            queries as f64,
+            "",
+            "Pieces whose pair needed parry's distance queries; the others were known far from every boundary.",
+        )
         .metric("v_star_min", "Lowest V*", v_lo, "", "Densest coils printed.")
         .metric("v_star_max", "Highest V*", v_hi, "", "Sparsest coils printed.")
-        .metric("e_per_mm_max", "Most filament per mm", if v_lo > 0.0 { p.filament_per_mm(v_lo) } else { 0.0 }, "mm/mm", "ΔE per mm of nozzle travel at the lowest V*: A_t / (V*·A_f).")
-        .metric("e_per_mm_min", "Least filament per mm", if v_hi > 0.0 { p.filament_per_mm(v_hi) } else { 0.0 }, "mm/mm", "ΔE per mm of nozzle travel at the highest V*.")
-        .metric("thread_speed", "Thread speed", p.speed_mm_s(1.0), "mm/s", "Speed of the thread leaving the nozzle, C·A_f/A_t (the nozzle moves V* times as fast).");
+        .metric(
+            "e_per_mm_max",
+            "Most filament per mm",
+            if v_lo > 0.0 { p.filament_per_mm(v_lo) } else { 0.0 },
+            "mm/mm",
+            "ΔE per mm of nozzle travel at the lowest V*: A_t / (V*·A_f).",
+        )
+        .metric(
+            "e_per_mm_min",
+            "Least filament per mm",
+            if v_hi > 0.0 { p.filament_per_mm(v_hi) } else { 0.0 },
+            "mm/mm",
+            "ΔE per mm of nozzle travel at the highest V*.",
+        )
+        .metric(
+            "thread_speed",
+            "Thread speed",
+            p.speed_mm_s(1.0),
+            "mm/s",
+            "Speed of the thread leaving the nozzle, C·A_f/A_t (the nozzle moves V* times as fast).",
+        );
     // The weighting functions of the transitions (appendix A), plotted over x = α_i/α_T.
     let xs: Vec<f64> = (0..=120).map(|i| -0.6 + 1.2 * i as f64 / 120.0).collect();
-    let mut weights = Plot { key: "weighting".into(), title: "Weighting functions w(x)".into(), kind: PlotKind::Line, x: Axis::new("x = α_i / α_T", ""), y: Axis::new("w", ""), group: None, series: Vec::new() };
+    let mut weights = Plot {
+        key: "weighting".into(),
+        title: "Weighting functions w(x)".into(),
+        kind: PlotKind::Line,
+        x: Axis::new("x = α_i / α_T", ""),
+        y: Axis::new("w", ""),
+        group: None,
+        series: Vec::new(),
+    };
     let mut seen: Vec<Weighting> = Vec::new();
     for t in transitions {
         if !seen.contains(&t.weighting) {
@@ -929,7 +1193,14 @@ fn grade_report(j: &FoamJob, p: &Process, field: &Field, regions: &Regions, tran
     }
     let used = seen.len();
     let linear_modulus = Weighting::LinearModulus { ratio: crate::foam::weight::DEFAULT_MODULUS_RATIO };
-    for w in [Weighting::Linear, Weighting::Cubic { slope: crate::foam::weight::DEFAULT_CUBIC_SLOPE }, Weighting::logarithmic(), Weighting::CubeRoot, Weighting::Sinusoidal, linear_modulus] {
+    for w in [
+        Weighting::Linear,
+        Weighting::Cubic { slope: crate::foam::weight::DEFAULT_CUBIC_SLOPE },
+        Weighting::logarithmic(),
+        Weighting::CubeRoot,
+        Weighting::Sinusoidal,
+        linear_modulus,
+    ] {
         if !seen.iter().any(|s| std::mem::discriminant(s) == std::mem::discriminant(&w)) {
             seen.push(w);
         }
@@ -994,7 +1265,11 @@ fn grade_report(j: &FoamJob, p: &Process, field: &Field, regions: &Regions, tran
                 label: format!("Region {}: V*", i + 1),
                 value: field.pair(i).v_star,
                 unit: String::new(),
-                hint: format!("The V* whose foam has {} kPa ({}), by the calibration under Stiffness.", spec.modulus_kpa, regions.regions.get(i).map_or("", |x| x.name.as_str())),
+                hint: format!(
+                    "The V* whose foam has {} kPa ({}), by the calibration under Stiffness.",
+                    spec.modulus_kpa,
+                    regions.regions.get(i).map_or("", |x| x.name.as_str())
+                ),
                 group_index: None,
             });
         }

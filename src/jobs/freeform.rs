@@ -88,7 +88,12 @@ pub struct DesignOptions {
 
 impl Default for DesignOptions {
     fn default() -> Self {
-        DesignOptions { up: Up::Z, ground: Ground::File, ground_tolerance_mm: wireframe::DEFAULT_GROUND_TOLERANCE_MM, merge_tolerance_mm: wireframe::DEFAULT_MERGE_TOLERANCE_MM }
+        DesignOptions {
+            up: Up::Z,
+            ground: Ground::File,
+            ground_tolerance_mm: wireframe::DEFAULT_GROUND_TOLERANCE_MM,
+            merge_tolerance_mm: wireframe::DEFAULT_MERGE_TOLERANCE_MM,
+        }
     }
 }
 
@@ -178,7 +183,16 @@ pub struct PlannerOptions {
 
 impl Default for PlannerOptions {
     fn default() -> Self {
-        PlannerOptions { cost: Cost::Exact, budget_s: plan::DEFAULT_BUDGET_S, compare: true, exact_search: ExactSearch::Compare, exact_beams: optimal::DEFAULT_MAX_BEAMS, exact_states: optimal::DEFAULT_MAX_STATES, band_beams: bands::DEFAULT_BAND_BEAMS, send_ahead_beams: plan::DEFAULT_SEND_AHEAD_BEAMS }
+        PlannerOptions {
+            cost: Cost::Exact,
+            budget_s: plan::DEFAULT_BUDGET_S,
+            compare: true,
+            exact_search: ExactSearch::Compare,
+            exact_beams: optimal::DEFAULT_MAX_BEAMS,
+            exact_states: optimal::DEFAULT_MAX_STATES,
+            band_beams: bands::DEFAULT_BAND_BEAMS,
+            send_ahead_beams: plan::DEFAULT_SEND_AHEAD_BEAMS,
+        }
     }
 }
 
@@ -297,29 +311,81 @@ const TODO: Feature = Feature::Handle;
 
 const DESIGN_FIELDS: &[Row0] = &[
     crate::settings::choice_docs(
-        other("up", "Design", "Up is the file's", FieldKind::Choice, &["z", "x", "minus_x", "y", "minus_y", "minus_z"], "Turn the design on the plate: which of its axes points up."),
+        other(
+            "up",
+            "Design",
+            "Up is the file's",
+            FieldKind::Choice,
+            &["z", "x", "minus_x", "y", "minus_y", "minus_z"],
+            "Turn the design on the plate: which of its axes points up.",
+        ),
         &["+Z, as drawn.", "+X.", "−X.", "+Y.", "−Y.", "−Z (upside down)."],
     ),
     crate::settings::choice_docs(
         other("ground", "Design", "Grounded joints", FieldKind::Choice, &["file", "lowest"], "Which joints stand on the substrate."),
         &["As the file marks them (the lowest joints when it marks none).", "Every joint within the tolerance of the lowest one."],
     ),
-    num("ground_tolerance_mm", "Design", "Ground tolerance", "mm", 0.0, 1000.0, 0.01, "Joints this close above the lowest one count as grounded (when grounding the lowest)."),
+    num(
+        "ground_tolerance_mm",
+        "Design",
+        "Ground tolerance",
+        "mm",
+        0.0,
+        1000.0,
+        0.01,
+        "Joints this close above the lowest one count as grounded (when grounding the lowest).",
+    ),
     num("merge_tolerance_mm", "Design", "Merge tolerance", "mm", 1e-6, 10.0, 0.001, "CSV beam ends closer than this are one joint."),
 ];
 
 const NOZZLE_FIELDS: &[Row0] = &[
-    num("half_angle_deg", "Nozzle", "Cone half-angle", "°", 1.0, 89.0, 1.0, "Half-angle of the nozzle's cone at the tip: beams steeper than this may only be printed upward."),
+    num(
+        "half_angle_deg",
+        "Nozzle",
+        "Cone half-angle",
+        "°",
+        1.0,
+        89.0,
+        1.0,
+        "Half-angle of the nozzle's cone at the tip: beams steeper than this may only be printed upward.",
+    ),
     num("radius_mm", "Nozzle", "Body radius", "mm", 0.01, 500.0, 0.1, "Radius of the nozzle body where the cone ends."),
-    num("height_mm", "Nozzle", "Body height", "mm", 0.0, 1000.0, 1.0, "Height of the body's cylinder above the cone: beams within it are hit when printing below them."),
-    num("tilt_deg", "Nozzle", "Tilt up to", "°", 0.0, precedence::MAX_TILT_DEG, 5.0, "A 5-axis head may tilt the nozzle this far from vertical per beam to miss beams it would hit (0: a 3-axis printer)."),
+    num(
+        "height_mm",
+        "Nozzle",
+        "Body height",
+        "mm",
+        0.0,
+        1000.0,
+        1.0,
+        "Height of the body's cylinder above the cone: beams within it are hit when printing below them.",
+    ),
+    num(
+        "tilt_deg",
+        "Nozzle",
+        "Tilt up to",
+        "°",
+        0.0,
+        precedence::MAX_TILT_DEG,
+        5.0,
+        "A 5-axis head may tilt the nozzle this far from vertical per beam to miss beams it would hit (0: a 3-axis printer).",
+    ),
 ];
 
 const BEAM_FIELDS: &[Row0] = &[
     num("diameter_mm", "Beams", "Beam diameter", "mm", 0.01, 50.0, 0.01, "Diameter of every beam: sets the extrusion and the stiffness."),
     num("e_mpa", "Beams", "Young's modulus E", "MPa", 1.0, 1e6, 100.0, "Stiffness of the set material (the paper's isomalt: 2600 MPa)."),
     num("g_mpa", "Beams", "Shear modulus G", "MPa", 1.0, 1e6, 100.0, "Twisting stiffness (the paper's isomalt: 1100 MPa)."),
-    num("load_n", "Beams", "Nozzle load", "N", 1e-9, 100.0, 1e-5, "Force of the nozzle on the free end of the beam being printed, straight down (the paper's 10⁻⁴ N)."),
+    num(
+        "load_n",
+        "Beams",
+        "Nozzle load",
+        "N",
+        1e-9,
+        100.0,
+        1e-5,
+        "Force of the nozzle on the free end of the beam being printed, straight down (the paper's 10⁻⁴ N).",
+    ),
 ];
 
 const CONSTRAINT_FIELDS: &[Row0] = &[
@@ -328,7 +394,10 @@ const CONSTRAINT_FIELDS: &[Row0] = &[
     other("connection", "Constraints", "Connection", FieldKind::Bool, &[], "Each beam starts at a grounded joint or a joint already printed."),
     crate::settings::choice_docs(
         other("cantilever", "Constraints", "Cantilevers", FieldKind::Choice, &["strict", "relaxed"], "How many cantilevers a joint may carry while printing."),
-        &["One per joint: heating a joint lets a second cantilever pivot (isomalt, glassy materials).", "Any number (materials whose joints hold while heated)."],
+        &[
+            "One per joint: heating a joint lets a second cantilever pivot (isomalt, glassy materials).",
+            "Any number (materials whose joints hold while heated).",
+        ],
     ),
 ];
 
@@ -359,7 +428,8 @@ impl Kind for FreeformKind {
     type Settings = FreeformJob;
     const NAME: &'static str = "freeform";
     const LABEL: &'static str = "Freeform wireframe";
-    const DOC: &'static str = "A wireframe printed beam by beam in free space, in an order that never collides, never strands a joint, and keeps joints where they belong.";
+    const DOC: &'static str =
+        "A wireframe printed beam by beam in free space, in an order that never collides, never strands a joint, and keeps joints where they belong.";
     const SLOTS: &'static [Slot] = SLOTS;
     const STAGES: &'static [StageInfo] = STAGES;
     const VIEWS: &'static [ViewInfo] = VIEWS;
@@ -367,7 +437,10 @@ impl Kind for FreeformKind {
     fn fields() -> Vec<Row> {
         let mut rows = mount(
             "job",
-            &[crate::settings::Field { default: Some(r#"{"kind":"tower","cells":2,"levels":4,"cell_mm":3,"level_mm":3,"taper":0.7}"#), ..other("model", "Model", "Built-in design", FieldKind::Section, &[], "Use a wireframe made by weft instead of a loaded file.") }],
+            &[crate::settings::Field {
+                default: Some(r#"{"kind":"tower","cells":2,"levels":4,"cell_mm":3,"level_mm":3,"taper":0.7}"#),
+                ..other("model", "Model", "Built-in design", FieldKind::Section, &[], "Use a wireframe made by weft instead of a loaded file.")
+            }],
         );
         rows.extend(mount("job.model", models::FIELDS));
         rows.extend(mount("job.design", DESIGN_FIELDS));
@@ -399,10 +472,19 @@ impl Kind for FreeformKind {
         }
         let n = &j.nozzle;
         if !(n.half_angle_deg > 0.0 && n.half_angle_deg < 90.0) {
-            out.push(Problem { path: "job.nozzle.half_angle_deg".into(), message: format!("{}° is not a cone: use more than 0° and less than 90°", n.half_angle_deg) });
+            out.push(Problem {
+                path: "job.nozzle.half_angle_deg".into(),
+                message: format!("{}° is not a cone: use more than 0° and less than 90°", n.half_angle_deg),
+            });
         }
         if n.tilt_deg > 0.0 && _design.printer.machine.kind == crate::machine::Kind::Cartesian {
-            out.push(Problem { path: "job.nozzle.tilt_deg".into(), message: format!("a nozzle that tilts {}° needs a 5-axis machine: set the printer's machine to five_axis, or the tilt to 0° for a 3-axis printer", n.tilt_deg) });
+            out.push(Problem {
+                path: "job.nozzle.tilt_deg".into(),
+                message: format!(
+                    "a nozzle that tilts {}° needs a 5-axis machine: set the printer's machine to five_axis, or the tilt to 0° for a 3-axis printer",
+                    n.tilt_deg
+                ),
+            });
         }
     }
 
@@ -423,10 +505,18 @@ impl Kind for FreeformKind {
         // that may tilt tests every axis it may take (17 with the default rings): the
         // cantilever truss with tilt took 3.7 s where 0.22 s was stated before this counted.
         let axes = precedence::tilt_axes(j.nozzle.tilt_deg.clamp(0.0, precedence::MAX_TILT_DEG)).len() as f64;
-        let constraints = Estimate::new("constraints").quantity("beams", "Beams", m, "").quantity("axes", "Nozzle axes tried", axes, "").cost(m * 400.0, m * 1e-4 * axes).parallel(0.85).budgets("lower the nozzle's radius or height, or its tilt");
+        let constraints = Estimate::new("constraints")
+            .quantity("beams", "Beams", m, "")
+            .quantity("axes", "Nozzle axes tried", axes, "")
+            .cost(m * 400.0, m * 1e-4 * axes)
+            .parallel(0.85)
+            .budgets("lower the nozzle's radius or height, or its tilt");
         let exact = j.planner.cost == Cost::Exact;
         let plan_s = if exact { (m * 4e-4).min(j.planner.budget_s) } else { m * 5e-5 };
-        let plan = Estimate::new("plan").quantity("beams", "Beams", m, "").cost(m * 2000.0, plan_s).budgets("plan with the heuristic cost, or lower the planning budget");
+        let plan = Estimate::new("plan")
+            .quantity("beams", "Beams", m, "")
+            .cost(m * 2000.0, plan_s)
+            .budgets("plan with the heuristic cost, or lower the planning budget");
         let searched = exact_runs(j, m as usize);
         let states = if searched { j.planner.exact_states as f64 } else { 0.0 };
         // Measured: about 40 µs a state on a 30-beam dome (the frame's update grows as the
@@ -439,13 +529,23 @@ impl Kind for FreeformKind {
         // search's path (its capacity doubles from 16 joints).
         let cap = if searched { (m + 1.0).max(16.0).log2().ceil().exp2() } else { 0.0 };
         let path_bytes = if searched { m * (6.0 * cap).powi(2) * 8.0 } else { 0.0 };
-        let optimum = Estimate::new("optimum").quantity("states", "States at most", states, "").cost(states * 24.0 + path_bytes, typical * per_state).budgets("lower the exact search's states, or switch it off");
+        let optimum = Estimate::new("optimum")
+            .quantity("states", "States at most", states, "")
+            .cost(states * 24.0 + path_bytes, typical * per_state)
+            .budgets("lower the exact search's states, or switch it off");
         let order = Estimate::new("order").quantity("beams", "Beams", m, "").cost(m * 200.0, m * 2e-5);
         let costs = Estimate::new("costs")
             .quantity("beams", "Beams", if j.planner.compare { m } else { 0.0 }, "")
             .quantity("segments", "Segments", 4.0 * m, "")
             // The replay is bounded by the planning budget; in bands the plan's order is replayed too.
-            .cost(m * 300.0, if j.planner.compare { (m * 4e-4).min(j.planner.budget_s) * if j.planner.band_beams > 0 && (j.planner.band_beams as f64) < m { 2.0 } else { 1.0 } } else { 0.0 })
+            .cost(
+                m * 300.0,
+                if j.planner.compare {
+                    (m * 4e-4).min(j.planner.budget_s) * if j.planner.band_beams > 0 && (j.planner.band_beams as f64) < m { 2.0 } else { 1.0 }
+                } else {
+                    0.0
+                },
+            )
             .budgets("switch off the comparison of the costs");
         Ok(vec![import, constraints, plan, optimum, order, costs])
     }
@@ -492,7 +592,8 @@ impl std::ops::Deref for Placed {
 }
 
 fn import_stage(j: &FreeformJob, ctx: &mut Ctx) -> Result<Out<Placed>, Error> {
-    let options = wireframe::Options { ground: j.design.ground, ground_tolerance_mm: j.design.ground_tolerance_mm, merge_tolerance_mm: j.design.merge_tolerance_mm };
+    let options =
+        wireframe::Options { ground: j.design.ground, ground_tolerance_mm: j.design.ground_tolerance_mm, merge_tolerance_mm: j.design.merge_tolerance_mm };
     let parts = (&j.model, j.design);
     let (bytes, name, keys) = match (&j.model, &j.input) {
         (Some(_), _) => (None, "model".to_string(), Vec::new()),
@@ -536,14 +637,28 @@ fn import_stage(j: &FreeformJob, ctx: &mut Ctx) -> Result<Out<Placed>, Error> {
         let shortest = lengths.iter().copied().fold(f64::INFINITY, f64::min);
         let longest = lengths.iter().copied().fold(0.0, f64::max);
         let grounded = wire.grounded.iter().filter(|&&g| g).count();
-        let report = StageReport::new("import", "Reading the wireframe", &serde_json::json!({ "joints": wire.joints.len(), "beams": wire.beams.len(), "grounded": grounded, "format": wire.format }))
-            .metric("joints", "Joints", wire.joints.len() as f64, "", "Points where beams meet.")
-            .metric("beams", "Beams", wire.beams.len() as f64, "", "Straight beams, each printed once.")
-            .metric("grounded", "Grounded joints", grounded as f64, "", if wire.grounded_by_file { "Joints on the substrate, as the design marks them." } else { "Joints on the substrate: the lowest ones (the design marks none)." })
-            .metric("length", "Beam length", total, "mm", "Total length of all beams.")
-            .metric("shortest", "Shortest beam", if shortest.is_finite() { shortest } else { 0.0 }, "mm", "The shortest beam.")
-            .metric("longest", "Longest beam", longest, "mm", "The longest beam.")
-            .metric("height", "Height", size.z, "mm", "Height of the design on the plate.");
+        let report = StageReport::new(
+            "import",
+            "Reading the wireframe",
+            &serde_json::json!({ "joints": wire.joints.len(), "beams": wire.beams.len(), "grounded": grounded, "format": wire.format }),
+        )
+        .metric("joints", "Joints", wire.joints.len() as f64, "", "Points where beams meet.")
+        .metric("beams", "Beams", wire.beams.len() as f64, "", "Straight beams, each printed once.")
+        .metric(
+            "grounded",
+            "Grounded joints",
+            grounded as f64,
+            "",
+            if wire.grounded_by_file {
+                "Joints on the substrate, as the design marks them."
+            } else {
+                "Joints on the substrate: the lowest ones (the design marks none)."
+            },
+        )
+        .metric("length", "Beam length", total, "mm", "Total length of all beams.")
+        .metric("shortest", "Shortest beam", if shortest.is_finite() { shortest } else { 0.0 }, "mm", "The shortest beam.")
+        .metric("longest", "Longest beam", longest, "mm", "The longest beam.")
+        .metric("height", "Height", size.z, "mm", "Height of the design on the plate.");
         Ok((Placed { wire, name: name.clone() }, Some(report)))
     })
 }
@@ -581,15 +696,40 @@ fn constraints_stage(j: &FreeformJob, ctx: &mut Ctx, w: &Out<Placed>) -> Result<
         let c = precedence::constraints(&w.joints, &w.beams, &o, progress).map_err(|e| Error::stage("constraints", e))?;
         let ms = (crate::clock::now_s() - started) * 1000.0;
         let one_way = c.forward.iter().zip(&c.backward).filter(|(f, b)| !(**f && **b)).count();
-        let report = StageReport::new("constraints", "Directions and collisions", &serde_json::json!({ "pairs": c.pairs(), "one_way": one_way, "tested": c.tested }))
-            .metric("pairs", "Collision precedences", c.pairs() as f64, "", "Pairs (A, B) where the nozzle printing A would sweep through B: A is printed first.")
-            .metric("one_way", "Upward only", one_way as f64, "", "Beams steeper than the nozzle's cone: printed from their lower joint.")
-            .metric("tested", "Pairs tested exactly", c.tested as f64, "", "Pairs near enough (by the BVH and the 2D distance) for the exact cone/cylinder test (each axis tried counts).")
-            .metric("time", "Time", ms, "ms", "Wall time of this stage on this machine.");
+        let report =
+            StageReport::new("constraints", "Directions and collisions", &serde_json::json!({ "pairs": c.pairs(), "one_way": one_way, "tested": c.tested }))
+                .metric(
+                    "pairs",
+                    "Collision precedences",
+                    c.pairs() as f64,
+                    "",
+                    "Pairs (A, B) where the nozzle printing A would sweep through B: A is printed first.",
+                )
+                .metric("one_way", "Upward only", one_way as f64, "", "Beams steeper than the nozzle's cone: printed from their lower joint.")
+                .metric(
+                    "tested",
+                    "Pairs tested exactly",
+                    c.tested as f64,
+                    "",
+                    "Pairs near enough (by the BVH and the 2D distance) for the exact cone/cylinder test (each axis tried counts).",
+                )
+                .metric("time", "Time", ms, "ms", "Wall time of this stage on this machine.");
         let report = if o.tilt_deg > 0.0 {
             report
-                .metric("tilted", "Beams tilted", c.tilted as f64, "", "Beams printed with the nozzle tilted: a tilt let them go either way or hit fewer beams.")
-                .metric("vertical_pairs", "Precedences if vertical", c.vertical_pairs as f64, "", "Collision precedences a vertical nozzle would have had (beside the ones left with tilting).")
+                .metric(
+                    "tilted",
+                    "Beams tilted",
+                    c.tilted as f64,
+                    "",
+                    "Beams printed with the nozzle tilted: a tilt let them go either way or hit fewer beams.",
+                )
+                .metric(
+                    "vertical_pairs",
+                    "Precedences if vertical",
+                    c.vertical_pairs as f64,
+                    "",
+                    "Collision precedences a vertical nozzle would have had (beside the ones left with tilting).",
+                )
         } else {
             report
         };
@@ -713,7 +853,11 @@ fn plan_stage(j: &FreeformJob, ctx: &mut Ctx, w: &Out<Placed>, c: &Out<Constrain
             sent_ms = Some((crate::clock::now_s() - started) * 1000.0);
         };
         let band_of = bands::assign(&w.joints, &w.beams, c, j.planner.band_beams);
-        let planned = if band_of.iter().all(|&k| k == 0) { plan::plan_sending(&a, &o, send_at, &mut tick, &mut ahead) } else { bands::plan(&a, &o, &band_of, &mut tick).map(|(p, _)| p) };
+        let planned = if band_of.iter().all(|&k| k == 0) {
+            plan::plan_sending(&a, &o, send_at, &mut tick, &mut ahead)
+        } else {
+            bands::plan(&a, &o, &band_of, &mut tick).map(|(p, _)| p)
+        };
         let p = match planned {
             Ok(p) => p,
             // The planner's refusals that are proofs stand; its search's limits the exact
@@ -729,33 +873,91 @@ fn plan_stage(j: &FreeformJob, ctx: &mut Ctx, w: &Out<Placed>, c: &Out<Constrain
         let max = eps.iter().copied().fold(0.0, f64::max);
         let mean = eps.iter().sum::<f64>() / eps.len().max(1) as f64;
         let multi = p.blocks.iter().filter(|b| b.end - b.start > 1).count();
-        let mut report = StageReport::new("plan", "Planning the sequence", &serde_json::json!({ "steps": p.steps.len(), "blocks": p.blocks.len(), "max_um": max, "expansions": p.expansions, "exact_until": p.exact_until }))
-            .metric("max_eps", "Largest ε", max, "µm", "The largest error of a joint while printing: the deflection of the beam's free end under the nozzle's load (what the plan minimises).")
-            .metric("mean_eps", "Mean ε", mean, "µm", "The mean over all beams (0 for beams that close onto a printed joint).")
-            .metric("blocks", "Subassemblies", p.blocks.len() as f64, "", "Consistent subassemblies added one after another (paths between stable joints, single closing beams, hanging ends).")
-            .metric("paths", "Joined paths", multi as f64, "", "Subassemblies of several beams: cantilevers grown from stable joints until they meet.")
-            .metric("expansions", "Search steps", p.expansions as f64, "", "Tree states expanded by the best-first search.")
-            .metric("work", "Counted work", p.work / plan::WORK_PER_SECOND, "s", "Work counted against the planning budget (the same on every machine).")
-            .metric("time", "Planning time", ms, "ms", "Wall time of the plan on this machine.")
-            .metric("first_ms", "First beams fixed", first_ms.unwrap_or(ms), "ms", "When the plan's first subassembly was fixed: a printer could start then, while planning goes on (the plan only adds after it).")
-            .metric("half_ms", "Half the beams fixed", half_ms.unwrap_or(ms), "ms", "When half of the sequence was fixed.");
+        let mut report = StageReport::new(
+            "plan",
+            "Planning the sequence",
+            &serde_json::json!({ "steps": p.steps.len(), "blocks": p.blocks.len(), "max_um": max, "expansions": p.expansions, "exact_until": p.exact_until }),
+        )
+        .metric(
+            "max_eps",
+            "Largest ε",
+            max,
+            "µm",
+            "The largest error of a joint while printing: the deflection of the beam's free end under the nozzle's load (what the plan minimises).",
+        )
+        .metric("mean_eps", "Mean ε", mean, "µm", "The mean over all beams (0 for beams that close onto a printed joint).")
+        .metric(
+            "blocks",
+            "Subassemblies",
+            p.blocks.len() as f64,
+            "",
+            "Consistent subassemblies added one after another (paths between stable joints, single closing beams, hanging ends).",
+        )
+        .metric("paths", "Joined paths", multi as f64, "", "Subassemblies of several beams: cantilevers grown from stable joints until they meet.")
+        .metric("expansions", "Search steps", p.expansions as f64, "", "Tree states expanded by the best-first search.")
+        .metric("work", "Counted work", p.work / plan::WORK_PER_SECOND, "s", "Work counted against the planning budget (the same on every machine).")
+        .metric("time", "Planning time", ms, "ms", "Wall time of the plan on this machine.")
+        .metric(
+            "first_ms",
+            "First beams fixed",
+            first_ms.unwrap_or(ms),
+            "ms",
+            "When the plan's first subassembly was fixed: a printer could start then, while planning goes on (the plan only adds after it).",
+        )
+        .metric("half_ms", "Half the beams fixed", half_ms.unwrap_or(ms), "ms", "When half of the sequence was fixed.");
         if let Some(t) = sent_ms {
             report = report
-                .metric("sent", "Beams sent ahead", p.sent as f64, "", "Beams whose G-code was sent out while planning went on; the final G-code's moves begin with theirs.")
+                .metric(
+                    "sent",
+                    "Beams sent ahead",
+                    p.sent as f64,
+                    "",
+                    "Beams whose G-code was sent out while planning went on; the final G-code's moves begin with theirs.",
+                )
                 .metric("sent_ms", "Sent ahead at", t, "ms", "When they were sent, counted from the plan's start.");
         }
         if !p.bands.is_empty() {
-            report = report.metric("bands", "Bands", p.bands.len() as f64, "", "Bands planned one after another up the design, each with the bands below printed and rigid.");
+            report = report.metric(
+                "bands",
+                "Bands",
+                p.bands.len() as f64,
+                "",
+                "Bands planned one after another up the design, each with the bands below printed and rigid.",
+            );
         }
         if let Some(k) = p.exact_until {
-            report = report.metric("exact_until", "Exact cost until step", k as f64, "", "The planning budget ran out here: later steps were chosen by the heuristic cost.");
+            report = report.metric(
+                "exact_until",
+                "Exact cost until step",
+                k as f64,
+                "",
+                "The planning budget ran out here: later steps were chosen by the heuristic cost.",
+            );
         }
         if j.planner.cost == Cost::Exact {
-            report = report.metric("peak_live", "Joints tracked", p.peak_live as f64, "", "Most joints whose compliance the exact cost kept at once (its memory grows as the square).");
+            report = report.metric(
+                "peak_live",
+                "Joints tracked",
+                p.peak_live as f64,
+                "",
+                "Most joints whose compliance the exact cost kept at once (its memory grows as the square).",
+            );
             if p.refreshes > 0 {
                 report = report
-                    .metric("refreshes", "Sparse checks", p.refreshes as f64, "", "Times the running compliance was checked against a sparse Cholesky factorisation of the printed frame (faer).")
-                    .metric("drift", "Largest difference", p.drift, "", "The largest difference a check found, relative to the largest compliance: the rounding the running updates have gathered.");
+                    .metric(
+                        "refreshes",
+                        "Sparse checks",
+                        p.refreshes as f64,
+                        "",
+                        "Times the running compliance was checked against a sparse Cholesky factorisation of the printed frame (faer).",
+                    )
+                    .metric(
+                        "drift",
+                        "Largest difference",
+                        p.drift,
+                        "",
+                        "The largest difference a check found, relative to the largest compliance: the rounding the running updates have gathered.",
+                    );
             }
         }
         Ok((Ok(p), Some(report)))
@@ -786,8 +988,13 @@ fn optimum_stage(j: &FreeformJob, ctx: &mut Ctx, w: &Out<Placed>, c: &Out<Constr
         let planned: &Planned = p;
         if !searched {
             // Say why when it was asked for.
-            let why = if !j.constraints.connection { "it needs the connection constraint".to_string() } else { format!("{} beams, more than {}", w.beams.len(), j.planner.exact_beams.min(optimal::MAX_BEAMS)) };
-            let note = (j.planner.exact_search != ExactSearch::Off).then(|| StageReport::new("optimum", &format!("Exact search: not run ({why})"), &serde_json::json!({ "skipped": why })));
+            let why = if !j.constraints.connection {
+                "it needs the connection constraint".to_string()
+            } else {
+                format!("{} beams, more than {}", w.beams.len(), j.planner.exact_beams.min(optimal::MAX_BEAMS))
+            };
+            let note = (j.planner.exact_search != ExactSearch::Off)
+                .then(|| StageReport::new("optimum", &format!("Exact search: not run ({why})"), &serde_json::json!({ "skipped": why })));
             return match planned {
                 Ok(plan) => Ok((plan.clone(), note)),
                 Err(u) => Err(Error::stage("planning", CannotPrint(explain(w, u, mode)))),
@@ -810,7 +1017,11 @@ fn optimum_stage(j: &FreeformJob, ctx: &mut Ctx, w: &Out<Placed>, c: &Out<Constr
             (Err(u), None) => {
                 let why = explain(w, u, mode);
                 let msg = if best.proven {
-                    format!("cannot be printed: the exact search tried every order ({} states) and none meets the constraints{}; the planner said: {why}", best.states, if mode == Mode::Strict { " with one cantilever per joint" } else { "" })
+                    format!(
+                        "cannot be printed: the exact search tried every order ({} states) and none meets the constraints{}; the planner said: {why}",
+                        best.states,
+                        if mode == Mode::Strict { " with one cantilever per joint" } else { "" }
+                    )
                 } else {
                     format!("{why} (the exact search gave up after {} states: raise its states to decide)", best.states)
                 };
@@ -839,19 +1050,47 @@ fn optimum_report(best: &Optimum, known: Option<f64>, planner_eps: Option<&[f64]
         (true, Some(_), _, None) => "Exact search: the optimal sequence (the planner found none)".to_string(),
         (false, _, _, _) => format!("Exact search: gave up after {} states", best.states),
     };
-    let mut r = StageReport::new("optimum", &label, &serde_json::json!({ "proven": best.proven, "best_um": best.best_mm.map(um), "planner_um": known.map(um), "states": best.states, "improvements": best.improvements }));
+    let mut r = StageReport::new(
+        "optimum",
+        &label,
+        &serde_json::json!({ "proven": best.proven, "best_um": best.best_mm.map(um), "planner_um": known.map(um), "states": best.states, "improvements": best.improvements }),
+    );
     if let Some(b) = best.best_mm {
-        r = r.metric("best", if best.proven { "Least largest ε (proven)" } else { "Least largest ε found" }, um(b), "µm", "The smallest largest joint error over every order the constraints allow (exact cost).");
+        r = r.metric(
+            "best",
+            if best.proven { "Least largest ε (proven)" } else { "Least largest ε found" },
+            um(b),
+            "µm",
+            "The smallest largest joint error over every order the constraints allow (exact cost).",
+        );
     }
     if let Some(k) = known {
         r = r.metric("planner", "Planner's largest ε (exact)", um(k), "µm", "The planner's sequence measured with the exact cost.");
         if let Some(b) = best.best_mm.filter(|&b| b > 0.0) {
-            r = r.metric("gap", "Planner's gap", (k / b - 1.0) * 100.0, "%", "How far the planner's largest ε is above the least found (0: the planner's is optimal when proven).");
+            r = r.metric(
+                "gap",
+                "Planner's gap",
+                (k / b - 1.0) * 100.0,
+                "%",
+                "How far the planner's largest ε is above the least found (0: the planner's is optimal when proven).",
+            );
         }
     }
     r = r
-        .metric("states", "States searched", best.states as f64, "", "Sets of printed beams the search explored (each a state whatever the order that led to it).")
-        .metric("improvements", "Better orders found", best.improvements as f64, "", "Sequences the search found one after another, each with a smaller largest ε than the last.")
+        .metric(
+            "states",
+            "States searched",
+            best.states as f64,
+            "",
+            "Sets of printed beams the search explored (each a state whatever the order that led to it).",
+        )
+        .metric(
+            "improvements",
+            "Better orders found",
+            best.improvements as f64,
+            "",
+            "Sequences the search found one after another, each with a smaller largest ε than the last.",
+        )
         .metric("time", "Search time", ms, "ms", "Wall time of the search on this machine.");
     if let (Some(steps), Some(pe)) = (&best.steps, planner_eps) {
         let x: Vec<f64> = (1..=pe.len()).map(|i| i as f64).collect();
@@ -900,7 +1139,12 @@ fn order_stage(j: &FreeformJob, ctx: &mut Ctx, w: &Out<Placed>, c: &Out<Constrai
 
 fn deadhead_options(j: &FreeformJob, design: &crate::design::Design) -> deadhead::Options {
     let printer = &design.printer;
-    deadhead::Options { xy_mm_s: printer.travel_speed_mm_s, z_mm_s: printer.z_speed_mm_s, clearance_mm: j.print.clearance_mm, beam_radius_mm: j.beam.diameter_mm / 2.0 }
+    deadhead::Options {
+        xy_mm_s: printer.travel_speed_mm_s,
+        z_mm_s: printer.z_speed_mm_s,
+        clearance_mm: j.print.clearance_mm,
+        beam_radius_mm: j.beam.diameter_mm / 2.0,
+    }
 }
 
 fn costs_stage(j: &FreeformJob, ctx: &mut Ctx, w: &Out<Placed>, p: &Out<Plan>, o: &Out<Ordered>) -> Result<Out<Vec<Costs>>, Error> {
@@ -943,7 +1187,13 @@ fn joins_report(r: StageReport, p: &Plan, whole: &[Costs]) -> StageReport {
     let x: Vec<f64> = (1..=planned.len()).map(|i| i as f64).collect();
     let mut r = r
         .metric("band_planned", "Largest ε planned in bands", worst_planned, "µm", "The largest ε the bands' plans saw, each with the bands below rigid.")
-        .metric("band_join", "Cost of the joins", join, "µm", "The most one step's ε grows when the bands below deflect too (the plan's order measured with the whole frame).")
+        .metric(
+            "band_join",
+            "Cost of the joins",
+            join,
+            "µm",
+            "The most one step's ε grows when the bands below deflect too (the plan's order measured with the whole frame).",
+        )
         .metric("band_measured", "Largest ε measured", worst, "µm", "The largest ε of the joined sequence with the whole frame.");
     r.plots.push(Plot {
         key: "bands".into(),
@@ -962,7 +1212,15 @@ fn planned_report(o: &Ordered) -> StageReport {
     let x: Vec<f64> = (1..=o.steps.len()).map(|i| i as f64).collect();
     let y: Vec<f64> = o.steps.iter().map(|s| s.cost_mm * 1000.0).collect();
     let mut r = StageReport::new("costs", "Joint errors along the sequence", &serde_json::json!({ "compared": false }));
-    r.plots.push(Plot { key: "eps_sequence".into(), title: "ε of each step (as planned)".into(), kind: PlotKind::Line, x: Axis::new("step", ""), y: Axis::new("ε", "µm"), group: None, series: vec![Series::xy("planned", x, y)] });
+    r.plots.push(Plot {
+        key: "eps_sequence".into(),
+        title: "ε of each step (as planned)".into(),
+        kind: PlotKind::Line,
+        x: Axis::new("step", ""),
+        y: Axis::new("ε", "µm"),
+        group: None,
+        series: vec![Series::xy("planned", x, y)],
+    });
     r
 }
 
@@ -984,7 +1242,13 @@ fn costs_report(c: &[Costs], load: f64, chosen: Cost, stopped: Option<usize>) ->
         .metric("ratio", "Heuristic ÷ exact (largest)", if max_e > 0.0 { max_h / max_e } else { 0.0 }, "", "How much of the worst error the heuristic sees.")
         .metric("above", "Steps heuristic > exact", above as f64, "", "Steps where the heuristic reads more than the exact cost (the paper: never).");
     let mut r = match stopped {
-        Some(k) => r.metric("measured", "Steps measured", k as f64, "", "The planning budget ran out during the measurement: the numbers and plots cover these first steps (raise the budget to measure all)."),
+        Some(k) => r.metric(
+            "measured",
+            "Steps measured",
+            k as f64,
+            "",
+            "The planning budget ran out during the measurement: the numbers and plots cover these first steps (raise the budget to measure all).",
+        ),
         None => r,
     };
     let chosen_name = match chosen {
@@ -1037,7 +1301,15 @@ fn costs_report(c: &[Costs], load: f64, chosen: Cost, stopped: Option<usize>) ->
             let k = ((e / max_e * bins as f64) as usize).min(bins - 1);
             counts[k] += 1.0;
         }
-        r.plots.push(Plot { key: "eps_histogram".into(), title: "Distribution of ε (exact)".into(), kind: PlotKind::Histogram, x: Axis::new("ε", "µm"), y: Axis::new("steps", ""), group: None, series: vec![Series::xy("steps", edges, counts)] });
+        r.plots.push(Plot {
+            key: "eps_histogram".into(),
+            title: "Distribution of ε (exact)".into(),
+            kind: PlotKind::Histogram,
+            x: Axis::new("ε", "µm"),
+            y: Axis::new("steps", ""),
+            group: None,
+            series: vec![Series::xy("steps", edges, counts)],
+        });
     }
     r
 }
@@ -1059,7 +1331,12 @@ fn toolpath(j: &FreeformJob, w: &Placed, o: &Ordered, c: &Constraints) -> Toolpa
         // A tilted beam carries its nozzle axis (the writer turns it into rotary words).
         let axis = c.axis.get(s.beam).copied().unwrap_or(DVec3::Z);
         let tool_axis = (axis != DVec3::Z).then(|| vec![axis, axis]);
-        let data = PointData { flow: Some(PointFlow::AreaMm2(vec![0.0, area])), feed_mm_s: Some(vec![0.0, j.print.speed_mm_s]), tool_axis, dwell_s: Some(vec![0.0, j.print.dwell_s]) };
+        let data = PointData {
+            flow: Some(PointFlow::AreaMm2(vec![0.0, area])),
+            feed_mm_s: Some(vec![0.0, j.print.speed_mm_s]),
+            tool_axis,
+            dwell_s: Some(vec![0.0, j.print.dwell_s]),
+        };
         let path = Path { points: vec![a, b], feature: Feature::Beam, width: d, speed_factor: 1.0, approach, data: Some(Box::new(data)) };
         passes.push(Pass { kind: PassKind::Free, z: a.z.max(b.z), height: d, paths: vec![path] });
         last = Some(b);
@@ -1105,7 +1382,13 @@ fn sequence_view(w: &Placed, o: &Ordered, c: &Constraints, index: usize) -> Insp
         .map(|s| {
             let t = tilt(s.beam);
             let tilted = if t > 1e-9 { format!(", nozzle tilted {t:.0}°") } else { String::new() };
-            format!("{} from {} to {}, ε {:.3} µm{tilted}", names(w, &[s.beam]), w.joint_names.get(s.from).map_or("", String::as_str), w.joint_names.get(s.to).map_or("", String::as_str), s.cost_mm * 1000.0)
+            format!(
+                "{} from {} to {}, ε {:.3} µm{tilted}",
+                names(w, &[s.beam]),
+                w.joint_names.get(s.from).map_or("", String::as_str),
+                w.joint_names.get(s.to).map_or("", String::as_str),
+                s.cost_mm * 1000.0
+            )
         })
         .unwrap_or_default();
     let meta = serde_json::json!({
@@ -1144,7 +1427,11 @@ pub fn sequence_table(w: &Wireframe, o: &Ordered) -> Table {
         key: "sequence".into(),
         title: format!("Sequence (first {} of {} steps)", o.steps.len().min(TABLE_ROWS), o.steps.len()),
         group: None,
-        columns: ["step", "beam", "from", "to", "ε"].iter().zip(["", "", "", "", "µm"]).map(|(l, u)| Column { label: l.to_string(), unit: u.to_string() }).collect(),
+        columns: ["step", "beam", "from", "to", "ε"]
+            .iter()
+            .zip(["", "", "", "", "µm"])
+            .map(|(l, u)| Column { label: l.to_string(), unit: u.to_string() })
+            .collect(),
         rows,
     }
 }

@@ -24,14 +24,14 @@ use crate::gcode_edit;
 use crate::geom::{DVec3, Mesh};
 use crate::isosurface;
 use crate::pipeline::{Ctx, Error, Out};
-use crate::source::ByteSource;
-use std::sync::Arc;
 use crate::report::{Axis, Column, Plot, PlotKind, Row as TableRow, Series, StageReport, Table};
 use crate::scaffold::{self, grade, Calibration, Cell, LayerStat, Limit};
 use crate::settings::{choice_docs, mount, num, other, percent, points, vec3, when, Field, Kind as FieldKind, Problem, Row};
 use crate::slice::{self, InfillPattern};
+use crate::source::ByteSource;
 use crate::volume::{self, Axis as SliceAxis, Roi, Volume};
 use serde::{Deserialize, Serialize};
+use std::sync::Arc;
 
 /// The paper's contour levels on the slices (Fig. 8): 250, 350 (the bone threshold) and 600 HU.
 pub const DEFAULT_CONTOUR_LEVELS_HU: [f64; 3] = [250.0, 350.0, 600.0];
@@ -263,61 +263,227 @@ const STAGES: &[StageInfo] = &[
 ];
 
 const VIEWS: &[ViewInfo] = &[
-    ViewInfo { id: "axial", stage: "volume", label: "Axial slices", shape: Shape::Image, index_label: "Slice", doc: "The volume across k (HU), with iso-contours and the region of interest." },
-    ViewInfo { id: "coronal", stage: "volume", label: "Coronal slices", shape: Shape::Image, index_label: "Slice", doc: "The volume across j (HU), with iso-contours and the region of interest." },
-    ViewInfo { id: "sagittal", stage: "volume", label: "Sagittal slices", shape: Shape::Image, index_label: "Slice", doc: "The volume across i (HU), with iso-contours and the region of interest." },
-    ViewInfo { id: "density", stage: "density", label: "Target density", shape: Shape::Image, index_label: "Slice", doc: "The relative density the infill is graded to (1 − P(HU), clamped to [ρ_min, 1]), axial slices of the ROI." },
-    ViewInfo { id: "surface", stage: "surface", label: "Surface model", shape: Shape::Mesh, index_label: "View", doc: "The closed mesh marching cubes extracted at the isovalue inside the ROI (volume frame, mm)." },
+    ViewInfo {
+        id: "axial",
+        stage: "volume",
+        label: "Axial slices",
+        shape: Shape::Image,
+        index_label: "Slice",
+        doc: "The volume across k (HU), with iso-contours and the region of interest.",
+    },
+    ViewInfo {
+        id: "coronal",
+        stage: "volume",
+        label: "Coronal slices",
+        shape: Shape::Image,
+        index_label: "Slice",
+        doc: "The volume across j (HU), with iso-contours and the region of interest.",
+    },
+    ViewInfo {
+        id: "sagittal",
+        stage: "volume",
+        label: "Sagittal slices",
+        shape: Shape::Image,
+        index_label: "Slice",
+        doc: "The volume across i (HU), with iso-contours and the region of interest.",
+    },
+    ViewInfo {
+        id: "density",
+        stage: "density",
+        label: "Target density",
+        shape: Shape::Image,
+        index_label: "Slice",
+        doc: "The relative density the infill is graded to (1 − P(HU), clamped to [ρ_min, 1]), axial slices of the ROI.",
+    },
+    ViewInfo {
+        id: "surface",
+        stage: "surface",
+        label: "Surface model",
+        shape: Shape::Mesh,
+        index_label: "View",
+        doc: "The closed mesh marching cubes extracted at the isovalue inside the ROI (volume frame, mm).",
+    },
 ];
 
 const JOB_FIELDS: &[Field] = &[
     choice_docs(
-        other("route", "Route", "Route", FieldKind::Choice, &["native", "edit"], "Who makes the toolpath: weft slices the surface model, or you bring another slicer's G-code."),
-        &["weft slices the surface model and grades its own infill (long segments split to the voxel size).", "The paper's route: another slicer's G-code of the same model, its infill's E rewritten (equation 6)."],
+        other(
+            "route",
+            "Route",
+            "Route",
+            FieldKind::Choice,
+            &["native", "edit"],
+            "Who makes the toolpath: weft slices the surface model, or you bring another slicer's G-code.",
+        ),
+        &[
+            "weft slices the surface model and grades its own infill (long segments split to the voxel size).",
+            "The paper's route: another slicer's G-code of the same model, its infill's E rewritten (equation 6).",
+        ],
     ),
-    vec3("contour_levels_hu", "Volume", "Contours at", "HU", -5000.0, 50000.0, 1.0, "Three iso-contour levels drawn on the slices (the paper's Fig. 8: 250, 350, 600 HU)."),
-    when(percent(num("gcode_rho_s", "Route", "Its infill density ρ_s", "", 0.01, 1.0, 0.01, "The infill density the other slicer's file was made with (equation 6 divides by it).")), "route", "edit"),
-    when(other("gcode_infill_types", "Route", "Its infill types", FieldKind::Text, &[], "The ;TYPE: names of infill in that file (PrusaSlicer 'Internal infill', Cura 'FILL'), one per line."), "route", "edit"),
+    vec3(
+        "contour_levels_hu",
+        "Volume",
+        "Contours at",
+        "HU",
+        -5000.0,
+        50000.0,
+        1.0,
+        "Three iso-contour levels drawn on the slices (the paper's Fig. 8: 250, 350, 600 HU).",
+    ),
     when(
-        choice_docs(
-            other("alignment.mode", "Route", "Alignment", FieldKind::Choice, &["auto", "manual"], "How the G-code's part is placed over the volume."),
-            &["By the bounding boxes: XY centres and bottoms of the surface model and the printed part.", "By the translation below (the paper's v⃗, equation 5)."],
+        percent(num(
+            "gcode_rho_s",
+            "Route",
+            "Its infill density ρ_s",
+            "",
+            0.01,
+            1.0,
+            0.01,
+            "The infill density the other slicer's file was made with (equation 6 divides by it).",
+        )),
+        "route",
+        "edit",
+    ),
+    when(
+        other(
+            "gcode_infill_types",
+            "Route",
+            "Its infill types",
+            FieldKind::Text,
+            &[],
+            "The ;TYPE: names of infill in that file (PrusaSlicer 'Internal infill', Cura 'FILL'), one per line.",
         ),
         "route",
         "edit",
     ),
-    when(other("compare_edit", "Route", "Compare with the edit route", FieldKind::Bool, &[], "Also grade the same toolpath the paper's way (whole moves, E by the field at their midpoint) and plot both routes' error per layer."), "route", "native"),
-    when(vec3("alignment.translation_mm", "Route", "Translation v⃗", "mm", -100000.0, 100000.0, 0.01, "G-code point = volume point + v⃗ (alignment 'manual')."), "alignment.mode", "manual"),
+    when(
+        choice_docs(
+            other("alignment.mode", "Route", "Alignment", FieldKind::Choice, &["auto", "manual"], "How the G-code's part is placed over the volume."),
+            &[
+                "By the bounding boxes: XY centres and bottoms of the surface model and the printed part.",
+                "By the translation below (the paper's v⃗, equation 5).",
+            ],
+        ),
+        "route",
+        "edit",
+    ),
+    when(
+        other(
+            "compare_edit",
+            "Route",
+            "Compare with the edit route",
+            FieldKind::Bool,
+            &[],
+            "Also grade the same toolpath the paper's way (whole moves, E by the field at their midpoint) and plot both routes' error per layer.",
+        ),
+        "route",
+        "native",
+    ),
+    when(
+        vec3("alignment.translation_mm", "Route", "Translation v⃗", "mm", -100000.0, 100000.0, 0.01, "G-code point = volume point + v⃗ (alignment 'manual')."),
+        "alignment.mode",
+        "manual",
+    ),
 ];
 
 const ROI_FIELDS: &[Field] = &[
-    Field { default: Some("{\"min_mm\":[0,0,0],\"max_mm\":[50,50,50]}"), ..other("", "Region of interest", "Crop to a box", FieldKind::Section, &[], "Use only the voxels inside a box (volume frame, mm); off: the whole volume.") },
-    vec3("min_mm", "Region of interest", "From", "mm", -100000.0, 100000.0, 0.1, "The ROI box's smallest corner in the volume frame (first voxel centre at 0)."),
+    Field {
+        default: Some("{\"min_mm\":[0,0,0],\"max_mm\":[50,50,50]}"),
+        ..other(
+            "",
+            "Region of interest",
+            "Crop to a box",
+            FieldKind::Section,
+            &[],
+            "Use only the voxels inside a box (volume frame, mm); off: the whole volume.",
+        )
+    },
+    vec3(
+        "min_mm",
+        "Region of interest",
+        "From",
+        "mm",
+        -100000.0,
+        100000.0,
+        0.1,
+        "The ROI box's smallest corner in the volume frame (first voxel centre at 0).",
+    ),
     vec3("max_mm", "Region of interest", "To", "mm", -100000.0, 100000.0, 0.1, "The ROI box's largest corner in the volume frame."),
 ];
 
 const DENSITY_FIELDS: &[Field] = &[
-    points("points", "Density", "HU → porosity", "", -100000.0, 100000.0, 64, "Calibration points 'HU P', one per line: porosity P at that HU, straight lines between (the femur case: -91 0.95 and 1516 0.10)."),
-    num("min_width_mm", "Density", "E_w,min", "mm", 0.01, 10.0, 0.01, "Narrowest bead that still holds the layer (equation 2: the layer height); ρ_min follows from it."),
+    points(
+        "points",
+        "Density",
+        "HU → porosity",
+        "",
+        -100000.0,
+        100000.0,
+        64,
+        "Calibration points 'HU P', one per line: porosity P at that HU, straight lines between (the femur case: -91 0.95 and 1516 0.10).",
+    ),
+    num(
+        "min_width_mm",
+        "Density",
+        "E_w,min",
+        "mm",
+        0.01,
+        10.0,
+        0.01,
+        "Narrowest bead that still holds the layer (equation 2: the layer height); ρ_min follows from it.",
+    ),
     num("max_width_mm", "Density", "E_w,max", "mm", 0.05, 20.0, 0.01, "Widest bead that keeps its shape (equation 3: 3 × the nozzle)."),
-    num("q_max_mm3_s", "Density", "Q_max", "mm³/s", 0.1, 1000.0, 0.1, "Most material the hot end melts per second (the paper measured 19.24 for PLA at 215 °C)."),
+    num(
+        "q_max_mm3_s",
+        "Density",
+        "Q_max",
+        "mm³/s",
+        0.1,
+        1000.0,
+        0.1,
+        "Most material the hot end melts per second (the paper measured 19.24 for PLA at 215 °C).",
+    ),
     choice_docs(
         other("limit", "Density", "Over a limit", FieldKind::Choice, &["warn", "clamp"], "What to do with a segment over Q_max or E_w,max."),
         &["Count it in the report and print it as graded.", "Count it and reduce its flow to the limit."],
     ),
-    num("segment_mm", "Density", "Grading step", "mm", 0.0, 100.0, 0.1, "Longest infill segment after splitting (0: the smallest voxel spacing), so the grading resolves the voxels."),
-    choice_docs(
-        other("cell_sizing", "Density", "Cell size", FieldKind::Choice, &["fixed", "graded"], "Keep one gyroid cell everywhere, or re-size it where the bead would leave its printable range."),
-        &["One cell L_s; density by the bead width alone (the paper: beads clamp at E_w,min and E_w,max).", "Smaller cells where the bead would be wider than E_w,max, larger where narrower than E_w,min (gyroid)."],
+    num(
+        "segment_mm",
+        "Density",
+        "Grading step",
+        "mm",
+        0.0,
+        100.0,
+        0.1,
+        "Longest infill segment after splitting (0: the smallest voxel spacing), so the grading resolves the voxels.",
     ),
-    when(num("max_cell_ratio", "Density", "Cell size range", "×", 1.0, 10.0, 0.1, "A re-sized cell stays within L_s ÷ this and L_s × this."), "cell_sizing", "graded"),
+    choice_docs(
+        other(
+            "cell_sizing",
+            "Density",
+            "Cell size",
+            FieldKind::Choice,
+            &["fixed", "graded"],
+            "Keep one gyroid cell everywhere, or re-size it where the bead would leave its printable range.",
+        ),
+        &[
+            "One cell L_s; density by the bead width alone (the paper: beads clamp at E_w,min and E_w,max).",
+            "Smaller cells where the bead would be wider than E_w,max, larger where narrower than E_w,min (gyroid).",
+        ],
+    ),
+    when(
+        num("max_cell_ratio", "Density", "Cell size range", "×", 1.0, 10.0, 0.1, "A re-sized cell stays within L_s ÷ this and L_s × this."),
+        "cell_sizing",
+        "graded",
+    ),
 ];
 
 impl Kind for GradedKind {
     type Settings = GradedJob;
     const NAME: &'static str = "graded";
     const LABEL: &'static str = "CT-graded scaffold";
-    const DOC: &'static str = "A CT volume's density drives the extrusion of a gyroid (or rectilinear, 3D honeycomb) infill: patient-specific graded scaffolds from DICOM.";
+    const DOC: &'static str =
+        "A CT volume's density drives the extrusion of a gyroid (or rectilinear, 3D honeycomb) infill: patient-specific graded scaffolds from DICOM.";
     const SLOTS: &'static [Slot] = SLOTS;
     const STAGES: &'static [StageInfo] = STAGES;
     const VIEWS: &'static [ViewInfo] = VIEWS;
@@ -346,13 +512,19 @@ impl Kind for GradedKind {
             }
         }
         if j.density.cell_sizing == CellSizing::Graded && (j.route != Route::Native || j.slice.infill_pattern != InfillPattern::Gyroid) {
-            out.push(Problem { path: "job.density.cell_sizing".into(), message: "a graded cell size needs route 'native' and the gyroid pattern (job.slice.infill_pattern); or set it to 'fixed'".into() });
+            out.push(Problem {
+                path: "job.density.cell_sizing".into(),
+                message: "a graded cell size needs route 'native' and the gyroid pattern (job.slice.infill_pattern); or set it to 'fixed'".into(),
+            });
         }
         if !(j.density.max_cell_ratio >= 1.0 && j.density.max_cell_ratio <= 10.0) {
             out.push(Problem { path: "job.density.max_cell_ratio".into(), message: "the cell size range must be between 1 and 10".into() });
         }
         if j.route == Route::Edit && j.gcode.is_none() {
-            out.push(Problem { path: "job.gcode".into(), message: "route 'edit' rewrites another slicer's G-code: load it (its drop zone, or --input gcode=FILE), or pick route 'native'".into() });
+            out.push(Problem {
+                path: "job.gcode".into(),
+                message: "route 'edit' rewrites another slicer's G-code: load it (its drop zone, or --input gcode=FILE), or pick route 'native'".into(),
+            });
         }
     }
 
@@ -424,7 +596,8 @@ impl Kind for GradedKind {
                 }
             }
             Route::Edit => {
-                let input = j.gcode.as_ref().ok_or_else(|| Error::NoInput("route 'edit' needs another slicer's G-code: load it, or pass --input gcode=FILE".into()))?;
+                let input =
+                    j.gcode.as_ref().ok_or_else(|| Error::NoInput("route 'edit' needs another slicer's G-code: load it, or pass --input gcode=FILE".into()))?;
                 let (source, _) = ctx.file_source("gcode", input)?;
                 let e = gcode_edit::estimate(source.len(), &edit_options(j, ctx.design, [0.0; 3], 1.0));
                 // The analyzer reads about one segment per 30 bytes of G-code.
@@ -512,7 +685,11 @@ const ROI_COLOR: &str = "#4cc38a";
 const LEVEL_COLORS: [&str; 3] = ["#f5d547", "#e5484d", "#3e8ef7"];
 
 fn volume_input(j: &GradedJob) -> Result<&Input, Error> {
-    j.volume.as_ref().ok_or_else(|| Error::NoInput("a graded job needs a CT volume: drop a DICOM series (folder, files or .zip), an NRRD or a .raw file, or pass --input volume=FOLDER".into()))
+    j.volume.as_ref().ok_or_else(|| {
+        Error::NoInput(
+            "a graded job needs a CT volume: drop a DICOM series (folder, files or .zip), an NRRD or a .raw file, or pass --input volume=FOLDER".into(),
+        )
+    })
 }
 
 fn volume_options(j: &GradedJob) -> volume::Options {
@@ -609,7 +786,11 @@ impl Model {
 /// The grading step, mm: the design's, else the smallest voxel spacing.
 fn grading_step(j: &GradedJob, vol: &Volume) -> f64 {
     let smallest_voxel = vol.spacing_mm.iter().copied().fold(f64::INFINITY, f64::min);
-    if j.density.segment_mm > 0.0 { j.density.segment_mm } else { smallest_voxel.clamp(0.05, 100.0) }
+    if j.density.segment_mm > 0.0 {
+        j.density.segment_mm
+    } else {
+        smallest_voxel.clamp(0.05, 100.0)
+    }
 }
 
 /// The density stage: the model's numbers, the calibration and ρ over the solid voxels.
@@ -631,13 +812,23 @@ fn density_report(j: &GradedJob, m: &Model, vol: &Volume, roi: &Roi) -> StageRep
         .metric("rho_min", "ρ_min", m.rho_min, "", "The least density printed: equation 1 with the bead at E_w,min (thinner beads do not hold the layer).")
         .metric("ew_min", "E_w,min", j.density.min_width_mm, "mm", "Narrowest bead (equation 2: l_h).")
         .metric("ew_max", "E_w,max", j.density.max_width_mm, "mm", "Widest bead (equation 3: 3φ).")
-        .metric("cell_eq4", "L_cell for ρ = 1 (eq. 4)", m.cell_eq4_mm, "mm", "Equation 4: the cell whose beads at E_w,max make a solid; larger cells cannot reach ρ = 1.")
+        .metric(
+            "cell_eq4",
+            "L_cell for ρ = 1 (eq. 4)",
+            m.cell_eq4_mm,
+            "mm",
+            "Equation 4: the cell whose beads at E_w,max make a solid; larger cells cannot reach ρ = 1.",
+        )
         .metric("k_c", "k_c", m.cell.k_c, "", "Toolpath length in a unit cell ÷ L_cell for this pattern (table 1).")
         .metric("segment", "Grading step", m.segment_mm, "mm", "Infill segments are split to this length so the grading resolves the voxels.");
     if let Some((slope, intercept)) = m.line {
-        r = r
-            .metric("slope", "P slope", slope * 1000.0, "per 1000 HU", "Equation 7: P = slope · HU + intercept (the femur case: −0.529 per 1000 HU).")
-            .metric("intercept", "P intercept", intercept, "", "Equation 7's constant (the femur case: 0.901867).");
+        r = r.metric("slope", "P slope", slope * 1000.0, "per 1000 HU", "Equation 7: P = slope · HU + intercept (the femur case: −0.529 per 1000 HU).").metric(
+            "intercept",
+            "P intercept",
+            intercept,
+            "",
+            "Equation 7's constant (the femur case: 0.901867).",
+        );
     }
     // The calibration, plotted over the ROI's HU range.
     let h = volume::histogram(vol, roi, 64);
@@ -769,9 +960,21 @@ fn cells_report(r: &scaffold::cells::CellsReport, o: &scaffold::cells::Options) 
     let mut s = StageReport::new("cells", "Sizing the cells", r)
         .metric("nodes", "Cell-size nodes", r.nodes as f64, "", "Nodes of the cell-size grid (one per L_s over the part); the size is trilinear between them.")
         .metric("sampled", "Nodes in the volume", r.sampled as f64, "", "Nodes with CT density around them.")
-        .metric("smaller", "Cells made smaller", r.smaller as f64, "", "Density above what E_w,max gives at L_s: a smaller cell reaches it with a printable bead.")
+        .metric(
+            "smaller",
+            "Cells made smaller",
+            r.smaller as f64,
+            "",
+            "Density above what E_w,max gives at L_s: a smaller cell reaches it with a printable bead.",
+        )
         .metric("larger", "Cells made larger", r.larger as f64, "", "Density below what E_w,min gives at L_s: a larger cell reaches it with a bead that holds.")
-        .metric("still_out", "Still out of range", r.still_out_of_range as f64, "", "Re-sized cells whose bead is outside [E_w,min, E_w,max] even at the size bound (the grading clamps them).")
+        .metric(
+            "still_out",
+            "Still out of range",
+            r.still_out_of_range as f64,
+            "",
+            "Re-sized cells whose bead is outside [E_w,min, E_w,max] even at the size bound (the grading clamps them).",
+        )
         .metric("min_cell", "Smallest cell", r.min_cell_mm, "mm", "The smallest cell written.")
         .metric("max_cell", "Largest cell", r.max_cell_mm, "mm", "The largest cell written.")
         .metric("reference", "L_s", o.reference_mm, "mm", "The uniform cell (equation 1 at ρ_s), kept where the bead is printable.");
@@ -784,7 +987,18 @@ fn cells_report(r: &scaffold::cells::CellsReport, o: &scaffold::cells::Options) 
         rows: r
             .resized
             .iter()
-            .map(|c| TableRow { group_index: None, cells: vec![c.centre_mm[0].into(), c.centre_mm[1].into(), c.centre_mm[2].into(), c.rho.into(), c.width_at_reference_mm.into(), c.cell_mm.into(), c.width_mm.into()] })
+            .map(|c| TableRow {
+                group_index: None,
+                cells: vec![
+                    c.centre_mm[0].into(),
+                    c.centre_mm[1].into(),
+                    c.centre_mm[2].into(),
+                    c.rho.into(),
+                    c.width_at_reference_mm.into(),
+                    c.cell_mm.into(),
+                    c.width_mm.into(),
+                ],
+            })
             .collect(),
     });
     s
@@ -793,8 +1007,22 @@ fn cells_report(r: &scaffold::cells::CellsReport, o: &scaffold::cells::Options) 
 /// The paper's route on the same toolpath: `sliced` written as G-code without grading, its
 /// infill moves' E rewritten by the field at their midpoints ([`gcode_edit`]); both routes'
 /// per-layer error, measured the same way ([`scaffold::mean_along`]), in one plot.
-fn compare(j: &GradedJob, ctx: &mut Ctx, vol: &Out<Volume>, sliced: &Out<crate::geom::Toolpath>, model: &Model, g: &grade::Options, offset: DVec3) -> Result<(), Error> {
-    let native_layers: Vec<LayerStat> = ctx.reports.iter().find(|r| r.stage == "grade").and_then(|r| serde_json::from_value::<grade::GradeReport>(r.data.clone()).ok()).map(|r| r.layers).unwrap_or_default();
+fn compare(
+    j: &GradedJob,
+    ctx: &mut Ctx,
+    vol: &Out<Volume>,
+    sliced: &Out<crate::geom::Toolpath>,
+    model: &Model,
+    g: &grade::Options,
+    offset: DVec3,
+) -> Result<(), Error> {
+    let native_layers: Vec<LayerStat> = ctx
+        .reports
+        .iter()
+        .find(|r| r.stage == "grade")
+        .and_then(|r| serde_json::from_value::<grade::GradeReport>(r.data.clone()).ok())
+        .map(|r| r.layers)
+        .unwrap_or_default();
     let design = ctx.design;
     let writer = crate::pipeline::writer_options(design);
     // G-code point = volume point + placement offset + the bed's origin offset.
@@ -811,20 +1039,53 @@ fn compare(j: &GradedJob, ctx: &mut Ctx, vol: &Out<Volume>, sliced: &Out<crate::
         let written = crate::gcode::write_gcode(sliced, &writer).map_err(|e| Error::stage("writing the comparison's G-code", e))?;
         progress(0.3);
         let rho = density_field(j, vol);
-        let edited = gcode_edit::edit("compare.gcode", &written.text.as_bytes(), &rho, &options, &mut |x| progress(0.3 + 0.7 * x)).map_err(|e| Error::stage("editing the comparison's G-code", e))?;
+        let edited = gcode_edit::edit("compare.gcode", &written.text.as_bytes(), &rho, &options, &mut |x| progress(0.3 + 0.7 * x))
+            .map_err(|e| Error::stage("editing the comparison's G-code", e))?;
         let edit_layers = edited.report.layers;
         let mean = |ls: &[LayerStat]| {
             let n: f64 = ls.iter().map(|l| l.length_mm).sum();
-            if n > 0.0 { ls.iter().map(|l| l.mean_abs_error * l.length_mm).sum::<f64>() / n } else { 0.0 }
+            if n > 0.0 {
+                ls.iter().map(|l| l.mean_abs_error * l.length_mm).sum::<f64>() / n
+            } else {
+                0.0
+            }
         };
         let (e_native, e_edit) = (mean(&native_layers), mean(&edit_layers));
         let used = |ls: &[LayerStat]| ls.iter().filter(|l| l.moves > 0).map(|l| (l.z_mm, l.mean_abs_error)).unzip::<f64, f64, Vec<f64>, Vec<f64>>();
         let ((zn, en), (ze, ee)) = (used(&native_layers), used(&edit_layers));
-        let mut report = StageReport::new("compare", "Native against the edit route", &CompareReport { native: native_layers.clone(), edit: edit_layers.clone(), edited_moves: edited.report.edited_moves })
-            .metric("native_error", "Native: mean |achieved − target| ρ", e_native, "", "weft's own grading: segments split to the grading step, each graded by the field at its midpoint.")
-            .metric("edit_error", "Edit route: mean |achieved − target| ρ", e_edit, "", "The paper's route on the same toolpath: whole moves, each graded by the field at its midpoint.")
-            .metric("error_ratio", "Edit ÷ native error", if e_native > 0.0 { e_edit / e_native } else { 0.0 }, "×", "How many times further from the field the edit route's infill is (0 when native is exact).")
-            .metric("edit_moves", "Edited moves", edited.report.edited_moves as f64, "", "Infill moves the edit route rewrote (native splits them into more, shorter segments).");
+        let mut report = StageReport::new(
+            "compare",
+            "Native against the edit route",
+            &CompareReport { native: native_layers.clone(), edit: edit_layers.clone(), edited_moves: edited.report.edited_moves },
+        )
+        .metric(
+            "native_error",
+            "Native: mean |achieved − target| ρ",
+            e_native,
+            "",
+            "weft's own grading: segments split to the grading step, each graded by the field at its midpoint.",
+        )
+        .metric(
+            "edit_error",
+            "Edit route: mean |achieved − target| ρ",
+            e_edit,
+            "",
+            "The paper's route on the same toolpath: whole moves, each graded by the field at its midpoint.",
+        )
+        .metric(
+            "error_ratio",
+            "Edit ÷ native error",
+            if e_native > 0.0 { e_edit / e_native } else { 0.0 },
+            "×",
+            "How many times further from the field the edit route's infill is (0 when native is exact).",
+        )
+        .metric(
+            "edit_moves",
+            "Edited moves",
+            edited.report.edited_moves as f64,
+            "",
+            "Infill moves the edit route rewrote (native splits them into more, shorter segments).",
+        );
         report.plots.push(Plot {
             key: "error_per_layer".into(),
             title: "Density error per layer: native against edit".into(),
@@ -852,7 +1113,13 @@ fn grade_report(r: &grade::GradeReport) -> StageReport {
     let mut s = StageReport::new("grade", "Grading the infill", r)
         .metric("segments", "Infill segments", r.segments as f64, "", "Infill segments written, each with its own extrusion.")
         .metric("split", "Added by splitting", r.split_added as f64, "", "Segments cut so none is longer than the grading step.")
-        .metric("clamped_low", "Raised to ρ_min", r.clamped_low as f64, "", "Segments whose target was below ρ_min (a bead narrower than E_w,min would not hold).")
+        .metric(
+            "clamped_low",
+            "Raised to ρ_min",
+            r.clamped_low as f64,
+            "",
+            "Segments whose target was below ρ_min (a bead narrower than E_w,min would not hold).",
+        )
         .metric("over_flow", "Over Q_max", r.over_flow as f64, "", "Segments needing more melt per second than the hot end gives at the infill speed.")
         .metric("over_width", "Over E_w,max", r.over_width as f64, "", "Segments whose bead would be wider than E_w,max.")
         .metric("outside", "Outside the volume", r.outside as f64, "", "Segments with no CT value under them, printed at ρ_s.")
@@ -898,7 +1165,10 @@ fn layer_plots(s: &mut StageReport, layers: &[LayerStat]) {
         columns: vec![col("Z", "mm"), col("Segments", ""), col("Length", "mm"), col("Target ρ", ""), col("Achieved ρ", ""), col("Mean |error|", "")],
         rows: used
             .iter()
-            .map(|l| TableRow { group_index: None, cells: vec![l.z_mm.into(), l.moves.into(), l.length_mm.into(), l.target_mean.into(), l.achieved_mean.into(), l.mean_abs_error.into()] })
+            .map(|l| TableRow {
+                group_index: None,
+                cells: vec![l.z_mm.into(), l.moves.into(), l.length_mm.into(), l.target_mean.into(), l.achieved_mean.into(), l.mean_abs_error.into()],
+            })
             .collect(),
     });
 }
@@ -968,7 +1238,13 @@ fn edit(j: &GradedJob, ctx: &mut Ctx, vol: &Out<Volume>, surface: &Out<isosurfac
             .metric("clamped_low", "Raised to ρ_min", r.clamped_low as f64, "", "Moves whose target was below ρ_min.")
             .metric("over_flow", "Over Q_max", r.over_flow as f64, "", "Moves needing more melt per second than the hot end gives.")
             .metric("over_width", "Over E_w,max", r.over_width as f64, "", "Moves whose bead would be wider than E_w,max.")
-            .metric("resets", "G92 lines added", r.resets_inserted as f64, "", "Absolute-E files: one 'G92 E…' after each run of edited moves keeps every other line's E valid and unchanged.")
+            .metric(
+                "resets",
+                "G92 lines added",
+                r.resets_inserted as f64,
+                "",
+                "Absolute-E files: one 'G92 E…' after each run of edited moves keeps every other line's E valid and unchanged.",
+            )
             .metric("saved", "Material saved", saved * 100.0, "%", "Infill material saved against the file as sliced (negative: more material).");
         layer_plots(&mut report, &r.layers);
         let text = String::from_utf8(out.text).map_err(|_| Error::NoInput(format!("{name}: the edited G-code is not UTF-8 text")))?;

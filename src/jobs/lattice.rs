@@ -84,7 +84,14 @@ const VIEWS: &[ViewInfo] = &[ViewInfo {
 
 /// Rows of the domain (paths relative to `job.domain`).
 const DOMAIN_FIELDS: &[Field] = &[
-    other("kind", "Domain", "Domain", FieldKind::Choice, &["rectangle", "disc", "tensile_specimen", "solid"], "Where the lattice goes: a built-in shape, or the layers of a loaded solid."),
+    other(
+        "kind",
+        "Domain",
+        "Domain",
+        FieldKind::Choice,
+        &["rectangle", "disc", "tensile_specimen", "solid"],
+        "Where the lattice goes: a built-in shape, or the layers of a loaded solid.",
+    ),
     crate::settings::num("width_mm", "Domain", "Width", "mm", 0.1, 2000.0, 0.1, "Size of the rectangle along X."),
     crate::settings::num("height_mm", "Domain", "Height", "mm", 0.1, 2000.0, 0.1, "Size of the rectangle along Y."),
     crate::settings::num("diameter_mm", "Domain", "Diameter", "mm", 0.1, 2000.0, 0.1, "Diameter of the disc."),
@@ -93,7 +100,17 @@ const DOMAIN_FIELDS: &[Field] = &[
 ];
 
 /// The pattern choice row, edited with the page's pattern picker.
-const PATTERN_FIELD: &[Field] = &[widget(other("pattern.kind", "Lattice", "Pattern", FieldKind::Choice, lattice::PATTERNS, "The cell shape the lattice repeats (or randomises): pick by its picture."), "pattern_picker")];
+const PATTERN_FIELD: &[Field] = &[widget(
+    other(
+        "pattern.kind",
+        "Lattice",
+        "Pattern",
+        FieldKind::Choice,
+        lattice::PATTERNS,
+        "The cell shape the lattice repeats (or randomises): pick by its picture.",
+    ),
+    "pattern_picker",
+)];
 
 /// The strut width of lattices: the nozzle diameter (d_n of equation 4).
 fn line_width(design: &Design) -> f64 {
@@ -126,7 +143,10 @@ impl Kind for LatticeKind {
         }
         if let Some(np) = &j.nonplanar {
             if np.surface == nonplanar::Surface::Mesh && j.surface_input.is_none() {
-                out.push(Problem { path: "job.surface_input".into(), message: "a mesh surface needs a mesh: load the surface file or set job.surface_input".into() });
+                out.push(Problem {
+                    path: "job.surface_input".into(),
+                    message: "a mesh surface needs a mesh: load the surface file or set job.surface_input".into(),
+                });
             }
         }
         for o in &j.lattice.overrides {
@@ -158,7 +178,8 @@ impl Kind for LatticeKind {
     fn estimate(j: &LatticeJob, ctx: &mut Ctx) -> Result<Vec<crate::budget::Estimate>, Error> {
         let size = match j.domain {
             Domain::Solid => {
-                let input = j.input.as_ref().ok_or_else(|| Error::NoInput("a solid lattice domain needs a mesh: load one, or pass --input mesh=FILE".into()))?;
+                let input =
+                    j.input.as_ref().ok_or_else(|| Error::NoInput("a solid lattice domain needs a mesh: load one, or pass --input mesh=FILE".into()))?;
                 let mesh = ctx.mesh("mesh", input)?;
                 lattice::DomainSize::of_mesh(&mesh, j.lattice.layer_thickness_mm)
             }
@@ -206,7 +227,13 @@ impl Kind for LatticeKind {
             let p = nonplanar::project(&optimised, surface.as_deref(), np).map_err(|e| Error::stage("non-planar", e))?;
             let r = &p.report;
             let report = StageReport::new("nonplanar", "Projecting onto the surface", r)
-                .metric("missed_points", "Points off the surface", r.missed_points as f64, "", "Points with no surface under them (kept at the lowest surface height).")
+                .metric(
+                    "missed_points",
+                    "Points off the surface",
+                    r.missed_points as f64,
+                    "",
+                    "Points with no surface under them (kept at the lowest surface height).",
+                )
                 .metric("collisions", "Digging segments", r.collisions as f64, "", "Moves that would cut into the layer below; 0 is safe.");
             Ok((p.toolpath, Some(report)))
         })?;
@@ -229,7 +256,16 @@ impl Kind for LatticeKind {
             }
         }
         let z = strokes.get(index).map_or(0.0, |l| l.z);
-        Ok(Inspection { view: view.into(), shape: Shape::Lines2d, index, count, stride: Shape::Lines2d.stride(), data, overlay: Vec::new(), meta: serde_json::json!({ "z_mm": z }) })
+        Ok(Inspection {
+            view: view.into(),
+            shape: Shape::Lines2d,
+            index,
+            count,
+            stride: Shape::Lines2d.stride(),
+            data,
+            overlay: Vec::new(),
+            meta: serde_json::json!({ "z_mm": z }),
+        })
     }
 }
 
@@ -261,7 +297,14 @@ fn strokes(j: &LatticeJob, ctx: &mut Ctx) -> Result<Out<Vec<StrokeLayer>>, Error
             let input = j.input.as_ref().ok_or_else(|| Error::NoInput("a solid lattice domain needs a mesh: load one, or pass --input mesh=FILE".into()))?;
             let mesh = ctx.mesh("mesh", input)?;
             let t = j.lattice.layer_thickness_mm;
-            let options = slice::Options { first_layer_height_mm: t, layer_height_mm: t, perimeters: 0, infill_density: 0.0, solid_layers: 0, ..slice::Options::default() };
+            let options = slice::Options {
+                first_layer_height_mm: t,
+                layer_height_mm: t,
+                perimeters: 0,
+                infill_density: 0.0,
+                solid_layers: 0,
+                ..slice::Options::default()
+            };
             ctx.stage("slice", "domains", &options, &[mesh.key], |progress| {
                 let sliced = slice::slice(&mesh, &options, progress).map_err(|e| Error::stage("slicing", e))?;
                 let report = super::slice_report(&sliced.report, "Slicing the solid");
@@ -275,13 +318,20 @@ fn strokes(j: &LatticeJob, ctx: &mut Ctx) -> Result<Out<Vec<StrokeLayer>>, Error
         let g = lattice::generate(&domains, &j.lattice, line_width(design), design.seed, progress).map_err(|e| Error::stage("lattice", e))?;
         let r = &g.report;
         let struts: usize = r.struts_per_layer.iter().sum();
-        let mean_pore = if r.pore_fraction_per_layer.is_empty() { 0.0 } else { r.pore_fraction_per_layer.iter().sum::<f64>() / r.pore_fraction_per_layer.len() as f64 };
+        let mean_pore =
+            if r.pore_fraction_per_layer.is_empty() { 0.0 } else { r.pore_fraction_per_layer.iter().sum::<f64>() / r.pore_fraction_per_layer.len() as f64 };
         let report = StageReport::new("lattice", "Generating the lattice", r)
             .metric("layers", "Layers", r.layers as f64, "", "Lattice layers generated.")
             .metric("struts", "Struts", struts as f64, "", "Strut pieces over all layers (a curved strut counts once), before path optimisation.")
             .metric("pore_fraction", "Pores", 100.0 * mean_pore, "%", "Open area of a layer: the part of the domain no strut covers (mean over layers).")
             .metric("strut_width", "Strut width", line_width(design), "mm", "Nominal strut width: the nozzle diameter, what the paths are planned for.")
-            .metric("printed_width", "Predicted printed width", design.material.swollen_width(line_width(design)), "mm", "Nominal width × the material's die swell ratio: how wide the struts are expected to come out.");
+            .metric(
+                "printed_width",
+                "Predicted printed width",
+                design.material.swollen_width(line_width(design)),
+                "mm",
+                "Nominal width × the material's die swell ratio: how wide the struts are expected to come out.",
+            );
         Ok((g.layers, Some(report)))
     })
 }
@@ -294,19 +344,44 @@ fn paths_report(r: &PathsReport) -> StageReport {
     let bound: usize = r.layers.iter().map(|l| l.lower_bound_paths).sum();
     let mut report = StageReport::new("paths", "Optimising print paths", r)
         .metric("paths", "Paths (all layers)", total as f64, "", "Extrusion paths over all layers: fewer means fewer starts and stops.")
-        .metric("lower_bound", "Lower bound (all layers)", bound as f64, "", "The proven minimum number of paths (half the odd-degree nodes of each connected part, at least one).");
+        .metric(
+            "lower_bound",
+            "Lower bound (all layers)",
+            bound as f64,
+            "",
+            "The proven minimum number of paths (half the odd-degree nodes of each connected part, at least one).",
+        );
     for (i, l) in r.layers.iter().enumerate() {
         for (key, label, value, unit, hint) in [
             ("score", "Score", l.score, "", "GIPPO equation 1: higher means longer paths and fewer of them."),
             ("lts", "LTS", l.lts_percent, "%", "Equation 2: share of struts printed in long paths (5 nodes or more)."),
-            ("oe", "OE", l.oe_percent, "%", "Equation 3 (optimisation efficiency): length × edges of the long paths over total length × total edges; higher is better."),
+            (
+                "oe",
+                "OE",
+                l.oe_percent,
+                "%",
+                "Equation 3 (optimisation efficiency): length × edges of the long paths over total length × total edges; higher is better.",
+            ),
             ("travel", "Travel", l.travel_mm, "mm", "Moves without extruding: into the layer, between paths, and along struts retraced by a continuous walk."),
             ("circuit_travel", "Travel in circuit order", l.circuit_travel_mm, "mm", "The same travel with the paths in the order the optimiser walks them."),
             ("pairing", "Pairing", l.pairing_mm, "mm", "Length of the odd-joint pairing (euler, continuous): the travel a perfect order would need."),
             ("travel_per_pairing", "Travel ÷ pairing", ratio(l.travel_mm, l.pairing_mm), "", "Travel over pairing length (0 when there is no pairing)."),
-            ("retractions", "Retractions", l.retractions as f64, "", "Retractions the G-code makes in this layer (free travels at least the printer's minimum length)."),
+            (
+                "retractions",
+                "Retractions",
+                l.retractions as f64,
+                "",
+                "Retractions the G-code makes in this layer (free travels at least the printer's minimum length).",
+            ),
         ] {
-            report.metrics.push(crate::report::Metric { key: key.into(), label: label.into(), value, unit: unit.into(), hint: hint.into(), group_index: Some(i) });
+            report.metrics.push(crate::report::Metric {
+                key: key.into(),
+                label: label.into(),
+                value,
+                unit: unit.into(),
+                hint: hint.into(),
+                group_index: Some(i),
+            });
         }
         if l.pairing_mm > 0.0 || l.pairing_lower_bound_mm > 0.0 {
             let hint = if l.pairing_optimal {
@@ -361,11 +436,24 @@ fn paths_report(r: &PathsReport) -> StageReport {
         key: "layers".into(),
         title: "Paths per layer".into(),
         group: None,
-        columns: ["Layer", "Struts", "Odd nodes", "Lower bound", "Paths", "Score", "Pairing", "Pairing quality", "Pairing bound", "Travel", "Travel ÷ pairing", "Retractions"]
-            .iter()
-            .zip(["", "", "", "", "", "", "mm", "", "mm", "mm", "", ""])
-            .map(|(label, unit)| Column { label: (*label).into(), unit: unit.into() })
-            .collect(),
+        columns: [
+            "Layer",
+            "Struts",
+            "Odd nodes",
+            "Lower bound",
+            "Paths",
+            "Score",
+            "Pairing",
+            "Pairing quality",
+            "Pairing bound",
+            "Travel",
+            "Travel ÷ pairing",
+            "Retractions",
+        ]
+        .iter()
+        .zip(["", "", "", "", "", "", "mm", "", "mm", "mm", "", ""])
+        .map(|(label, unit)| Column { label: (*label).into(), unit: unit.into() })
+        .collect(),
         rows: r
             .layers
             .iter()
@@ -394,7 +482,11 @@ fn paths_report(r: &PathsReport) -> StageReport {
 
 /// `a / b`, 0 when `b` is 0.
 fn ratio(a: f64, b: f64) -> f64 {
-    if b > 0.0 { a / b } else { 0.0 }
+    if b > 0.0 {
+        a / b
+    } else {
+        0.0
+    }
 }
 
 /// A bar plot of path counts with one bar series per layer.

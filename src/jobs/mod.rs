@@ -75,7 +75,9 @@ impl SlotKind {
                 Some(r) => Err(format!("{file}: {r}")),
                 None => Ok(()),
             },
-            SlotKind::Frame if len_usize > crate::freeform::wireframe::MAX_BYTES => Err(crate::freeform::wireframe::Error::TooBig { file: file.into(), bytes: len_usize }.to_string()),
+            SlotKind::Frame if len_usize > crate::freeform::wireframe::MAX_BYTES => {
+                Err(crate::freeform::wireframe::Error::TooBig { file: file.into(), bytes: len_usize }.to_string())
+            }
             SlotKind::Frame => Ok(()),
         }
     }
@@ -194,7 +196,13 @@ pub fn slice_report(r: &crate::slice::SliceReport, label: &str) -> crate::report
     for (key, label, value, unit, hint) in [
         ("gaps_closed", "Gaps closed", r.gaps_closed as f64, "", "Open outlines whose ends were joined (the mesh has small holes)."),
         ("largest_gap", "Largest gap closed", r.largest_gap_closed_mm, "mm", "The widest hole bridged in a layer outline."),
-        ("open_contours_dropped", "Open outlines dropped", r.open_contours_dropped as f64, "", "Outlines too open to close: those parts are not printed; repair the mesh."),
+        (
+            "open_contours_dropped",
+            "Open outlines dropped",
+            r.open_contours_dropped as f64,
+            "",
+            "Outlines too open to close: those parts are not printed; repair the mesh.",
+        ),
         ("layers_with_overlaps", "Layers with overlaps", r.layers_with_overlaps as f64, "", "Layers where shells overlap; they were merged into one region."),
     ] {
         if value > 0.0 {
@@ -217,11 +225,7 @@ pub fn part_fits(design: &Design, mesh: &crate::geom::Mesh) -> Result<(), Error>
 pub fn thicker_than_nozzle(path: &str, height: f64, nozzle: f64) -> Option<Problem> {
     (height > nozzle).then(|| Problem {
         path: path.into(),
-        message: format!(
-            "{} mm is thicker than the {} mm nozzle: use at most the nozzle diameter",
-            crate::settings::fmt(height),
-            crate::settings::fmt(nozzle)
-        ),
+        message: format!("{} mm is thicker than the {} mm nozzle: use at most the nozzle diameter", crate::settings::fmt(height), crate::settings::fmt(nozzle)),
     })
 }
 
@@ -400,7 +404,9 @@ pub struct Registry {
 impl Registry {
     /// The kinds built into weft. **Register a new kind here** (one line).
     pub fn builtin() -> Registry {
-        Registry { kinds: vec![&slice::SliceKind, &lattice::LatticeKind, &axisymmetric::AxisymKind, &graded::GradedKind, &foam::FoamKind, &freeform::FreeformKind] }
+        Registry {
+            kinds: vec![&slice::SliceKind, &lattice::LatticeKind, &axisymmetric::AxisymKind, &graded::GradedKind, &foam::FoamKind, &freeform::FreeformKind],
+        }
     }
 
     /// This registry plus `kind` (a kind defined outside the crate, e.g. in a test).

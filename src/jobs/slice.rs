@@ -1,7 +1,7 @@
 //! The `slice` job: a solid sliced into planar layers of perimeters and rectilinear infill.
 
-use crate::budget::Estimate;
 use super::{Kind, Product, Slot, SlotKind, StageInfo};
+use crate::budget::Estimate;
 use crate::design::Input;
 use crate::geom::shapes::{self, Shape};
 use crate::pipeline::{Ctx, Error};
@@ -43,10 +43,7 @@ const SLOTS: &[Slot] = &[Slot {
     doc: "The solid to slice (STL, OBJ or 3MF); without one, the built-in shape is sliced.",
 }];
 
-const STAGES: &[StageInfo] = &[
-    StageInfo { name: "import", label: "Reading the mesh" },
-    StageInfo { name: "slice", label: "Slicing layers" },
-];
+const STAGES: &[StageInfo] = &[StageInfo { name: "import", label: "Reading the mesh" }, StageInfo { name: "slice", label: "Slicing layers" }];
 
 impl Kind for SliceKind {
     type Settings = SliceJob;

@@ -104,6 +104,8 @@ impl Clipper {
     /// Whether `p` (µm) is inside the regions (even-odd; undecided on the boundary).
     pub fn inside(&self, p: DVec2) -> bool {
         let Some(band) = self.band(p.y) else { return false };
+        // Edges tested (the growth checks count them).
+        crate::work::add(band.len());
         let mut inside = false;
         for &k in band {
             let [a, b] = self.edges[k as usize];
@@ -143,6 +145,7 @@ impl Clipper {
             cand.sort_unstable();
             cand.dedup();
         }
+        crate::work::add(cand.len());
         let mut ts = vec![0.0, 1.0];
         let mut along: Vec<u32> = Vec::new();
         let dl = dl2.sqrt();
@@ -207,10 +210,7 @@ mod tests {
     use super::*;
 
     fn square(h: f64) -> Polygon {
-        Polygon {
-            outer: vec![DVec2::new(-h, -h), DVec2::new(h, -h), DVec2::new(h, h), DVec2::new(-h, h)],
-            holes: vec![],
-        }
+        Polygon { outer: vec![DVec2::new(-h, -h), DVec2::new(h, -h), DVec2::new(h, h), DVec2::new(-h, h)], holes: vec![] }
     }
 
     #[test]
@@ -221,13 +221,7 @@ mod tests {
         let mut out = Vec::new();
         c.clip(DVec2::new(-8000.0, 0.0), DVec2::new(8000.0, 0.0), &mut out);
         let got: Vec<[DVec2; 2]> = out.iter().map(|s| [snap_mm(s[0]), snap_mm(s[1])]).collect();
-        assert_eq!(
-            got,
-            vec![
-                [DVec2::new(-5.0, 0.0), DVec2::new(-1.0, 0.0)],
-                [DVec2::new(1.0, 0.0), DVec2::new(5.0, 0.0)]
-            ]
-        );
+        assert_eq!(got, vec![[DVec2::new(-5.0, 0.0), DVec2::new(-1.0, 0.0)], [DVec2::new(1.0, 0.0), DVec2::new(5.0, 0.0)]]);
     }
 
     #[test]

@@ -103,7 +103,15 @@ pub(crate) fn crop_curved(
                         guard.keep(pc[0], pc[1], u32::MAX, &mut keep);
                         let d = pc[1] - pc[0];
                         for &(t0, t1) in &keep {
-                            let at = |t: f64| if t == 0.0 { pc[0] } else if t == 1.0 { pc[1] } else { pc[0] + d * t };
+                            let at = |t: f64| {
+                                if t == 0.0 {
+                                    pc[0]
+                                } else if t == 1.0 {
+                                    pc[1]
+                                } else {
+                                    pc[0] + d * t
+                                }
+                            };
                             push(at(t0), at(t1), &mut lines);
                         }
                     }

@@ -8,10 +8,7 @@ pub const DISC_CHORD_ERROR_MM: f64 = 0.5e-3;
 
 /// Counter-clockwise axis-aligned rectangle `[x0, x1] × [y0, y1]`.
 pub(crate) fn rect_polygon(x0: f64, y0: f64, x1: f64, y1: f64) -> Polygon {
-    Polygon {
-        outer: vec![DVec2::new(x0, y0), DVec2::new(x1, y0), DVec2::new(x1, y1), DVec2::new(x0, y1)],
-        holes: Vec::new(),
-    }
+    Polygon { outer: vec![DVec2::new(x0, y0), DVec2::new(x1, y0), DVec2::new(x1, y1), DVec2::new(x0, y1)], holes: Vec::new() }
 }
 
 /// Sides of a polygon inscribed in a circle of radius `r` whose chord error is at most
@@ -64,10 +61,7 @@ pub(crate) fn planar(domain: &Domain, options: &Options) -> Option<Vec<LayerDoma
                 let (hw, hl) = (width_mm / 2.0, length_mm / 2.0);
                 let lattice = vec![rect_polygon(-hl, -hw, hl, hw)];
                 let handles = if usable(handle_length_mm) {
-                    vec![
-                        rect_polygon(-hl - handle_length_mm, -hw, -hl, hw),
-                        rect_polygon(hl, -hw, hl + handle_length_mm, hw),
-                    ]
+                    vec![rect_polygon(-hl - handle_length_mm, -hw, -hl, hw), rect_polygon(hl, -hw, hl + handle_length_mm, hw)]
                 } else {
                     vec![]
                 };
@@ -78,9 +72,5 @@ pub(crate) fn planar(domain: &Domain, options: &Options) -> Option<Vec<LayerDoma
         }
     };
     let t = options.layer_thickness_mm;
-    Some(
-        (0..options.layers)
-            .map(|i| LayerDomain { z: (i + 1) as f64 * t, height: t, regions: regions.clone(), handles: handles.clone() })
-            .collect(),
-    )
+    Some((0..options.layers).map(|i| LayerDomain { z: (i + 1) as f64 * t, height: t, regions: regions.clone(), handles: handles.clone() }).collect())
 }

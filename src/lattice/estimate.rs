@@ -7,8 +7,8 @@
 //! [`MAX_STRUTS_PER_LAYER`] limits, is [`super::estimate_struts`] over the layer's box turned
 //! into the pattern's frame and grown by a cell, as [`super::generate`] fills it.
 
-use super::{cell_length, estimate_struts, pattern_graph, Domain, LayerDomain, Options, Pattern, MAX_STRUTS_PER_LAYER};
 use super::graph::Rect;
+use super::{cell_length, estimate_struts, pattern_graph, Domain, LayerDomain, Options, Pattern, MAX_STRUTS_PER_LAYER};
 use crate::budget::Estimate;
 use crate::geom::{DVec2, Mesh};
 
@@ -303,18 +303,26 @@ pub(crate) fn denser_fix(p: &Pattern, struts: f64, limit: f64) -> String {
         crate::settings::fmt(libm::ceil(v / e) * e)
     };
     match *p {
-        Pattern::Honeycomb { hexagon_radius_mm } | Pattern::WavyHoneycomb { hexagon_radius_mm, .. } => format!("use a hexagon radius ≥ {} mm or a smaller domain", up(hexagon_radius_mm * k)),
+        Pattern::Honeycomb { hexagon_radius_mm } | Pattern::WavyHoneycomb { hexagon_radius_mm, .. } => {
+            format!("use a hexagon radius ≥ {} mm or a smaller domain", up(hexagon_radius_mm * k))
+        }
         Pattern::Voronoi { density_per_mm2 } => {
             let e = libm::pow(10.0, libm::floor(libm::log10(density_per_mm2 / (k * k))) - 1.0);
             format!("use at most {} seed points per mm² or a smaller domain", crate::settings::fmt(libm::floor(density_per_mm2 / (k * k) / e) * e))
         }
-        Pattern::Penrose { cell_size_mm } | Pattern::SnubSquare { cell_size_mm } | Pattern::SquareGrid { cell_size_mm } | Pattern::TriangleGrid { cell_size_mm } | Pattern::WavySquareGrid { cell_size_mm, .. } => {
+        Pattern::Penrose { cell_size_mm }
+        | Pattern::SnubSquare { cell_size_mm }
+        | Pattern::SquareGrid { cell_size_mm }
+        | Pattern::TriangleGrid { cell_size_mm }
+        | Pattern::WavySquareGrid { cell_size_mm, .. } => {
             format!("use cells ≥ {} mm or a smaller domain", up(cell_size_mm * k))
         }
         Pattern::Arrowhead { cell_width_mm, cell_height_mm } | Pattern::ReentrantHoneycomb { cell_width_mm, cell_height_mm } => {
             format!("use unit cells ≥ {} × {} mm or a smaller domain", up(cell_width_mm * k), up(cell_height_mm * k))
         }
-        Pattern::Rectilinear { strand_distance_mm } => format!("use a strand distance ≥ {} mm or a smaller domain", up(strand_distance_mm * struts / limit * 1.05)),
+        Pattern::Rectilinear { strand_distance_mm } => {
+            format!("use a strand distance ≥ {} mm or a smaller domain", up(strand_distance_mm * struts / limit * 1.05))
+        }
     }
 }
 
@@ -406,11 +414,17 @@ pub fn estimate(size: &DomainSize, options: &Options, line_width_mm: f64) -> Est
     let edges = strut_segments + extra_edges;
     let per_layer_extra = if n > 0 { extra_edges / n as f64 } else { 0.0 };
     let strokes = struts_total + handle_strokes + if options.contour { n as f64 } else { 0.0 };
-    seconds += copied * SECONDS_PER_COPIED_STROKE + (contour_points + size.handle_points) * SECONDS_PER_OUTLINE_POINT + handle_strokes * seconds_per_strut(&Pattern::Rectilinear { strand_distance_mm: 1.0 });
+    seconds += copied * SECONDS_PER_COPIED_STROKE
+        + (contour_points + size.handle_points) * SECONDS_PER_OUTLINE_POINT
+        + handle_strokes * seconds_per_strut(&Pattern::Rectilinear { strand_distance_mm: 1.0 });
     // The output strokes, the contour strokes' points, the domains' polygons and the graph of
     // the largest generated layer.
     // Curved struts hold `samples_per_strut + 1` points instead of two.
-    let bytes = strokes * BYTES_PER_STROKE + (strut_segments - struts_total).max(0.0) * 16.0 + (contour_points + size.handle_points) * 16.0 + (size.outline_points + size.handle_points) * 16.0 + gen_max * BYTES_PER_GENERATED_STRUT;
+    let bytes = strokes * BYTES_PER_STROKE
+        + (strut_segments - struts_total).max(0.0) * 16.0
+        + (contour_points + size.handle_points) * 16.0
+        + (size.outline_points + size.handle_points) * 16.0
+        + gen_max * BYTES_PER_GENERATED_STRUT;
     Estimate::new("lattice")
         .quantity("layers", "Layers", n as f64, "")
         .quantity("struts", "Struts on the densest layer", densest_struts, "")

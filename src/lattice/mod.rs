@@ -50,8 +50,7 @@ mod voronoi;
 
 pub use arrowhead::{INNER_DEPTH as ARROWHEAD_INNER_DEPTH, OUTER_DEPTH as ARROWHEAD_OUTER_DEPTH};
 pub use curved::{
-    DEFAULT_AMPLITUDE_MM as DEFAULT_WAVE_AMPLITUDE_MM, DEFAULT_SAMPLES_PER_STRUT, MAX_AMPLITUDE_FRACTION, MAX_SAMPLES_PER_STRUT,
-    MIN_SAMPLES_PER_STRUT,
+    DEFAULT_AMPLITUDE_MM as DEFAULT_WAVE_AMPLITUDE_MM, DEFAULT_SAMPLES_PER_STRUT, MAX_AMPLITUDE_FRACTION, MAX_SAMPLES_PER_STRUT, MIN_SAMPLES_PER_STRUT,
 };
 pub use domain::{disc_sides, DISC_CHORD_ERROR_MM};
 pub use estimate::{estimate, DomainSize, PatternStats};
@@ -93,13 +92,47 @@ pub const FIELDS: &[crate::settings::Field] = {
     use crate::settings::{int, num, other, Kind};
     &[
         num("pattern.hexagon_radius_mm", "Lattice", "Hexagon radius", "mm", MIN_CELL_MM, MAX_CELL_MM, 0.05, "Distance from a hexagon's centre to its corners."),
-        num("pattern.density_per_mm2", "Lattice", "Seed points", "/mm²", 0.0001, MAX_VORONOI_DENSITY, 0.01, "Voronoi seed points per mm² (placed by the random seed)."),
+        num(
+            "pattern.density_per_mm2",
+            "Lattice",
+            "Seed points",
+            "/mm²",
+            0.0001,
+            MAX_VORONOI_DENSITY,
+            0.01,
+            "Voronoi seed points per mm² (placed by the random seed).",
+        ),
         num("pattern.cell_size_mm", "Lattice", "Cell size", "mm", MIN_CELL_MM, MAX_CELL_MM, 0.05, "Edge length of the tiles: bigger cells, bigger pores."),
         num("pattern.cell_width_mm", "Lattice", "Unit-cell width", "mm", MIN_CELL_MM, MAX_CELL_MM, 0.05, "Width of the repeating cell along X."),
         num("pattern.cell_height_mm", "Lattice", "Unit-cell height", "mm", MIN_CELL_MM, MAX_CELL_MM, 0.05, "Height of the repeating cell along Y."),
-        num("pattern.strand_distance_mm", "Lattice", "Strand distance", "mm", MIN_CELL_MM, MAX_CELL_MM, 0.05, "Distance between neighbouring parallel strands, centre to centre."),
-        num("pattern.amplitude_mm", "Lattice", "Wave amplitude", "mm", 0.0, MAX_CELL_MM * MAX_AMPLITUDE_FRACTION, 0.01, "How far each curved strut swings to either side of the straight line (at most a quarter of the strut)."),
-        int("pattern.samples_per_strut", "Lattice", "Points per curved strut", MIN_SAMPLES_PER_STRUT as f64, MAX_SAMPLES_PER_STRUT as f64, "Straight segments each curved strut is printed as: more is smoother, and a longer G-code."),
+        num(
+            "pattern.strand_distance_mm",
+            "Lattice",
+            "Strand distance",
+            "mm",
+            MIN_CELL_MM,
+            MAX_CELL_MM,
+            0.05,
+            "Distance between neighbouring parallel strands, centre to centre.",
+        ),
+        num(
+            "pattern.amplitude_mm",
+            "Lattice",
+            "Wave amplitude",
+            "mm",
+            0.0,
+            MAX_CELL_MM * MAX_AMPLITUDE_FRACTION,
+            0.01,
+            "How far each curved strut swings to either side of the straight line (at most a quarter of the strut).",
+        ),
+        int(
+            "pattern.samples_per_strut",
+            "Lattice",
+            "Points per curved strut",
+            MIN_SAMPLES_PER_STRUT as f64,
+            MAX_SAMPLES_PER_STRUT as f64,
+            "Straight segments each curved strut is printed as: more is smoother, and a longer G-code.",
+        ),
         num("layer_thickness_mm", "Lattice", "Layer thickness", "mm", 0.01, 2.0, 0.001, "Height of each lattice layer (LT of GIPPO equation 4)."),
         int("layers", "Lattice", "Layers", 1.0, 10000.0, "Ignored for a solid domain (it has as many as it slices to)."),
         num("rotation_deg", "Lattice", "Rotation per layer", "°", -360.0, 360.0, 1.0, "Each layer turns the pattern by this much more than the one below."),
@@ -109,8 +142,17 @@ pub const FIELDS: &[crate::settings::Field] = {
 
 /// The atlas, by `kind` name.
 pub const PATTERNS: &[&str] = &[
-    "honeycomb", "voronoi", "penrose", "snub_square", "arrowhead", "reentrant_honeycomb", "rectilinear", "square_grid", "triangle_grid",
-    "wavy_honeycomb", "wavy_square_grid",
+    "honeycomb",
+    "voronoi",
+    "penrose",
+    "snub_square",
+    "arrowhead",
+    "reentrant_honeycomb",
+    "rectilinear",
+    "square_grid",
+    "triangle_grid",
+    "wavy_honeycomb",
+    "wavy_square_grid",
 ];
 
 /// A pattern of the atlas with its parameters (mm).
@@ -229,7 +271,7 @@ impl Pattern {
 
 /// Default sizes of the paper's six patterns: the parameters that give the pore fractions of
 /// the paper's Table 1 with its 0.2 mm struts on a 10 × 10 mm layer (pores measured as the
-/// union of the struts, [`LatticeReport::pore_fraction_per_layer`]; `tests/pore_fraction.rs`).
+/// union of the struts, [`LatticeReport::pore_fraction_per_layer`]; `tests/it/pore_fraction.rs`).
 /// Honeycomb circumradius, mm: 75 % pores.
 pub const DEFAULT_HONEYCOMB_RADIUS_MM: f64 = 0.92;
 /// Voronoi seed points per mm²: 69 % pores (seed 1; about ±3 points from seed to seed).
@@ -407,22 +449,12 @@ pub enum Error {
 /// shorter than [`MIN_PIECE_MM`] are dropped; struts crossing a loop more steeply still end
 /// exactly on it. A loop running in an earlier loop's bead (a region narrower than a line
 /// width, a handle against a contour) is likewise opened there into polylines.
-pub fn generate(
-    domains: &[LayerDomain],
-    options: &Options,
-    line_width_mm: f64,
-    seed: u64,
-    progress: &mut dyn FnMut(f32),
-) -> Result<Lattice, Error> {
+pub fn generate(domains: &[LayerDomain], options: &Options, line_width_mm: f64, seed: u64, progress: &mut dyn FnMut(f32)) -> Result<Lattice, Error> {
     if domains.iter().all(|d| d.regions.is_empty() && d.handles.is_empty()) {
         return Err(Error::EmptyDomain);
     }
     if !(line_width_mm.is_finite() && line_width_mm > 0.0 && line_width_mm <= 100.0) {
-        return Err(Error::BadParameter {
-            field: "line_width_mm",
-            value: line_width_mm,
-            fix: "use a line width in (0, 100] mm".into(),
-        });
+        return Err(Error::BadParameter { field: "line_width_mm", value: line_width_mm, fix: "use a line width in (0, 100] mm".into() });
     }
     let problems = crate::settings::check(options, FIELDS, "");
     if !problems.is_empty() {
@@ -438,17 +470,9 @@ pub fn generate(
     // Identical layers (same regions, pattern and angle) are generated once.
     let mut cache: Vec<(usize, &Pattern, f64)> = Vec::new();
     for (i, d) in domains.iter().enumerate() {
-        let pattern = options
-            .overrides
-            .iter()
-            .rev()
-            .find(|o| o.layer as usize == i)
-            .map(|o| &o.pattern)
-            .unwrap_or(&options.pattern);
+        let pattern = options.overrides.iter().rev().find(|o| o.layer as usize == i).map(|o| &o.pattern).unwrap_or(&options.pattern);
         let angle = (options.rotation_deg * i as f64).rem_euclid(360.0);
-        let hit = cache.iter().find(|(k, p, a)| {
-            *p == pattern && *a == angle && domains[*k].regions == d.regions && domains[*k].handles == d.handles
-        });
+        let hit = cache.iter().find(|(k, p, a)| *p == pattern && *a == angle && domains[*k].regions == d.regions && domains[*k].handles == d.handles);
         let (strokes, struts, pore, slivers) = if let Some(&(k, _, _)) = hit {
             let l = &out.layers[k];
             (l.strokes.clone(), out.report.struts_per_layer[k], out.report.pore_fraction_per_layer[k], 0)
@@ -489,8 +513,7 @@ pub fn validate(p: &Pattern) -> Result<(), Error> {
         Pattern::Voronoi { density_per_mm2 } => check("density_per_mm2", density_per_mm2, 0.0, MAX_VORONOI_DENSITY, true),
         Pattern::Penrose { cell_size_mm } | Pattern::SnubSquare { cell_size_mm } => c("cell_size_mm", cell_size_mm),
         Pattern::SquareGrid { cell_size_mm } | Pattern::TriangleGrid { cell_size_mm } => c("cell_size_mm", cell_size_mm),
-        Pattern::Arrowhead { cell_width_mm, cell_height_mm }
-        | Pattern::ReentrantHoneycomb { cell_width_mm, cell_height_mm } => {
+        Pattern::Arrowhead { cell_width_mm, cell_height_mm } | Pattern::ReentrantHoneycomb { cell_width_mm, cell_height_mm } => {
             c("cell_width_mm", cell_width_mm)?;
             c("cell_height_mm", cell_height_mm)
         }
@@ -515,8 +538,9 @@ fn cell_length(p: &Pattern) -> f64 {
         | Pattern::SquareGrid { cell_size_mm }
         | Pattern::WavySquareGrid { cell_size_mm, .. }
         | Pattern::TriangleGrid { cell_size_mm } => 2.0 * cell_size_mm,
-        Pattern::Arrowhead { cell_width_mm, cell_height_mm }
-        | Pattern::ReentrantHoneycomb { cell_width_mm, cell_height_mm } => cell_width_mm.max(cell_height_mm),
+        Pattern::Arrowhead { cell_width_mm, cell_height_mm } | Pattern::ReentrantHoneycomb { cell_width_mm, cell_height_mm } => {
+            cell_width_mm.max(cell_height_mm)
+        }
         Pattern::Rectilinear { strand_distance_mm } => strand_distance_mm,
     }
 }
@@ -553,9 +577,7 @@ pub(crate) fn pattern_graph(p: &Pattern, rect: Rect, seed: u64) -> Result<Graph,
         Pattern::Penrose { cell_size_mm } => penrose::penrose(cell_size_mm, rect),
         Pattern::SnubSquare { cell_size_mm } => snub_square::snub_square(cell_size_mm, rect),
         Pattern::Arrowhead { cell_width_mm, cell_height_mm } => arrowhead::arrowhead(cell_width_mm, cell_height_mm, rect),
-        Pattern::ReentrantHoneycomb { cell_width_mm, cell_height_mm } => {
-            reentrant::reentrant(cell_width_mm, cell_height_mm, rect)
-        }
+        Pattern::ReentrantHoneycomb { cell_width_mm, cell_height_mm } => reentrant::reentrant(cell_width_mm, cell_height_mm, rect),
         Pattern::Rectilinear { strand_distance_mm } => grids::rectilinear(strand_distance_mm, rect),
         Pattern::SquareGrid { cell_size_mm } => grids::square(cell_size_mm, rect),
         Pattern::TriangleGrid { cell_size_mm } => grids::triangle(cell_size_mm, rect),
@@ -572,23 +594,12 @@ pub(crate) fn pattern_graph(p: &Pattern, rect: Rect, seed: u64) -> Result<Graph,
 /// shorter than [`MIN_PIECE_MM`] are dropped: those left by cropping (of nonzero length), and
 /// those left by trimming (a piece trimmed away entirely counts once). Returns (total kept
 /// length mm, dropped slivers).
-pub(crate) fn crop_graph(
-    g: &Graph,
-    cs: (f64, f64),
-    clip: &Clipper,
-    guard: Option<&Guard>,
-    feature: Feature,
-    out: &mut Vec<Stroke>,
-) -> (f64, usize) {
+pub(crate) fn crop_graph(g: &Graph, cs: (f64, f64), clip: &Clipper, guard: Option<&Guard>, feature: Feature, out: &mut Vec<Stroke>) -> (f64, usize) {
     if let Some(curve) = g.curve {
         return curved::crop_curved(g, curve, cs, clip, guard, feature, out);
     }
     let (c, s) = cs;
-    let um: Vec<DVec2> = g
-        .pts
-        .iter()
-        .map(|p| DVec2::new(c * p.x - s * p.y, s * p.x + c * p.y) * crate::geom::tolerance::UNITS_PER_MM)
-        .collect();
+    let um: Vec<DVec2> = g.pts.iter().map(|p| DVec2::new(c * p.x - s * p.y, s * p.x + c * p.y) * crate::geom::tolerance::UNITS_PER_MM).collect();
     let guard = guard.filter(|g| !g.is_empty());
     let mut pieces = Vec::new();
     let mut keep = Vec::new();
@@ -612,7 +623,15 @@ pub(crate) fn crop_graph(
             };
             guard.keep(pc[0], pc[1], u32::MAX, &mut keep);
             let d = pc[1] - pc[0];
-            let at = |t: f64| if t == 0.0 { a } else if t == 1.0 { b } else { crop::snap_mm(pc[0] + d * t) };
+            let at = |t: f64| {
+                if t == 0.0 {
+                    a
+                } else if t == 1.0 {
+                    b
+                } else {
+                    crop::snap_mm(pc[0] + d * t)
+                }
+            };
             let (mut kept, mut short) = (false, 0);
             for &(t0, t1) in &keep {
                 let (p, q) = (at(t0), at(t1));
@@ -706,14 +725,7 @@ fn ring_strokes(pts: &[DVec2], tag: u32, guard: &Guard, feature: Feature, out: &
 }
 
 /// One layer: (strokes, lattice struts, pore fraction, dropped slivers).
-fn layer(
-    d: &LayerDomain,
-    pattern: &Pattern,
-    angle_deg: f64,
-    contour: bool,
-    line_width: f64,
-    seed: u64,
-) -> Result<(Vec<Stroke>, usize, f64, usize), Error> {
+fn layer(d: &LayerDomain, pattern: &Pattern, angle_deg: f64, contour: bool, line_width: f64, seed: u64) -> Result<(Vec<Stroke>, usize, f64, usize), Error> {
     let mut strokes = Vec::new();
     let mut slivers = 0;
     let rad = angle_deg.to_radians();

@@ -22,10 +22,7 @@ fn phi() -> f64 {
 
 /// Number of deflations for a sun that covers `rect` with rhombus edge `a`.
 fn deflations(a: f64, rect: Rect) -> u32 {
-    let far = [rect.min, rect.max, DVec2::new(rect.min.x, rect.max.y), DVec2::new(rect.max.x, rect.min.y)]
-        .iter()
-        .map(|p| p.length())
-        .fold(0.0, f64::max);
+    let far = [rect.min, rect.max, DVec2::new(rect.min.x, rect.max.y), DVec2::new(rect.max.x, rect.min.y)].iter().map(|p| p.length()).fold(0.0, f64::max);
     // The sun's inscribed radius is R·cos 18° > 0.95 R.
     let mut n = 0;
     let mut r = a;

@@ -18,10 +18,12 @@ const JOINT_SIDES: usize = 16;
 /// Twice the signed area of a loop, µm².
 fn area2(c: &[IntPoint<i32>]) -> i64 {
     let n = c.len();
-    (0..n).map(|i| {
-        let (a, b) = (c[i], c[(i + 1) % n]);
-        a.x as i64 * b.y as i64 - b.x as i64 * a.y as i64
-    }).sum()
+    (0..n)
+        .map(|i| {
+            let (a, b) = (c[i], c[(i + 1) % n]);
+            a.x as i64 * b.y as i64 - b.x as i64 * a.y as i64
+        })
+        .sum()
 }
 
 fn ip(p: DVec2) -> IntPoint<i32> {

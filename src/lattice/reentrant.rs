@@ -23,14 +23,7 @@ pub(crate) fn reentrant(w: f64, h: f64, rect: Rect) -> Graph {
             let cx = w * i as f64 + shift;
             let (l, r) = (cx - w * 0.5, cx + w * 0.5);
             let (b, t) = (cy - side * 0.5, cy + side * 0.5);
-            let hex = [
-                DVec2::new(r, b),
-                DVec2::new(r, t),
-                DVec2::new(cx, t - inset),
-                DVec2::new(l, t),
-                DVec2::new(l, b),
-                DVec2::new(cx, b + inset),
-            ];
+            let hex = [DVec2::new(r, b), DVec2::new(r, t), DVec2::new(cx, t - inset), DVec2::new(l, t), DVec2::new(l, b), DVec2::new(cx, b + inset)];
             g.polyline(&hex, true);
         }
     }

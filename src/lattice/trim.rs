@@ -200,7 +200,11 @@ fn slab(iv: (f64, f64), v0: f64, dv: f64, min: f64, max: f64) -> Option<(f64, f6
         std::mem::swap(&mut t0, &mut t1);
     }
     let (lo, hi) = (iv.0.max(t0), iv.1.min(t1));
-    if hi >= lo { Some((lo, hi)) } else { None }
+    if hi >= lo {
+        Some((lo, hi))
+    } else {
+        None
+    }
 }
 
 #[cfg(test)]

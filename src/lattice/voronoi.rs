@@ -121,12 +121,7 @@ pub(crate) fn voronoi(density: f64, seed: u64, rect: Rect) -> Graph {
         order[fill[b] as usize] = i as u32;
         fill[b] += 1;
     }
-    let box_poly = [
-        (area.min, -1i64),
-        (DVec2::new(area.max.x, area.min.y), -1),
-        (area.max, -1),
-        (DVec2::new(area.min.x, area.max.y), -1),
-    ];
+    let box_poly = [(area.min, -1i64), (DVec2::new(area.max.x, area.min.y), -1), (area.max, -1), (DVec2::new(area.min.x, area.max.y), -1)];
     let mut poly = Vec::with_capacity(16);
     let mut scratch = Vec::with_capacity(16);
     let mut near: Vec<(f64, u32)> = Vec::new();

@@ -152,7 +152,11 @@ fn rot(axis: Ax, deg: f64, v: DVec3) -> DVec3 {
 /// `a + 360·k` closest to `near`.
 fn unwrap_near(a: f64, near: f64) -> f64 {
     let k = ((near - a) / 360.0).round();
-    if k.is_finite() { a + 360.0 * k } else { a }
+    if k.is_finite() {
+        a + 360.0 * k
+    } else {
+        a
+    }
 }
 
 impl Machine {
@@ -193,7 +197,11 @@ impl Machine {
     /// The letter-ordered pair from (outer, inner).
     fn letters_order(&self, outer: f64, inner: f64) -> [f64; 2] {
         let (_, _, o) = self.chain();
-        if o == 0 { [outer, inner] } else { [inner, outer] }
+        if o == 0 {
+            [outer, inner]
+        } else {
+            [inner, outer]
+        }
     }
 
     /// Rotation the machine applies at `angles`: the head's orientation (head-head) or the
@@ -266,7 +274,11 @@ impl Machine {
         // Normalised form n = R_a1(α) R_a2(β) ẑ; previous angles in that form.
         let prev = previous.map(|p| {
             let (o, i) = self.outer_inner(p);
-            if swap { (sign * i, sign * o) } else { (sign * o, sign * i) }
+            if swap {
+                (sign * i, sign * o)
+            } else {
+                (sign * o, sign * i)
+            }
         });
         // α makes the a1-perpendicular part of n lie in the plane R_a2(β)ẑ sweeps.
         let (u, w) = match (a1, a2) {

@@ -2,10 +2,7 @@
 //! analyzer and the writer (which reads its start/end templates and user codes with it).
 
 /// Powers of ten exactly representable as f64.
-const POW10: [f64; 23] = [
-    1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16, 1e17, 1e18, 1e19,
-    1e20, 1e21, 1e22,
-];
+const POW10: [f64; 23] = [1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16, 1e17, 1e18, 1e19, 1e20, 1e21, 1e22];
 
 /// Parses a decimal number `[+-]?digits[.digits]` (or `.digits`) at the start of `s`.
 /// Returns the value and the bytes consumed; `None` when there is no digit.
@@ -102,7 +99,11 @@ impl Words {
     #[inline]
     pub fn get(&self, letter: u8) -> Option<f64> {
         let k = (letter - b'A') as usize;
-        if self.mask & (1 << k) != 0 { Some(self.vals[k]) } else { None }
+        if self.mask & (1 << k) != 0 {
+            Some(self.vals[k])
+        } else {
+            None
+        }
     }
 
     /// Sets `letter` (uppercase) to `v`, as if the line had it (the writer describes the moves
@@ -316,7 +317,11 @@ fn is_rate(cmd: Command, letter: u8) -> bool {
 }
 
 fn printable(b: u8) -> String {
-    if b.is_ascii_graphic() { (b as char).to_string() } else { format!("\\x{b:02x}") }
+    if b.is_ascii_graphic() {
+        (b as char).to_string()
+    } else {
+        format!("\\x{b:02x}")
+    }
 }
 
 /// Position of the first byte that cannot appear in a text file (NUL and other C0 controls

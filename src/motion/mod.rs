@@ -66,7 +66,11 @@ pub fn arc_chords(r: f64, ang: f64) -> usize {
     let half_pi = std::f64::consts::FRAC_PI_2;
     let step = if r > ARC_TOLERANCE_MM { (2.0 * libm::acos(1.0 - ARC_TOLERANCE_MM / r)).min(half_pi) } else { half_pi };
     let n = ang.abs() / step;
-    if n.is_nan() { 1 } else { n.ceil().clamp(1.0, MAX_ARC_CHORDS as f64) as usize }
+    if n.is_nan() {
+        1
+    } else {
+        n.ceil().clamp(1.0, MAX_ARC_CHORDS as f64) as usize
+    }
 }
 
 /// What one line did.

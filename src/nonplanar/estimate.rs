@@ -243,7 +243,10 @@ pub fn estimate(work: &Work, surface: Option<&SurfaceSize>, options: &Options) -
     // The longest segment that fits: points go as 1 / max_segment.
     let over = (bytes / crate::budget::MAX_STAGE_BYTES).max(seconds / crate::budget::MAX_STAGE_SECONDS);
     let fix = if over > 1.0 && s.is_finite() {
-        format!("use a longest segment (max_segment_mm) ≥ {} mm, fewer layers or a smaller domain", crate::settings::fmt((s * over * 1.1 * 100.0).ceil() / 100.0))
+        format!(
+            "use a longest segment (max_segment_mm) ≥ {} mm, fewer layers or a smaller domain",
+            crate::settings::fmt((s * over * 1.1 * 100.0).ceil() / 100.0)
+        )
     } else {
         "use a longer max_segment_mm, fewer layers or a smaller domain".to_string()
     };

@@ -12,8 +12,8 @@ mod surface;
 
 pub use estimate::{estimate, SurfaceSize, Work};
 
-use crate::settings::{num, other, vec3, Field, Kind};
 use crate::geom::{Mesh, Toolpath};
+use crate::settings::{num, other, vec3, Field, Kind};
 use serde::{Deserialize, Serialize};
 
 /// Default longest segment after projection, mm (segments are split so Z follows the surface).
@@ -172,16 +172,39 @@ pub fn project(toolpath: &Toolpath, surface_mesh: Option<&Mesh>, options: &Optio
 
 fn validate(options: &Options) -> Result<(), Error> {
     let problems = crate::settings::check(options, FIELDS, "");
-    if problems.is_empty() { Ok(()) } else { Err(Error::BadOptions { problems }) }
+    if problems.is_empty() {
+        Ok(())
+    } else {
+        Err(Error::BadOptions { problems })
+    }
 }
 
 /// Rows of [`Options`] (paths relative to the options, `""` is the optional block itself):
 /// ranges, units, help, shared by the design's form and [`project`]'s own check.
 pub const FIELDS: &[Field] = &[
-    Field { default: Some("{\"surface\":{\"kind\":\"sphere\"}}"), ..other("", "Non-planar", "Print on a surface", Kind::Section, &[], "Project every layer onto a surface along Z.") },
-    other("surface.kind", "Non-planar", "Surface", Kind::Choice, &["sphere", "cylinder", "mesh"], "The shape printed on: a sphere, a cylinder, or a loaded surface mesh."),
+    Field {
+        default: Some("{\"surface\":{\"kind\":\"sphere\"}}"),
+        ..other("", "Non-planar", "Print on a surface", Kind::Section, &[], "Project every layer onto a surface along Z.")
+    },
+    other(
+        "surface.kind",
+        "Non-planar",
+        "Surface",
+        Kind::Choice,
+        &["sphere", "cylinder", "mesh"],
+        "The shape printed on: a sphere, a cylinder, or a loaded surface mesh.",
+    ),
     num("surface.radius_mm", "Non-planar", "Radius", "mm", 0.1, 10000.0, 0.1, "Radius of the sphere or cylinder."),
     vec3("surface.center_mm", "Non-planar", "Centre X, Y, Z", "mm", -10000.0, 10000.0, 0.1, "Where the sphere's centre is, in bed coordinates."),
     num("surface.axis_z_mm", "Non-planar", "Axis height", "mm", -10000.0, 10000.0, 0.1, "The cylinder lies along X."),
-    num("max_segment_mm", "Non-planar", "Longest segment", "mm", 0.01, 10.0, 0.01, "Long lines are split into pieces this short so the nozzle follows the curve."),
+    num(
+        "max_segment_mm",
+        "Non-planar",
+        "Longest segment",
+        "mm",
+        0.01,
+        10.0,
+        0.01,
+        "Long lines are split into pieces this short so the nozzle follows the curve.",
+    ),
 ];

@@ -3,7 +3,7 @@
 use super::collision::collides;
 use super::surface::Caster;
 use super::{Error, Projected, ProjectionReport};
-use crate::geom::{DVec2, DVec3, Path, Toolpath, Pass};
+use crate::geom::{DVec2, DVec3, Pass, Path, Toolpath};
 
 /// Deepest bisection of one planar piece. Where the projection jumps (a ray starts missing
 /// the surface) no split helps; the piece stops being split after this many halvings.

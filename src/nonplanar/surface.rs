@@ -30,9 +30,7 @@ impl Caster {
     /// Prepares `surface` (`mesh` is the job's surface mesh, for [`Surface::Mesh`]).
     pub fn new(surface: &Surface, mesh: Option<&Mesh>) -> Result<Caster, Error> {
         Ok(match *surface {
-            Surface::Sphere { radius_mm, center_mm } => {
-                Caster::Sphere { center: DVec3::from_array(center_mm), radius: radius_mm }
-            }
+            Surface::Sphere { radius_mm, center_mm } => Caster::Sphere { center: DVec3::from_array(center_mm), radius: radius_mm },
             Surface::Cylinder { radius_mm, axis_z_mm } => Caster::Cylinder { radius: radius_mm, axis_z: axis_z_mm },
             Surface::Mesh => {
                 let mesh = mesh.ok_or(Error::NoSurfaceMesh)?;
@@ -245,10 +243,12 @@ impl MeshGrid {
                 }
                 let mean = around.iter().fold(DVec3::ZERO, |m, &g| m + faces[g as usize].n).normalize_or_zero();
                 let tight = around.iter().all(|&g| faces[g as usize].n.dot(mean) >= HALF_CREASE_COS);
-                tight.then(|| around.iter().fold(DVec3::ZERO, |sum, &g| {
-                    let g = &faces[g as usize];
-                    sum + g.n * g.angle[corner_at(g, vi)]
-                }))
+                tight.then(|| {
+                    around.iter().fold(DVec3::ZERO, |sum, &g| {
+                        let g = &faces[g as usize];
+                        sum + g.n * g.angle[corner_at(g, vi)]
+                    })
+                })
             })
             .collect();
         let mut tris = Vec::new();
@@ -348,7 +348,10 @@ impl MeshGrid {
         let (cx, cy) = self.cell_of(x, y);
         let c = cy * self.nx + cx;
         let mut best: Option<(f64, &Tri, [f64; 3])> = None;
-        for &ti in &self.items[self.start[c] as usize..self.start[c + 1] as usize] {
+        let candidates = &self.items[self.start[c] as usize..self.start[c + 1] as usize];
+        // Triangles tested (the growth checks count them).
+        crate::work::add(candidates.len());
+        for &ti in candidates {
             let t = &self.tris[ti as usize];
             let [a, b, cc] = t.v;
             let l1 = ((b.y - cc.y) * (x - cc.x) + (cc.x - b.x) * (y - cc.y)) / t.det;

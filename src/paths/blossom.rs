@@ -135,8 +135,7 @@ pub fn min_cost_perfect_matching(n: usize, edges: &[(usize, usize, i64)]) -> Res
     if n == 0 {
         return Ok(Matching { mates: Vec::new(), cost: 0, duals: Duals::default() });
     }
-    let mut list: Vec<(usize, usize, i64)> =
-        edges.iter().filter(|e| e.0 != e.1).map(|&(u, v, c)| (u.min(v), u.max(v), c)).collect();
+    let mut list: Vec<(usize, usize, i64)> = edges.iter().filter(|e| e.0 != e.1).map(|&(u, v, c)| (u.min(v), u.max(v), c)).collect();
     list.sort_unstable();
     list.dedup_by_key(|e| (e.0, e.1));
     let mut s = Solver::new(n, list);
@@ -593,7 +592,15 @@ impl Solver {
                 for e in 0..self.edges.len() {
                     let (u, v, _) = self.edges[e];
                     if self.inblossom[u] != self.inblossom[v] {
-                        assert!(self.slack(e) >= 0, "after step kind {kind} id {id} edge {u}-{v} slack {} labels {} {} inbl {} {}", self.slack(e), self.label[self.inblossom[u]], self.label[self.inblossom[v]], self.inblossom[u], self.inblossom[v]);
+                        assert!(
+                            self.slack(e) >= 0,
+                            "after step kind {kind} id {id} edge {u}-{v} slack {} labels {} {} inbl {} {}",
+                            self.slack(e),
+                            self.label[self.inblossom[u]],
+                            self.label[self.inblossom[v]],
+                            self.inblossom[u],
+                            self.inblossom[v]
+                        );
                     }
                 }
             }
@@ -1046,8 +1053,7 @@ mod tests {
         let mut cost = 0;
         let mut seen = vec![false; n];
         // Parallel edges: the cheapest is the one that counts (first after sorting).
-        let mut edges: Vec<(usize, usize, i64)> =
-            edges.iter().filter(|e| e.0 != e.1).map(|&(u, v, c)| (u.min(v), u.max(v), c)).collect();
+        let mut edges: Vec<(usize, usize, i64)> = edges.iter().filter(|e| e.0 != e.1).map(|&(u, v, c)| (u.min(v), u.max(v), c)).collect();
         edges.sort_unstable();
         for &(u, v, c) in &edges {
             let r = m.duals.reduced_cost(u, v, c);

@@ -166,28 +166,21 @@ pub fn estimate(work: &Work, options: &Options) -> Estimate {
         let (dense, sparse) = if options.method == Method::Euler {
             (super::matching::exact_seconds(per_layer), super::matching::sparse_seconds(per_layer))
         } else {
-            (
-                super::postman::exact_seconds(per_layer, layer_edges),
-                super::postman::sparse_seconds(per_layer, layer_edges),
-            )
+            (super::postman::exact_seconds(per_layer, layer_edges), super::postman::sparse_seconds(per_layer, layer_edges))
         };
         let (method, one) = super::matching::choose_method(dense, sparse, options.exact_pairing_seconds);
         seconds += layers * one.min(options.exact_pairing_seconds);
         let n = per_layer as f64;
         exact_bytes = match method {
             super::matching::PairingMethod::Sparse { dense_fallback } => {
-                n * super::matching::SPARSE_BYTES_PER_NODE
-                    + if dense_fallback { n * n * super::matching::EXACT_BYTES_PER_SQUARE } else { 0.0 }
+                n * super::matching::SPARSE_BYTES_PER_NODE + if dense_fallback { n * n * super::matching::EXACT_BYTES_PER_SQUARE } else { 0.0 }
             }
             super::matching::PairingMethod::Dense => n * n * super::matching::EXACT_BYTES_PER_SQUARE,
             super::matching::PairingMethod::Heuristic => 0.0,
         };
     }
     let segments = edges + paths + approach;
-    let bytes = work.edges_max_layer.min(edges) * BYTES_PER_EDGE_WORKING
-        + paths * BYTES_PER_PATH
-        + segments * BYTES_PER_POINT
-        + exact_bytes;
+    let bytes = work.edges_max_layer.min(edges) * BYTES_PER_EDGE_WORKING + paths * BYTES_PER_PATH + segments * BYTES_PER_POINT + exact_bytes;
     let fewer = match options.method {
         Method::GippoMax | Method::GippoMin => "use fewer GIPPO iterations, larger cells or a smaller domain",
         _ => "use larger cells, fewer layers or a smaller domain",

@@ -144,8 +144,7 @@ pub(crate) struct EulerPaths {
 /// [`super::matching::exact_seconds`]) fit in `exact_seconds` (for the layer); the rest by the
 /// heuristic.
 pub(crate) fn run(graph: &Graph, exact_seconds: f64) -> EulerPaths {
-    let mut aug: Vec<AugEdge> =
-        graph.edges.iter().enumerate().map(|(i, e)| AugEdge { a: e.a, b: e.b, base: i, real: true }).collect();
+    let mut aug: Vec<AugEdge> = graph.edges.iter().enumerate().map(|(i, e)| AugEdge { a: e.a, b: e.b, base: i, real: true }).collect();
     let odd = odd_by_component(graph);
     let mut pairing_mm = 0.0;
     let mut lower_bound_mm = 0.0;
@@ -157,8 +156,7 @@ pub(crate) fn run(graph: &Graph, exact_seconds: f64) -> EulerPaths {
         }
         let pts: Vec<DVec2> = nodes.iter().map(|&v| graph.nodes[v]).collect();
         let n = pts.len();
-        let (method, cost) =
-            choose_method(super::matching::exact_seconds(n), super::matching::sparse_seconds(n), left);
+        let (method, cost) = choose_method(super::matching::exact_seconds(n), super::matching::sparse_seconds(n), left);
         left -= cost;
         let p = pair_points(&pts, method);
         pairing_mm += p.total;

@@ -120,6 +120,8 @@ pub(crate) fn run(graph: &Graph, iterations: u32, maximise: bool, rng: &mut Pcg6
         cur.clear();
         let mut weighted = 0.0;
         let mut paths = 0usize;
+        // Node records read (the growth checks count them).
+        let mut scanned = 0usize;
 
         while !incomplete.is_empty() {
             let start = incomplete[below(rng, incomplete.len())] as usize;
@@ -136,9 +138,11 @@ pub(crate) fn run(graph: &Graph, iterations: u32, maximise: bool, rng: &mut Pcg6
                         break;
                     }
                     let h = rec[ext];
+                    scanned += 1;
                     if h.len == 0.0 {
                         continue;
                     }
+                    scanned += h.a as usize;
                     for (k, s) in rec[ext + 1..ext + 1 + h.a as usize].iter().enumerate() {
                         if s.b & USED != 0 {
                             continue;
@@ -169,6 +173,7 @@ pub(crate) fn run(graph: &Graph, iterations: u32, maximise: bool, rng: &mut Pcg6
                 rec[slot].b |= USED;
                 let e = rec[slot].b & !USED;
                 let deg = rec[w].a as usize;
+                scanned += deg;
                 for t in &mut rec[w + 1..w + 1 + deg] {
                     if t.b == e {
                         t.b |= USED;
@@ -206,6 +211,7 @@ pub(crate) fn run(graph: &Graph, iterations: u32, maximise: bool, rng: &mut Pcg6
             weighted += length * segments as f64;
             paths += 1;
         }
+        crate::work::add(scanned);
         let score = weighted / (total_length * paths as f64);
         iteration_scores.push(score);
         if score > best_score {

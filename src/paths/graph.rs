@@ -263,11 +263,7 @@ struct Split {
 /// Cost: a uniform grid finds candidate crossing pairs, so the work is about linear in the
 /// number of segments for lattice-like input (100,000 edges in a few tens of milliseconds).
 pub fn build_graph(layer: &StrokeLayer, merge_tolerance_mm: f64) -> Graph {
-    let tol = if merge_tolerance_mm.is_finite() && merge_tolerance_mm > 0.0 {
-        merge_tolerance_mm
-    } else {
-        super::DEFAULT_MERGE_TOLERANCE_MM
-    };
+    let tol = if merge_tolerance_mm.is_finite() && merge_tolerance_mm > 0.0 { merge_tolerance_mm } else { super::DEFAULT_MERGE_TOLERANCE_MM };
     let mut degenerate = 0usize;
 
     // 1. Raw segments.
@@ -316,11 +312,7 @@ pub fn build_graph(layer: &StrokeLayer, merge_tolerance_mm: f64) -> Graph {
         }
     }
     if segs.is_empty() {
-        return Graph {
-            degenerate_dropped: degenerate,
-            adj_start: vec![0],
-            ..Graph::default()
-        };
+        return Graph { degenerate_dropped: degenerate, adj_start: vec![0], ..Graph::default() };
     }
 
     // 2. Split points at crossings and T-junctions.
@@ -444,18 +436,7 @@ pub fn build_graph(layer: &StrokeLayer, merge_tolerance_mm: f64) -> Graph {
         *comp = root_comp[r];
     }
 
-    Graph {
-        nodes,
-        edges,
-        bends,
-        bend_start,
-        degenerate_dropped: degenerate,
-        duplicates_collapsed: duplicates,
-        component,
-        components,
-        adj_start,
-        adj,
-    }
+    Graph { nodes, edges, bends, bend_start, degenerate_dropped: degenerate, duplicates_collapsed: duplicates, component, components, adj_start, adj }
 }
 
 /// Greedy deterministic node merging on a grid of cells 2·tol wide: a point joins the nearest
@@ -702,14 +683,10 @@ mod tests {
 
     #[test]
     fn merge_and_degenerate() {
-        let g = build_graph(
-            &layer(&[&[(0.0, 0.0), (1.0, 0.0)], &[(1.002, 0.001), (1.0, 1.0)], &[(3.0, 3.0), (3.001, 3.0)]]),
-            0.005,
-        );
+        let g = build_graph(&layer(&[&[(0.0, 0.0), (1.0, 0.0)], &[(1.002, 0.001), (1.0, 1.0)], &[(3.0, 3.0), (3.001, 3.0)]]), 0.005);
         assert_eq!(g.edges.len(), 2);
         assert_eq!(g.nodes.len(), 3);
         assert_eq!(g.degenerate_dropped, 1);
         assert_eq!(g.components, 1);
     }
 }
-

@@ -183,12 +183,7 @@ pub fn pair_points(points: &[DVec2], method: PairingMethod) -> Pairing {
     };
     let optimal = exact.is_some();
     let partner = exact.unwrap_or_else(|| {
-        min_pairing(
-            n,
-            &mut |active| knn_candidates(points, active, CANDIDATES_PER_NODE),
-            &mut |i, j, _| Some(points[i].distance(points[j])),
-        )
-        .0
+        min_pairing(n, &mut |active| knn_candidates(points, active, CANDIDATES_PER_NODE), &mut |i, j, _| Some(points[i].distance(points[j]))).0
     });
     let mut pairs = Vec::with_capacity(n / 2);
     let mut total = 0.0;
@@ -296,14 +291,10 @@ pub fn exact_units(mm: f64) -> i64 {
 pub fn certified_points(points: &[DVec2]) -> Result<super::blossom::Certified, super::blossom::CertifyError> {
     let n = points.len();
     let all: Vec<usize> = (0..n).collect();
-    let cands: Vec<(usize, usize, i64)> = knn_candidates(points, &all, SPARSE_CANDIDATES)
-        .into_iter()
-        .map(|(d, i, j)| (i, j, exact_units(d)))
-        .collect();
+    let cands: Vec<(usize, usize, i64)> = knn_candidates(points, &all, SPARSE_CANDIDATES).into_iter().map(|(d, i, j)| (i, j, exact_units(d))).collect();
     let grid = Grid::new(points);
-    let mut find = |duals: &super::blossom::Duals, out: &mut Vec<(usize, usize, i64)>| -> bool {
-        grid.violators(points, duals, VIOLATOR_CHECKS_PER_NODE * n, out)
-    };
+    let mut find =
+        |duals: &super::blossom::Duals, out: &mut Vec<(usize, usize, i64)>| -> bool { grid.violators(points, duals, VIOLATOR_CHECKS_PER_NODE * n, out) };
     super::blossom::certified_pairing(n, cands, &mut find, SPARSE_MAX_SOLVES)
 }
 
@@ -386,6 +377,7 @@ impl Grid {
             let (y0, y1) = (self.coord(p.y - r, self.min.y, self.ny), self.coord(p.y + r, self.min.y, self.ny));
             checks += (x1 - x0 + 1) * (y1 - y0 + 1);
             if checks > max_checks {
+                crate::work::add(checks);
                 return false;
             }
             for cy in y0..=y1 {
@@ -404,9 +396,12 @@ impl Grid {
                 }
             }
             if checks > max_checks {
+                crate::work::add(checks);
                 return false;
             }
         }
+        // Cells and pairs checked (the growth checks count them).
+        crate::work::add(checks);
         true
     }
 }
@@ -451,9 +446,7 @@ pub fn dual_lower_bound(n: usize, cands: &[(f64, usize, usize)], k: usize) -> f6
         }
         lists.push(l);
     }
-    let mut y: Vec<f64> = (0..n)
-        .map(|u| lists[u].iter().map(|x| 0.5 * x.1).fold(cap[u], f64::min))
-        .collect();
+    let mut y: Vec<f64> = (0..n).map(|u| lists[u].iter().map(|x| 0.5 * x.1).fold(cap[u], f64::min)).collect();
     for u in 0..n {
         if lists[u].is_empty() && cap[u].is_infinite() {
             y[u] = 0.0; // No partner seen at all: nothing is known.
@@ -491,6 +484,8 @@ pub fn knn_candidates(points: &[DVec2], active: &[usize], k: usize) -> Vec<(f64,
     let (start, items) = (&g.start, &g.items);
     let mut best: Vec<(f64, usize)> = Vec::with_capacity(k + 1);
     let max_r = nx.max(ny);
+    // Cells and points looked at (the growth checks count them).
+    let mut looked = 0usize;
     for &i in active {
         let p = points[i];
         let (cx, cy) = cell_of(p);
@@ -506,8 +501,10 @@ pub fn knn_candidates(points: &[DVec2], active: &[usize], k: usize) -> Vec<(f64,
                 let ring_row = y == y0 || y == y1;
                 let mut x = x0;
                 while x <= x1 {
+                    looked += 1;
                     if x >= 0 && x < nx as isize {
                         let c = y as usize * nx + x as usize;
+                        looked += start[c + 1] - start[c];
                         for &j in &items[start[c]..start[c + 1]] {
                             if j == i {
                                 continue;
@@ -533,6 +530,7 @@ pub fn knn_candidates(points: &[DVec2], active: &[usize], k: usize) -> Vec<(f64,
             out.push((d, i.min(j), i.max(j)));
         }
     }
+    crate::work::add(looked);
     out
 }
 
@@ -688,13 +686,10 @@ mod tests {
             let n = 300;
             let pts = random_points(n, 77 + seed, 100.0);
             let all: Vec<usize> = (0..n).collect();
-            let cands: Vec<(usize, usize, i64)> =
-                knn_candidates(&pts, &all, 3).into_iter().map(|(d, i, j)| (i, j, exact_units(d))).collect();
+            let cands: Vec<(usize, usize, i64)> = knn_candidates(&pts, &all, 3).into_iter().map(|(d, i, j)| (i, j, exact_units(d))).collect();
             let Ok(first) = super::super::blossom::min_cost_perfect_matching(n, &cands) else { continue };
             let grid = Grid::new(&pts);
-            let mut find = |d: &super::super::blossom::Duals, out: &mut Vec<(usize, usize, i64)>| {
-                grid.violators(&pts, d, usize::MAX, out)
-            };
+            let mut find = |d: &super::super::blossom::Duals, out: &mut Vec<(usize, usize, i64)>| grid.violators(&pts, d, usize::MAX, out);
             let c = certified_pairing(n, cands, &mut find, 50).expect("certified");
             let mut dist = vec![0.0; n * n];
             for i in 0..n {
@@ -732,7 +727,8 @@ mod tests {
     #[test]
     #[ignore]
     fn bench_sparse_vs_dense() {
-        let sizes: Vec<usize> = std::env::var("WEFT_BENCH_N").map(|v| v.split(',').map(|x| x.parse().unwrap()).collect()).unwrap_or(vec![400, 800, 1752, 5000, 20000]);
+        let sizes: Vec<usize> =
+            std::env::var("WEFT_BENCH_N").map(|v| v.split(',').map(|x| x.parse().unwrap()).collect()).unwrap_or(vec![400, 800, 1752, 5000, 20000]);
         for &n in &sizes {
             let pts = random_points(n, 5 + n as u64, 1000.0);
             let dense = if n <= 1752 && std::env::var("WEFT_BENCH_NO_DENSE").is_err() {
@@ -751,10 +747,7 @@ mod tests {
             let t = std::time::Instant::now();
             let c = certified_points(&pts).expect("certified");
             let ts = t.elapsed().as_secs_f64();
-            println!(
-                "n {n}: dense {:?} sparse {ts:.4} s cost {} solves {} added {} est {:.4} s",
-                dense, c.matching.cost, c.solves, c.added, sparse_seconds(n)
-            );
+            println!("n {n}: dense {:?} sparse {ts:.4} s cost {} solves {} added {} est {:.4} s", dense, c.matching.cost, c.solves, c.added, sparse_seconds(n));
         }
     }
 }

@@ -52,11 +52,7 @@ pub fn lts_percent(runs: &[Run]) -> f64 {
 pub fn oe_percent(runs: &[Run]) -> f64 {
     let total: f64 = runs.iter().map(|r| r.length).sum();
     let edges: usize = runs.iter().map(|r| r.segments).sum();
-    let num: f64 = runs
-        .iter()
-        .filter(|r| r.segments + 1 >= LTS_LONG_MIN_NODES)
-        .map(|r| r.length * r.segments as f64)
-        .sum();
+    let num: f64 = runs.iter().filter(|r| r.segments + 1 >= LTS_LONG_MIN_NODES).map(|r| r.length * r.segments as f64).sum();
     if total <= 0.0 || edges == 0 {
         0.0
     } else {

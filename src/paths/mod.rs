@@ -12,8 +12,8 @@
 //! native and wasm): no hash-map iteration order, no platform transcendental functions,
 //! GIPPO's RNG is `rand_pcg::Pcg64` seeded per layer.
 
-pub mod graph;
 pub mod blossom;
+pub mod graph;
 pub mod matching;
 pub mod metrics;
 
@@ -26,8 +26,8 @@ mod postman;
 pub use estimate::{estimate, Work, MAX_GIPPO_STEPS};
 pub use graph::{build_graph, Edge, Graph};
 
+use crate::geom::{DVec2, DVec3, Feature, Pass, Path, StrokeLayer, Toolpath};
 use crate::settings::{choice_docs, int, num, other, Field, Kind};
-use crate::geom::{DVec2, DVec3, Feature, Path, StrokeLayer, Toolpath, Pass};
 use metrics::Run;
 use rand_core::SeedableRng;
 use rand_pcg::Pcg64;
@@ -248,13 +248,7 @@ pub enum Error {
 /// graph edge exactly once. `progress` is called after each layer with the fraction done.
 /// The work is estimated first ([`Work::of_layers`], [`estimate`]); over a limit:
 /// [`Error::OverBudget`], before anything is built.
-pub fn optimise(
-    layers: &[StrokeLayer],
-    options: &Options,
-    line_width_mm: f64,
-    seed: u64,
-    progress: &mut dyn FnMut(f32),
-) -> Result<Optimised, Error> {
+pub fn optimise(layers: &[StrokeLayer], options: &Options, line_width_mm: f64, seed: u64, progress: &mut dyn FnMut(f32)) -> Result<Optimised, Error> {
     validate(options)?;
     estimate(&Work::of_layers(layers), options).check()?;
     let mut toolpath = Toolpath::default();
@@ -394,7 +388,11 @@ pub fn layer_seed(seed: u64, index: usize) -> u64 {
 /// Checks the options against [`FIELDS`], the ranges the design's form shows.
 pub fn validate(options: &Options) -> Result<(), Error> {
     let problems = crate::settings::check(options, FIELDS, "");
-    if problems.is_empty() { Ok(()) } else { Err(Error::BadOptions { problems }) }
+    if problems.is_empty() {
+        Ok(())
+    } else {
+        Err(Error::BadOptions { problems })
+    }
 }
 
 /// Rows of [`Options`] (paths relative to the options): ranges, units, help, shared by the
@@ -450,15 +448,7 @@ impl Chain {
 
 /// Splits a chain into extrusion paths: every maximal printed run is a [`Path`]; the first is
 /// reached by a free travel, later ones through the travelled run before them.
-fn emit_chain(
-    graph: &Graph,
-    chain: &Chain,
-    z: f64,
-    width: f64,
-    options: &Options,
-    paths: &mut Vec<Path>,
-    runs: &mut Vec<Run>,
-) {
+fn emit_chain(graph: &Graph, chain: &Chain, z: f64, width: f64, options: &Options, paths: &mut Vec<Path>, runs: &mut Vec<Run>) {
     let at = |v: usize| DVec3::new(graph.nodes[v].x, graph.nodes[v].y, z);
     let mut k = 0;
     let mut first = true;
@@ -508,8 +498,7 @@ fn emit_chain(
             points.extend(graph.bends_from(chain.edges[i], chain.nodes[i]).map(|p| DVec3::new(p.x, p.y, z)));
         }
         points.push(at(chain.nodes[k]));
-        let speed_factor =
-            if (segments as u64) < options.short_path_segments as u64 { options.short_path_speed_factor } else { 1.0 };
+        let speed_factor = if (segments as u64) < options.short_path_segments as u64 { options.short_path_speed_factor } else { 1.0 };
         paths.push(Path { points, feature: Feature::ALL[feature], width, speed_factor, approach, data: None });
         runs.push(Run { length, segments });
         first = false;

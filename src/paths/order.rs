@@ -41,10 +41,14 @@ pub(crate) fn sort_longest_first(chains: &mut [Chain], graph: &Graph) {
         }
         (segs, len)
     };
-    let mut keyed: Vec<(usize, f64, usize)> = chains.iter().enumerate().map(|(i, c)| {
-        let (s, l) = key(c);
-        (s, l, i)
-    }).collect();
+    let mut keyed: Vec<(usize, f64, usize)> = chains
+        .iter()
+        .enumerate()
+        .map(|(i, c)| {
+            let (s, l) = key(c);
+            (s, l, i)
+        })
+        .collect();
     keyed.sort_by(|x, y| y.0.cmp(&x.0).then(y.1.total_cmp(&x.1)).then(x.2.cmp(&y.2)));
     let mut taken: Vec<Option<Chain>> = chains.iter_mut().map(|c| Some(std::mem::take(c))).collect();
     for (slot, &(_, _, i)) in keyed.iter().enumerate() {
@@ -73,9 +77,7 @@ fn nearest_neighbour(ends: &[[DVec2; 2]], from: DVec2) -> Vec<(usize, bool)> {
     }
     let nx = (size.x / cell).floor() as usize + 1;
     let ny = (size.y / cell).floor() as usize + 1;
-    let cell_xy = |p: DVec2| -> (isize, isize) {
-        (((p.x - min.x) / cell).floor() as isize, ((p.y - min.y) / cell).floor() as isize)
-    };
+    let cell_xy = |p: DVec2| -> (isize, isize) { (((p.x - min.x) / cell).floor() as isize, ((p.y - min.y) / cell).floor() as isize) };
     let mut cells: Vec<Vec<u32>> = vec![Vec::new(); nx * ny];
     for (i, e) in ends.iter().enumerate() {
         for (w, p) in e.iter().enumerate() {
@@ -91,9 +93,12 @@ fn nearest_neighbour(ends: &[[DVec2; 2]], from: DVec2) -> Vec<(usize, bool)> {
         None => true,
         Some((bd, bid)) => d < *bd || (d == *bd && id < *bid),
     };
+    // Chain ends and grid cells looked at (the growth checks count them).
+    let mut looked = 0usize;
     while !remaining.is_empty() {
         let mut best: Option<(f64, u32)> = None;
         if remaining.len() < BRUTE_BELOW || order.is_empty() {
+            looked += 2 * remaining.len();
             for &i in &remaining {
                 for (w, p) in ends[i].iter().enumerate() {
                     let id = (2 * i + w) as u32;
@@ -116,7 +121,9 @@ fn nearest_neighbour(ends: &[[DVec2; 2]], from: DVec2) -> Vec<(usize, bool)> {
                     let edge_row = y == cy - r || y == cy + r;
                     let mut x = cx - r;
                     while x <= cx + r {
+                        looked += 1;
                         if x >= 0 && x < nx as isize {
+                            looked += cells[y as usize * nx + x as usize].len();
                             for &id in &cells[y as usize * nx + x as usize] {
                                 let i = id as usize / 2;
                                 let d = cur.distance(ends[i][id as usize % 2]);
@@ -148,11 +155,13 @@ fn nearest_neighbour(ends: &[[DVec2; 2]], from: DVec2) -> Vec<(usize, bool)> {
         for (w, p) in ends[i].iter().enumerate() {
             let (x, y) = cell_xy(*p);
             let list = &mut cells[y as usize * nx + x as usize];
+            looked += list.len();
             if let Some(k) = list.iter().position(|&e| e as usize == 2 * i + w) {
                 list.swap_remove(k);
             }
         }
     }
+    crate::work::add(looked);
     order
 }
 
@@ -219,6 +228,8 @@ fn improve(order: &mut Vec<(usize, bool)>, ends: &[[DVec2; 2]], from: Option<DVe
     let mut s: Vec<DVec2> = order.iter().map(|&(i, r)| ends[i][r as usize]).collect();
     let mut e: Vec<DVec2> = order.iter().map(|&(i, r)| ends[i][1 - r as usize]).collect();
     for _ in 0..MAX_PASSES {
+        // Moves tried, and elements shifted by a chain moved (the growth checks count them).
+        crate::work::add(m * 2 * (WINDOW + 1));
         let mut improved = false;
         // 2-opt: reverse the run i..=j (each chain flipped).
         for i in 0..m {
@@ -261,6 +272,7 @@ fn improve(order: &mut Vec<(usize, bool)>, ends: &[[DVec2; 2]], from: Option<DVe
                 }
             }
             if let Some((_, q, flip)) = best {
+                crate::work::add(2 * m);
                 let (mut c, mut a, mut b) = (order.remove(i), s.remove(i), e.remove(i));
                 if flip {
                     c.1 = !c.1;
@@ -342,7 +354,11 @@ pub(crate) fn sort_directional(chains: Vec<Chain>, graph: &Graph, dir: Option<DV
         .enumerate()
         .map(|(i, e)| {
             let (a, b) = (key(e[0]), key(e[1]));
-            if b < a { (b, i, true) } else { (a, i, false) }
+            if b < a {
+                (b, i, true)
+            } else {
+                (a, i, false)
+            }
         })
         .collect();
     keyed.sort_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));

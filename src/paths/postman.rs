@@ -47,13 +47,7 @@ struct Dijkstra {
 
 impl Dijkstra {
     fn new(n: usize) -> Dijkstra {
-        Dijkstra {
-            dist: vec![f64::INFINITY; n],
-            pred: vec![usize::MAX; n],
-            done: vec![false; n],
-            touched: Vec::new(),
-            heap: BinaryHeap::new(),
-        }
+        Dijkstra { dist: vec![f64::INFINITY; n], pred: vec![usize::MAX; n], done: vec![false; n], touched: Vec::new(), heap: BinaryHeap::new() }
     }
 
     fn reset(&mut self) {
@@ -73,14 +67,18 @@ impl Dijkstra {
         self.dist[src] = 0.0;
         self.touched.push(src);
         self.heap.push(Item { d: 0.0, v: src });
+        // Nodes popped and edges relaxed (the growth checks count them).
+        let mut steps = 0usize;
         while let Some(Item { d, v }) = self.heap.pop() {
+            steps += 1;
             if self.done[v] || d > self.dist[v] {
                 continue;
             }
             self.done[v] = true;
             if !visit(v, d) {
-                return;
+                break;
             }
+            steps += g.incident(v).len();
             for &e in g.incident(v) {
                 let w = g.other(e, v);
                 let nd = d + g.edges[e].length;
@@ -94,6 +92,7 @@ impl Dijkstra {
                 }
             }
         }
+        crate::work::add(steps);
     }
 }
 
@@ -169,9 +168,7 @@ pub(crate) fn exact_seconds(odd: usize, edges: usize) -> f64 {
 /// settles about [`super::matching::SPARSE_CANDIDATES`] odd nodes' share of the component.
 pub(crate) fn sparse_seconds(odd: usize, edges: usize) -> f64 {
     super::matching::sparse_seconds(odd)
-        + (super::matching::SPARSE_MAX_SOLVES * 2 * super::matching::SPARSE_CANDIDATES) as f64
-            * edges as f64
-            * DIJKSTRA_EDGE_SECONDS
+        + (super::matching::SPARSE_MAX_SOLVES * 2 * super::matching::SPARSE_CANDIDATES) as f64 * edges as f64 * DIJKSTRA_EDGE_SECONDS
 }
 
 /// Settled nodes per odd node and round the violator searches may use before giving up.
@@ -232,9 +229,7 @@ fn sparse_pairing(graph: &Graph, nodes: &[usize], local: &[usize], dij: &mut Dij
         }
         true
     };
-    super::blossom::certified_pairing(m, cands, &mut find, super::matching::SPARSE_MAX_SOLVES)
-        .ok()
-        .map(|c| c.matching.mates)
+    super::blossom::certified_pairing(m, cands, &mut find, super::matching::SPARSE_MAX_SOLVES).ok().map(|c| c.matching.mates)
 }
 
 /// Chinese-postman walks of every component. Components are paired exactly (graph distances,
@@ -244,8 +239,7 @@ fn sparse_pairing(graph: &Graph, nodes: &[usize], local: &[usize], dij: &mut Dij
 pub(crate) fn run(graph: &Graph, exact_budget: f64) -> PostmanPaths {
     const NONE: usize = usize::MAX;
     let n = graph.nodes.len();
-    let mut aug: Vec<AugEdge> =
-        graph.edges.iter().enumerate().map(|(i, e)| AugEdge { a: e.a, b: e.b, base: i, real: true }).collect();
+    let mut aug: Vec<AugEdge> = graph.edges.iter().enumerate().map(|(i, e)| AugEdge { a: e.a, b: e.b, base: i, real: true }).collect();
     let odd = odd_by_component(graph);
     let mut dij = Dijkstra::new(n);
     let mut local = vec![NONE; n];

@@ -120,7 +120,13 @@ pub fn estimate(bounds: &Aabb, options: &Options) -> Estimate {
         .quantity("nodes", "Cell-size nodes", n, "")
         .quantity("trace_samples", "Gyroid samples (slicing)", samples, "")
         .limit("cell-size nodes", n, MAX_NODES as f64, "", "a larger infill cell (lower ρ_s) or a smaller part")
-        .limit("samples of the graded gyroid", samples, MAX_TRACE_SAMPLES, "", "crop the ROI, raise the layer height, or narrow the cell size range (job.density.max_cell_ratio)")
+        .limit(
+            "samples of the graded gyroid",
+            samples,
+            MAX_TRACE_SAMPLES,
+            "",
+            "crop the ROI, raise the layer height, or narrow the cell size range (job.density.max_cell_ratio)",
+        )
         .cost(n * 40.0 + per_layer * 24.0, n * 27.0 * 2e-8 + samples * 3e-8)
 }
 
@@ -129,7 +135,14 @@ pub fn estimate(bounds: &Aabb, options: &Options) -> Estimate {
 pub fn size_cells(bounds: &Aabb, density: &dyn Fn(DVec3) -> Option<f64>, options: &Options) -> Result<Sized, Error> {
     let o = options;
     let ok = |x: f64| x.is_finite() && x > 0.0;
-    if !(ok(o.reference_mm) && ok(o.width_min_mm) && o.width_max_mm > o.width_min_mm && o.width_max_mm.is_finite() && ok(o.layer_mm) && o.max_ratio >= 1.0 && o.max_ratio.is_finite()) {
+    if !(ok(o.reference_mm)
+        && ok(o.width_min_mm)
+        && o.width_max_mm > o.width_min_mm
+        && o.width_max_mm.is_finite()
+        && ok(o.layer_mm)
+        && o.max_ratio >= 1.0
+        && o.max_ratio.is_finite())
+    {
         return Err(Error::BadOption(format!("options out of range: {o:?}")));
     }
     if let Some(r) = estimate(bounds, o).refused {

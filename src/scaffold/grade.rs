@@ -109,10 +109,25 @@ fn infill_segments(t: &Toolpath) -> usize {
 /// outside the field). `cell_ratio`, when the infill's cell varies ([`super::cells`]), is
 /// `L(p) / L_s`: the bead then is `A_s · (ρ / ρ_s) · L(p) / L_s` (equation 1 in the local cell)
 /// and the floor `ρ_min · L_s / L(p)` (`E_w,min` in that cell).
-pub fn grade(toolpath: &Toolpath, density: &dyn Fn(DVec3) -> Option<f64>, cell_ratio: Option<&dyn Fn(DVec3) -> f64>, options: &Options, progress: &mut dyn FnMut(f32)) -> Result<Graded, Error> {
+pub fn grade(
+    toolpath: &Toolpath,
+    density: &dyn Fn(DVec3) -> Option<f64>,
+    cell_ratio: Option<&dyn Fn(DVec3) -> f64>,
+    options: &Options,
+    progress: &mut dyn FnMut(f32),
+) -> Result<Graded, Error> {
     let o = options;
     let ok = |x: f64| x.is_finite() && x > 0.0;
-    if !(ok(o.rho_s) && o.rho_s <= 1.0 && o.rho_min.is_finite() && (0.0..=1.0).contains(&o.rho_min) && ok(o.nominal_area_mm2) && ok(o.segment_mm) && ok(o.q_max_mm3_s) && ok(o.width_max_mm) && ok(o.feed_mm_s)) {
+    if !(ok(o.rho_s)
+        && o.rho_s <= 1.0
+        && o.rho_min.is_finite()
+        && (0.0..=1.0).contains(&o.rho_min)
+        && ok(o.nominal_area_mm2)
+        && ok(o.segment_mm)
+        && ok(o.q_max_mm3_s)
+        && ok(o.width_max_mm)
+        && ok(o.feed_mm_s))
+    {
         return Err(Error::BadOption(format!("grading options out of range: {o:?}")));
     }
     let e = estimate(toolpath, o);

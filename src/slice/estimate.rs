@@ -3,7 +3,7 @@
 //! Layer count exact; contour segments = the triangles' layer crossings (each crossing is one
 //! contour segment); infill from the mesh's volume and the mean chord of its layers (Cauchy:
 //! π·area / perimeter), so a hollow or thin part is not charged like its bounding box.
-//! Checked against real slices in `tests/estimates.rs`.
+//! Checked against real slices in `tests/it/estimates.rs`.
 
 use super::{layer_stack_len, InfillPattern, Options, MAX_COORD_MM, MAX_LAYERS};
 use crate::budget::Estimate;
@@ -37,7 +37,7 @@ const BYTES_PER_CLIPPED_SEGMENT: f64 = 160.0;
 
 /// Segments per mm of a sparse pattern's curves at cell size `cell_mm`: the gyroid's
 /// bisection (at least 13 chords per cell length, and about `0.8 √(L / tolerance)`; measured
-/// for L = 0.5–20 mm in `tests/infill_patterns.rs`), the honeycomb's two per grid unit
+/// for L = 0.5–20 mm in `tests/it/infill_patterns.rs`), the honeycomb's two per grid unit
 /// (`L / 2`), rectilinear's none beyond the one per line across the region.
 fn segments_per_mm(pattern: InfillPattern, cell_mm: f64) -> f64 {
     match pattern {
@@ -70,7 +70,15 @@ struct MeshStats {
 const STATS_CHUNK: usize = 1 << 16;
 
 fn stats(mesh: &Mesh, layer_height: f64) -> MeshStats {
-    let mut s = MeshStats { triangles: mesh.triangles.len(), crossings: 0.0, volume: 0.0, wall_area: 0.0, flat_area: 0.0, min: [f64::INFINITY; 3], max: [f64::NEG_INFINITY; 3] };
+    let mut s = MeshStats {
+        triangles: mesh.triangles.len(),
+        crossings: 0.0,
+        volume: 0.0,
+        wall_area: 0.0,
+        flat_area: 0.0,
+        min: [f64::INFINITY; 3],
+        max: [f64::NEG_INFINITY; 3],
+    };
     for v in &mesh.vertices {
         for k in 0..3 {
             s.min[k] = s.min[k].min(v[k] as f64);
@@ -178,7 +186,8 @@ pub fn estimate(mesh: &Mesh, options: &Options) -> Estimate {
     let contour = 0.5 * s.crossings;
     let perimeter_segments = contour * o.perimeters as f64;
     let segments = perimeter_segments + infill_segments + layers;
-    let bytes = s.triangles as f64 * BYTES_PER_TRIANGLE + contour * BYTES_PER_CROSSING + segments * BYTES_PER_SEGMENT + generated_per_layer * BYTES_PER_CLIPPED_SEGMENT;
+    let bytes =
+        s.triangles as f64 * BYTES_PER_TRIANGLE + contour * BYTES_PER_CROSSING + segments * BYTES_PER_SEGMENT + generated_per_layer * BYTES_PER_CLIPPED_SEGMENT;
     let outline_ops = 2.0 + o.perimeters as f64 + 2.0 * o.solid_layers as f64;
     let seconds = contour * outline_ops * SECONDS_PER_OUTLINE_OP + segments * SECONDS_PER_SEGMENT + generated * SECONDS_PER_CLIPPED_SEGMENT;
     e.quantity("layers", "Layers", layers, "")

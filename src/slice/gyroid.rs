@@ -29,7 +29,7 @@ use std::f64::consts::{PI, TAU};
 /// Mean toolpath length per unit layer area times the cell size `L` (the paper's `k_c · m`):
 /// the two branches' arc length over one period, / 2π, averaged over a period in `z` (400
 /// heights, 20 000 steps per period: 2.4586; k_c = 1.2293, 0.7 % above table 1's 1.221,
-/// which PrusaSlicer's coarser 0.2 mm chord tolerance would explain). `tests/infill_patterns.rs`
+/// which PrusaSlicer's coarser 0.2 mm chord tolerance would explain). `tests/it/infill_patterns.rs`
 /// measures the clipped toolpaths against it.
 pub const LENGTH_PER_AREA_FACTOR: f64 = 2.4586;
 

@@ -85,7 +85,12 @@ impl CellField {
     /// Whether the field is usable: finite positive sizes, a node per value.
     pub fn is_valid(&self) -> bool {
         let n = self.dims.iter().product::<usize>();
-        n > 0 && self.cell_mm.len() == n && self.step_mm > 0.0 && self.step_mm.is_finite() && self.reference_mm > 0.0 && self.cell_mm.iter().all(|l| l.is_finite() && *l > 0.0)
+        n > 0
+            && self.cell_mm.len() == n
+            && self.step_mm > 0.0
+            && self.step_mm.is_finite()
+            && self.reference_mm > 0.0
+            && self.cell_mm.iter().all(|l| l.is_finite() && *l > 0.0)
     }
 }
 

@@ -78,13 +78,7 @@ pub(crate) fn rectilinear(area: &[IntShape<i32>], spacing_um: f64, angle_rad: f6
     if hits.is_empty() {
         return Vec::new();
     }
-    hits.sort_by(|a, b| {
-        a.k.cmp(&b.k)
-            .then(a.x.total_cmp(&b.x))
-            .then(a.contour.cmp(&b.contour))
-            .then(a.edge.cmp(&b.edge))
-            .then(a.t.total_cmp(&b.t))
-    });
+    hits.sort_by(|a, b| a.k.cmp(&b.k).then(a.x.total_cmp(&b.x)).then(a.contour.cmp(&b.contour)).then(a.edge.cmp(&b.edge)).then(a.t.total_cmp(&b.t)));
 
     // Lines: pairs of consecutive crossings on each scanline.
     let nh = hits.len();
@@ -217,11 +211,7 @@ pub(crate) fn rectilinear(area: &[IntShape<i32>], spacing_um: f64, angle_rad: f6
         pts.push(point(r));
         pts.extend(fwd);
         // Rotate back by +angle and convert to mm.
-        out.push(
-            pts.into_iter()
-                .map(|p| DVec2::new((p.x * c - p.y * s) / 1000.0, (p.x * s + p.y * c) / 1000.0))
-                .collect(),
-        );
+        out.push(pts.into_iter().map(|p| DVec2::new((p.x * c - p.y * s) / 1000.0, (p.x * s + p.y * c) / 1000.0)).collect());
     }
     out
 }
@@ -325,12 +315,7 @@ mod tests {
     use i_overlay::i_float::int::point::IntPoint;
 
     fn square(side: i32) -> Vec<IntShape<i32>> {
-        vec![vec![vec![
-            IntPoint::new(0, 0),
-            IntPoint::new(side, 0),
-            IntPoint::new(side, side),
-            IntPoint::new(0, side),
-        ]]]
+        vec![vec![vec![IntPoint::new(0, 0), IntPoint::new(side, 0), IntPoint::new(side, side), IntPoint::new(0, side)]]]
     }
 
     fn total_len(ls: &[Vec<DVec2>]) -> f64 {
@@ -359,12 +344,7 @@ mod tests {
     #[test]
     fn lines_do_not_cross_a_hole() {
         let mut a = square(10_000);
-        a[0].push(vec![
-            IntPoint::new(3_000, 3_000),
-            IntPoint::new(3_000, 7_000),
-            IntPoint::new(7_000, 7_000),
-            IntPoint::new(7_000, 3_000),
-        ]);
+        a[0].push(vec![IntPoint::new(3_000, 3_000), IntPoint::new(3_000, 7_000), IntPoint::new(7_000, 7_000), IntPoint::new(7_000, 3_000)]);
         let lines = rectilinear(&a, 400.0, 0.0, 40.0);
         for l in &lines {
             for w in l.windows(2) {

@@ -31,9 +31,9 @@ mod plane;
 mod regions;
 mod stitch;
 
-use crate::settings::{choice_docs, int, num, other, percent, Field, Kind};
 use crate::geom::tolerance::UNITS_PER_MM;
-use crate::geom::{DVec2, Feature, Mesh, Polygon, Toolpath, Pass};
+use crate::geom::{DVec2, Feature, Mesh, Pass, Polygon, Toolpath};
+use crate::settings::{choice_docs, int, num, other, percent, Field, Kind};
 use i_overlay::i_shape::int::shape::{IntShape, IntShapes};
 use serde::{Deserialize, Serialize};
 
@@ -101,7 +101,7 @@ impl InfillPattern {
 
     /// Mean toolpath length per unit layer area times the unit cell size `L`: the paper's
     /// `k_c · m` (table 1) as this implementation draws the pattern, measured in
-    /// `tests/infill_patterns.rs` (mean over layers for the patterns that change with height).
+    /// `tests/it/infill_patterns.rs` (mean over layers for the patterns that change with height).
     /// Rectilinear √2 = 1.4142 (table 1: 0.707 × 2, the same); gyroid 2.4586 (table 1: 2.442,
     /// 0.7 % less); 3D honeycomb 2 + (√2 − 1)/2 = 2.2071 (table 1: 2.022; PrusaSlicer's
     /// geometry with `L` its period across the lines gives 9 % more than the table).
@@ -247,14 +247,27 @@ pub enum Error {
 /// Checks every option against [`FIELDS`], the ranges the design's form shows.
 fn validate(o: &Options) -> Result<(), Error> {
     let problems = crate::settings::check(o, FIELDS, "");
-    if problems.is_empty() { Ok(()) } else { Err(Error::BadOptions { problems }) }
+    if problems.is_empty() {
+        Ok(())
+    } else {
+        Err(Error::BadOptions { problems })
+    }
 }
 
 /// Rows of [`Options`] (paths relative to the options): ranges, units, help, shared by the
 /// design's form and [`slice`]'s own check.
 pub const FIELDS: &[Field] = &[
     num("first_layer_height_mm", "Slicing", "First layer height", "mm", 0.01, 2.0, 0.01, "Height of the first layer: a thicker one sticks to the bed better."),
-    num("layer_height_mm", "Slicing", "Layer height", "mm", 0.01, 2.0, 0.01, "Height of every other layer: thinner is smoother and slower (LT of GIPPO equation 4)."),
+    num(
+        "layer_height_mm",
+        "Slicing",
+        "Layer height",
+        "mm",
+        0.01,
+        2.0,
+        0.01,
+        "Height of every other layer: thinner is smoother and slower (LT of GIPPO equation 4).",
+    ),
     int("perimeters", "Slicing", "Perimeters", 0.0, 50.0, "Walls: closed loops printed around the outline of each layer."),
     num("line_width_mm", "Slicing", "Line width", "mm", 0.05, 5.0, 0.01, "Width of each printed line, usually about the nozzle diameter."),
     percent(num("infill_density", "Slicing", "Infill density", "", 0.0, 1.0, 0.05, "How much of the inside is filled: 0 % hollow, 100 % solid.")),
@@ -262,14 +275,30 @@ pub const FIELDS: &[Field] = &[
     int("solid_layers", "Slicing", "Solid layers (top and bottom)", 0.0, 1000.0, "Fully filled layers that close the part at its top and bottom."),
     num("gap_closing_mm", "Slicing", "Gap closing", "mm", 0.0, 5.0, 0.01, "Repairs small holes in a mesh: outline ends closer than this are joined."),
     choice_docs(
-        other("infill_pattern", "Slicing", "Infill pattern", Kind::Choice, INFILL_PATTERNS, "The shape of the sparse infill inside the part (top and bottom skins stay straight lines)."),
+        other(
+            "infill_pattern",
+            "Slicing",
+            "Infill pattern",
+            Kind::Choice,
+            INFILL_PATTERNS,
+            "The shape of the sparse infill inside the part (top and bottom skins stay straight lines).",
+        ),
         &[
             "Straight lines, crossing at 90° from layer to layer.",
             "Wavy lines that shift with height, building a gyroid: open, even channels in every direction.",
             "Zig-zags that shift with height, building cells like truncated octahedra.",
         ],
     ),
-    num("infill_cell_mm", "Slicing", "Infill cell size", "mm", MIN_INFILL_CELL_MM, MAX_INFILL_CELL_MM, 0.1, "Size of one repeat of the infill pattern; left out, it follows from the infill density."),
+    num(
+        "infill_cell_mm",
+        "Slicing",
+        "Infill cell size",
+        "mm",
+        MIN_INFILL_CELL_MM,
+        MAX_INFILL_CELL_MM,
+        0.1,
+        "Size of one repeat of the infill pattern; left out, it follows from the infill density.",
+    ),
 ];
 
 /// Layer tops, heights and cutting heights for a mesh whose top is at `top` mm: layers are
@@ -539,10 +568,7 @@ fn fill_layer(o: &Options, layer_shapes: &[IntShapes<i32>], stack: &[(f64, f64, 
             })
             .unwrap_or_else(|| {
                 (0..works.len())
-                    .min_by(|&a, &b| {
-                        order::box_dist2(p, works[a].min, works[a].max)
-                            .total_cmp(&order::box_dist2(p, works[b].min, works[b].max))
-                    })
+                    .min_by(|&a, &b| order::box_dist2(p, works[a].min, works[a].max).total_cmp(&order::box_dist2(p, works[b].min, works[b].max)))
                     .unwrap_or(0)
             });
         if let Some(r) = works.get_mut(k) {

@@ -43,9 +43,7 @@ pub(crate) fn order_layer(regions: Vec<RegionWork>, pos: &mut DVec2, z: f64, wid
         }
         let Some((_, i)) = best else { break };
         let r = left[i].take().unwrap_or_default();
-        let mk = |pts: Vec<DVec2>, feature: Feature| {
-            Path::new(pts.into_iter().map(|p| DVec3::new(p.x, p.y, z)).collect(), feature, width)
-        };
+        let mk = |pts: Vec<DVec2>, feature: Feature| Path::new(pts.into_iter().map(|p| DVec3::new(p.x, p.y, z)).collect(), feature, width);
         for (level, loops) in r.perimeters.into_iter().enumerate().rev() {
             let feature = if level == 0 { Feature::ExternalPerimeter } else { Feature::Perimeter };
             for pts in order_loops(loops, pos) {

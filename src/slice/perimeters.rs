@@ -57,12 +57,7 @@ mod tests {
 
     #[test]
     fn square_insets() {
-        let sq: IntShape<i32> = vec![vec![
-            IntPoint::new(0, 0),
-            IntPoint::new(10_000, 0),
-            IntPoint::new(10_000, 10_000),
-            IntPoint::new(0, 10_000),
-        ]];
+        let sq: IntShape<i32> = vec![vec![IntPoint::new(0, 0), IntPoint::new(10_000, 0), IntPoint::new(10_000, 10_000), IntPoint::new(0, 10_000)]];
         let levels = perimeter_levels(&sq, 3, 400);
         assert_eq!(levels.len(), 3);
         // 10 mm − 2 × 0.2 mm, then − 2 × 0.6 mm, − 2 × 1.0 mm.
@@ -70,12 +65,7 @@ mod tests {
             assert_eq!(shapes_area2(&levels[k]), 2 * side * side, "level {k}");
         }
         // A too-thin region loses its inner levels.
-        let thin: IntShape<i32> = vec![vec![
-            IntPoint::new(0, 0),
-            IntPoint::new(10_000, 0),
-            IntPoint::new(10_000, 1_300),
-            IntPoint::new(0, 1_300),
-        ]];
+        let thin: IntShape<i32> = vec![vec![IntPoint::new(0, 0), IntPoint::new(10_000, 0), IntPoint::new(10_000, 1_300), IntPoint::new(0, 1_300)]];
         assert_eq!(perimeter_levels(&thin, 3, 400).len(), 2);
     }
 }

@@ -7,8 +7,8 @@
 //! Intersection points are computed from the edge's lower vertex to its upper one (a fixed
 //! order), so the two triangles sharing an edge produce bit-identical points.
 
-use crate::geom::Mesh;
 use crate::geom::tolerance::to_um;
+use crate::geom::Mesh;
 
 /// A point in integer micrometres (x, y). Ordered lexicographically.
 pub(crate) type Pt = [i32; 2];
@@ -39,7 +39,11 @@ fn cut(lo: [f64; 3], hi: [f64; 3], h: f64) -> Pt {
 /// Intersection point of edge (p, q) with the plane, whichever of p, q is the lower one.
 #[inline]
 fn cut_edge(p: [f64; 3], q: [f64; 3], h: f64) -> Pt {
-    if p[2] < h { cut(p, q, h) } else { cut(q, p, h) }
+    if p[2] < h {
+        cut(p, q, h)
+    } else {
+        cut(q, p, h)
+    }
 }
 
 /// The oriented segment where triangle `t` crosses the plane `z = h`, if it does.
@@ -154,10 +158,7 @@ mod tests {
 
     #[test]
     fn vertex_on_plane_counts_as_above() {
-        let mesh = Mesh {
-            vertices: vec![[0.0, 0.0, 0.0], [1.0, 0.0, 1.0], [0.0, 1.0, 1.0]],
-            triangles: vec![[0, 1, 2]],
-        };
+        let mesh = Mesh { vertices: vec![[0.0, 0.0, 0.0], [1.0, 0.0, 1.0], [0.0, 1.0, 1.0]], triangles: vec![[0, 1, 2]] };
         // Plane through the two upper vertices: the segment is exactly that edge.
         let s = cut_triangle(&mesh, [0, 1, 2], 1.0).unwrap();
         let mut ends = [s.a, s.b];

@@ -48,8 +48,7 @@ pub(crate) fn union_loops(loops: &[Vec<Pt>]) -> (IntShapes<i32>, bool) {
     if loops.is_empty() {
         return (Vec::new(), false);
     }
-    let contours: Vec<IntContour<i32>> =
-        loops.iter().map(|l| l.iter().map(|p| IntPoint::new(p[0], p[1])).collect()).collect();
+    let contours: Vec<IntContour<i32>> = loops.iter().map(|l| l.iter().map(|p| IntPoint::new(p[0], p[1])).collect()).collect();
     let sum: i64 = contours.iter().map(|c| area2(c)).sum();
     let mut shapes = Overlay::from_subj(&contours).overlay(OverlayRule::Subject, FillRule::NonZero);
     sort_shapes(&mut shapes);
@@ -61,10 +60,7 @@ pub(crate) fn union_loops(loops: &[Vec<Pt>]) -> (IntShapes<i32>, bool) {
 /// Integer shapes → `Polygon`s in mm (outer CCW, holes CW, as i_overlay outputs them).
 pub(crate) fn to_polygons(shapes: &[IntShape<i32>]) -> Vec<Polygon> {
     let conv = |c: &IntContour<i32>| c.iter().map(|p| DVec2::new(from_um(p.x), from_um(p.y))).collect::<Vec<_>>();
-    shapes
-        .iter()
-        .map(|s| Polygon { outer: conv(&s[0]), holes: s[1..].iter().map(conv).collect() })
-        .collect()
+    shapes.iter().map(|s| Polygon { outer: conv(&s[0]), holes: s[1..].iter().map(conv).collect() }).collect()
 }
 
 /// Intersection of two shape sets (NonZero).

@@ -344,9 +344,7 @@ mod tests {
 
     fn square_segs(offset: i32) -> Vec<Seg> {
         let p = [[0, 0], [1000, 0], [1000, 1000], [0, 1000]];
-        (0..4)
-            .map(|i| Seg { a: [p[i][0] + offset, p[i][1]], b: [p[(i + 1) % 4][0] + offset, p[(i + 1) % 4][1]] })
-            .collect()
+        (0..4).map(|i| Seg { a: [p[i][0] + offset, p[i][1]], b: [p[(i + 1) % 4][0] + offset, p[(i + 1) % 4][1]] }).collect()
     }
 
     #[test]

@@ -243,9 +243,7 @@ fn deflate(bytes: &[u8]) -> Vec<u8> {
 /// A deflated zip of `files` (names kept).
 pub fn zip_files(files: &[(String, Vec<u8>)]) -> Vec<u8> {
     let mut w = zip::ZipWriter::new(Cursor::new(Vec::new()));
-    let opts = zip::write::SimpleFileOptions::default()
-        .compression_method(zip::CompressionMethod::Deflated)
-        .last_modified_time(zip::DateTime::default());
+    let opts = zip::write::SimpleFileOptions::default().compression_method(zip::CompressionMethod::Deflated).last_modified_time(zip::DateTime::default());
     for (name, body) in files {
         // Writing into a Vec cannot fail.
         let _ = w.start_file(name.as_str(), opts);

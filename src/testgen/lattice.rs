@@ -63,10 +63,7 @@ fn projected(n: usize, max_segment_mm: f64) -> String {
     let mut d = design(&format!("projected-honeycomb-{n}"), side(n), Pattern::Honeycomb { hexagon_radius_mm: 1.0 }, Method::Euler, 1);
     let mut j: LatticeJob = d.job.settings().expect("a lattice job");
     j.lattice.layers = 28;
-    j.nonplanar = Some(nonplanar::Options {
-        surface: nonplanar::Surface::Sphere { radius_mm: 400.0, center_mm: [0.0, 0.0, -380.0] },
-        max_segment_mm,
-    });
+    j.nonplanar = Some(nonplanar::Options { surface: nonplanar::Surface::Sphere { radius_mm: 400.0, center_mm: [0.0, 0.0, -380.0] }, max_segment_mm });
     d.job = Job::new("lattice", &j);
     d.to_json_pretty()
 }

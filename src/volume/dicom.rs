@@ -157,8 +157,8 @@ fn long_vr(vr: [u8; 2]) -> bool {
 
 fn valid_vr(vr: [u8; 2]) -> bool {
     const ALL: [&[u8; 2]; 34] = [
-        b"AE", b"AS", b"AT", b"CS", b"DA", b"DS", b"DT", b"FL", b"FD", b"IS", b"LO", b"LT", b"OB", b"OD", b"OF", b"OL", b"OV", b"OW", b"PN",
-        b"SH", b"SL", b"SQ", b"SS", b"ST", b"SV", b"TM", b"UC", b"UI", b"UL", b"UN", b"UR", b"US", b"UT", b"UV",
+        b"AE", b"AS", b"AT", b"CS", b"DA", b"DS", b"DT", b"FL", b"FD", b"IS", b"LO", b"LT", b"OB", b"OD", b"OF", b"OL", b"OV", b"OW", b"PN", b"SH", b"SL",
+        b"SQ", b"SS", b"ST", b"SV", b"TM", b"UC", b"UI", b"UL", b"UN", b"UR", b"US", b"UT", b"UV",
     ];
     ALL.contains(&&vr)
 }
@@ -208,10 +208,9 @@ impl<'a> Cur<'a> {
     /// The `len` bytes of a value at `pos`, moving past them.
     fn value(&mut self, tag: u32, len: usize) -> Result<&'a [u8], Stop> {
         let at = self.pos;
-        let v = self
-            .b
-            .get(at..at.saturating_add(len))
-            .ok_or_else(|| Stop::Truncated(at, format!("element ({:04X},{:04X}) needs {len} bytes, {} are left", tag >> 16, tag & 0xFFFF, self.b.len().saturating_sub(at))))?;
+        let v = self.b.get(at..at.saturating_add(len)).ok_or_else(|| {
+            Stop::Truncated(at, format!("element ({:04X},{:04X}) needs {len} bytes, {} are left", tag >> 16, tag & 0xFFFF, self.b.len().saturating_sub(at)))
+        })?;
         self.pos = at + len;
         Ok(v)
     }
@@ -317,7 +316,9 @@ fn walk(c: &mut Cur, end: usize, in_item: bool, path: &mut Vec<(u32, usize)>, v:
         if tag >> 16 == 0xFFFE {
             return Err(Stop::Bad(format!("an item tag ({:04X},{:04X}) stands outside a sequence at byte {at}", tag >> 16, tag & 0xFFFF)));
         }
-        let is_seq = vr == *b"SQ" || (!c.explicit && KNOWN_SEQUENCES.contains(&tag) && len != UNDEFINED) || (len == UNDEFINED && !matches!(&vr, b"OB" | b"OW") && tag != TAG_PIXEL_DATA);
+        let is_seq = vr == *b"SQ"
+            || (!c.explicit && KNOWN_SEQUENCES.contains(&tag) && len != UNDEFINED)
+            || (len == UNDEFINED && !matches!(&vr, b"OB" | b"OW") && tag != TAG_PIXEL_DATA);
         if is_seq {
             if path.len() >= MAX_DEPTH {
                 return Err(Stop::Bad(format!("sequences nest more than {MAX_DEPTH} deep at byte {at}")));
@@ -347,7 +348,14 @@ fn walk(c: &mut Cur, end: usize, in_item: bool, path: &mut Vec<(u32, usize)>, v:
 
 /// Walks the items of a sequence.
 fn sequence(c: &mut Cur, tag: u32, len: u32, outer_end: usize, path: &mut Vec<(u32, usize)>, v: &mut Visit) -> Result<(), Stop> {
-    let end = if len == UNDEFINED { outer_end } else { c.pos.checked_add(len as usize).filter(|&e| e <= outer_end).ok_or_else(|| Stop::Truncated(c.pos, format!("sequence ({:04X},{:04X}) needs {len} bytes", tag >> 16, tag & 0xFFFF)))? };
+    let end = if len == UNDEFINED {
+        outer_end
+    } else {
+        c.pos
+            .checked_add(len as usize)
+            .filter(|&e| e <= outer_end)
+            .ok_or_else(|| Stop::Truncated(c.pos, format!("sequence ({:04X},{:04X}) needs {len} bytes", tag >> 16, tag & 0xFFFF)))?
+    };
     let mut item = 0usize;
     while c.pos < end {
         let at = c.pos;
@@ -359,7 +367,8 @@ fn sequence(c: &mut Cur, tag: u32, len: u32, outer_end: usize, path: &mut Vec<(u
                 let r = if ilen == UNDEFINED {
                     walk(c, end, true, path, v).map(|_| ())
                 } else {
-                    let iend = c.pos.checked_add(ilen as usize).filter(|&e| e <= end).ok_or_else(|| Stop::Truncated(c.pos, format!("an item needs {ilen} bytes")))?;
+                    let iend =
+                        c.pos.checked_add(ilen as usize).filter(|&e| e <= end).ok_or_else(|| Stop::Truncated(c.pos, format!("an item needs {ilen} bytes")))?;
                     let r = walk(c, iend, false, path, v).map(|_| ());
                     c.pos = iend;
                     r
@@ -479,7 +488,10 @@ pub(crate) fn header(file: &str, bytes: &[u8], complete: bool) -> Result<Header,
         if encapsulated_family(&h.syntax_uid) {
             return Err(Error::Compressed { file: clean(file), syntax_name: format!("transfer syntax {}", clean(&h.syntax_uid)) });
         }
-        return Err(Error::Unsupported { file: clean(file), what: format!("transfer syntax {} is not one weft reads; convert the series to Explicit VR Little Endian", clean(&h.syntax_uid)) });
+        return Err(Error::Unsupported {
+            file: clean(file),
+            what: format!("transfer syntax {} is not one weft reads; convert the series to Explicit VR Little Endian", clean(&h.syntax_uid)),
+        });
     };
     let data = bytes.get(h.dataset_start..).unwrap_or_default();
     if s.deflated {
@@ -489,7 +501,10 @@ pub(crate) fn header(file: &str, bytes: &[u8], complete: bool) -> Result<Header,
             let (all, done) = inflate(file, data, MAX_DEFLATED_HEADER, false)?;
             walk_header(file, &all, s, done, &mut h)?;
             if h.pixel.is_none() && !done {
-                return Err(Error::Unsupported { file: clean(file), what: format!("the header is over {} MiB before the pixel data", MAX_DEFLATED_HEADER >> 20) });
+                return Err(Error::Unsupported {
+                    file: clean(file),
+                    what: format!("the header is over {} MiB before the pixel data", MAX_DEFLATED_HEADER >> 20),
+                });
             }
         }
     } else {
@@ -611,7 +626,10 @@ fn check_image(name: &str, h: &Header) -> Result<(), Error> {
         return Err(Error::Unsupported { file, what: "float pixel data (7FE0,0008) are not read; export integer pixel data with a rescale".into() });
     }
     if h.samples > 1 {
-        return Err(Error::Unsupported { file, what: format!("a colour image ({} samples per pixel) is not a CT/MR volume; drop a greyscale series", h.samples) });
+        return Err(Error::Unsupported {
+            file,
+            what: format!("a colour image ({} samples per pixel) is not a CT/MR volume; drop a greyscale series", h.samples),
+        });
     }
     if !matches!(h.bits_alloc, 8 | 16 | 32) {
         return Err(Error::Unsupported { file, what: format!("Bits Allocated {} is not read (8, 16 or 32 are)", h.bits_alloc) });
@@ -684,13 +702,20 @@ pub(crate) fn read(files: &[(&str, &[u8])]) -> Result<Imported, Error> {
             });
         }
         let Some(sp) = h.spacing.filter(|s| s.iter().all(|v| *v > 0.0)) else {
-            return Err(Error::Unsupported { file: clean(name_of(*i)), what: "no valid Pixel Spacing (0028,0030): the image is not measured in mm (a screenshot or secondary capture?); drop the original series".into() });
+            return Err(Error::Unsupported {
+                file: clean(name_of(*i)),
+                what: "no valid Pixel Spacing (0028,0030): the image is not measured in mm (a screenshot or secondary capture?); drop the original series"
+                    .into(),
+            });
         };
         if !close(&sp, &first.spacing.unwrap_or(sp), 1e-4) {
             return Err(Error::SpacingMismatch { file: clean(name_of(*i)), expected: fmt2(first.spacing.unwrap_or(sp)), found: fmt2(sp) });
         }
         let Some(o) = h.orientation else {
-            return Err(Error::Unsupported { file: clean(name_of(*i)), what: "no Image Orientation (Patient) (0020,0037): the slices cannot be placed; drop the original series".into() });
+            return Err(Error::Unsupported {
+                file: clean(name_of(*i)),
+                what: "no Image Orientation (Patient) (0020,0037): the slices cannot be placed; drop the original series".into(),
+            });
         };
         if !close(&o, &first.orientation.unwrap_or(o), 1e-4) {
             return Err(Error::OrientationMismatch { file_a: clean(first_name), file_b: clean(name_of(*i)) });
@@ -734,7 +759,10 @@ pub(crate) fn read(files: &[(&str, &[u8])]) -> Result<Imported, Error> {
     } else {
         for (idx, (i, h)) in images.iter().enumerate() {
             let Some(p) = h.position else {
-                return Err(Error::Unsupported { file: clean(name_of(*i)), what: "no Image Position (Patient) (0020,0032): the slice cannot be placed; drop the original series".into() });
+                return Err(Error::Unsupported {
+                    file: clean(name_of(*i)),
+                    what: "no Image Position (Patient) (0020,0032): the slice cannot be placed; drop the original series".into(),
+                });
             };
             slices.push(Slice { file: idx, frame: 0, position: p, along: dot(p, n) });
         }

@@ -196,7 +196,8 @@ fn parse_header(file: &str, bytes: &[u8]) -> Result<Header, Error> {
                 have_spacing = true;
             }
             "space directions" => {
-                let d = parse_directions(value).ok_or_else(|| bad("space directions must be three vectors (x,y,z) (none is not allowed: every axis must be spatial)"))?;
+                let d = parse_directions(value)
+                    .ok_or_else(|| bad("space directions must be three vectors (x,y,z) (none is not allowed: every axis must be spatial)"))?;
                 directions = Some((d, line));
             }
             "space origin" => origin = parse_vector(value).ok_or_else(|| bad("space origin must be a vector (x,y,z)"))?,
@@ -265,9 +266,12 @@ fn parse_header(file: &str, bytes: &[u8]) -> Result<Header, Error> {
             v[1] = -v[1];
         }
     }
-    h.voxels = h.sizes.iter().try_fold(1usize, |a, &d| a.checked_mul(d)).filter(|v| v.checked_mul(8).is_some()).ok_or_else(|| {
-        err(file, h.sizes_line, "sizes multiply to more voxels than any memory holds")
-    })?;
+    h.voxels = h
+        .sizes
+        .iter()
+        .try_fold(1usize, |a, &d| a.checked_mul(d))
+        .filter(|v| v.checked_mul(8).is_some())
+        .ok_or_else(|| err(file, h.sizes_line, "sizes multiply to more voxels than any memory holds"))?;
     Ok(h)
 }
 
@@ -304,12 +308,9 @@ fn header_file<'a>(files: &[(&'a str, &'a [u8])]) -> Result<(&'a str, &'a [u8]),
 /// The detached data file among `files`, by base name.
 fn data_file<'a>(h: &Header, name: &str, files: &[(&'a str, &'a [u8])]) -> Result<(&'a str, &'a [u8]), Error> {
     let want = base_name(name);
-    files
-        .iter()
-        .find(|(n, _)| base_name(n) == want)
-        .or_else(|| files.iter().find(|(n, _)| base_name(n).eq_ignore_ascii_case(want)))
-        .copied()
-        .ok_or_else(|| err(&h.file, 0, format!("the data file \"{}\" the header names is not among the files given; drop it together with the header", clean(want))))
+    files.iter().find(|(n, _)| base_name(n) == want).or_else(|| files.iter().find(|(n, _)| base_name(n).eq_ignore_ascii_case(want))).copied().ok_or_else(|| {
+        err(&h.file, 0, format!("the data file \"{}\" the header names is not among the files given; drop it together with the header", clean(want)))
+    })
 }
 
 pub(crate) fn scan(files: &[(&str, &[u8])]) -> Result<Scan, Error> {

@@ -2,7 +2,7 @@
 //! shared with NRRD: each sample is decoded from its bytes (type and endianness) and
 //! rescaled (`stored · slope + intercept`, in `f64`, then stored as `f32`).
 
-use super::read::{clean, Error, Imported, ImportReport, RawLayout, Scan, VoxelType};
+use super::read::{clean, Error, ImportReport, Imported, RawLayout, Scan, VoxelType};
 use super::{Placement, Volume, VolumeInfo};
 
 /// Decodes `out.len()` samples of `voxel` from `bytes` (which hold at least that many) and

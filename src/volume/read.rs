@@ -511,7 +511,9 @@ fn finish(file: &str, imported: &mut Imported) -> Result<(), Error> {
     if bad > 0 {
         return Err(Error::Unsupported {
             file: clean(file),
-            what: format!("{bad} voxels are not finite numbers (NaN or infinite) after rescaling; replace them (e.g. by the background value) before importing"),
+            what: format!(
+                "{bad} voxels are not finite numbers (NaN or infinite) after rescaling; replace them (e.g. by the background value) before importing"
+            ),
         });
     }
     imported.report.min = if lo.is_finite() { lo } else { 0.0 };
@@ -524,7 +526,14 @@ fn finish(file: &str, imported: &mut Imported) -> Result<(), Error> {
 pub const RAW_FIELDS: &[Field] = &[
     vec3("dims", "Raw volume", "Voxels", "", 0.0, 100000.0, 1.0, "A .raw file's size in voxels along i, j, k (0 0 0 when no .raw file is used)."),
     vec3("spacing_mm", "Raw volume", "Voxel size", "mm", 0.0, 1000.0, 0.001, "A .raw file's voxel spacing along i, j, k."),
-    other("voxel", "Raw volume", "Voxel type", FieldKind::Choice, &["u8", "i8", "u16", "i16", "u32", "i32", "f32", "f64"], "How each voxel of a .raw file is stored."),
+    other(
+        "voxel",
+        "Raw volume",
+        "Voxel type",
+        FieldKind::Choice,
+        &["u8", "i8", "u16", "i16", "u32", "i32", "f32", "f64"],
+        "How each voxel of a .raw file is stored.",
+    ),
     other("big_endian", "Raw volume", "Big-endian", FieldKind::Bool, &[], "The .raw file stores the most significant byte first."),
     num("slope", "Raw volume", "Rescale slope", "", -1e9, 1e9, 0.001, "Value = stored × slope + intercept (1 and 0 keep the stored values)."),
     num("intercept", "Raw volume", "Rescale intercept", "", -1e9, 1e9, 1.0, "Added after the slope (e.g. −1024 for CT stored as unsigned)."),

@@ -69,16 +69,7 @@ pub fn slice_image(volume: &Volume, axis: Axis, index: usize) -> SliceImage {
     let count = volume.dims[af];
     let s = volume.spacing_mm;
     if volume.is_empty() || volume.values.len() < volume.len() {
-        return SliceImage {
-            axis,
-            index: 0,
-            count,
-            width: 0,
-            height: 0,
-            pixel_mm: [s[ax], s[ay]],
-            position_mm: 0.0,
-            values: Vec::new(),
-        };
+        return SliceImage { axis, index: 0, count, width: 0, height: 0, pixel_mm: [s[ax], s[ay]], position_mm: 0.0, values: Vec::new() };
     }
     let index = index.min(count - 1);
     let (width, height) = (volume.dims[ax], volume.dims[ay]);

@@ -64,7 +64,8 @@ pub(crate) fn list(file: &str, bytes: &[u8]) -> Result<Vec<Entry>, Error> {
     let mut out = Vec::new();
     let mut total: u64 = 0;
     for index in 0..zip.len() {
-        let e = zip.by_index_raw(index).map_err(|_| zip_err(file, format!("entry {index} cannot be read: the archive is damaged; zip the series folder again")))?;
+        let e =
+            zip.by_index_raw(index).map_err(|_| zip_err(file, format!("entry {index} cannot be read: the archive is damaged; zip the series folder again")))?;
         let name = e.name().map(|n| n.to_string()).unwrap_or_else(|_| format!("entry-{index}"));
         if e.is_dir() || ignored(&name).is_some() {
             continue;
@@ -117,9 +118,9 @@ pub(crate) fn inflate(file: &str, bytes: &[u8], entries: &[Entry], head: Option<
     let mut out = Vec::with_capacity(entries.len());
     for e in entries {
         let shown = clean(&e.name);
-        let entry = zip
-            .by_index(e.index)
-            .map_err(|_| zip_err(file, format!("{shown} cannot be unpacked (unknown compression or damaged); zip the series folder again with plain deflate")))?;
+        let entry = zip.by_index(e.index).map_err(|_| {
+            zip_err(file, format!("{shown} cannot be unpacked (unknown compression or damaged); zip the series folder again with plain deflate"))
+        })?;
         let want = match head {
             Some(h) => e.size.min(h as u64),
             None => e.size,

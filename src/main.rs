@@ -437,6 +437,8 @@ fn use_threads(n: Option<usize>) -> Result<(), String> {
     }
 }
 
+// One parameter per `weft run` option, as clap's `Command::Run` hands them over.
+#[allow(clippy::too_many_arguments)]
 fn cmd_run(
     design: &str,
     out: Option<PathBuf>,

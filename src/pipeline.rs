@@ -685,9 +685,13 @@ fn file_bytes_in<'f>(files: &'f Files, slot: &str, input: &Input) -> Result<(std
     }
 }
 
+/// One file of a volume input: its name, its bytes (borrowed when the store holds them in memory)
+/// and the key of its contents.
+type VolumeFile<'f> = (String, std::borrow::Cow<'f, [u8]>, Key);
+
 /// The files of a volume `input` (one file: a `.zip`, NRRD, raw or single DICOM; several: a
 /// series), read, with the keys of their contents.
-fn volume_files<'f>(files: &'f Files, slot: &str, input: &Input) -> Result<Vec<(String, std::borrow::Cow<'f, [u8]>, Key)>, Error> {
+fn volume_files<'f>(files: &'f Files, slot: &str, input: &Input) -> Result<Vec<VolumeFile<'f>>, Error> {
     match input {
         Input::Files(names) => {
             // Each file was checked alone as it was loaded; the series together, from the

@@ -488,6 +488,8 @@ fn project_ring(ring: &[[f64; 2]], s: &Surface, q: [f64; 2], inside: bool) -> [f
 
 /// Adaptive Simpson on [a, b] to relative tolerance `tol` (depth-capped, deterministic).
 pub(crate) fn simpson(f: &dyn Fn(f64) -> f64, a: f64, b: f64, tol: f64) -> f64 {
+    // The recursion's state is its arguments (interval, three samples, estimate, tolerance, depth).
+    #[allow(clippy::too_many_arguments)]
     fn rec(f: &dyn Fn(f64) -> f64, a: f64, b: f64, fa: f64, fm: f64, fb: f64, whole: f64, eps: f64, depth: u32) -> f64 {
         let m = 0.5 * (a + b);
         let (lm, rm) = (0.5 * (a + m), 0.5 * (m + b));

@@ -269,6 +269,12 @@ pub fn estimate(n_points: usize, o: &Options, spacing_mm: f64) -> Estimate {
 /// A test of whether the straight map segment between two (u, θ) points crosses a hole.
 pub type Avoid<'a> = &'a dyn Fn([f64; 2], [f64; 2]) -> bool;
 
+/// A sampled path in the (u, θ) map.
+type MapPath = Vec<[f64; 2]>;
+
+/// Sampled geodesics per unordered pair of points (lower index first): length and path.
+type GeodesicCache = BTreeMap<(usize, usize), (f64, MapPath)>;
+
 /// Plans the path through `points` (u, θ) on `p` (the platform, or an offset of it). `dist` is
 /// the geodesic distance (mm) between two points; `avoid`, when given, marks pairs whose
 /// segment would cross a hole (see the module notes); `progress` gets 0..=1.
@@ -417,14 +423,14 @@ pub fn plan(
         .check()?;
 
     // Geodesics, cached per unordered pair (computed from the lower index for determinism).
-    let mut cache: BTreeMap<(usize, usize), (f64, Vec<[f64; 2]>)> = BTreeMap::new();
+    let mut cache: GeodesicCache = BTreeMap::new();
     let gopts = geodesic::Options::default();
-    let segment = |i: usize, j: usize, cache: &mut BTreeMap<(usize, usize), (f64, Vec<[f64; 2]>)>| -> Result<(f64, Vec<[f64; 2]>), Error> {
+    let segment = |i: usize, j: usize, cache: &mut GeodesicCache| -> Result<(f64, MapPath), Error> {
         let (a, b) = if i < j { (i, j) } else { (j, i) };
-        if !cache.contains_key(&(a, b)) {
+        if let std::collections::btree_map::Entry::Vacant(e) = cache.entry((a, b)) {
             let s = sample_geodesic(p, points[a], points[b], raw(a, b) - if crosses(a, b) { HOLE_PENALTY_MM } else { 0.0 }, o.step_mm, &gopts)
                 .map_err(|source| Error::Geodesic { from: a, to: b, source })?;
-            cache.insert((a, b), s);
+            e.insert(s);
         }
         let (len, path) = &cache[&(a, b)];
         let mut path = path.clone();
@@ -439,7 +445,7 @@ pub fn plan(
         }
         Ok((*len, path))
     };
-    let build = |order: &[usize], cache: &mut BTreeMap<(usize, usize), (f64, Vec<[f64; 2]>)>| -> Result<(f64, Vec<Vec<[f64; 2]>>), Error> {
+    let build = |order: &[usize], cache: &mut GeodesicCache| -> Result<(f64, Vec<MapPath>), Error> {
         let mut total = 0.0;
         let mut out = Vec::with_capacity(order.len() - 1);
         for w in order.windows(2) {

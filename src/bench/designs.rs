@@ -22,16 +22,13 @@ pub struct DesignTiming {
     pub runs_s: Vec<f64>,
 }
 
+/// Each stage's time, s, in run order.
+pub type StageTimes = Vec<(String, f64)>;
+
 /// One run of `design` through `cache`: (total s, (stage, s) in run order, the output). A
 /// stage's time runs from its first progress report to the next stage's (the last one to the
 /// end); a stage reported twice (estimated, then reused from the cache) is summed.
-pub fn timed_run(
-    registry: &Registry,
-    cache: &mut Cache,
-    design: &Design,
-    files: &Files,
-    options: &RunOptions,
-) -> Result<(f64, Vec<(String, f64)>, RunOutput), String> {
+pub fn timed_run(registry: &Registry, cache: &mut Cache, design: &Design, files: &Files, options: &RunOptions) -> Result<(f64, StageTimes, RunOutput), String> {
     let start = Instant::now();
     let mut marks: Vec<(String, f64)> = Vec::new();
     let mut progress = |stage: &str, _: f32| {

@@ -349,7 +349,7 @@ pub fn regions(input: Vec<(String, Mesh)>, options: &Options) -> Result<Regions,
         }
     }
     if groups.len() > 1 {
-        groups.sort_by(|x, y| y.len().cmp(&x.len()));
+        groups.sort_by_key(|g| std::cmp::Reverse(g.len()));
         return Err(Error::Disconnected { groups });
     }
     Ok(Regions { regions: out, boundaries, epsilon_mm: epsilon })

@@ -305,7 +305,7 @@ impl Pattern {
                 }
             }
         }
-        let entries: Vec<(usize, usize)> = set.into_iter().map(|(r, c)| (r, c)).collect();
+        let entries: Vec<(usize, usize)> = set.into_iter().collect();
         let index = |r: usize, c: usize| entries.binary_search(&(r.max(c), r.min(c))).ok();
         let mut beam_slots = Vec::with_capacity(beams.len());
         for &[a, b] in beams {

@@ -371,7 +371,7 @@ fn hanging(d: &Assembly, inc: &[Vec<usize>], stable: &[bool]) -> Hanging {
         for &b in &inc[j] {
             let o = d.other(b, j);
             if !stable[j] || !stable[o] {
-                if root_side[b] == usize::MAX && !(stable[o] && !stable[j]) {
+                if root_side[b] == usize::MAX && (!stable[o] || stable[j]) {
                     cantilever[b] = true;
                     root_side[b] = j;
                 }
@@ -874,10 +874,13 @@ fn path_of(states: &[State], mut s: usize, d: &Assembly) -> Vec<(usize, usize, u
     out
 }
 
+/// A path step as searched: (beam, from joint, to joint).
+type PathStep = (usize, usize, usize);
+
 /// Orders the steps of several paths (each in its own order) so every precedence between them
 /// holds (Kahn's algorithm on the paths' heads, the first ready path first); None when they
 /// block each other (a cycle through them). Returns the steps and each step's path predecessor.
-fn merge_chains(chains: &[&[(usize, usize, usize)]], c: &Constraints) -> Option<(Vec<(usize, usize, usize)>, Vec<usize>)> {
+fn merge_chains(chains: &[&[PathStep]], c: &Constraints) -> Option<(Vec<PathStep>, Vec<usize>)> {
     let members: HashSet<usize> = chains.iter().flat_map(|ch| ch.iter().map(|s| s.0)).collect();
     let total: usize = chains.iter().map(|ch| ch.len()).sum();
     let mut head = vec![0usize; chains.len()];

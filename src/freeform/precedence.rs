@@ -359,7 +359,7 @@ pub fn constraints(joints: &[DVec3], beams: &[[usize; 2]], options: &Options, pr
         let runs = if crate::par::threads() > 1 { 8 * crate::par::threads() } else { 1 };
         let per_beam = crate::par::map_runs(m, runs, &mut |d| progress(d as f32 / m as f32), |range, tick| {
             let mut found: Vec<u32> = Vec::new();
-            let mut near: Vec<(u32, Option<usize>)> = Vec::new();
+            let mut near: NearBeams = Vec::new();
             let mut hits: Vec<u32> = Vec::new();
             range
                 .map(|a| {
@@ -406,6 +406,9 @@ struct BeamQueries {
     vertical_pairs: usize,
 }
 
+/// Beams near a beam A, each with the joint it shares with A (if any).
+type NearBeams = Vec<(u32, Option<usize>)>;
+
 /// The collision queries of beam `a`: near beams from the BVH, then each axis in turn (the
 /// vertical first); a tilt is kept when it allows more directions, or as many and hits fewer
 /// beams. `reach` is (sideways, above, below) of the nozzle's box; the buffers are reused.
@@ -420,7 +423,7 @@ fn beam_queries(
     dirs: &dyn Fn(usize, DVec3) -> (bool, bool),
     (reach, top, below): (f64, f64, f64),
     r: f64,
-    (found, near, hits): (&mut Vec<u32>, &mut Vec<(u32, Option<usize>)>, &mut Vec<u32>),
+    (found, near, hits): (&mut Vec<u32>, &mut NearBeams, &mut Vec<u32>),
 ) -> BeamQueries {
     let [i, j] = beams[a];
     let (a0, a1) = (joints[i], joints[j]);
@@ -479,9 +482,12 @@ fn beam_queries(
     out
 }
 
+/// A precedence pair (A, B) mapped to the (row, column) of a CSR.
+type PairKey = dyn Fn(&(u32, u32)) -> (u32, u32);
+
 /// Precedence pairs (A before B) as CSR both ways: (succ_start, succ, pred_start, pred).
 fn both_csr(pairs: &[(u32, u32)], m: usize) -> (Vec<u32>, Vec<u32>, Vec<u32>, Vec<u32>) {
-    let csr = |key: &dyn Fn(&(u32, u32)) -> (u32, u32)| -> (Vec<u32>, Vec<u32>) {
+    let csr = |key: &PairKey| -> (Vec<u32>, Vec<u32>) {
         let mut sorted: Vec<(u32, u32)> = pairs.iter().map(key).collect();
         sorted.sort_unstable();
         let mut start = vec![0u32; m + 1];

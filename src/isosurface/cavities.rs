@@ -90,36 +90,6 @@ fn flood(cells: &mut [u8], steps: [usize; 3], stack: &mut Vec<u32>, mark: u8) ->
     marked
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn an_enclosed_voxel_is_filled_and_an_open_one_is_not() {
-        // 5×5×5 ROI (7³ padded): a solid 3³ shell around the centre voxel.
-        let m = [7, 7, 7];
-        let mut cells = vec![0u8; 343];
-        let at = |i: usize, j: usize, k: usize| k * 49 + j * 7 + i;
-        for k in 2..=4 {
-            for j in 2..=4 {
-                for i in 2..=4 {
-                    if (i, j, k) != (3, 3, 3) {
-                        cells[at(i, j, k)] = SOLID;
-                    }
-                }
-            }
-        }
-        let mut closed_z = cells.clone();
-        let f = fill(&mut cells, m, [true; 6]);
-        assert_eq!(f, Filled { cavities: 1, voxels: 1 });
-        assert_eq!(cells[at(3, 3, 3)], SOLID);
-        assert_eq!(cells[at(1, 1, 1)], OUTSIDE);
-        // With every face closed, the whole empty region is one "cavity".
-        let f = fill(&mut closed_z, m, [false; 6]);
-        assert_eq!(f, Filled { cavities: 2, voxels: 125 - 26 });
-    }
-}
-
 /// Fills the holes of each slice across k (z) of the padded grid `cells`: empty voxels that
 /// cannot reach the slice's outer ring through empty voxels of the same slice (4-connectivity).
 /// This closes a medullary canal that runs out through the ROI's end faces (a tunnel in 3D,
@@ -177,4 +147,34 @@ fn flood_plane(layer: &mut [u8], nx: usize, reached: &mut [bool], stack: &mut Ve
         }
     }
     count
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_enclosed_voxel_is_filled_and_an_open_one_is_not() {
+        // 5×5×5 ROI (7³ padded): a solid 3³ shell around the centre voxel.
+        let m = [7, 7, 7];
+        let mut cells = vec![0u8; 343];
+        let at = |i: usize, j: usize, k: usize| k * 49 + j * 7 + i;
+        for k in 2..=4 {
+            for j in 2..=4 {
+                for i in 2..=4 {
+                    if (i, j, k) != (3, 3, 3) {
+                        cells[at(i, j, k)] = SOLID;
+                    }
+                }
+            }
+        }
+        let mut closed_z = cells.clone();
+        let f = fill(&mut cells, m, [true; 6]);
+        assert_eq!(f, Filled { cavities: 1, voxels: 1 });
+        assert_eq!(cells[at(3, 3, 3)], SOLID);
+        assert_eq!(cells[at(1, 1, 1)], OUTSIDE);
+        // With every face closed, the whole empty region is one "cavity".
+        let f = fill(&mut closed_z, m, [false; 6]);
+        assert_eq!(f, Filled { cavities: 2, voxels: 125 - 26 });
+    }
 }

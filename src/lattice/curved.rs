@@ -122,7 +122,7 @@ pub(crate) fn crop_curved(
             let mut pts: Vec<DVec2> = Vec::with_capacity(line.len());
             let last = *line.last().unwrap();
             for p in line {
-                if pts.last().map_or(true, |q: &DVec2| q.distance(p) >= MIN_PIECE_MM) {
+                if pts.last().is_none_or(|q: &DVec2| q.distance(p) >= MIN_PIECE_MM) {
                     pts.push(p);
                 }
             }

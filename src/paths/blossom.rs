@@ -484,10 +484,8 @@ impl Solver {
                         let root = self.tree_of[bv];
                         self.assign_label(w, T, (v, w), root);
                     }
-                    FREE => {
-                        if self.bestedge[w] == NONE || ks < self.slack(self.bestedge[w]) {
-                            self.push_vertex_best(w, k);
-                        }
+                    FREE if self.bestedge[w] == NONE || ks < self.slack(self.bestedge[w]) => {
+                        self.push_vertex_best(w, k);
                     }
                     S if ks <= 0 => match self.scan_blossom(v, w) {
                         Some(base) => self.add_blossom(base, v, w),

@@ -147,7 +147,7 @@ pub(crate) fn run(graph: &Graph, iterations: u32, maximise: bool, rng: &mut Pcg6
                         if s.b & USED != 0 {
                             continue;
                         }
-                        let (w, e, len) = (s.a as usize, (ext + 1 + k) as usize, s.len);
+                        let (w, e, len) = (s.a as usize, ext + 1 + k, s.len);
                         match pick {
                             None => {
                                 pick = Some((at_back, e, w, len));

@@ -344,7 +344,7 @@ mod tests {
         let l = 4.0;
         let square = IntShape::from(vec![vec![IntPoint::new(0, 0), IntPoint::new(20_000, 0), IntPoint::new(20_000, 20_000), IntPoint::new(0, 20_000)]]);
         for z in [0.1, 0.9, 2.3] {
-            let lines = gyroid_graded(&[square.clone()], &uniform(l), z, 0.0, 0.0);
+            let lines = gyroid_graded(std::slice::from_ref(&square), &uniform(l), z, 0.0, 0.0);
             assert!(lines.len() >= 4, "{} lines", lines.len());
             let s = TAU / l;
             for p in lines.iter().flatten() {
@@ -354,7 +354,7 @@ mod tests {
             }
             // As long as the closed-form section's.
             let len = |ls: &[Vec<DVec2>]| ls.iter().map(|l| l.windows(2).map(|w| w[0].distance(w[1])).sum::<f64>()).sum::<f64>();
-            let exact = super::super::gyroid::gyroid(&[square.clone()], l * 1000.0, z, 0.0, 0.0);
+            let exact = super::super::gyroid::gyroid(std::slice::from_ref(&square), l * 1000.0, z, 0.0, 0.0);
             let (a, b) = (len(&lines), len(&exact));
             assert!((a - b).abs() < 0.01 * b, "traced {a} mm against {b} mm at z {z}");
         }

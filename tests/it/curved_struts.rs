@@ -7,6 +7,9 @@ use weft::geom::{DVec2, Feature};
 use weft::lattice::{self, Domain, Options, Pattern};
 use weft::pipeline::{self, Files, RunOptions};
 
+/// An XY point in whole µm.
+type MicronXy = (i64, i64);
+
 const LW: f64 = 0.2;
 
 fn strokes(p: Pattern) -> weft::geom::StrokeLayer {
@@ -40,7 +43,7 @@ fn curved_patterns_have_the_straight_graph() {
         // stay in where the chord leaves) the graphs are the same: the same edges between the
         // same nodes, each curved one longer.
         let inner = |g: &weft::paths::Graph| {
-            let mut v: Vec<((i64, i64), (i64, i64), f64)> = g
+            let mut v: Vec<(MicronXy, MicronXy, f64)> = g
                 .edges
                 .iter()
                 .filter(|e| [e.a, e.b].iter().all(|&n| g.nodes[n].abs().max_element() < 3.5))
@@ -50,7 +53,7 @@ fn curved_patterns_have_the_straight_graph() {
                     (a.min(b), a.max(b), e.length)
                 })
                 .collect();
-            v.sort_by(|x, y| (x.0, x.1).cmp(&(y.0, y.1)));
+            v.sort_by_key(|x| (x.0, x.1));
             v
         };
         let (iw, is) = (inner(&gw), inner(&gs));
@@ -102,7 +105,7 @@ fn design(pattern: serde_json::Value, edit: impl FnOnce(&mut serde_json::Value))
 }
 
 /// Extruded XY segments of a G-code (µm keys, unordered ends), with their counts.
-fn extruded_segments(gcode: &str, offset: DVec2) -> BTreeMap<((i64, i64), (i64, i64)), usize> {
+fn extruded_segments(gcode: &str, offset: DVec2) -> BTreeMap<(MicronXy, MicronXy), usize> {
     let (mut x, mut y, mut e) = (0.0f64, 0.0f64, 0.0f64);
     let mut out = BTreeMap::new();
     for line in gcode.lines() {

@@ -150,7 +150,9 @@ fn a_run_states_its_plan_and_refuses_over_budget_before_running() {
     assert!((plan.seconds - plan.stages.iter().map(|e| e.seconds).sum::<f64>()).abs() < 1e-12);
     assert!(plan.refused.is_none() && plan.ask.is_none(), "the default design is small");
     let out = pipeline::run(&d, &Files::new(), &RunOptions::default(), &mut |_, _| {}).unwrap();
-    within("G-code", plan.gcode_bytes, out.gcode.len() as f64, 0.5, 2.0).map(|m| panic!("{m}"));
+    if let Some(m) = within("G-code", plan.gcode_bytes, out.gcode.len() as f64, 0.5, 2.0) {
+        panic!("{m}");
+    }
 
     let big = design_with(&[
         r#"job.input={"builtin":{"shape":"cube","size":[200,200,200]}}"#,

@@ -23,7 +23,7 @@ fn spec(slicer: Slicer, relative_e: bool) -> Foreign {
 /// A linear field along x, 0.1 at x = 85 to 0.85 at x = 115 (below ρ_min = 0.235 for
 /// x < 90.4), with no value above y = 112.3 (outside the volume).
 fn linear(p: DVec3) -> Option<f64> {
-    (p.y <= 112.3).then(|| 0.1 + 0.025 * (p.x - 85.0))
+    (p.y <= 112.3).then_some(0.1 + 0.025 * (p.x - 85.0))
 }
 
 fn run(name: &str, text: &[u8], field: &dyn Fn(DVec3) -> Option<f64>, o: &Options) -> Edited {

@@ -270,7 +270,7 @@ fn edit_route_rewrites_only_the_infill_of_another_slicers_gcode() {
                 if let Some(ty) = l.strip_prefix(";TYPE:") {
                     infill = ty == "Internal infill";
                 }
-                !(infill && l.starts_with("G1 ") && l.contains(" E")) && !l.starts_with("G92 E")
+                !((infill && l.starts_with("G1 ") && l.contains(" E")) || l.starts_with("G92 E"))
             })
             .map(str::to_string)
             .collect()
@@ -341,10 +341,10 @@ fn files_kept_outside_give_the_same_gcode_and_a_gone_one_is_named() {
 
     // Deleted after loading: the run names the file and says what to do.
     far.last().unwrap().gone.store(true, Relaxed);
-    let e = pipeline::run(&design, &outside, &RunOptions::default(), &mut |_, _| {}).err().expect("an unreadable file is refused").to_string();
+    let e = pipeline::run(&design, &outside, &RunOptions::default(), &mut |_, _| {}).expect_err("an unreadable file is refused").to_string();
     assert!(e.contains("part.gcode") && e.contains("load it again"), "{e}");
     far[3].gone.store(true, Relaxed);
-    let e = pipeline::run(&design, &outside, &RunOptions::default(), &mut |_, _| {}).err().expect("an unreadable slice is refused").to_string();
+    let e = pipeline::run(&design, &outside, &RunOptions::default(), &mut |_, _| {}).expect_err("an unreadable slice is refused").to_string();
     assert!(e.contains(&series()[3].0) && e.contains("load it again"), "{e}");
 }
 
@@ -360,7 +360,7 @@ fn a_broken_series_is_refused_by_name_and_the_design_keeps_its_inputs() {
         names.push(name);
     }
     let design = example().with_slot_input(&weft::jobs::Registry::builtin(), "volume", Input::Files(names.clone())).unwrap();
-    let e = pipeline::run(&design, &files, &RunOptions::default(), &mut |_, _| {}).err().expect("a truncated slice must be refused").to_string();
+    let e = pipeline::run(&design, &files, &RunOptions::default(), &mut |_, _| {}).expect_err("a truncated slice must be refused").to_string();
     assert!(e.contains(&names[7]), "the message does not name the file: {e}");
     // The design still names every file (nothing was dropped from it).
     let v: serde_json::Value = serde_json::from_str(&design.to_json_pretty()).unwrap();
@@ -438,7 +438,7 @@ fn a_series_over_the_limit_together_is_refused_before_it_is_read() {
     }
     let read_on_loading: Vec<usize> = sources.iter().map(|z| z.reads.load(Relaxed)).collect();
     let design = example().with_slot_input(&weft::jobs::Registry::builtin(), "volume", Input::Files(vec!["s0.dcm".into(), "s1.dcm".into()])).unwrap();
-    let e = pipeline::run(&design, &files, &RunOptions::default(), &mut |_, _| {}).err().expect("refused").to_string();
+    let e = pipeline::run(&design, &files, &RunOptions::default(), &mut |_, _| {}).expect_err("refused").to_string();
     assert!(e.contains("the files given for 'volume':") && e.contains("MiB is more than the") && e.contains("crop or resample"), "{e}");
     let read_later: Vec<usize> = sources.iter().map(|z| z.reads.load(Relaxed)).collect();
     assert_eq!(read_later, read_on_loading, "a file of the series was read before the refusal");

@@ -108,9 +108,7 @@ fn unconstructable_designs_are_refused_naming_the_beams() {
     let csv = "x1,y1,z1,x2,y2,z2\n0,0,0,0,0,5\n0,0,5,5,0,5\n5,0,5,5,0,0\n5,0,5,7,1,5.2\n5,0,5,7,-1,5.2\n";
     let mut files = Files::new();
     files.insert("two-struts.csv".into(), csv.as_bytes().to_vec());
-    let d =
-        Design::from_json("t", &format!(r#"{{"version":1,"name":"two struts","job":{{"kind":"freeform","input":{{"file":{{"name":"two-struts.csv"}}}}}}}}"#))
-            .unwrap();
+    let d = Design::from_json("t", r#"{"version":1,"name":"two struts","job":{"kind":"freeform","input":{"file":{"name":"two-struts.csv"}}}}"#).unwrap();
     let e = run(&d, &files).unwrap_err();
     assert!(e.contains("two cantilevers") && e.contains("line 5") && e.contains("line 6"), "{e}");
     let relaxed = d.with_overrides(&["job.constraints.cantilever=relaxed".to_string()]).unwrap();

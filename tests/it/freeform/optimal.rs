@@ -27,6 +27,8 @@ fn brute(w: &Wireframe, c: &Constraints, strict: bool) -> Option<f64> {
         inc[p].push(b);
         inc[q].push(b);
     }
+    // The search's state is its arguments (what is printed and touched, the worst ε so far).
+    #[allow(clippy::too_many_arguments)]
     fn go(
         w: &Wireframe,
         c: &Constraints,

@@ -2,7 +2,8 @@
 # Benchmarks of BENCHMARKS.md: builds the native CLI and the wasm page, then runs the browser
 # worker benchmark and `weft bench` side by side (tests/e2e/bench.mjs), printing Markdown on
 # stdout (progress on stderr). Not part of scripts/test.sh: timings depend on the machine.
-# Usage: scripts/bench.sh                 (CARGO_TARGET_DIR is honoured; default ./target)
+# Usage: scripts/bench.sh                 (CARGO_TARGET_DIR is honoured; default ./target;
+#                                          the wasm builds in its www/, as scripts/build-www.sh)
 #        BENCH_TRIANGLES=200000 BENCH_GCODE_MB=20 scripts/bench.sh   (a quick run)
 #        BENCH_LATTICE_ONLY=1 scripts/bench.sh   (only the lattice path-optimisation benchmarks)
 #        BENCH_SCALING_ONLY=1 scripts/bench.sh   (only the growth benchmark: every `weft bench

@@ -6,8 +6,16 @@
 #                                     is cross-origin isolated)
 #   www/vendor/                      (three.js module build + OrbitControls, from node_modules)
 #   www/examples/                    (examples/*.json + index.json)
-# Usage: scripts/build-www.sh            (CARGO_TARGET_DIR is honoured; default ./target)
+# Usage: scripts/build-www.sh            (cargo builds the wasm in <target>/www, <target> being
+#                                          $CARGO_TARGET_DIR or ./target: one directory that
+#                                          scripts/serve.sh, scripts/test.sh and scripts/bench.sh
+#                                          share, apart from the native build's so both can build
+#                                          at once; cargo locks a target directory)
 #        SKIP_WASM=1 scripts/build-www.sh  (only vendor + examples)
+# A module's wasm-bindgen + wasm-opt -Oz (the slow part once cargo has nothing to do) run only
+# when their input changed: each output directory keeps a stamp (.build-stamp: the sha256 of
+# cargo's weft.wasm, the wasm-bindgen and binaryen versions, the wasm-opt flags, the sha256 of
+# the outputs); when it matches, the module is said to be up to date and left as it is.
 # Environment (the production build, used by the tests and the served app, sets neither):
 #   WEFT_WASM_FEATURES  cargo features of the wasm build, e.g. "bench" (scripts/bench.sh)
 #   WEFT_PKG_DIR        output directory of the wasm build instead of ./pkg (the variable
@@ -16,7 +24,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 root=$(pwd)
-target_dir=${CARGO_TARGET_DIR:-$root/target}
+target_dir=${CARGO_TARGET_DIR:-$root/target}/www
 bindgen_version=0.2.130
 features=${WEFT_WASM_FEATURES:-}
 pkg_dir=${WEFT_PKG_DIR:-pkg}
@@ -56,6 +64,15 @@ if [ -z "${SKIP_WASM:-}" ]; then
     cargo install wasm-bindgen-cli --version "$bindgen_version"
   fi
 
+  binaryen_version=$(node -p 'require("./node_modules/binaryen/package.json").version')
+  # Features rustc enables by default for wasm32-unknown-unknown (bulk memory, saturating
+  # float→int, sign extension, mutable globals, multi-value, reference types): wasm-opt must
+  # accept every one the module uses. Debian's binaryen is too old for the table.fill that
+  # wasm-bindgen emits for reference types, hence the npm build (runs under node), pinned in
+  # package.json.
+  wasm_opt_flags=(-Oz --enable-bulk-memory --enable-nontrapping-float-to-int --enable-sign-ext
+    --enable-mutable-globals --enable-multivalue --enable-reference-types)
+
   # build_pkg OUT_DIR CARGO_TARGET_DIR FEATURES WASM_OPT_FLAGS… : cargo → wasm-bindgen → wasm-opt.
   build_pkg() {
     local out=$1 tdir=$2 feats=$3
@@ -66,27 +83,38 @@ if [ -z "${SKIP_WASM:-}" ]; then
     # shellcheck disable=SC2086
     CARGO_TARGET_DIR=$tdir cargo build --lib --profile wasm --target wasm32-unknown-unknown \
       "${feature_args[@]}" ${BUILD_STD:-}
+    local input=$tdir/wasm32-unknown-unknown/wasm/weft.wasm
+    local wasm=$out/weft_bg.wasm stamp=$out/.build-stamp
+    # pkg_stamp: what the outputs were made from and what they are. When the stamp holds the
+    # same, cargo's module has not changed since this directory was made: nothing to redo.
+    pkg_stamp() {
+      printf 'input %s\nwasm-bindgen %s --target web --out-name weft\nbinaryen %s\nwasm-opt %s\n' \
+        "$(sha256sum < "$input" | cut -d' ' -f1)" "$(wasm-bindgen --version | awk '{print $2}')" \
+        "$binaryen_version" "${wasm_opt_flags[*]}${*:+ $*}"
+      local f
+      for f in weft.js weft_bg.wasm; do
+        [ -f "$out/$f" ] || { echo "missing $f"; continue; }
+        printf 'output %s %s\n' "$f" "$(sha256sum < "$out/$f" | cut -d' ' -f1)"
+      done
+    }
+    if [ -f "$stamp" ] && [ "$(pkg_stamp "$@")" = "$(cat "$stamp")" ]; then
+      say "$out/ up to date (${input#"$root"/} unchanged since it was made: no wasm-bindgen, no wasm-opt)"
+      return 0
+    fi
+    rm -f "$stamp"
     mkdir -p "$out"
-    wasm-bindgen --target web --out-dir "$out" --out-name weft "$tdir/wasm32-unknown-unknown/wasm/weft.wasm"
-    local wasm=$out/weft_bg.wasm
+    wasm-bindgen --target web --out-dir "$out" --out-name weft "$input"
     local before after
     before="$(raw_bytes "$wasm") B (gzip -9: $(gz_bytes "$wasm") B)"
-    # Features rustc enables by default for wasm32-unknown-unknown (bulk memory, saturating
-    # float→int, sign extension, mutable globals, multi-value, reference types): wasm-opt must
-    # accept every one the module uses. Debian's binaryen is too old for the table.fill that
-    # wasm-bindgen emits for reference types, hence the npm build (runs under node), pinned in
-    # package.json. A failure here is an error: the module would ship unoptimised.
-    if ! "$wasm_opt" -Oz --enable-bulk-memory --enable-nontrapping-float-to-int --enable-sign-ext \
-      --enable-mutable-globals --enable-multivalue --enable-reference-types "$@" \
-      -o "$wasm.opt" "$wasm"; then
+    # A failure here is an error: the module would ship unoptimised.
+    if ! "$wasm_opt" "${wasm_opt_flags[@]}" "$@" -o "$wasm.opt" "$wasm"; then
       rm -f "$wasm.opt"
       say "wasm-opt ($("$wasm_opt" --version 2>/dev/null)) failed on $wasm"
       exit 1
     fi
     mv "$wasm.opt" "$wasm"
     after="$(raw_bytes "$wasm") B (gzip -9: $(gz_bytes "$wasm") B)"
-    local binaryen_version
-    binaryen_version=$(node -p 'require("./node_modules/binaryen/package.json").version')
+    pkg_stamp "$@" > "$stamp"
     say "$wasm${feats:+ [features: $feats]}: $before before wasm-opt -Oz, $after after" \
       "(binaryen $binaryen_version)"
   }
@@ -150,9 +178,9 @@ cp "$three/LICENSE" www/vendor/three-LICENSE.txt
 # --- example designs ---------------------------------------------------------------------
 # index.json lists each example with its job kind and one-line description (from the design)
 # and a thumbnail: the example run by the wasm just built (thumbnailSvg), drawn as a small SVG.
-rm -rf www/examples
-mkdir -p www/examples
-WEFT_PKG="$pkg_dir" node --input-type=module - <<'JS'
+# Running every example takes about 20 s (one of them 10 s), so it is redone only when an
+# example, the wasm package or this step changed (www/examples/.build-stamp: their sha256).
+examples_js=$(cat <<'JS'
 import { readdirSync, readFileSync, copyFileSync, writeFileSync, existsSync } from "node:fs";
 import { resolve } from "node:path";
 import { pathToFileURL } from "node:url";
@@ -188,4 +216,19 @@ const index = files.map((file) => {
 writeFileSync("www/examples/index.json", JSON.stringify(index, null, 2) + "\n");
 console.log(`[build-www] www/examples: ${index.length} design(s), ${index.filter((e) => e.thumbnail).length} thumbnail(s)`);
 JS
+)
+examples_stamp=$(
+  printf '%s\n' "$examples_js" | sha256sum
+  for f in "$pkg_dir/weft.js" "$pkg_dir/weft_bg.wasm" examples/*.json; do
+    if [ -f "$f" ]; then printf '%s %s\n' "$(sha256sum < "$f" | cut -d' ' -f1)" "$f"; else echo "missing $f"; fi
+  done
+)
+if [ -f www/examples/index.json ] && [ "$examples_stamp" = "$(cat www/examples/.build-stamp 2>/dev/null)" ]; then
+  say "www/examples/ up to date (no example and no wasm changed since it was made)"
+else
+  rm -rf www/examples
+  mkdir -p www/examples
+  WEFT_PKG="$pkg_dir" node --input-type=module -e "$examples_js"
+  printf '%s\n' "$examples_stamp" > www/examples/.build-stamp
+fi
 say "done"

@@ -83,9 +83,11 @@ export async function latticeChecks({ browser, baseUrl, weftBin = process.env.WE
         ?.series.find((s) => (s.group_index ?? 0) === 0);
       if (shown.bars.length !== 3 || !shown.bars.some((w) => w > 0)) throw new Error(`path-class bars not drawn: ${JSON.stringify(shown)}`);
       if (layer0 && shown.labels.join("|") !== layer0.x.join("|")) throw new Error(`bar labels ${shown.labels} vs report ${layer0.x}`);
-      let px = 0;
-      for (let tries = 0; tries < 10 && px < 300; tries++) { // a resize may clear the canvas until the next frame
-        if (tries) await page.waitForTimeout(200);
+      // A resize may clear the canvas until the next frame: read again for up to 20 s (a
+      // loaded machine draws later; a drawn preview ends the loop at once).
+      let px = await colouredPixels(page);
+      for (const t0 = Date.now(); px < 300 && Date.now() - t0 < 20000;) {
+        await page.waitForTimeout(200);
         px = await colouredPixels(page);
       }
       if (px < 300) throw new Error(`only ${px} toolpath-coloured pixels in the 3D preview`);

@@ -96,10 +96,12 @@ export async function newcomerChecks({ base, check, newPage, outDir, first, cube
       if (!fieldError) throw new Error("2.5 perimeters shows no message under the field");
       const before = await count(page);
       await page.click("#slice");
-      await page.waitForTimeout(800);
-      if ((await count(page)) !== before) throw new Error("Run ran with an invalid field");
-      const err = await page.$eval("#error", (e) => (e.hidden ? "" : e.textContent));
+      // Run answers at once, on the page: the error shows and no job starts (a job would make
+      // the page busy before its answer, whatever the machine's load).
+      const err = await page.waitForFunction(() => { const e = document.getElementById("error"); return !e.hidden && e.textContent; }, null, { timeout: TIMEOUT })
+        .then((h) => h.jsonValue()).catch(() => "");
       if (!/perimeters/i.test(err)) throw new Error(`the error does not name the field: "${err}"`);
+      if ((await count(page)) !== before || await page.evaluate(() => window.weft.busy)) throw new Error("Run ran with an invalid field");
       const s = await stale(page);
       if (!s.dimmed) throw new Error("the result is not marked out of date while a field is invalid");
       await page.fill(field, "3");
@@ -140,11 +142,12 @@ export async function newcomerChecks({ base, check, newPage, outDir, first, cube
       await waitResult(page, before, "honeycomb example", TIMEOUT);
       before = await count(page);
       await page.setInputFiles("#file", { name: "bunny.stl", mimeType: "model/stl", buffer: cube.bytes });
-      const notice = await page.waitForSelector("#notice:not([hidden]) .notice-action", { timeout: 5000 }).catch(() => null);
+      // The question comes once the file is read (later on a loaded machine: no short bound).
+      const notice = await page.waitForSelector("#notice:not([hidden]) .notice-action", { timeout: TIMEOUT }).catch(() => null);
       if (!notice) throw new Error("dropping a part on the lattice design did not ask what it is for");
       const labels = await page.$$eval("#notice .notice-action", (bs) => bs.map((b) => b.textContent));
       await page.waitForTimeout(300);
-      if ((await count(page)) !== before) throw new Error("the drop ran something before the user chose");
+      if ((await count(page)) !== before || await page.evaluate(() => window.weft.busy)) throw new Error("the drop ran something before the user chose");
       if ((await design(page)).job.kind !== "lattice") throw new Error("the drop changed the job before the user chose");
       const slice = labels.find((l) => /slice/i.test(l));
       if (!slice) throw new Error(`no choice to slice the part: ${labels.join(" | ")}`);
@@ -186,15 +189,18 @@ export async function newcomerChecks({ base, check, newPage, outDir, first, cube
         await page.fill(id, String(v));
         await page.dispatchEvent(id, "change");
       }
-      await page.waitForFunction(() => /big|too big/.test(document.getElementById("estimate").textContent), null, { timeout: 20000 });
+      await page.waitForFunction(() => /big|too big/.test(document.getElementById("estimate").textContent), null, { timeout: TIMEOUT });
       const est = await page.textContent("#estimate");
       const before = await count(page);
       await page.click("#slice");
-      const ask = await page.waitForSelector("#notice:not([hidden]) .notice-action", { timeout: 20000 }).catch(() => null);
+      // The page asks, or refuses, once the worker has planned the run: whichever comes first.
+      const answer = await page.waitForFunction(() => (document.querySelector("#notice:not([hidden]) .notice-action") ? "asked" : "") ||
+        (document.getElementById("error").hidden ? false : "refused"), null, { timeout: TIMEOUT }).then((h) => h.jsonValue()).catch(() => null);
+      const ask = answer === "asked";
       const err = await page.$eval("#error", (e) => (e.hidden ? "" : e.textContent));
       if (!ask && !/limit/.test(err)) throw new Error(`a big job neither asked nor was refused (estimate "${est}")`);
       await page.waitForTimeout(300);
-      if ((await count(page)) !== before) throw new Error("the big job ran without asking");
+      if ((await count(page)) !== before || await page.evaluate(() => window.weft.busy)) throw new Error("the big job ran without asking");
       return `estimate: "${est}"`;
     } finally {
       await context.close();

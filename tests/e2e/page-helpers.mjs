@@ -205,3 +205,25 @@ export async function stageMarks(page) {
     .filter((m) => m.name.startsWith("weft:stage"))
     .map((m) => ({ name: m.name === "weft:stage-end" ? null : m.name.slice("weft:stage:".length), at: performance.timeOrigin + m.startTime })));
 }
+
+/**
+ * From the moment the page has handled a click on Cancel (a listener added after the page's
+ * own), records every change to what shows a run: the progress bar, its label, the stats and
+ * the report. `window.__stopWatch()` ends the recording; `window.__afterCancel` then lists the
+ * changes (null: the click never reached the page).
+ */
+export async function watchAfterCancel(page) {
+  await page.evaluate(() => {
+    window.__afterCancel = null;
+    document.getElementById("cancel").addEventListener("click", () => {
+      window.__afterCancel = [];
+      const seen = (ms) => { for (const m of ms) window.__afterCancel.push(`${m.target.id || m.target.parentElement?.closest("[id]")?.id}: ${m.type} ${m.attributeName ?? ""}`); };
+      const watch = new MutationObserver(seen);
+      for (const id of ["progress", "progress-label", "progress-bar", "progress-ahead", "stats", "report"]) {
+        const el = document.getElementById(id);
+        if (el) watch.observe(el, { attributes: true, childList: true, characterData: true, subtree: true });
+      }
+      window.__stopWatch = () => { seen(watch.takeRecords()); watch.disconnect(); };
+    }, { once: true });
+  });
+}

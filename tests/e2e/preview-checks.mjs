@@ -78,7 +78,19 @@ export async function previewChecks({ baseUrl, check, newPage, first, timeoutMs 
       await page.waitForFunction((k) => window.weft.resultCount > k && !window.weft.busy, before, { timeout: timeoutMs });
       const r = await page.$eval("#preview", (c) => c.getBoundingClientRect().toJSON());
       middle = { x: r.x + r.width / 2, y: r.y + r.height / 2 };
-      await page.waitForTimeout(300); // the stats and report settle (a resize refits)
+      // The stats and report settle (a resize refits): until the canvas keeps its size over
+      // 5 frames in a row (counted in frames, not milliseconds: a loaded machine draws later).
+      await page.evaluate(async () => {
+        const frame = () => new Promise((r) => requestAnimationFrame(() => r()));
+        const box = document.getElementById("preview").parentElement;
+        let size = "", same = 0;
+        for (let i = 0; i < 600 && same < 5; i++) {
+          await frame();
+          const now = `${box.clientWidth}×${box.clientHeight}`;
+          same = now === size ? same + 1 : 0;
+          size = now;
+        }
+      });
       const b = await partBox(page);
       if (!(b.fill >= MIN_FILL)) throw new Error(`the part spans ${fill(b)}`);
       return fill(b);

@@ -24,29 +24,49 @@ python3 tests/serve/check.py
 
 # The wasm modules and the page build in the background, in the wasm's own target directory
 # (build-www.sh's <target>/www, the one scripts/serve.sh builds in too: serving after testing
-# rebuilds nothing; cargo locks a target directory while it builds), beside the Rust tests:
-# those leave about a quarter of two cores idle (one-thread timing sections, short test
-# binaries), which the builds' long one-core links fill. Its log is printed when it is waited for.
+# rebuilds nothing; cargo locks a target directory while it builds), beside the native build.
+# Its log is printed when it is waited for. Each background job has its own process group
+# (setsid), so a failure stops the whole job, cargo included.
 www_log=$(mktemp)
-echo "== wasm + page: building in the background (log below, after the Rust tests)"
-# Its own process group (setsid), so a failing test run stops the whole build, cargo included.
+rust_log=$(mktemp)
+e2e_log=$(mktemp)
+echo "== wasm + page: building in the background (log below)"
 setsid bash scripts/build-www.sh > "$www_log" 2>&1 &
 www_pid=$!
-trap 'kill -- -"$www_pid" 2>/dev/null || true; rm -f "$www_log"' EXIT
+rust_pid=""
+trap 'kill -- -"$www_pid" 2>/dev/null || true; [ -n "$rust_pid" ] && kill -- -"$rust_pid" 2>/dev/null; rm -f "$www_log" "$rust_log" "$e2e_log"' EXIT
 # Tests and the CLI they drive build without link-time optimisation (the one test binary,
 # tests/it, links the whole library, and thin LTO would redo that optimisation for it). Output
 # is the same bytes either way (the golden hashes and the wasm comparisons check it).
 export CARGO_PROFILE_RELEASE_LTO=false
-echo "== Rust tests (the library's unit tests, the one integration-test binary tests/it, doc tests)"
-cargo test --release 2>&1 | tee /tmp/weft-cargo-test.log
-echo "== CLI (release, as the tests built it)"
+echo "== Rust: building the tests and the CLI (release)"
+cargo test --release --no-run
 cargo build --release --bin weft
-echo "== lint: cargo clippy --all-targets -- -D warnings"
-cargo clippy --all-targets -- -D warnings
+# The builds kept both cores busy. What follows does not: the Rust tests (about 1.6 cores for
+# 2–3 min), clippy (one core, 1–2 min) and the browser checks (about one core, 4 min) run side
+# by side, the Rust ones in the background, printed after the browser checks.
+echo "== Rust tests (the library's unit tests, the one integration-test binary tests/it, doc tests) and clippy: running in the background (log below, after the browser checks)"
+setsid bash -c 'set -o pipefail
+  cargo test --release || exit 1
+  echo "== lint: cargo clippy --all-targets -- -D warnings"
+  cargo clippy --all-targets -- -D warnings' > "$rust_log" 2>&1 &
+rust_pid=$!
 echo "== wasm + page (built in the background)"
 www_ok=0
 wait "$www_pid" || www_ok=$?
 cat "$www_log"
 [ "$www_ok" = 0 ] || { echo "scripts/build-www.sh failed (exit $www_ok)"; exit 1; }
 echo "== browser end-to-end (headless Chromium)"
-WEFT_BIN="$PWD/target/release/weft" node tests/e2e/run.mjs
+e2e_ok=0
+WEFT_BIN="$PWD/target/release/weft" node tests/e2e/run.mjs 2>&1 | tee "$e2e_log" || e2e_ok=$?
+echo "== Rust tests and clippy (ran in the background)"
+rust_ok=0
+wait "$rust_pid" || rust_ok=$?
+rust_pid=""
+cat "$rust_log"
+cp "$rust_log" /tmp/weft-cargo-test.log 2>/dev/null || true
+echo "== summary"
+grep '^test result' "$rust_log" || true
+[ "$rust_ok" = 0 ] && echo "Rust tests and clippy: passed" || echo "Rust tests or clippy: FAILED (exit $rust_ok; the log above)"
+echo "browser: $(tail -n 1 "$e2e_log")"
+[ "$rust_ok" = 0 ] && [ "$e2e_ok" = 0 ]

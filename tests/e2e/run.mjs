@@ -27,7 +27,7 @@ import { newcomerChecks } from "./newcomer-checks.mjs";
 import { previewChecks } from "./preview-checks.mjs";
 import { threadsChecks } from "./threads-checks.mjs";
 import {
-  boxStl, collectErrors, colouredPixels, confirmBigJobs, downloadGcode, launchChromium, stageMarks, waitReady, waitResult as waitResultWithin,
+  boxStl, collectErrors, colouredPixels, confirmBigJobs, downloadGcode, launchChromium, stageMarks, waitReady, waitResult as waitResultWithin, watchAfterCancel,
 } from "./page-helpers.mjs";
 
 const OUT = join(ROOT, "tests/e2e/out");

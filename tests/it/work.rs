@@ -120,7 +120,19 @@ fn take_slot() -> usize {
 /// result. The counts are the same on every run of the same input.
 pub fn measure<R: Send>(f: impl FnOnce() -> R + Send) -> (Work, R) {
     let slot = take_slot();
-    let pool = rayon::ThreadPoolBuilder::new().num_threads(1).start_handler(move |_| TAG.with(|t| t.set(slot))).build().expect("a pool of one thread");
+    // The pool's thread leaves the slot (untags itself) on its way out and says so: the slot is
+    // free for the next measurement only then, so nothing the thread frees or allocates while
+    // it ends counts in another measurement that took the same slot.
+    let (left, gone) = std::sync::mpsc::channel::<()>();
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .start_handler(move |_| TAG.with(|t| t.set(slot)))
+        .exit_handler(move |_| {
+            TAG.with(|t| t.set(0));
+            let _ = left.send(());
+        })
+        .build()
+        .expect("a pool of one thread");
     let out = pool.install(|| {
         let c = &COUNTS[slot];
         for a in [&c.allocs, &c.bytes] {
@@ -135,6 +147,8 @@ pub fn measure<R: Send>(f: impl FnOnce() -> R + Send) -> (Work, R) {
         (w, r)
     });
     drop(pool);
+    // Err: the thread ended without its exit handler (it panicked); it counts nothing more.
+    let _ = gone.recv();
     TAKEN.fetch_and(!(1 << slot), Relaxed);
     out
 }

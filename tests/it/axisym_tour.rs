@@ -1,6 +1,5 @@
 //! Axisymmetric tour (issue 10): NN + 2-opt path through (u, θ) points, sampled geodesics.
 
-use std::time::Instant;
 use weft::axisym::geodesic::{self, geodesic};
 use weft::axisym::platform::{normal, position, Platform, Profile};
 use weft::axisym::tour::{self, plan, Error, Options, Start, Tour};
@@ -80,7 +79,6 @@ fn brute_crossings(s: &[Vec<[f64; 2]>]) -> usize {
 }
 
 fn run(p: &Platform, pts: &[[f64; 2]], o: &Options, d: &dyn Fn([f64; 2], [f64; 2]) -> f64, label: &str) -> Tour {
-    let t0 = Instant::now();
     let mut last = -1.0f32;
     let tour = plan(p, pts, o, d, None, &mut |f| {
         assert!(f >= last && (0.0..=1.0).contains(&f), "progress goes up within 0..=1");
@@ -88,9 +86,8 @@ fn run(p: &Platform, pts: &[[f64; 2]], o: &Options, d: &dyn Fn([f64; 2], [f64; 2
     })
     .unwrap();
     println!(
-        "{label}: {} points in {:.3} s; NN {:.1} mm → 2-opt {:.1} mm ({} passes, {} moves), crossings removed {} left {}, {} poses",
+        "{label}: {} points; NN {:.1} mm → 2-opt {:.1} mm ({} passes, {} moves), crossings removed {} left {}, {} poses",
         pts.len(),
-        t0.elapsed().as_secs_f64(),
         tour.nn_length_mm,
         tour.length_mm,
         tour.two_opt_passes,

@@ -425,18 +425,9 @@ fn fuzz_smoke_never_panics() {
 #[test]
 fn edits_a_50_mb_file() {
     let g = sized(Slicer::PrusaSlicer, false, 50 << 20);
-    let t = std::time::Instant::now();
     let mut calls = 0;
-    let out = edit("big.gcode", &g.text, &linear, &Options::default(), &mut |_| calls += 1).unwrap();
-    let s = t.elapsed().as_secs_f64();
-    println!(
-        "edited {:.1} MB ({} infill moves, {} resets) in {:.3} s: {:.2} ns/byte",
-        g.text.len() as f64 / 1e6,
-        out.report.edited_moves,
-        out.report.resets_inserted,
-        s,
-        s * 1e9 / g.text.len() as f64
-    );
+    let (w, out) = crate::work::measure(|| edit("big.gcode", &g.text, &linear, &Options::default(), &mut |_| calls += 1).unwrap());
+    println!("edited {:.1} MB ({} infill moves, {} resets): {w:?}", g.text.len() as f64 / 1e6, out.report.edited_moves, out.report.resets_inserted);
     assert_eq!(out.report.infill_moves, g.infill.len());
     assert!(out.text.len() as f64 <= g.text.len() as f64 * 1.02);
     assert!(calls >= 10);

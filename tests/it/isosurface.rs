@@ -425,9 +425,8 @@ fn ct_phantom_is_closed() {
     let roi = Roi { min_mm: [50.0, 65.0, 100.0], max_mm: [125.0, 130.0, 340.0] };
     let mut volumes = Vec::new();
     for fill in [true, false] {
-        let t = std::time::Instant::now();
         let surf = run(&v, &roi, &opts(350.0, fill, 0));
-        eprintln!("phantom ROI (fill {fill}): {:?}, {:?}", t.elapsed(), surf.report);
+        eprintln!("phantom ROI (fill {fill}): {:?}", surf.report);
         let rep = &surf.report;
         assert!(rep.closed);
         assert_closed_manifold(&surf.mesh, "phantom");
@@ -446,9 +445,8 @@ fn ct_phantom_is_closed() {
     // Closing the canal adds its volume: r < 9 mm over the ROI's z from 100 to 300 mm.
     let canal = std::f64::consts::PI * 81.0 * 200.0;
     assert!((volumes[0] - volumes[1] - canal).abs() < 0.1 * canal, "closing the canal added {} mm³, expected about {canal}", volumes[0] - volumes[1]);
-    let t = std::time::Instant::now();
     let whole = run(&v, &Roi::whole(&v), &Options::default());
-    eprintln!("phantom whole volume: {:?}, {:?}", t.elapsed(), whole.report);
+    eprintln!("phantom whole volume: {:?}", whole.report);
     assert!(whole.report.closed);
     // Closed at both ends within the volume, the canal is a cavity: filled, and its voxels
     // are the marrow's (r < 9 mm, 60 < z ≤ 300).
@@ -461,10 +459,10 @@ fn ct_phantom_is_closed() {
 }
 
 /// A gyroid-like field over the paper's whole CT grid: a 3.6 M-triangle surface (near the
-/// limit), closed. Prints the times (not asserted): `cargo test --release --test it isosurface::
-/// large_surface -- --ignored --nocapture`.
+/// limit), closed. Prints its counted work (times: `weft bench`): `cargo test --release --test it
+/// isosurface::large_surface -- --ignored --nocapture`.
 #[test]
-#[ignore = "timing print, about 2 s"]
+#[ignore = "a big surface, about 2 s"]
 fn large_surface_timing() {
     let s = [0.976562, 0.976562, 3.27];
     let p = 3.0;
@@ -473,18 +471,9 @@ fn large_surface_timing() {
         350.0 + 500.0 * (x.sin() * y.cos() + y.sin() * z.cos() + z.sin() * x.cos())
     });
     for it in [0, 10] {
-        let t = std::time::Instant::now();
         let e = estimate(&v, &Roi::whole(&v), &opts(350.0, true, it));
-        let te = t.elapsed();
-        let t = std::time::Instant::now();
-        let surf = run(&v, &Roi::whole(&v), &opts(350.0, true, it));
-        eprintln!(
-            "smoothing {it}: estimate took {te:?} (states {:.2} s, {:.0} MB), extract took {:?}: {} triangles",
-            e.seconds,
-            e.bytes / 1e6,
-            t.elapsed(),
-            surf.report.triangles
-        );
+        let (w, surf) = crate::work::measure(|| run(&v, &Roi::whole(&v), &opts(350.0, true, it)));
+        eprintln!("smoothing {it}: the estimate states {:.2} s, {:.0} MB; extracting: {w:?}, {} triangles", e.seconds, e.bytes / 1e6, surf.report.triangles);
         assert!(surf.report.closed);
         assert_eq!(e.get("triangles"), surf.report.triangles as f64);
     }

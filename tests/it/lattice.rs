@@ -371,28 +371,22 @@ fn pore_fractions_reach_table_1() {
     }
 }
 
-/// Timings (run with `--release -- --ignored --nocapture`).
+/// The work of generating a few lattices (`crate::work`: items counted, allocations, bytes),
+/// printed (run with `--release -- --ignored --nocapture`; times: `weft bench`).
 #[test]
 #[ignore]
 fn timing() {
-    let t = std::time::Instant::now();
-    let l = gen(Pattern::Honeycomb { hexagon_radius_mm: 1.0 }, &Domain::Disc { diameter_mm: 48.0 }, 1, 0.0, 0);
-    println!("48 mm disc honeycomb r 1: {} struts in {:?}", l.report.struts_per_layer[0], t.elapsed());
-    let t = std::time::Instant::now();
-    let l = gen(Pattern::Honeycomb { hexagon_radius_mm: 1.0 }, &Domain::Disc { diameter_mm: 48.0 }, 2, 45.0, 0);
-    println!("48 mm disc honeycomb r 1, two layers (0°, 45°): {} + {} struts in {:?}", l.report.struts_per_layer[0], l.report.struts_per_layer[1], t.elapsed());
-    let t = std::time::Instant::now();
-    let l = gen(Pattern::Voronoi { density_per_mm2: 0.5 }, &rect10(), 1, 0.0, 0);
-    println!("10 × 10 Voronoi 0.5/mm²: {} struts in {:?}", l.report.struts_per_layer[0], t.elapsed());
-    let t = std::time::Instant::now();
-    let l = gen(Pattern::Voronoi { density_per_mm2: 100.0 }, &rect10(), 1, 0.0, 0);
-    println!("10 × 10 Voronoi 100/mm²: {} struts in {:?}", l.report.struts_per_layer[0], t.elapsed());
-    let t = std::time::Instant::now();
-    let l = gen(Pattern::Penrose { cell_size_mm: 0.5 }, &Domain::Disc { diameter_mm: 48.0 }, 1, 0.0, 0);
-    println!("48 mm disc Penrose 0.5: {} struts in {:?}", l.report.struts_per_layer[0], t.elapsed());
-    let t = std::time::Instant::now();
-    let l = gen(Pattern::Voronoi { density_per_mm2: 5.0 }, &Domain::Disc { diameter_mm: 48.0 }, 1, 0.0, 0);
-    println!("48 mm disc Voronoi 5/mm²: {} struts in {:?}", l.report.struts_per_layer[0], t.elapsed());
+    for (what, pattern, domain, layers, rotation) in [
+        ("48 mm disc honeycomb r 1", Pattern::Honeycomb { hexagon_radius_mm: 1.0 }, Domain::Disc { diameter_mm: 48.0 }, 1, 0.0),
+        ("48 mm disc honeycomb r 1, two layers (0°, 45°)", Pattern::Honeycomb { hexagon_radius_mm: 1.0 }, Domain::Disc { diameter_mm: 48.0 }, 2, 45.0),
+        ("10 × 10 Voronoi 0.5/mm²", Pattern::Voronoi { density_per_mm2: 0.5 }, rect10(), 1, 0.0),
+        ("10 × 10 Voronoi 100/mm²", Pattern::Voronoi { density_per_mm2: 100.0 }, rect10(), 1, 0.0),
+        ("48 mm disc Penrose 0.5", Pattern::Penrose { cell_size_mm: 0.5 }, Domain::Disc { diameter_mm: 48.0 }, 1, 0.0),
+        ("48 mm disc Voronoi 5/mm²", Pattern::Voronoi { density_per_mm2: 5.0 }, Domain::Disc { diameter_mm: 48.0 }, 1, 0.0),
+    ] {
+        let (w, l) = crate::work::measure(|| gen(pattern, &domain, layers, rotation, 0));
+        println!("{what}: {:?} struts, {w:?}", l.report.struts_per_layer);
+    }
 }
 
 /// Length (mm) of `b` lying on `a` by the G-code analyzer's rule: nearly parallel (≤ 10°),

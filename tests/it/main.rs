@@ -12,7 +12,6 @@ mod analyze_basic;
 mod analyze_fixtures;
 mod analyze_fuzz;
 mod analyze_hostile;
-mod analyze_throughput;
 mod axisym_job;
 mod axisym_tour;
 mod cli;

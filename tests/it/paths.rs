@@ -2,7 +2,6 @@
 //! bounds, continuous walks, determinism, GIPPO scores, crossing splits and timings.
 
 use std::collections::BTreeSet;
-use std::time::Instant;
 use weft::geom::{DVec2, Feature, Stroke, StrokeLayer, Toolpath};
 use weft::paths::{build_graph, optimise, Error, Graph, Method, Optimised, Options, Order};
 
@@ -476,13 +475,8 @@ fn options_are_validated_and_progress_reported() {
     assert_eq!(out.report.layers[0].retractions, 0);
 }
 
-fn time_ms(f: &mut dyn FnMut()) -> f64 {
-    let t = Instant::now();
-    f();
-    t.elapsed().as_secs_f64() * 1000.0
-}
-
-/// `cargo test --release --test it paths:: -- --ignored --nocapture timings`
+/// The counted work of building graphs and optimising paths (`crate::work`), printed (times:
+/// `weft bench --lattice`): `cargo test --release --test it paths:: -- --ignored --nocapture timings`
 #[test]
 #[ignore]
 fn timings() {
@@ -491,8 +485,6 @@ fn timings() {
     let big = grid_segments(223, 224, 1.0);
     let big_lines = grid_lines(223, 224, 1.0);
     let dense = honeycomb_10mm_dense();
-    // Best of 5 runs (the machine may be shared).
-    let best_of = |f: &mut dyn FnMut()| (0..5).map(|_| time_ms(f)).fold(f64::INFINITY, f64::min);
     for (name, l) in [
         ("honeycomb 10 mm r1", &small),
         ("honeycomb 10 mm r0.7", &dense),
@@ -500,18 +492,16 @@ fn timings() {
         ("grid 100k (segments)", &big),
         ("grid 100k (lines)", &big_lines),
     ] {
-        let mut g = Graph::default();
-        let t = best_of(&mut || g = build_graph(l, TOL));
-        println!("{name}: {} edges, {} nodes, build_graph {t:.2} ms", g.edges.len(), g.nodes.len());
+        let (t, g): (_, Graph) = crate::work::measure(|| build_graph(l, TOL));
+        println!("{name}: {} edges, {} nodes, build_graph {t:?}", g.edges.len(), g.nodes.len());
     }
     for (name, l) in [("honeycomb 10 mm r1", &small), ("honeycomb 10 mm r0.7", &dense), ("honeycomb disc 48 mm", &disc)] {
         for m in [Method::GippoMax, Method::GippoMin] {
             let o = Options { method: m, ..Options::default() };
-            let mut out = None;
-            let t = best_of(&mut || out = Some(optimise(std::slice::from_ref(l), &o, 0.4, 1, &mut |_| {}).unwrap()));
-            let r = &out.unwrap().report.layers[0];
+            let (t, out) = crate::work::measure(|| optimise(std::slice::from_ref(l), &o, 0.4, 1, &mut |_| {}).unwrap());
+            let r = &out.report.layers[0];
             println!(
-                "{name}: {m:?} 500 iterations {t:.2} ms (incl. graph) — paths {} (lb {}), score {:.3}, LTS {:.1} %, OE {:.1} %",
+                "{name}: {m:?} 500 iterations {t:?} (incl. graph) — paths {} (lb {}), score {:.3}, LTS {:.1} %, OE {:.1} %",
                 r.paths, r.lower_bound_paths, r.score, r.lts_percent, r.oe_percent
             );
         }
@@ -520,11 +510,10 @@ fn timings() {
         for m in [Method::Euler, Method::Continuous] {
             for order in [Order::LongestFirst, Order::MinTravel] {
                 let o = Options { method: m, order, ..Options::default() };
-                let mut out = None;
-                let t = best_of(&mut || out = Some(optimise(std::slice::from_ref(l), &o, 0.4, 1, &mut |_| {}).unwrap()));
-                let r = &out.unwrap().report.layers[0];
+                let (t, out) = crate::work::measure(|| optimise(std::slice::from_ref(l), &o, 0.4, 1, &mut |_| {}).unwrap());
+                let r = &out.report.layers[0];
                 println!(
-                    "{name}: {m:?} {order:?} {t:.2} ms (incl. graph) — paths {} (lb {}), pairing {:.1} mm, travel {:.1} mm",
+                    "{name}: {m:?} {order:?} {t:?} (incl. graph) — paths {} (lb {}), pairing {:.1} mm, travel {:.1} mm",
                     r.paths, r.lower_bound_paths, r.pairing_mm, r.travel_mm
                 );
             }

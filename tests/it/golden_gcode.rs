@@ -10,6 +10,7 @@
 //! is meant to alter output, regenerate them with
 //! `WEFT_BLESS=1 cargo test --release --test it golden_gcode::` and say why in the commit.
 
+use crate::common::root;
 use sha2::{Digest, Sha256};
 use std::collections::BTreeMap;
 use std::io::{Read, Write};
@@ -90,18 +91,13 @@ const KEEP_WHOLE_GZ_BYTES: usize = 32 << 10;
 /// Lines shown on each side of a mismatch.
 const SHOWN: usize = 6;
 
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
-
 fn hex(bytes: &[u8]) -> String {
     bytes.iter().map(|b| format!("{b:02x}")).collect()
 }
 
 /// The G-code of `example` with `sets`, made in this process on a pool of `threads` threads.
 fn gcode_of(example: &str, sets: &[&str], threads: usize) -> String {
-    let text = std::fs::read_to_string(root().join(format!("examples/{example}.json"))).unwrap();
-    let mut d = weft::Design::from_json(&format!("{example}.json"), &text).unwrap();
+    let mut d = crate::common::example(example);
     if !sets.is_empty() {
         d = d.with_overrides(&sets.iter().map(|s| s.to_string()).collect::<Vec<_>>()).unwrap();
     }

@@ -4,7 +4,7 @@ use clap::{Parser, Subcommand};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
-use weft::design::{share, Design, Input};
+use weft::design::{share, Design};
 use weft::jobs::Registry;
 use weft::pipeline::{self, Files, RunOptions};
 
@@ -285,35 +285,50 @@ fn load_design(arg: &str) -> Result<Design, String> {
 }
 
 /// The slot and the path of `--input [SLOT=]FILE` (the kind's first slot when none is named).
-fn input_slot(design: &Design, kind: &dyn weft::jobs::JobKind, arg: &str) -> Result<(String, PathBuf), String> {
+fn input_slot(kind_name: &str, kind: &dyn weft::jobs::JobKind, arg: &str) -> Result<(String, PathBuf), String> {
     match arg.split_once('=') {
         Some((slot, path)) if kind.slots().iter().any(|s| s.name == slot) => Ok((slot.to_string(), PathBuf::from(path))),
         Some((slot, _)) if !Path::new(arg).exists() => {
             let names: Vec<&str> = kind.slots().iter().map(|s| s.name).collect();
             Err(format!(
-                "--input {arg}: a {} job has no input slot '{slot}'; its slots are {}",
-                design.job.kind(),
+                "--input {arg}: a {kind_name} job has no input slot '{slot}'; its slots are {}",
                 if names.is_empty() { "none".into() } else { names.join(", ") }
             ))
         }
         _ => {
-            let first = kind.slots().first().ok_or_else(|| format!("--input: a {} job takes no input file", design.job.kind()))?;
+            let first = kind.slots().first().ok_or_else(|| format!("--input: a {kind_name} job takes no input file"))?;
             Ok((first.name.to_string(), PathBuf::from(arg)))
         }
     }
 }
 
-/// Reads each `--input [SLOT=]FILE`, puts it in its slot of the design and in `files`.
-fn apply_inputs(design: &mut Design, inputs: &[String], files: &mut Files) -> Result<(), String> {
+/// `design` with every `--input [SLOT=]FILE` read into `files` and put in its slot and every
+/// `--set` applied, validated once at the end (as the page does): files given one by one, as
+/// a folder or in any order with the settings make the same design.
+fn apply_changes(design: &Design, inputs: &[String], set: &[String], files: &mut Files) -> Result<Design, String> {
     let registry = Registry::builtin();
-    // Files given on this command line for each slot that takes several.
-    let mut gathered: std::collections::BTreeMap<String, Vec<String>> = std::collections::BTreeMap::new();
-    let kind = registry.get(design.job.kind()).ok_or_else(|| format!("unknown job kind '{}'", design.job.kind()))?;
+    let kind_name = design.kind_after(set);
+    let slots = read_inputs(&registry, &kind_name, inputs, files)?;
+    if slots.is_empty() && set.is_empty() {
+        return Ok(design.clone());
+    }
+    design.with_changes_in(&registry, &slots, set).map_err(|e| e.to_string())
+}
+
+/// Reads each `--input [SLOT=]FILE` of a `kind_name` job into `files`: each slot's input, in
+/// the order the slots were first named. A slot that takes several files gathers every file
+/// given for it (repeated --input, folders) into one input.
+fn read_inputs(registry: &Registry, kind_name: &str, inputs: &[String], files: &mut Files) -> Result<Vec<(String, weft::design::Input)>, String> {
+    use weft::design::Input;
+    if inputs.is_empty() {
+        return Ok(Vec::new());
+    }
+    let kind = registry.get(kind_name).ok_or_else(|| format!("unknown job kind '{kind_name}'"))?;
     // A volume's series is read whole: the sizes of all its files, however they are given
     // (folders, repeated --input), are checked together before any is read.
     let mut series_bytes: std::collections::BTreeMap<String, u64> = std::collections::BTreeMap::new();
     for arg in inputs {
-        let (slot, path) = input_slot(design, kind, arg)?;
+        let (slot, path) = input_slot(kind_name, kind, arg)?;
         if kind.slots().iter().any(|s| s.name == slot && s.kind == weft::jobs::SlotKind::Volume) {
             let size = |p: &Path| std::fs::metadata(p).map_or(0, |m| m.len());
             let (bytes, what) = if path.is_dir() {
@@ -327,47 +342,59 @@ fn apply_inputs(design: &mut Design, inputs: &[String], files: &mut Files) -> Re
             weft::jobs::SlotKind::Volume.check_file(&format!("the files given for '{slot}'"), &[], *total)?;
         }
     }
+    // Per slot: the names given and whether a folder was among them.
+    let mut gathered: Vec<(String, Vec<String>, bool)> = Vec::new();
     for arg in inputs {
-        let (slot, path) = input_slot(design, kind, arg)?;
+        let (slot, path) = input_slot(kind_name, kind, arg)?;
         let slot_kind = kind.slots().iter().find(|s| s.name == slot).map(|s| s.kind);
         let several = slot_kind.is_some_and(|k| k.multiple());
-        let input = if several {
-            // A folder (a DICOM series) gives every file in it, named by its path inside the
-            // folder; repeated --input SLOT=FILE gather.
-            let mut names = Vec::new();
-            if path.is_dir() {
-                let folder = files_in_folder(&path)?;
-                for (name, file) in &folder {
-                    refuse_huge_file(slot_kind, file, name)?;
-                }
-                for (name, file) in folder {
-                    files.insert(name.clone(), read(&file)?);
-                    names.push(name);
-                }
-                if names.is_empty() {
-                    return Err(format!("--input {arg}: the folder has no files"));
-                }
-            } else {
-                let name = file_name(&path);
-                refuse_huge_file(slot_kind, &path, &name)?;
-                files.insert(name.clone(), read(&path)?);
+        let mut names = Vec::new();
+        if several && path.is_dir() {
+            // A folder (a DICOM series, region meshes) gives every file in it, named by its
+            // path inside the folder.
+            let folder = files_in_folder(&path)?;
+            for (name, file) in &folder {
+                refuse_huge_file(slot_kind, file, name)?;
+            }
+            for (name, file) in folder {
+                files.insert(name.clone(), read(&file)?);
                 names.push(name);
             }
-            let list = gathered.entry(slot.clone()).or_default();
-            list.extend(names);
-            match list.as_slice() {
-                [one] if !path.is_dir() => Input::File { name: one.clone(), embedded: None },
-                all => Input::Files(all.to_vec()),
+            if names.is_empty() {
+                return Err(format!("--input {arg}: the folder has no files"));
             }
         } else {
             let name = file_name(&path);
             refuse_huge_file(slot_kind, &path, &name)?;
             files.insert(name.clone(), read(&path)?);
-            Input::File { name, embedded: None }
-        };
-        *design = design.with_slot_input(&registry, &slot, input).map_err(|e| format!("--input {arg}: {e}"))?;
+            names.push(name);
+        }
+        let folder = several && path.is_dir();
+        match gathered.iter_mut().find(|(s, _, _)| *s == slot) {
+            // One file per slot: the last given wins.
+            Some((_, list, _)) if !several => *list = names,
+            Some((_, list, had_folder)) => {
+                for n in names {
+                    if !list.contains(&n) {
+                        list.push(n);
+                    }
+                }
+                *had_folder |= folder;
+            }
+            None => gathered.push((slot, names, folder)),
+        }
     }
-    Ok(())
+    Ok(gathered
+        .into_iter()
+        .map(|(slot, names, folder)| {
+            let input = match names.as_slice() {
+                [one] if !folder => Input::File { name: one.clone(), embedded: None },
+                all if kind.slots().iter().any(|s| s.name == slot && s.kind.multiple()) => Input::Files(all.to_vec()),
+                all => Input::File { name: all.last().cloned().unwrap_or_default(), embedded: None },
+            };
+            (slot, input)
+        })
+        .collect())
 }
 
 /// The files under `folder` (depth ≤ 8, hidden ones skipped), sorted, each with its path
@@ -401,12 +428,8 @@ fn files_in_folder(folder: &Path) -> Result<Vec<(String, PathBuf)>, String> {
 }
 
 fn cmd_inspect(design: &str, view: &str, index: usize, inputs: &[String], set: &[String], out: PathBuf) -> Result<(), String> {
-    let mut design = load_design(design)?;
-    if !set.is_empty() {
-        design = design.with_overrides(set).map_err(|e| e.to_string())?;
-    }
     let mut files = Files::new();
-    apply_inputs(&mut design, inputs, &mut files)?;
+    let design = apply_changes(&load_design(design)?, inputs, set, &mut files)?;
     let registry = Registry::builtin();
     let found = weft::pipeline::inspect(&registry, &mut weft::pipeline::Cache::disabled(), &design, &files, view, index.saturating_sub(1))
         .map_err(|e| e.to_string())?;
@@ -454,11 +477,8 @@ fn cmd_run(
     if let Some(id) = printer {
         design.printer = weft::gcode::presets::preset(id).map_err(|e| format!("--printer: {e}"))?.printer;
     }
-    if !set.is_empty() {
-        design = design.with_overrides(set).map_err(|e| e.to_string())?;
-    }
     let mut files = Files::new();
-    apply_inputs(&mut design, inputs, &mut files)?;
+    let design = apply_changes(&design, inputs, set, &mut files)?;
     if dry_run {
         let plan = pipeline::estimate(&Registry::builtin(), &mut pipeline::Cache::disabled(), &design, &files).map_err(|e| e.to_string())?;
         out!("{}", plan_table(&plan));
@@ -522,6 +542,12 @@ fn cmd_run(
     }
     let out = output_path(out.as_deref(), &design.name, design.printer.flavor.file_extension());
     write(&out, output.gcode.as_bytes())?;
+    // What the stages repaired or assumed is said even with --quiet: it changes what prints.
+    for stage in &output.report.stages {
+        for note in &stage.notes {
+            errln!("weft: {}: {note}", stage.stage);
+        }
+    }
     if let Some(path) = report {
         let json = serde_json::to_string_pretty(&output.report).unwrap_or_default();
         write(&output_path(Some(&path), &design.name, "report.json"), json.as_bytes())?;
@@ -622,9 +648,8 @@ fn cmd_analyze(file: &Path, json: bool) -> Result<(), String> {
 }
 
 fn cmd_share(design: &Path, inputs: &[String]) -> Result<(), String> {
-    let mut d = load_design(&design.display().to_string())?;
     let mut files = Files::new();
-    apply_inputs(&mut d, inputs, &mut files)?;
+    let d = apply_changes(&load_design(&design.display().to_string())?, inputs, &[], &mut files)?;
     let list: Vec<(&str, &[u8])> = files.names().filter_map(|n| files.get(n).map(|b| (n, b))).collect();
     let link = share::encode(&d, &list);
     outln!("{}", link.fragment);

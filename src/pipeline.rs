@@ -12,7 +12,7 @@ use crate::design::{share, Design, Input};
 use crate::gcode::{self, GcodeStats};
 use crate::geom::{DVec3, Mesh, Toolpath};
 use crate::import::{self, ImportReport};
-use crate::jobs::{Inspection, Product, Registry};
+use crate::jobs::{Inspection, Product, Registry, Slot};
 use crate::report::StageReport;
 use crate::source::ByteSource;
 use crate::volume;
@@ -492,59 +492,73 @@ impl<'a> Ctx<'a> {
 
     /// The mesh of `input` (a slot's [`Input`]), imported once per file content and placed on
     /// the plate: XY centred on 0, lowest point at Z = 0. `slot` names the slot for messages
-    /// and for the cache id.
-    pub fn mesh(&mut self, slot: &str, input: &Input) -> Result<Out<Mesh>, Error> {
+    /// and for the cache id, and its kind says what the mesh must be: a solid slot's mesh is
+    /// closed and oriented by [`import::close::close_solid`] (repairs stated in the report's
+    /// notes) or refused.
+    pub fn mesh(&mut self, slot: &Slot, input: &Input) -> Result<Out<Mesh>, Error> {
         self.mesh_placed(slot, input, true)
     }
 
     /// The mesh of `slot` in its file's own coordinates (not moved onto the plate): for jobs
     /// where the part's place relative to something else matters (a part resting on a curved
     /// platform).
-    pub fn mesh_in_place(&mut self, slot: &str, input: &Input) -> Result<Out<Mesh>, Error> {
+    pub fn mesh_in_place(&mut self, slot: &Slot, input: &Input) -> Result<Out<Mesh>, Error> {
         self.mesh_placed(slot, input, false)
     }
 
     /// Mesh `item` of a slot holding several (foam regions), in its file's own coordinates:
     /// each item is cached on its own.
-    pub fn mesh_item(&mut self, slot: &str, item: usize, input: &Input) -> Result<Out<Mesh>, Error> {
-        self.mesh_placed_as(slot, &format!("import-item:{slot}:{item}"), input, false)
+    pub fn mesh_item(&mut self, slot: &Slot, item: usize, input: &Input) -> Result<Out<Mesh>, Error> {
+        self.mesh_placed_as(slot, &format!("import-item:{}:{item}", slot.name), input, false)
     }
 
-    fn mesh_placed(&mut self, slot: &str, input: &Input, place: bool) -> Result<Out<Mesh>, Error> {
-        let id = if place { format!("import:{slot}") } else { format!("import-in-place:{slot}") };
+    fn mesh_placed(&mut self, slot: &Slot, input: &Input, place: bool) -> Result<Out<Mesh>, Error> {
+        let id = if place { format!("import:{}", slot.name) } else { format!("import-in-place:{}", slot.name) };
         self.mesh_placed_as(slot, &id, input, place)
     }
 
-    fn mesh_placed_as(&mut self, slot: &str, id: &str, input: &Input, place: bool) -> Result<Out<Mesh>, Error> {
+    fn mesh_placed_as(&mut self, slot: &Slot, id: &str, input: &Input, place: bool) -> Result<Out<Mesh>, Error> {
         // A loaded file is keyed by its content; a built-in shape or an embedded file by the
         // input itself. Missing files and several-file inputs are refused by `load_input`.
         let file = match input {
             Input::File { name, .. } => self.files.hash(name).map(|h| (name, h)),
             _ => None,
         };
+        let solid = slot.kind.solid();
         let (parts, upstream) = match file {
-            Some((name, h)) => (serde_json::json!({ "file": name }), vec![h]),
-            None => (serde_json::to_value(input).unwrap_or_default(), Vec::new()),
+            Some((name, h)) => (serde_json::json!({ "file": name, "solid": solid }), vec![h]),
+            None => (serde_json::json!({ "input": input, "solid": solid }), Vec::new()),
         };
         let files = self.files;
         let keep = place; // the placed mesh is what the estimate and the run both read
+        let slot_name = slot.name;
         self.run_stage(
             "import",
             id,
             &parts,
             &upstream,
             |_| {
-                let (mesh, report) = load_input(slot, input, files, place)?;
+                let (mesh, report) = load_input(slot_name, input, files, place, solid)?;
                 let stage = report.as_ref().map(|r| {
-                    StageReport::new("import", "Reading the mesh", r)
+                    let mut s = StageReport::new("import", "Reading the mesh", r)
                         .metric("triangles", "Triangles", r.triangles as f64, "", "Facets in the mesh after repairs.")
                         .metric(
                             "open_edges",
                             "Open edges",
                             r.open_edges as f64,
                             "",
-                            "Edges with one facet: holes in the surface (0 for a closed, printable mesh).",
-                        )
+                            "Edges with one facet as read: holes in the surface (0 for a closed, printable mesh).",
+                        );
+                    if let Some(c) = &r.closure {
+                        s = s
+                            .metric("holes_capped", "Holes capped", c.capped.len() as f64, "", "Flat holes closed with a cap so the part is a whole solid.")
+                            .metric("capped_area", "Area capped", c.capped_area_mm2(), "mm²", "Surface the caps added.")
+                            .metric("flipped", "Facets turned", c.flipped as f64, "", "Facets that faced inward, turned to face out.");
+                    }
+                    for note in &r.notes {
+                        s = s.note(note);
+                    }
+                    s
                 });
                 Ok((mesh, stage))
             },
@@ -852,7 +866,7 @@ impl Error {
 /// Resolves the mesh input of `slot`: the built-in shape, or the file (loaded, or embedded in
 /// a share link) imported; with `place`, placed on the plate: XY centred on 0, lowest point at
 /// Z = 0.
-fn load_input(slot: &str, input: &Input, files: &Files, place: bool) -> Result<(Mesh, Option<ImportReport>), Error> {
+fn load_input(slot: &str, input: &Input, files: &Files, place: bool, solid: bool) -> Result<(Mesh, Option<ImportReport>), Error> {
     let (mut mesh, report) = match input {
         Input::Builtin(shape) => (shape.mesh(), None),
         Input::File { name, embedded } => {
@@ -861,7 +875,14 @@ fn load_input(slot: &str, input: &Input, files: &Files, place: bool) -> Result<(
                 (None, Some(e)) => std::borrow::Cow::Owned(share::unpack(e).map_err(|source| Error::Embedded { name: name.clone(), source })?),
                 (None, None) => return Err(Error::MissingInput { name: name.clone(), slot: slot.into() }),
             };
-            let imported = import::read_mesh(name, &bytes, &import::Options::default())?;
+            let mut imported = import::read_mesh(name, &bytes, &import::Options::default())?;
+            drop(bytes);
+            if solid {
+                let closure = import::close::close_solid(name, &mut imported.mesh).map_err(import::Error::Open)?;
+                imported.report.notes.extend(closure.notes(name));
+                imported.report.triangles = imported.mesh.triangles.len();
+                imported.report.closure = Some(closure);
+            }
             (imported.mesh, Some(imported.report))
         }
         Input::Files(_) => return Err(Error::NoInput(format!("the {slot} input takes one mesh file, not several"))),
@@ -951,6 +972,7 @@ fn stats_of(a: &analyze::Report) -> GcodeStats {
         travel_mm: a.travel_mm,
         retractions: a.retractions,
         estimated_time_s: a.estimated_time_s,
+        merged_moves: 0,
     }
 }
 
@@ -998,7 +1020,14 @@ fn write_stage(ctx: &mut Ctx, toolpath: &Out<Toolpath>) -> Result<Out<Written>, 
         let g = gcode::write_gcode(toolpath, &writer_options(design))?;
         // Its numbers are the run report's `gcode` totals, which the page shows once, in its
         // overall statistics; the stage report says whether the writer ran.
-        let report = StageReport::new("gcode", "Writing G-code", &g.stats);
+        let mut report = StageReport::new("gcode", "Writing G-code", &g.stats);
+        if g.stats.merged_moves > 0 {
+            report = report.note(&format!(
+                "joined {} extruding move(s) shorter than {} mm to their neighbours, with their filament (such dust stutters a printer's planner)",
+                g.stats.merged_moves,
+                gcode::MIN_MOVE_MM
+            ));
+        }
         Ok((Written { text: Arc::new(g.text), stats: g.stats }, Some(report)))
     })
 }

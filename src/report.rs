@@ -148,6 +148,10 @@ pub struct StageReport {
     /// The stage's own typed report, as JSON (for `--report` and tests; the page does not
     /// depend on it).
     pub data: Value,
+    /// What the stage repaired or assumed, one sentence each: said out loud by the CLI (on
+    /// stderr) and the page (on the stage's card), never only in numbers.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub notes: Vec<String>,
 }
 
 impl StageReport {
@@ -161,7 +165,14 @@ impl StageReport {
             plots: Vec::new(),
             tables: Vec::new(),
             data: serde_json::to_value(data).unwrap_or(Value::Null),
+            notes: Vec::new(),
         }
+    }
+
+    /// Adds a sentence on what the stage repaired or assumed.
+    pub fn note(mut self, text: &str) -> StageReport {
+        self.notes.push(text.into());
+        self
     }
 
     /// Adds a whole-stage metric.

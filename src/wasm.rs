@@ -315,7 +315,7 @@ impl Session {
                     .map_err(|m| JsError::new(&format!("{name} could not be read ({m}); load it again")))?;
                 self.check_loaded(slot, name, kind)
             }
-            SlotKind::Mesh | SlotKind::Meshes | SlotKind::Frame => {
+            SlotKind::Mesh | SlotKind::Meshes | SlotKind::Surface | SlotKind::Frame => {
                 let bytes = read_whole(&source, name)?;
                 self.add_file(slot, name, bytes)
             }
@@ -323,30 +323,31 @@ impl Session {
     }
 
     fn slot_kind(&self, slot: &str) -> Result<SlotKind, JsError> {
-        self.registry
-            .kinds()
-            .iter()
-            .flat_map(|k| k.slots())
-            .find(|s| s.name == slot)
-            .map(|s| s.kind)
-            .ok_or_else(|| JsError::new(&format!("no job kind has an input slot '{slot}'")))
+        self.slot(slot).map(|s| s.kind)
+    }
+
+    fn slot(&self, slot: &str) -> Result<&'static crate::jobs::Slot, JsError> {
+        self.registry.slot(slot).ok_or_else(|| JsError::new(&format!("no job kind has an input slot '{slot}'")))
     }
 
     /// Reads a just-loaded file with its slot kind's reader; forgets it if it is refused.
     fn check_loaded(&mut self, slot: &str, name: &str, kind: SlotKind) -> Result<JsValue, JsError> {
         let size = self.files.source(name).map_or(0, |s| s.len());
         let (summary, report) = match kind {
-            SlotKind::Mesh | SlotKind::Meshes => {
+            SlotKind::Mesh | SlotKind::Meshes | SlotKind::Surface => {
+                let spec = self.slot(slot)?;
                 let design = Design::default();
                 let mut quiet = |_: &str, _: f32| {};
                 let mut ctx = pipeline::Ctx::new(&design, &self.files, &mut self.cache, &mut quiet);
                 let input = Input::File { name: name.to_string(), embedded: None };
-                match ctx.mesh(slot, &input) {
+                match ctx.mesh(spec, &input) {
                     Ok(mesh) => {
                         let report = ctx.reports.first().map(|r| r.data.clone()).unwrap_or_default();
+                        let notes = ctx.reports.first().map(|r| r.notes.join("; ")).unwrap_or_default();
                         let size = mesh.bounds().map(|b| b.max - b.min).unwrap_or_default();
                         let tris = mesh.triangles.len();
-                        (format!("{} triangles, {:.1} × {:.1} × {:.1} mm", group(tris as u64), size.x, size.y, size.z), report)
+                        let said = if notes.is_empty() { String::new() } else { format!(" ({notes})") };
+                        (format!("{} triangles, {:.1} × {:.1} × {:.1} mm{said}", group(tris as u64), size.x, size.y, size.z), report)
                     }
                     Err(e) => {
                         self.files.remove(name);
@@ -381,19 +382,23 @@ impl Session {
                 };
                 match read {
                     Ok(w) => {
-                        let grounded = w.grounded.iter().filter(|&&g| g).count();
                         let first = w.joints.first().copied().unwrap_or_default();
                         let (lo, hi) = w.joints.iter().fold((first, first), |(a, b), p| (a.min(*p), b.max(*p)));
                         let d = hi - lo;
+                        // What reading assumed and what stands on the plate, said on loading.
+                        let g = crate::freeform::wireframe::grounding(&w, crate::freeform::wireframe::DEFAULT_GROUND_TOLERANCE_MM);
+                        let mut said: Vec<String> = w.notes.clone();
+                        said.push(g.statement());
+                        said.extend(g.warning());
                         (
                             format!(
-                                "{} beams, {} joints ({} grounded), {:.1} × {:.1} × {:.1} mm",
+                                "{} beams, {} joints, {:.1} × {:.1} × {:.1} mm ({})",
                                 group(w.beams.len() as u64),
                                 group(w.joints.len() as u64),
-                                group(grounded as u64),
                                 d.x,
                                 d.y,
-                                d.z
+                                d.z,
+                                said.join("; ")
                             ),
                             serde_json::Value::Null,
                         )

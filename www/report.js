@@ -46,7 +46,7 @@ export function renderReport(host, report, state) {
 }
 
 function hasContent(stage) {
-  return (stage.metrics?.length ?? 0) + (stage.plots?.length ?? 0) + (stage.tables?.length ?? 0) > 0;
+  return (stage.metrics?.length ?? 0) + (stage.plots?.length ?? 0) + (stage.tables?.length ?? 0) + (stage.notes?.length ?? 0) > 0;
 }
 
 function fillCard(card, stage, state) {
@@ -93,6 +93,18 @@ function fillCard(card, stage, state) {
   }
   card.dataset.group = group === null ? "" : String(group);
   card.append(head);
+  // What the stage repaired or assumed (a capped hole, the grounded joints): said first.
+  if (stage.notes?.length) {
+    const notes = document.createElement("ul");
+    notes.className = "stage-notes";
+    notes.setAttribute("role", "note");
+    for (const text of stage.notes) {
+      const li = document.createElement("li");
+      li.textContent = text;
+      notes.append(li);
+    }
+    card.append(notes);
+  }
 
   const metrics = (stage.metrics ?? []).filter((m) => !Number.isInteger(m.group_index) || m.group_index === group);
   if (metrics.length) card.append(metricList(metrics));

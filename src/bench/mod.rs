@@ -357,6 +357,7 @@ mod cache_native {
                 let mut quiet = |_: &str, _: f32| {};
                 let mut ctx = pipeline::Ctx::new(&plain, files, &mut cache, &mut quiet);
                 let input = crate::design::Input::File { name: "bench.stl".into(), embedded: None };
+                let slot = Registry::builtin().slot(slot).ok_or_else(|| format!("no slot {slot}"))?;
                 ctx.mesh(slot, &input).map_err(|e| e.to_string())?;
                 Some(t.elapsed().as_secs_f64())
             }

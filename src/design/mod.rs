@@ -326,6 +326,68 @@ impl Design {
         Design::from_value_in(registry, "--set", value)
     }
 
+    /// The job kind after `assignments` (a `job.kind=…` among them switches it).
+    pub fn kind_after(&self, assignments: &[String]) -> String {
+        let set = assignments.iter().rev().find_map(|a| a.split_once('=').filter(|(p, _)| p.trim() == "job.kind").map(|(_, v)| v));
+        match set {
+            Some(raw) => serde_json::from_str::<String>(raw).unwrap_or_else(|_| raw.to_string()),
+            None => self.job.kind().to_string(),
+        }
+    }
+
+    /// The design with `inputs` (slot name, input) in their slots and `assignments` applied,
+    /// validated once at the end, as the page does: a setting that needs a file (a route that
+    /// edits a loaded G-code) may come with it, in either order. Assignments are applied
+    /// before the inputs (a `job.kind=…` picks the slots) and again after them (so a value
+    /// given wins over a slot's rule, and a row that a file adds can be set).
+    pub fn with_changes_in(&self, registry: &Registry, inputs: &[(String, Input)], assignments: &[String]) -> Result<Design, Error> {
+        let mut value = serde_json::to_value(self).map_err(|e| Error::Override { assignment: String::new(), message: e.to_string() })?;
+        let apply = |value: &mut Value, strict: bool| -> Result<(), Error> {
+            for a in assignments {
+                let assignment = || clip(a, 200).into_owned();
+                let (path, raw) = a
+                    .split_once('=')
+                    .ok_or_else(|| Error::Override { assignment: assignment(), message: "expected PATH=VALUE, e.g. job.slice.layer_height_mm=0.1".into() })?;
+                let new: Value = serde_json::from_str(raw).unwrap_or_else(|_| Value::String(raw.to_string()));
+                let before = value.pointer("/job/kind").cloned();
+                match set_path(value, path.trim(), new) {
+                    Ok(()) => {}
+                    Err(message) if strict => return Err(Error::Override { assignment: assignment(), message }),
+                    Err(_) => continue,
+                }
+                // A switch of job kind lets the new kind put what it needs in place.
+                let after = value.pointer("/job/kind").cloned();
+                if after != before {
+                    if let Some(k) = after.as_ref().and_then(Value::as_str).and_then(|k| registry.get(k)) {
+                        k.adopted(value);
+                    }
+                }
+            }
+            Ok(())
+        };
+        apply(&mut value, false)?;
+        let kind_name = value.pointer("/job/kind").and_then(Value::as_str).unwrap_or("").to_string();
+        if !inputs.is_empty() {
+            let kind = registry.get(&kind_name).ok_or_else(|| Error::Override { assignment: "--input".into(), message: format!("unknown job kind '{kind_name}'") })?;
+            for (slot, input) in inputs {
+                let spec = kind.slots().iter().find(|s| s.name == slot).ok_or_else(|| Error::Override {
+                    assignment: slot.clone(),
+                    message: format!(
+                        "a {kind_name} job has no input slot '{slot}'; its slots are {}",
+                        if kind.slots().is_empty() { "none".to_string() } else { kind.slots().iter().map(|s| s.name).collect::<Vec<_>>().join(", ") }
+                    ),
+                })?;
+                let new = serde_json::to_value(input).unwrap_or(Value::Null);
+                set_path(&mut value, spec.path, new).map_err(|message| Error::Override { assignment: slot.clone(), message })?;
+                let job = value.get("job").cloned().unwrap_or(Value::Null);
+                value["job"] = kind.slot_filled(slot, job);
+            }
+        }
+        apply(&mut value, true)?;
+        let source = if assignments.is_empty() { "design" } else { "--set" };
+        Design::from_value_in(registry, source, value)
+    }
+
     /// The design with `input` in the slot at design path `slot_path` (e.g. `job.input`),
     /// after the job kind's own rule for a filled slot (a lattice fills a loaded solid).
     pub fn with_slot_input(&self, registry: &Registry, slot: &str, input: Input) -> Result<Design, Error> {

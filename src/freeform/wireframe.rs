@@ -7,12 +7,19 @@
 //! - `conmech` JSON (`nodes` of `{point: [x, y, z], node_ind, is_grounded}`, `elements` of
 //!   `{end_node_inds: [i, j]}`, `supports` of `{node_ind}`, `unit`, metres by default);
 //! - OBJ: `v x y z` and `l a b …` (a polyline of several joints is several beams; negative
-//!   indices count back from the last `v`), millimetres;
+//!   indices count back from the last `v`), millimetres; an OBJ without `l` lines whose faces
+//!   (`f`) are the design (a wireframe exported as a triangle mesh) gives each face's unique
+//!   edges as beams, said in [`Wireframe::notes`];
+//! - STL (binary or text, read by [`crate::import`]): each triangle's unique edges as beams,
+//!   millimetres, said the same way;
 //! - CSV: one beam per line, `x1, y1, z1, x2, y2, z2` (mm; commas, semicolons or spaces; a
 //!   first line that is not numbers is a header), joints merged within a tolerance.
 //!
 //! Grounded joints come from the file (`is_grounded`, conmech's `supports`) or, when it marks
-//! none or the user asks, are every joint within a tolerance of the lowest one.
+//! none or the user asks, are every joint within a tolerance of the lowest one. What was
+//! grounded is stated ([`grounding`]), with a warning and the tolerance that grounds the base
+//! when the lowest joints alone are an implausible footing (one point, or a small part of the
+//! design's footprint).
 //!
 //! Checked, every problem listed with its place: coordinates that are not finite, beams that
 //! name a joint the file lacks, zero-length beams, beams given twice, no grounded joint, and
@@ -76,6 +83,8 @@ pub enum Format {
     Obj,
     /// A CSV of beams.
     Csv,
+    /// A triangle mesh (STL) whose edges are the beams.
+    Mesh,
     /// A built-in design ([`super::models`]).
     Model,
 }
@@ -97,6 +106,10 @@ pub struct Wireframe {
     pub joint_names: Vec<String>,
     /// How the file names each beam (`element 12`, `line 40`), for messages.
     pub beam_names: Vec<String>,
+    /// What reading assumed, one sentence each (a triangle mesh's edges read as beams).
+    pub notes: Vec<String>,
+    /// What was grounded, once the design is placed ([`grounding`]); refusals cite it.
+    pub grounding: Option<Grounding>,
 }
 
 /// Why a design could not be read.
@@ -144,6 +157,10 @@ pub fn read(name: &str, bytes: &[u8], options: &Options) -> Result<Wireframe, Er
         return Err(Error::TooBig { file: name.into(), bytes: bytes.len() });
     }
     let not_read = |place: &str, message: String| Error::NotRead { file: name.into(), place: place.into(), message };
+    if name.to_ascii_lowercase().ends_with(".stl") {
+        let raw = stl(name, bytes)?;
+        return finish(name, raw, options);
+    }
     let text = std::str::from_utf8(bytes)
         .map_err(|e| not_read(&format!("byte {}", e.valid_up_to()), "the file is not text (UTF-8); export the design as JSON, OBJ or CSV".into()))?;
     let lower = name.to_ascii_lowercase();
@@ -176,6 +193,64 @@ struct Raw {
     format: Format,
     /// Beams naming a joint the file lacks (place, the missing name).
     dangling: Vec<(String, String)>,
+    /// What reading assumed.
+    notes: Vec<String>,
+}
+
+impl Raw {
+    fn new(format: Format) -> Raw {
+        Raw {
+            joints: Vec::new(),
+            joint_place: Vec::new(),
+            beams: Vec::new(),
+            beam_place: Vec::new(),
+            grounded: None,
+            format,
+            dangling: Vec::new(),
+            notes: Vec::new(),
+        }
+    }
+}
+
+/// Each face's edges, once each, as beams (in the order first met): `faces` are polygons of
+/// joint indices, `place(f)` names face `f`. Returns the notes' sentence.
+fn edges_as_beams(raw: &mut Raw, faces: &[(Vec<usize>, String)], what: &str) -> String {
+    let mut edges: Vec<((usize, usize), usize, usize)> = Vec::new();
+    for (f, (corners, _)) in faces.iter().enumerate() {
+        for k in 0..corners.len() {
+            let (a, b) = (corners[k], corners[(k + 1) % corners.len()]);
+            if a != b {
+                edges.push(((a.min(b), a.max(b)), f, edges.len()));
+            }
+        }
+    }
+    edges.sort_unstable();
+    edges.dedup_by_key(|e| e.0);
+    edges.sort_unstable_by_key(|e| e.2);
+    for &((a, b), f, _) in &edges {
+        raw.beams.push([a, b]);
+        raw.beam_place.push(format!("the edge {}–{} of {}", a + 1, b + 1, faces[f].1));
+    }
+    format!("read {} {what} as {} beams (their unique edges): the file has faces, not line elements", faces.len(), edges.len())
+}
+
+/// A triangle mesh (STL) whose edges are the beams.
+fn stl(name: &str, bytes: &[u8]) -> Result<Raw, Error> {
+    let imported = crate::import::read_mesh(name, bytes, &crate::import::Options::default())
+        .map_err(|e| Error::NotRead { file: name.into(), place: "the mesh".into(), message: e.to_string() })?;
+    let mesh = imported.mesh;
+    if mesh.triangles.len().saturating_mul(3) / 2 > MAX_BEAMS + 1 {
+        return Err(Error::TooManyBeams { file: name.into(), beams: mesh.triangles.len() * 3 / 2 });
+    }
+    let mut raw = Raw::new(Format::Mesh);
+    for (i, v) in mesh.vertices.iter().enumerate() {
+        raw.joints.push(DVec3::new(v[0] as f64, v[1] as f64, v[2] as f64));
+        raw.joint_place.push(format!("vertex {}", i + 1));
+    }
+    let faces: Vec<(Vec<usize>, String)> = mesh.triangles.iter().enumerate().map(|(t, tri)| (tri.iter().map(|&v| v as usize).collect(), format!("triangle {}", t + 1))).collect();
+    let note = edges_as_beams(&mut raw, &faces, "triangles");
+    raw.notes.push(note);
+    Ok(raw)
 }
 
 fn unit_scale(unit: &str) -> Option<f64> {
@@ -206,15 +281,7 @@ fn json(text: &str) -> Result<Raw, (String, String)> {
             .get("element_list")
             .and_then(Value::as_array)
             .ok_or(("element_list".to_string(), "an assembly_instances design needs its element_list (the beams)".to_string()))?;
-        let mut raw = Raw {
-            joints: Vec::new(),
-            joint_place: Vec::new(),
-            beams: Vec::new(),
-            beam_place: Vec::new(),
-            grounded: Some(Vec::new()),
-            format: Format::AssemblyInstances,
-            dangling: Vec::new(),
-        };
+        let mut raw = Raw { grounded: Some(Vec::new()), ..Raw::new(Format::AssemblyInstances) };
         let mut by_id = BTreeMap::new();
         for (i, n) in nodes.iter().enumerate() {
             let place = format!("node_list[{i}]");
@@ -238,15 +305,7 @@ fn json(text: &str) -> Result<Raw, (String, String)> {
         let s = scale(1000.0)?;
         let elements =
             v.get("elements").and_then(Value::as_array).ok_or(("elements".to_string(), "a conmech design needs its elements (the beams)".to_string()))?;
-        let mut raw = Raw {
-            joints: Vec::new(),
-            joint_place: Vec::new(),
-            beams: Vec::new(),
-            beam_place: Vec::new(),
-            grounded: None,
-            format: Format::Conmech,
-            dangling: Vec::new(),
-        };
+        let mut raw = Raw::new(Format::Conmech);
         let mut by_id = BTreeMap::new();
         let mut grounded = Vec::new();
         for (i, n) in nodes.iter().enumerate() {
@@ -329,15 +388,10 @@ fn numbers(line: &str) -> Vec<&str> {
 }
 
 fn obj(text: &str) -> Result<Raw, (usize, String)> {
-    let mut raw = Raw {
-        joints: Vec::new(),
-        joint_place: Vec::new(),
-        beams: Vec::new(),
-        beam_place: Vec::new(),
-        grounded: None,
-        format: Format::Obj,
-        dangling: Vec::new(),
-    };
+    let mut raw = Raw::new(Format::Obj);
+    // Faces, used as the design only when the file has no line elements.
+    let mut faces: Vec<(Vec<usize>, String)> = Vec::new();
+    let mut bad_face: Option<(usize, String)> = None;
     for (k, line) in text.lines().enumerate() {
         let n = k + 1;
         let mut it = line.split_whitespace();
@@ -375,25 +429,42 @@ fn obj(text: &str) -> Result<Raw, (usize, String)> {
                     }
                 }
             }
+            Some("f") => {
+                let mut corners = Vec::new();
+                for t in it {
+                    // `f v/vt/vn` triples: the vertex is the first number.
+                    let head = t.split('/').next().unwrap_or(t);
+                    let i: i64 = head.parse().map_err(|_| (n, format!("\"{t}\" is not a vertex number")))?;
+                    let count = raw.joints.len() as i64;
+                    let idx = if i > 0 { i - 1 } else { count + i };
+                    if idx < 0 || idx >= count {
+                        bad_face.get_or_insert((n, format!("vertex {i}")));
+                    } else {
+                        corners.push(idx as usize);
+                    }
+                }
+                if corners.len() >= 2 && faces.len() <= MAX_BEAMS {
+                    faces.push((corners, format!("the face on line {n}")));
+                }
+            }
             _ => {}
         }
     }
+    if raw.beams.is_empty() && !faces.is_empty() {
+        if let Some((line, missing)) = bad_face {
+            raw.dangling.push((format!("the face on line {line}"), missing));
+        }
+        let note = edges_as_beams(&mut raw, &faces, "faces");
+        raw.notes.push(note);
+    }
     if raw.beams.is_empty() {
-        return Err((text.lines().count().max(1), "no line elements (`l a b`): a wireframe OBJ joins its vertices by lines, not faces".into()));
+        return Err((text.lines().count().max(1), "no line elements (`l a b`) and no faces: a wireframe OBJ joins its vertices by lines (or faces whose edges are the beams)".into()));
     }
     Ok(raw)
 }
 
 fn csv(text: &str, merge_mm: f64) -> Result<Raw, (usize, String)> {
-    let mut raw = Raw {
-        joints: Vec::new(),
-        joint_place: Vec::new(),
-        beams: Vec::new(),
-        beam_place: Vec::new(),
-        grounded: None,
-        format: Format::Csv,
-        dangling: Vec::new(),
-    };
+    let mut raw = Raw::new(Format::Csv);
     // Joints by position on a grid of the merge tolerance (ends within it are one joint; the
     // neighbouring cells are looked at too, so a pair across a cell edge still merges).
     let cell = merge_mm.max(1e-9);
@@ -544,7 +615,150 @@ fn finish(name: &str, raw: Raw, options: &Options) -> Result<Wireframe, Error> {
         format: raw.format,
         joint_names: raw.joint_place,
         beam_names: raw.beam_place,
+        notes: raw.notes.into_iter().map(|n| format!("{name}: {n}")).collect(),
+        grounding: None,
     })
+}
+
+/// Grounded joints spanning less than this share of the design's footprint (the diagonals
+/// of their boxes seen from above) are an implausible footing when the lowest joints were
+/// grounded by tolerance.
+pub const PLAUSIBLE_FOOTPRINT_SHARE: f64 = 0.2;
+/// A suggested ground tolerance reaches at most this share of the design's height.
+pub const SUGGEST_HEIGHT_SHARE: f64 = 0.1;
+
+/// What was grounded and whether it is a plausible footing for the design.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Grounding {
+    /// Joints grounded.
+    pub joints: usize,
+    /// They are the file's marks (false: the joints within the tolerance of the lowest).
+    pub by_file: bool,
+    /// The lowest joint's z, mm.
+    pub z_mm: f64,
+    /// The tolerance used (grounding the lowest), mm.
+    pub tolerance_mm: f64,
+    /// The grounded joints' span over the design's, seen from above (diagonals of the boxes).
+    pub footprint_share: f64,
+    /// A tolerance that would ground the base: (tolerance mm, joints, footprint share).
+    pub suggestion: Option<(f64, usize, f64)>,
+}
+
+impl Grounding {
+    /// Grounding the lowest joints gave a footing the design cannot plausibly stand on.
+    pub fn implausible(&self) -> bool {
+        !self.by_file && self.footprint_share < PLAUSIBLE_FOOTPRINT_SHARE
+    }
+
+    /// One clause: what was grounded.
+    pub fn statement(&self) -> String {
+        let n = self.joints;
+        let joints = if n == 1 { "1 joint grounded".to_string() } else { format!("{n} joints grounded") };
+        if self.by_file {
+            format!("{joints}, as the file marks them")
+        } else {
+            format!("{joints}, the lowest: z {:.2} ± {} mm", self.z_mm, self.tolerance_mm)
+        }
+    }
+
+    /// The warning when the footing is implausible, with the tolerance that grounds the base.
+    pub fn warning(&self) -> Option<String> {
+        if !self.implausible() {
+            return None;
+        }
+        let fix = match self.suggestion {
+            Some((tol, joints, share)) => format!(
+                "a ground tolerance of {tol} mm grounds {joints} joints spanning {:.0} % of it (set Ground tolerance, job.design.ground_tolerance_mm), or mark the grounded joints in the file",
+                share * 100.0
+            ),
+            None => "mark the grounded joints in the file, or turn the design so its base is lowest".to_string(),
+        };
+        Some(format!(
+            "only {} touch{} the plate, spanning {:.0} % of the design's footprint: the part would stand on {}; {fix}",
+            if self.joints == 1 { "1 joint".to_string() } else { format!("{} joints", self.joints) },
+            if self.joints == 1 { "es" } else { "" },
+            self.footprint_share * 100.0,
+            if self.joints == 1 { "one point" } else { "a small part of its base" }
+        ))
+    }
+}
+
+/// XY diagonal of the box of `points`.
+fn xy_diagonal(points: impl Iterator<Item = DVec3>) -> f64 {
+    let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
+    for p in points {
+        lo = lo.min(p);
+        hi = hi.max(p);
+    }
+    if lo.x > hi.x {
+        return 0.0;
+    }
+    ((hi.x - lo.x).powi(2) + (hi.y - lo.y).powi(2)).sqrt()
+}
+
+/// What `w`'s grounding is (see [`Grounding`]), `tolerance_mm` being the one used when the
+/// lowest joints were grounded. The suggestion is the least tolerance, up to
+/// [`SUGGEST_HEIGHT_SHARE`] of the height, whose grounded joints are a plausible footing
+/// (rounded up to two significant figures).
+pub fn grounding(w: &Wireframe, tolerance_mm: f64) -> Grounding {
+    let used: Vec<bool> = {
+        let mut u = vec![false; w.joints.len()];
+        for &[i, j] in &w.beams {
+            u[i] = true;
+            u[j] = true;
+        }
+        u
+    };
+    let joints_used = || w.joints.iter().zip(&used).filter(|(_, &u)| u).map(|(p, _)| *p);
+    let footprint = xy_diagonal(joints_used());
+    let share = |d: f64| if footprint > 1e-9 { (d / footprint).min(1.0) } else { 1.0 };
+    let grounded = w.grounded.iter().filter(|&&g| g).count();
+    let low = joints_used().map(|p| p.z).fold(f64::INFINITY, f64::min);
+    let high = joints_used().map(|p| p.z).fold(f64::NEG_INFINITY, f64::max);
+    let footprint_share = share(xy_diagonal(w.joints.iter().zip(&w.grounded).filter(|(_, &g)| g).map(|(p, _)| *p)));
+    let mut g = Grounding {
+        joints: grounded,
+        by_file: w.grounded_by_file,
+        z_mm: if low.is_finite() { low } else { 0.0 },
+        tolerance_mm,
+        footprint_share,
+        suggestion: None,
+    };
+    if g.implausible() && low.is_finite() {
+        let mut by_z: Vec<DVec3> = joints_used().collect();
+        by_z.sort_by(|a, b| a.z.total_cmp(&b.z));
+        let reach = low + SUGGEST_HEIGHT_SHARE * (high - low);
+        let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
+        for p in &by_z {
+            if p.z > reach {
+                break;
+            }
+            lo = lo.min(*p);
+            hi = hi.max(*p);
+            let d = ((hi.x - lo.x).powi(2) + (hi.y - lo.y).powi(2)).sqrt();
+            if share(d) >= PLAUSIBLE_FOOTPRINT_SHARE {
+                let tol = round_up_2(p.z - low).max(tolerance_mm);
+                let count = by_z.iter().filter(|q| q.z <= low + tol).count();
+                let d = xy_diagonal(by_z.iter().filter(|q| q.z <= low + tol).copied());
+                g.suggestion = Some((tol, count, share(d)));
+                break;
+            }
+        }
+    }
+    g
+}
+
+/// `x` rounded up to two significant figures (0.3412 → 0.35).
+fn round_up_2(x: f64) -> f64 {
+    if !(x.is_finite() && x > 0.0) {
+        return 0.0;
+    }
+    let scale = libm::pow(10.0, libm::floor(libm::log10(x)) - 1.0);
+    let v = libm::ceil(x / scale - 1e-9) * scale;
+    // Printed cleanly: as many decimals as the scale has.
+    let decimals = (-libm::log10(scale)).round().max(0.0) as i32;
+    let f = libm::pow(10.0, decimals as f64);
+    (v * f).round() / f
 }
 
 impl Wireframe {

@@ -17,6 +17,7 @@ mod poses;
 pub mod presets;
 mod template;
 mod writer;
+pub use writer::MIN_MOVE_MM;
 
 pub use poses::POSES_CSV_HEADER;
 pub use template::{expand as expand_template, MAX_EXPANDED_BYTES, MAX_TEMPLATE_BYTES, PLACEHOLDERS};
@@ -354,6 +355,8 @@ pub struct GcodeStats {
     pub retractions: usize,
     /// Estimated print time, s.
     pub estimated_time_s: f64,
+    /// Extruding moves shorter than [`MIN_MOVE_MM`] merged into their neighbours.
+    pub merged_moves: usize,
 }
 
 /// The G-code and its statistics.

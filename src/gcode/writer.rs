@@ -44,6 +44,45 @@ pub(crate) fn segment_e(options: &Options, path: &Path, height: f64, j: usize, l
     }
 }
 
+/// Extruding moves shorter than this are merged into their neighbours, mm (a twentieth of
+/// the narrowest line weft prints, and under the 0.001 mm its coordinates are written to
+/// ten times over).
+pub const MIN_MOVE_MM: f64 = 0.01;
+
+/// Which points of `path` a written move ends at, and how many moves were merged: a point
+/// closer than [`MIN_MOVE_MM`] to the last one kept is passed over (its move joins the next),
+/// unless a dwell is asked there; the last point is always kept, and when the last move is
+/// the short one the point before it is passed over instead. Zero-length moves are not
+/// counted as merges (they write nothing either way).
+pub(crate) fn kept_points(path: &Path, dwells: Option<&[f64]>) -> (Vec<bool>, usize) {
+    let n = path.points.len();
+    let mut keep = vec![true; n];
+    if n < 3 {
+        return (keep, 0);
+    }
+    let dwell_at = |j: usize| dwells.is_some_and(|d| d.get(j).is_some_and(|&s| s > 0.0));
+    let mut merged = 0usize;
+    let mut last = 0usize;
+    for j in 1..n - 1 {
+        let d = path.points[last].distance(path.points[j]);
+        if d < MIN_MOVE_MM && !dwell_at(j) {
+            keep[j] = false;
+            if path.points[j - 1].distance(path.points[j]) > 0.0 {
+                merged += 1;
+            }
+        } else {
+            last = j;
+        }
+    }
+    // A short last move joins the one before it.
+    while last > 0 && path.points[last].distance(path.points[n - 1]) < MIN_MOVE_MM && path.points[last].distance(path.points[n - 1]) > 0.0 && !dwell_at(last) {
+        keep[last] = false;
+        merged += 1;
+        last = (0..last).rev().find(|&k| keep[k]).unwrap_or(0);
+    }
+    (keep, merged)
+}
+
 /// Every path's per-point data is usable, and a 3-axis printer gets only vertical tool axes.
 pub(crate) fn check_point_data(toolpath: &Toolpath, three_axis: bool) -> Result<(), Error> {
     for (pi, pass) in toolpath.passes.iter().enumerate() {
@@ -267,6 +306,7 @@ pub(crate) fn write(toolpath: &Toolpath, options: &Options) -> Result<Gcode, Err
     let mut path_no = 0usize;
     let mut line = String::new();
     let mut route_buf: Vec<DVec3> = Vec::new();
+    let mut merged_moves = 0usize;
     for layer in &toolpath.passes {
         if layer.paths.iter().all(|p| p.points.len() < 2) {
             path_no += layer.paths.len();
@@ -357,34 +397,48 @@ pub(crate) fn write(toolpath: &Toolpath, options: &Options) -> Result<Gcode, Err
                 d.path_end(&mut out, options);
                 open = false;
             }
+            // Moves shorter than MIN_MOVE_MM are merged into the next (dust stutters a
+            // printer's planner): their filament goes with it, so the total is unchanged.
+            let (keep, merged) = kept_points(path, dwells);
+            merged_moves += merged;
+            let (mut from, mut len, mut e) = (0usize, 0.0f64, 0.0f64);
             for (i, w) in path.points.windows(2).enumerate() {
                 let j = i + 1;
-                let len = w[0].distance(w[1]);
-                if len <= 0.0 {
+                let step = w[0].distance(w[1]);
+                if step > 0.0 {
+                    len += step;
+                    e += segment_e(options, path, layer.height, j, step);
+                }
+                if !keep[j] {
+                    continue;
+                }
+                let (start, piece, piece_e) = (path.points[from], len, e);
+                from = j;
+                (len, e) = (0.0, 0.0);
+                if piece <= 0.0 {
                     if let Some(dw) = dwells {
                         out.dwell(dw[j], "");
                     }
                     continue;
                 }
-                let e = segment_e(options, path, layer.height, j, len);
                 let feed = feeds.map_or(feed, |f| feed_mm_min(f[j]));
-                extruded_mm += len;
+                extruded_mm += piece;
                 aim(&mut out, j);
                 let to = at(j);
                 if !open {
                     d.coast(&mut out, to, feed);
-                } else if done + len > cut + 1e-9 {
-                    let t = (cut - done) / len;
-                    if t * len > 1e-9 {
-                        d.segment(&mut out, place(w[0].lerp(w[1], t), j), e * t, feed);
+                } else if done + piece > cut + 1e-9 {
+                    let t = (cut - done) / piece;
+                    if t * piece > 1e-9 {
+                        d.segment(&mut out, place(start.lerp(path.points[j], t), j), piece_e * t, feed);
                     }
                     d.path_end(&mut out, options);
                     open = false;
                     d.coast(&mut out, to, feed);
                 } else {
-                    d.segment(&mut out, to, e, feed);
+                    d.segment(&mut out, to, piece_e, feed);
                 }
-                done += len;
+                done += piece;
                 if let Some(dw) = dwells {
                     out.dwell(dw[j], "");
                 }
@@ -404,7 +458,8 @@ pub(crate) fn write(toolpath: &Toolpath, options: &Options) -> Result<Gcode, Err
     // header, stats and `weft analyze` agree; nothing when a user code makes the file unreadable.
     out.motion.timer.stop();
     let (time_s, travel_mm) = if out.motion_ok { (out.motion.timer.total(), out.motion.travel_mm) } else { (0.0, 0.0) };
-    let stats = GcodeStats { layers: layers_written, extruded_mm, filament_mm: out.e_total, travel_mm, retractions: out.retractions, estimated_time_s: time_s };
+    let stats =
+        GcodeStats { layers: layers_written, extruded_mm, filament_mm: out.e_total, travel_mm, retractions: out.retractions, estimated_time_s: time_s, merged_moves };
 
     let fd = printer.filament_diameter_mm;
     let volume_cm3 = out.e_total * std::f64::consts::PI * fd * fd / 4.0 / 1000.0;

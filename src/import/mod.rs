@@ -18,6 +18,7 @@
 //! [`clean`] (bounded length, no control characters).
 
 mod buckets;
+pub mod close;
 mod obj;
 mod repair;
 mod stl;
@@ -109,6 +110,12 @@ pub struct ImportReport {
     pub open_edges: usize,
     /// Scale applied to reach millimetres (3MF unit attribute; 1 for STL/OBJ).
     pub unit_scale: f64,
+    /// What making it a closed solid did (a slot that needs a solid: [`close::close_solid`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub closure: Option<close::Closure>,
+    /// Repairs stated in words, one sentence each.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub notes: Vec<String>,
 }
 
 /// A mesh and what happened while reading it.
@@ -229,6 +236,9 @@ pub enum Error {
         /// What to change.
         fix: String,
     },
+    /// A slot needs a closed solid and the mesh has holes that cannot be capped.
+    #[error(transparent)]
+    Open(close::OpenError),
 }
 
 /// Builds an [`Error::Malformed`].
@@ -370,6 +380,8 @@ fn read_mesh_on(file: &str, bytes: &[u8], options: &Options) -> Result<Imported,
         duplicates_removed: repaired.duplicates_removed,
         open_edges: repaired.open_edges,
         unit_scale,
+        closure: None,
+        notes: Vec::new(),
     };
     Ok(Imported { mesh: repaired.mesh, report })
 }

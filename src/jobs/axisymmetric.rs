@@ -788,7 +788,7 @@ fn domain_of(j: &AxisymJob, ctx: &mut Ctx, platform: &Out<Platform>, k: usize) -
     }
     let input = j.part.as_ref().ok_or_else(|| Error::NoInput("a part domain needs the part: load it, or pass --input part=FILE".into()))?;
     // In the file's own coordinates: the platform's axis is Z through the origin.
-    let mesh = ctx.mesh_in_place("part", input)?;
+    let mesh = ctx.mesh_in_place(&SLOTS[0], input)?;
     let offset_mm = k as f64 * j.layer_height_mm;
     ctx.stage("domain", &layer_id("domain", k), &offset_mm, &[platform.key, mesh.key], |_| {
         let c = contour::platform_contours(&mesh.value, &platform.value, &contour::Options { offset_mm, ..contour::Options::default() })

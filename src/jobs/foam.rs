@@ -575,8 +575,10 @@ impl Kind for FoamKind {
         if j.transitions.len() > MAX_TRANSITIONS {
             out.push(Problem { path: "job.transitions".into(), message: format!("{} transitions: at most {MAX_TRANSITIONS}", j.transitions.len()) });
         }
+        // More pairs than regions is allowed (a region's row waits for its file: loading
+        // files one by one never drops a row); fewer is not.
         if let Some(n) = source_regions(j) {
-            if n != j.regions.len() {
+            if n > j.regions.len() {
                 out.push(Problem {
                     path: "job.regions".into(),
                     message: format!(
@@ -633,14 +635,17 @@ impl Kind for FoamKind {
         }
     }
 
-    /// Region files loaded: the built-in model is switched off and there is one V*/H* pair
-    /// per file (new regions get the defaults; transitions to regions gone are dropped).
+    /// Region files loaded: the built-in model is switched off and every file has a V*/H*
+    /// pair (new regions get the defaults). Rows are never dropped: files given one by one,
+    /// as a folder or all at once give the same design, and a row set before its file came
+    /// is kept (rows beyond the files wait, unused, and the run says so).
     fn slot_filled(slot: &str, mut j: FoamJob) -> FoamJob {
         if slot == "regions" {
             j.model = None;
             let n = mesh_names(&j).len().min(MAX_REGIONS);
-            j.regions.resize(n, RegionSpec::new(DEFAULT_V_STAR, DEFAULT_H_STAR));
-            j.transitions.retain(|t| t.from >= 1 && t.to >= 1 && t.from <= n && t.to <= n);
+            if j.regions.len() < n {
+                j.regions.resize(n, RegionSpec::new(DEFAULT_V_STAR, DEFAULT_H_STAR));
+            }
         }
         j
     }
@@ -772,7 +777,7 @@ fn placed_stage(j: &FoamJob, ctx: &mut Ctx) -> Result<Out<Placed>, Error> {
                 Input::File { name, .. } => name.clone(),
                 _ => format!("region {}", i + 1),
             };
-            items.push((name, ctx.mesh_item("regions", i, input)?));
+            items.push((name, ctx.mesh_item(&SLOTS[0], i, input)?));
         }
     }
     let keys: Vec<crate::pipeline::Key> = items.iter().map(|(_, m)| m.key).collect();
@@ -1048,15 +1053,28 @@ fn grade(
     paths: &[LayerPath],
     progress: &mut dyn FnMut(f32),
 ) -> Result<(Toolpath, Option<StageReport>), Error> {
-    let pairs = pairs(j);
-    if pairs.len() != regions.regions.len() {
-        return Err(Error::NoInput(format!(
-            "the foam has {} regions but the design gives {} V*/H* pairs: give one per region",
-            regions.regions.len(),
-            pairs.len()
-        )));
+    let mut pairs = pairs(j);
+    let n = regions.regions.len();
+    if pairs.len() < n {
+        return Err(Error::NoInput(format!("the foam has {n} regions but the design gives {} V*/H* pairs: give one per region", pairs.len())));
     }
-    let transitions = transitions(j);
+    // Rows and transitions beyond the regions given wait for their files, said out loud.
+    let mut notes = Vec::new();
+    if pairs.len() > n {
+        notes.push(format!(
+            "the design gives {} V*/H* pairs for {n} region mesh(es): pair(s) {}–{} wait for their files and are not used",
+            pairs.len(),
+            n + 1,
+            pairs.len()
+        ));
+        pairs.truncate(n);
+    }
+    let mut transitions = transitions(j);
+    let waiting = transitions.iter().filter(|t| t.from >= n || t.to >= n).count();
+    if waiting > 0 {
+        notes.push(format!("{waiting} transition(s) join a region without its file and are not used"));
+        transitions.retain(|t| t.from < n && t.to < n);
+    }
     for t in &transitions {
         if regions.boundary(t.from, t.to).is_none() {
             return Err(Error::NoInput(format!(
@@ -1126,7 +1144,8 @@ fn grade(
         progress((k + 1) as f32 / paths.len() as f32);
     }
     let toolpath = Toolpath { passes };
-    let report = grade_report(j, p, &field, regions, &transitions, pieces, queries, (v_lo, v_hi));
+    let mut report = grade_report(j, p, &field, regions, &transitions, pieces, queries, (v_lo, v_hi));
+    report.notes.extend(notes);
     Ok((toolpath, Some(report)))
 }
 

@@ -630,6 +630,7 @@ fn import_stage(j: &FreeformJob, ctx: &mut Ctx) -> Result<Out<Placed>, Error> {
             }
         }
         place(&mut wire);
+        wire.grounding = Some(wireframe::grounding(&wire, j.design.ground_tolerance_mm));
         let size = bounds(&wire.joints).map(|(lo, hi)| hi - lo).unwrap_or_default();
         crate::gcode::check_fits([size.x, size.y, size.z], &design.printer).map_err(|e| Error::stage("the wireframe", e))?;
         let lengths: Vec<f64> = (0..wire.beams.len()).map(|b| wire.length(b)).collect();
@@ -637,10 +638,10 @@ fn import_stage(j: &FreeformJob, ctx: &mut Ctx) -> Result<Out<Placed>, Error> {
         let shortest = lengths.iter().copied().fold(f64::INFINITY, f64::min);
         let longest = lengths.iter().copied().fold(0.0, f64::max);
         let grounded = wire.grounded.iter().filter(|&&g| g).count();
-        let report = StageReport::new(
+        let mut report = StageReport::new(
             "import",
             "Reading the wireframe",
-            &serde_json::json!({ "joints": wire.joints.len(), "beams": wire.beams.len(), "grounded": grounded, "format": wire.format }),
+            &serde_json::json!({ "joints": wire.joints.len(), "beams": wire.beams.len(), "grounded": grounded, "format": wire.format, "grounding": wire.grounding }),
         )
         .metric("joints", "Joints", wire.joints.len() as f64, "", "Points where beams meet.")
         .metric("beams", "Beams", wire.beams.len() as f64, "", "Straight beams, each printed once.")
@@ -659,6 +660,12 @@ fn import_stage(j: &FreeformJob, ctx: &mut Ctx) -> Result<Out<Placed>, Error> {
         .metric("shortest", "Shortest beam", if shortest.is_finite() { shortest } else { 0.0 }, "mm", "The shortest beam.")
         .metric("longest", "Longest beam", longest, "mm", "The longest beam.")
         .metric("height", "Height", size.z, "mm", "Height of the design on the plate.");
+        // Assumptions said out loud: how the file was read, what stands on the plate.
+        report.notes.extend(wire.notes.iter().cloned());
+        if let Some(g) = &wire.grounding {
+            report.notes.push(format!("{}: {}", name, g.statement()));
+            report.notes.extend(g.warning().map(|w| format!("{name}: {w}")));
+        }
         Ok((Placed { wire, name: name.clone() }, Some(report)))
     })
 }
@@ -761,8 +768,20 @@ fn names(w: &Wireframe, beams: &[usize]) -> String {
     beams.iter().map(|&b| w.beam_names.get(b).cloned().unwrap_or_else(|| format!("beam {b}"))).collect::<Vec<_>>().join(", ")
 }
 
-/// The reason a design cannot be printed, in words.
+/// The reason a design cannot be printed, in words, with the grounding it holds for (a
+/// refusal is only as true as the footing it assumed).
 pub fn explain(w: &Wireframe, u: &Unconstructable, mode: Mode) -> String {
+    let why = explain_only(w, u, mode);
+    match &w.grounding {
+        Some(g) => match g.warning() {
+            Some(warn) => format!("{why} (with {}; {warn})", g.statement()),
+            None => format!("{why} (with {})", g.statement()),
+        },
+        None => why,
+    }
+}
+
+fn explain_only(w: &Wireframe, u: &Unconstructable, mode: Mode) -> String {
     let joint = |j: usize| w.joint_names.get(j).cloned().unwrap_or_else(|| format!("joint {j}"));
     match u {
         Unconstructable::Cycle { beams } => format!(

@@ -58,7 +58,7 @@ const SLOTS: &[Slot] = &[
     Slot {
         name: "surface",
         label: "Surface to print on",
-        kind: SlotKind::Mesh,
+        kind: SlotKind::Surface,
         path: "job.surface_input",
         required: false,
         doc: "A surface mesh the layers are projected onto (non-planar printing on a mesh).",
@@ -180,7 +180,7 @@ impl Kind for LatticeKind {
             Domain::Solid => {
                 let input =
                     j.input.as_ref().ok_or_else(|| Error::NoInput("a solid lattice domain needs a mesh: load one, or pass --input mesh=FILE".into()))?;
-                let mesh = ctx.mesh("mesh", input)?;
+                let mesh = ctx.mesh(&SLOTS[0], input)?;
                 lattice::DomainSize::of_mesh(&mesh, j.lattice.layer_thickness_mm)
             }
             _ => lattice::DomainSize::planar(&j.domain, &j.lattice),
@@ -190,7 +190,7 @@ impl Kind for LatticeKind {
         let mut out = vec![lat];
         if let Some(np) = &j.nonplanar {
             let surface = match (&np.surface, &j.surface_input) {
-                (nonplanar::Surface::Mesh, Some(input)) => Some(nonplanar::SurfaceSize::of_mesh(&*ctx.mesh("surface", input)?, size.min, size.max)),
+                (nonplanar::Surface::Mesh, Some(input)) => Some(nonplanar::SurfaceSize::of_mesh(&*ctx.mesh(&SLOTS[1], input)?, size.min, size.max)),
                 _ => None,
             };
             let projected = nonplanar::estimate(&nonplanar::Work::of_paths(&optimised, size.min, size.max), surface.as_ref(), np);
@@ -219,7 +219,7 @@ impl Kind for LatticeKind {
         drop(strokes);
         let Some(np) = &j.nonplanar else { return Ok(Product::Toolpath(optimised)) };
         let surface = match (&np.surface, &j.surface_input) {
-            (nonplanar::Surface::Mesh, Some(input)) => Some(ctx.mesh("surface", input)?),
+            (nonplanar::Surface::Mesh, Some(input)) => Some(ctx.mesh(&SLOTS[1], input)?),
             _ => None,
         };
         let upstream: Vec<_> = std::iter::once(optimised.key).chain(surface.as_ref().map(|s| s.key)).collect();
@@ -295,7 +295,7 @@ fn strokes(j: &LatticeJob, ctx: &mut Ctx) -> Result<Out<Vec<StrokeLayer>>, Error
         }
         Domain::Solid => {
             let input = j.input.as_ref().ok_or_else(|| Error::NoInput("a solid lattice domain needs a mesh: load one, or pass --input mesh=FILE".into()))?;
-            let mesh = ctx.mesh("mesh", input)?;
+            let mesh = ctx.mesh(&SLOTS[0], input)?;
             let t = j.lattice.layer_thickness_mm;
             let options = slice::Options {
                 first_layer_height_mm: t,

@@ -31,10 +31,13 @@ use serde_json::Value;
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum SlotKind {
-    /// One mesh: STL, OBJ or 3MF.
+    /// One solid: a closed mesh (STL, OBJ or 3MF); an open or inside-out one is repaired out
+    /// loud or refused ([`crate::import::close`]).
     Mesh,
-    /// Several meshes, each with a label (foam regions).
+    /// Several solids, each with a label (foam regions), each checked as [`SlotKind::Mesh`].
     Meshes,
+    /// One surface mesh, which may be open (a surface to print onto).
+    Surface,
     /// A volume: a DICOM series (many files, a folder or a `.zip`), NRRD, raw + header.
     Volume,
     /// Another slicer's G-code, to edit.
@@ -47,11 +50,16 @@ impl SlotKind {
     /// File name extensions a slot of this kind accepts (lower case, with the dot).
     pub fn accept(self) -> &'static [&'static str] {
         match self {
-            SlotKind::Mesh | SlotKind::Meshes => &[".stl", ".obj", ".3mf"],
+            SlotKind::Mesh | SlotKind::Meshes | SlotKind::Surface => &[".stl", ".obj", ".3mf"],
             SlotKind::Volume => &[".dcm", ".zip", ".nrrd", ".nhdr", ".raw"],
             SlotKind::Gcode => &[".gcode", ".gco", ".g", ".nc"],
-            SlotKind::Frame => &[".json", ".obj", ".csv"],
+            SlotKind::Frame => &[".json", ".obj", ".csv", ".stl"],
         }
+    }
+
+    /// Its meshes must be closed solids.
+    pub fn solid(self) -> bool {
+        matches!(self, SlotKind::Mesh | SlotKind::Meshes)
     }
 
     /// Several files at once.
@@ -69,7 +77,7 @@ impl SlotKind {
     pub fn check_file(self, file: &str, head: &[u8], len: u64) -> Result<(), String> {
         let len_usize = usize::try_from(len).unwrap_or(usize::MAX);
         match self {
-            SlotKind::Mesh | SlotKind::Meshes => crate::import::check_head(file, head, len).map_err(|e| e.to_string()),
+            SlotKind::Mesh | SlotKind::Meshes | SlotKind::Surface => crate::import::check_head(file, head, len).map_err(|e| e.to_string()),
             SlotKind::Volume => crate::volume::check_input_bytes(file, len).map_err(|e| e.to_string()),
             SlotKind::Gcode => match crate::gcode_edit::estimate(len_usize, &crate::gcode_edit::Options::default()).refused {
                 Some(r) => Err(format!("{file}: {r}")),
@@ -421,6 +429,11 @@ impl Registry {
         self.kinds.iter().copied().find(|k| k.name() == name)
     }
 
+    /// The first slot named `name` among the kinds (slots of one name are of one kind).
+    pub fn slot(&self, name: &str) -> Option<&'static Slot> {
+        self.kinds.iter().flat_map(|k| k.slots()).find(|s| s.name == name)
+    }
+
     /// Every kind, in menu order.
     pub fn kinds(&self) -> &[&'static dyn JobKind] {
         &self.kinds
@@ -446,11 +459,11 @@ mod tests {
     /// file of 4 GiB or more from its head and size, whatever the head says.
     #[test]
     fn every_slot_refuses_a_file_the_worker_cannot_address() {
-        let kinds = [SlotKind::Mesh, SlotKind::Meshes, SlotKind::Volume, SlotKind::Gcode, SlotKind::Frame];
+        let kinds = [SlotKind::Mesh, SlotKind::Meshes, SlotKind::Surface, SlotKind::Volume, SlotKind::Gcode, SlotKind::Frame];
         for kind in kinds {
             // Fails to compile when a kind is added, so the list above is kept whole.
             match kind {
-                SlotKind::Mesh | SlotKind::Meshes | SlotKind::Volume | SlotKind::Gcode | SlotKind::Frame => {}
+                SlotKind::Mesh | SlotKind::Meshes | SlotKind::Surface | SlotKind::Volume | SlotKind::Gcode | SlotKind::Frame => {}
             }
             // A binary STL's head whose count matches the length, and plain text.
             let triangles: u32 = 86_000_000;

@@ -71,13 +71,13 @@ impl Kind for SliceKind {
         if import.refused.is_some() {
             return Ok(vec![import]);
         }
-        let mesh = ctx.mesh("mesh", &s.input)?;
+        let mesh = ctx.mesh(&SLOTS[0], &s.input)?;
         super::part_fits(ctx.design, &mesh)?;
         Ok(vec![import, slice::estimate(&mesh, &s.slice)])
     }
 
     fn run(s: &SliceJob, ctx: &mut Ctx) -> Result<Product, Error> {
-        let mesh = ctx.mesh("mesh", &s.input)?;
+        let mesh = ctx.mesh(&SLOTS[0], &s.input)?;
         super::part_fits(ctx.design, &mesh)?;
         let sliced = ctx.stage("slice", "slice", &s.slice, &[mesh.key], |progress| {
             let sliced = slice::slice(&mesh, &s.slice, progress).map_err(|e| Error::stage("slicing", e))?;

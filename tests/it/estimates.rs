@@ -193,7 +193,7 @@ fn an_import_made_on_loading_is_counted_by_the_run_even_after_a_plan() {
         let loading = Design::default();
         let mut quiet = |_: &str, _: f32| {};
         let mut ctx = pipeline::Ctx::new(&loading, &files, &mut cache, &mut quiet);
-        ctx.mesh("mesh", &Input::File { name: "part.stl".into(), embedded: None }).unwrap();
+        ctx.mesh(registry.slot("mesh").unwrap(), &Input::File { name: "part.stl".into(), embedded: None }).unwrap();
         let loaded_ms = ctx.timings.iter().find(|t| t.stage == "import").map(|t| t.ms).expect("timed on loading");
         if plan_first {
             pipeline::estimate(&registry, &mut cache, &d, &files).unwrap();

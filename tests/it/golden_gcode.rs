@@ -97,13 +97,155 @@ fn hex(bytes: &[u8]) -> String {
 
 /// The G-code of `example` with `sets`, made in this process on a pool of `threads` threads.
 fn gcode_of(example: &str, sets: &[&str], threads: usize) -> String {
+    String::clone(&run_of(example, sets, threads).gcode)
+}
+
+/// The run of `example` with `sets` in this process on a pool of `threads` threads.
+fn run_of(example: &str, sets: &[&str], threads: usize) -> weft::pipeline::RunOutput {
     let mut d = crate::common::example(example);
     if !sets.is_empty() {
         d = d.with_overrides(&sets.iter().map(|s| s.to_string()).collect::<Vec<_>>()).unwrap();
     }
     let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
     let out = pool.install(|| weft::pipeline::run(&d, &weft::pipeline::Files::new(), &weft::RunOptions::default(), &mut |_, _| {}));
-    String::clone(&out.unwrap_or_else(|e| panic!("{example} {sets:?}: {e}")).gcode)
+    out.unwrap_or_else(|e| panic!("{example} {sets:?}: {e}"))
+}
+
+/// Extruding moves of a 3-axis G-code shorter than `min` mm (as written: each end rounded to
+/// the file's 3 decimals), with their line numbers; none for files with rotary or tool-axis
+/// words (their X Y Z are machine coordinates).
+fn dust(text: &str, min: f64) -> Vec<(usize, f64)> {
+    let (mut pos, mut e, mut relative) = ([0.0f64; 3], 0.0f64, false);
+    let mut out = Vec::new();
+    for (i, line) in text.lines().enumerate() {
+        let code = line.split(';').next().unwrap_or("").trim();
+        let mut words = code.split_whitespace();
+        let Some(cmd) = words.next() else { continue };
+        match cmd {
+            "M82" => relative = false,
+            "M83" => relative = true,
+            "G92" => {
+                for w in words {
+                    if let Some(v) = w.strip_prefix('E') {
+                        e = v.parse().unwrap_or(e);
+                    }
+                }
+            }
+            "G0" | "G1" => {
+                let mut to = pos;
+                let mut de = 0.0;
+                for w in words {
+                    let (letter, v) = w.split_at(1);
+                    let Ok(v) = v.parse::<f64>() else { continue };
+                    match letter {
+                        "X" => to[0] = v,
+                        "Y" => to[1] = v,
+                        "Z" => to[2] = v,
+                        "E" if relative => de = v,
+                        "E" => {
+                            de = v - e;
+                            e = v;
+                        }
+                        "A" | "B" | "C" | "I" | "J" | "K" => return Vec::new(),
+                        _ => {}
+                    }
+                }
+                let len = ((to[0] - pos[0]).powi(2) + (to[1] - pos[1]).powi(2) + (to[2] - pos[2]).powi(2)).sqrt();
+                if de > 0.0 && len > 0.0 && len < min {
+                    out.push((i + 1, len));
+                }
+                pos = to;
+            }
+            _ => {}
+        }
+    }
+    out
+}
+
+/// Numbers a description states with a unit or as a count ("120°", "0.148 mm", "83 beams"),
+/// each with its decimals, leaving out names (Ω1, Fig. 7a, equation 7, M3) and list markers.
+fn stated_numbers(text: &str) -> Vec<(String, f64, usize)> {
+    let chars: Vec<char> = text.chars().collect();
+    let mut out = Vec::new();
+    let mut i = 0;
+    while i < chars.len() {
+        let c = chars[i];
+        let prev = if i == 0 { ' ' } else { chars[i - 1] };
+        let starts = c.is_ascii_digit() && (prev == 'Ø' || !(prev.is_alphanumeric() || matches!(prev, '_' | '.' | '-' | '/')));
+        if !starts {
+            i += 1;
+            continue;
+        }
+        let from = i;
+        let mut s = String::new();
+        loop {
+            match chars.get(i) {
+                Some(d) if d.is_ascii_digit() || *d == '.' => s.push(*d),
+                // "1 620": a thousands gap (a space, then exactly three digits).
+                Some(' ') if s.len() <= 3
+                    && !s.contains('.')
+                    && chars.get(i + 1..i + 4).is_some_and(|t| t.iter().all(|c| c.is_ascii_digit()))
+                    && !chars.get(i + 4).is_some_and(|c| c.is_ascii_digit() || *c == '.') => {}
+                _ => break,
+            }
+            i += 1;
+        }
+        let s = s.trim_end_matches('.').to_string();
+        let before: String = chars[from.saturating_sub(10)..from].iter().collect::<String>().trim_end().to_string();
+        let after: String = chars[i..(i + 8).min(chars.len())].iter().collect();
+        // A range's second end ("Figs. 5–6") is named when its first is.
+        let range_of = before.strip_suffix('–').map(|b| b.trim_end_matches(|c: char| c.is_ascii_digit()).trim_end().to_string());
+        let names = ["Fig", "Figs", "Fig.", "Figs.", "equation", "Ω", "al."];
+        let named = names.iter().any(|w| before.ends_with(w) || range_of.as_deref().is_some_and(|b| b.ends_with(w)))
+            || after.starts_with(|c: char| c.is_alphabetic());
+        if named {
+            continue;
+        }
+        if let Ok(v) = s.parse::<f64>() {
+            let decimals = s.split_once('.').map_or(0, |(_, d)| d.len());
+            out.push((format!("{s}{}", after.chars().take(6).collect::<String>()), v, decimals));
+        }
+    }
+    out
+}
+
+/// Every number in `v` (a JSON tree), and each as a percentage and in degrees of a radian
+/// value, so that "50 %" meets 0.5 and "13°" meets 0.2269 rad.
+fn numbers_of(v: &serde_json::Value, out: &mut Vec<f64>) {
+    match v {
+        serde_json::Value::Number(n) => {
+            if let Some(x) = n.as_f64() {
+                out.extend([x, x * 100.0, x.to_degrees(), -x]);
+            }
+        }
+        serde_json::Value::Array(a) => {
+            if a.len() <= 64 {
+                a.iter().for_each(|x| numbers_of(x, out));
+            }
+        }
+        serde_json::Value::Object(m) => m.values().for_each(|x| numbers_of(x, out)),
+        _ => {}
+    }
+}
+
+/// The numbers of an example's description that neither its design nor its own run states
+/// (to the description's precision).
+fn untrue_numbers(example: &str, run: &weft::pipeline::RunOutput) -> Vec<String> {
+    let d = crate::common::example(example);
+    let text = std::fs::read_to_string(root().join(format!("examples/{example}.json"))).unwrap();
+    let json: serde_json::Value = serde_json::from_str(&text).unwrap();
+    let description = json.get("description").and_then(|v| v.as_str()).unwrap_or("").to_string();
+    let mut known = Vec::new();
+    numbers_of(&serde_json::to_value(&d).unwrap(), &mut known);
+    numbers_of(&serde_json::to_value(&run.report).unwrap(), &mut known);
+    stated_numbers(&description)
+        .into_iter()
+        .filter(|(_, v, decimals)| {
+            let half = 0.5 * 10f64.powi(-(*decimals as i32));
+            !known.iter().any(|k| (k - v).abs() <= half * (1.0 + 1e-9) || (v.fract() == 0.0 && *v >= 1000.0 && (k - v).abs() <= 0.005 * v))
+        })
+        .map(|(s, _, _)| s)
+        .collect()
 }
 
 /// The G-code of `example` with `sets` from the `weft` binary.
@@ -250,8 +392,22 @@ fn examples_give_the_recorded_gcode_at_any_thread_count() {
     let bless = std::env::var_os("WEFT_BLESS").is_some();
     let mut got = BTreeMap::new();
     let (mut differ, mut explained) = (Vec::new(), String::new());
+    let (mut untrue, mut dusty) = (Vec::new(), Vec::new());
     for (name, example, sets) in CASES {
-        let texts: Vec<String> = THREADS.iter().map(|&t| gcode_of(example, sets, t)).collect();
+        let runs: Vec<weft::pipeline::RunOutput> = THREADS.iter().map(|&t| run_of(example, sets, t)).collect();
+        let texts: Vec<String> = runs.iter().map(|r| String::clone(&r.gcode)).collect();
+        // Examples tell the truth: each number of the description is the design's or the
+        // run's own. And the writer leaves no dust.
+        if sets.is_empty() {
+            let wrong = untrue_numbers(example, &runs[0]);
+            if !wrong.is_empty() {
+                untrue.push(format!("{example}: {wrong:?}"));
+            }
+        }
+        let short = dust(&texts[0], weft::gcode::MIN_MOVE_MM - 0.0015);
+        if !short.is_empty() {
+            dusty.push(format!("{name}: {} moves, first at line {} ({:.4} mm)", short.len(), short[0].0, short[0].1));
+        }
         let hashes: Vec<String> = texts.iter().map(|t| hex(&Sha256::digest(t.as_bytes()))).collect();
         if hashes.iter().any(|h| h != &hashes[0]) {
             differ.push(format!("{name}: {}", THREADS.iter().zip(&hashes).map(|(t, h)| format!("{t} threads {}", &h[..12])).collect::<Vec<_>>().join(", ")));
@@ -275,6 +431,8 @@ fn examples_give_the_recorded_gcode_at_any_thread_count() {
     }
     let _ = std::fs::remove_dir_all(&dir);
     assert!(differ.is_empty(), "G-code depends on the thread count: {differ:?}");
+    assert!(untrue.is_empty(), "descriptions state numbers that neither the design nor the run gives:\n{}", untrue.join("\n"));
+    assert!(dusty.is_empty(), "extruding moves shorter than {} mm were written:\n{}", weft::gcode::MIN_MOVE_MM, dusty.join("\n"));
     if bless {
         let text: String = got.iter().map(|(n, h)| format!("{h}  {n}.gcode\n")).collect();
         std::fs::write(&golden_path, text).unwrap();
@@ -283,6 +441,16 @@ fn examples_give_the_recorded_gcode_at_any_thread_count() {
     let changed: Vec<&String> = got.keys().filter(|n| golden.get(*n) != got.get(*n)).collect();
     assert!(changed.is_empty(), "G-code changed for {changed:?} (WEFT_BLESS=1 to record a deliberate change):\n{explained}");
     assert_eq!(golden.len(), CASES.len(), "every recorded case is still run");
+}
+
+#[test]
+fn descriptions_and_dust_are_read() {
+    // The readers behind the checks above, on made-up text: they can fail.
+    let n = stated_numbers("The paper's Ω3 (Fig. 7a, equation 7): tilts up to 120°, a 1 620-beam tower, 0.148 mm layers, 50 % density.");
+    let values: Vec<f64> = n.iter().map(|x| x.1).collect();
+    assert_eq!(values, vec![120.0, 1620.0, 0.148, 50.0], "{n:?}");
+    let g = "M83\nG1 X0 Y0\nG1 X10 Y0 E0.5\nG1 X10.004 Y0 E0.001\nG1 X20 Y0 E0.5\n";
+    assert_eq!(dust(g, 0.0085).iter().map(|d| d.0).collect::<Vec<_>>(), vec![4]);
 }
 
 #[test]

@@ -55,7 +55,7 @@ impl Kind for Spiral {
 
     fn run(s: &SpiralJob, ctx: &mut Ctx) -> Result<Product, Error> {
         let height = match &s.input {
-            Some(i) => ctx.mesh("mesh", i)?.bounds().map_or(10.0, |b| b.max.z - b.min.z),
+            Some(i) => ctx.mesh(&Self::SLOTS[0], i)?.bounds().map_or(10.0, |b| b.max.z - b.min.z),
             None => 10.0,
         };
         let turns = s.turns;

@@ -124,6 +124,8 @@ fn random_frame(seed: u64, free: usize, beams: usize) -> Wireframe {
         format: wireframe::Format::Model,
         joint_names: names(n, "joint"),
         beam_names: names(m, "beam"),
+        notes: Vec::new(),
+        grounding: None,
     }
 }
 

@@ -373,6 +373,8 @@ fn steep_beams_go_up_and_block_each_other() {
         format: wireframe::Format::Model,
         joint_names: vec!["a".into(), "b".into(), "c".into()],
         beam_names: vec!["up".into(), "down".into()],
+        notes: Vec::new(),
+        grounding: None,
     };
     let c = constraints(&w, &n, 0.1);
     assert_eq!((c.forward[0], c.backward[0]), (true, false), "a beam steeper than the cone is printed upward only");
@@ -495,6 +497,8 @@ fn strict_mode_refuses_two_cantilevers_on_a_joint_and_a_strut_hanging_down() {
         format: wireframe::Format::Model,
         joint_names: names(6, "joint"),
         beam_names: names(5, "beam"),
+        notes: Vec::new(),
+        grounding: None,
     };
     let n = Nozzle { half_angle_deg: 13.0, radius_mm: 0.5, height_mm: 5.0 };
     let c = constraints(&w, &n, 0.1);

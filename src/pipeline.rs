@@ -973,6 +973,8 @@ fn stats_of(a: &analyze::Report) -> GcodeStats {
         retractions: a.retractions,
         estimated_time_s: a.estimated_time_s,
         merged_moves: 0,
+        dropped_paths: 0,
+        dropped_filament_mm: 0.0,
     }
 }
 
@@ -1026,6 +1028,14 @@ fn write_stage(ctx: &mut Ctx, toolpath: &Out<Toolpath>) -> Result<Out<Written>, 
                 "joined {} extruding move(s) shorter than {} mm to their neighbours, with their filament (such dust stutters a printer's planner)",
                 g.stats.merged_moves,
                 gcode::MIN_MOVE_MM
+            ));
+        }
+        if g.stats.dropped_paths > 0 {
+            report = report.note(&format!(
+                "left out {} path(s) shorter than {} mm in all (slivers with no neighbour to join; {:.5} mm of filament), with their travel and retraction",
+                g.stats.dropped_paths,
+                gcode::MIN_MOVE_MM,
+                g.stats.dropped_filament_mm
             ));
         }
         Ok((Written { text: Arc::new(g.text), stats: g.stats }, Some(report)))

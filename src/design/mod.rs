@@ -368,7 +368,8 @@ impl Design {
         apply(&mut value, false)?;
         let kind_name = value.pointer("/job/kind").and_then(Value::as_str).unwrap_or("").to_string();
         if !inputs.is_empty() {
-            let kind = registry.get(&kind_name).ok_or_else(|| Error::Override { assignment: "--input".into(), message: format!("unknown job kind '{kind_name}'") })?;
+            let kind =
+                registry.get(&kind_name).ok_or_else(|| Error::Override { assignment: "--input".into(), message: format!("unknown job kind '{kind_name}'") })?;
             for (slot, input) in inputs {
                 let spec = kind.slots().iter().find(|s| s.name == slot).ok_or_else(|| Error::Override {
                     assignment: slot.clone(),

@@ -268,5 +268,15 @@ pub fn build(m: &Model) -> Wireframe {
     let grounded: Vec<bool> = b.joints.iter().map(|p| p.z.abs() < 1e-9).collect();
     let joint_names = (0..b.joints.len()).map(|j| format!("joint {j}")).collect();
     let beam_names = (0..b.beams.len()).map(|e| format!("beam {e}")).collect();
-    Wireframe { joints: b.joints, beams: b.beams, grounded, grounded_by_file: true, format: Format::Model, joint_names, beam_names, notes: Vec::new(), grounding: None }
+    Wireframe {
+        joints: b.joints,
+        beams: b.beams,
+        grounded,
+        grounded_by_file: true,
+        format: Format::Model,
+        joint_names,
+        beam_names,
+        notes: Vec::new(),
+        grounding: None,
+    }
 }

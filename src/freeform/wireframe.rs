@@ -236,8 +236,11 @@ fn edges_as_beams(raw: &mut Raw, faces: &[(Vec<usize>, String)], what: &str) -> 
 
 /// A triangle mesh (STL) whose edges are the beams.
 fn stl(name: &str, bytes: &[u8]) -> Result<Raw, Error> {
-    let imported = crate::import::read_mesh(name, bytes, &crate::import::Options::default())
-        .map_err(|e| Error::NotRead { file: name.into(), place: "the mesh".into(), message: e.to_string() })?;
+    let imported = crate::import::read_mesh(name, bytes, &crate::import::Options::default()).map_err(|e| Error::NotRead {
+        file: name.into(),
+        place: "the mesh".into(),
+        message: e.to_string(),
+    })?;
     let mesh = imported.mesh;
     if mesh.triangles.len().saturating_mul(3) / 2 > MAX_BEAMS + 1 {
         return Err(Error::TooManyBeams { file: name.into(), beams: mesh.triangles.len() * 3 / 2 });
@@ -247,7 +250,8 @@ fn stl(name: &str, bytes: &[u8]) -> Result<Raw, Error> {
         raw.joints.push(DVec3::new(v[0] as f64, v[1] as f64, v[2] as f64));
         raw.joint_place.push(format!("vertex {}", i + 1));
     }
-    let faces: Vec<(Vec<usize>, String)> = mesh.triangles.iter().enumerate().map(|(t, tri)| (tri.iter().map(|&v| v as usize).collect(), format!("triangle {}", t + 1))).collect();
+    let faces: Vec<(Vec<usize>, String)> =
+        mesh.triangles.iter().enumerate().map(|(t, tri)| (tri.iter().map(|&v| v as usize).collect(), format!("triangle {}", t + 1))).collect();
     let note = edges_as_beams(&mut raw, &faces, "triangles");
     raw.notes.push(note);
     Ok(raw)
@@ -458,7 +462,10 @@ fn obj(text: &str) -> Result<Raw, (usize, String)> {
         raw.notes.push(note);
     }
     if raw.beams.is_empty() {
-        return Err((text.lines().count().max(1), "no line elements (`l a b`) and no faces: a wireframe OBJ joins its vertices by lines (or faces whose edges are the beams)".into()));
+        return Err((
+            text.lines().count().max(1),
+            "no line elements (`l a b`) and no faces: a wireframe OBJ joins its vertices by lines (or faces whose edges are the beams)".into(),
+        ));
     }
     Ok(raw)
 }

@@ -357,6 +357,10 @@ pub struct GcodeStats {
     pub estimated_time_s: f64,
     /// Extruding moves shorter than [`MIN_MOVE_MM`] merged into their neighbours.
     pub merged_moves: usize,
+    /// Whole paths shorter than [`MIN_MOVE_MM`] left out (with their travel and retraction).
+    pub dropped_paths: usize,
+    /// The filament those paths would have used, mm.
+    pub dropped_filament_mm: f64,
 }
 
 /// The G-code and its statistics.

@@ -307,6 +307,7 @@ pub(crate) fn write(toolpath: &Toolpath, options: &Options) -> Result<Gcode, Err
     let mut line = String::new();
     let mut route_buf: Vec<DVec3> = Vec::new();
     let mut merged_moves = 0usize;
+    let (mut dropped_paths, mut dropped_e) = (0usize, 0.0f64);
     for layer in &toolpath.passes {
         if layer.paths.iter().all(|p| p.points.len() < 2) {
             path_no += layer.paths.len();
@@ -347,6 +348,14 @@ pub(crate) fn write(toolpath: &Toolpath, options: &Options) -> Result<Gcode, Err
             let data = path.data.as_deref();
             let feeds = data.and_then(|d| d.feed_mm_s.as_deref());
             let dwells = data.and_then(|d| d.dwell_s.as_deref());
+            // A whole path shorter than the shortest move (a sliver a clip left) has no
+            // neighbour to join: it is left out, with its travel and retraction, and counted.
+            if path.length() < MIN_MOVE_MM && !dwells.is_some_and(|d| d.iter().any(|&s| s > 0.0)) {
+                dropped_paths += 1;
+                dropped_e +=
+                    (1..path.points.len()).map(|j| segment_e(options, path, layer.height, j, path.points[j - 1].distance(path.points[j]))).sum::<f64>();
+                continue;
+            }
             // Where a point on the segment to point `k` is written: machine X Y Z for rotary
             // output, the tip otherwise (path points themselves: `at`, planned already); and
             // the axis words it carries.
@@ -458,8 +467,17 @@ pub(crate) fn write(toolpath: &Toolpath, options: &Options) -> Result<Gcode, Err
     // header, stats and `weft analyze` agree; nothing when a user code makes the file unreadable.
     out.motion.timer.stop();
     let (time_s, travel_mm) = if out.motion_ok { (out.motion.timer.total(), out.motion.travel_mm) } else { (0.0, 0.0) };
-    let stats =
-        GcodeStats { layers: layers_written, extruded_mm, filament_mm: out.e_total, travel_mm, retractions: out.retractions, estimated_time_s: time_s, merged_moves };
+    let stats = GcodeStats {
+        layers: layers_written,
+        extruded_mm,
+        filament_mm: out.e_total,
+        travel_mm,
+        retractions: out.retractions,
+        estimated_time_s: time_s,
+        merged_moves,
+        dropped_paths,
+        dropped_filament_mm: dropped_e,
+    };
 
     let fd = printer.filament_diameter_mm;
     let volume_cm3 = out.e_total * std::f64::consts::PI * fd * fd / 4.0 / 1000.0;

@@ -90,7 +90,10 @@ impl Closure {
             out.push(if n == 1 {
                 format!("{file}: capped 1 flat hole of {largest}: the mesh was open; check the part is whole")
             } else {
-                format!("{file}: capped {n} flat holes, {:.1} mm² in all (the largest: {largest}): the mesh was open; check the part is whole", self.capped_area_mm2())
+                format!(
+                    "{file}: capped {n} flat holes, {:.1} mm² in all (the largest: {largest}): the mesh was open; check the part is whole",
+                    self.capped_area_mm2()
+                )
             });
         }
         if self.flipped > 0 {
@@ -142,7 +145,11 @@ pub fn close_solid(file: &str, mesh: &mut Mesh) -> Result<Closure, OpenError> {
         if rim.len() > MAX_CAP_EDGES {
             problems.push(format!("a hole of {} is more than {MAX_CAP_EDGES} edges around, too large to cap", hole.place()));
         } else if hole.bulge_mm > FLAT_MM.max(FLAT_RATIO * width) {
-            problems.push(format!("a hole of {} is not flat (its rim bulges {:.2} mm from its plane), so no cap can stand for the missing surface", hole.place(), hole.bulge_mm));
+            problems.push(format!(
+                "a hole of {} is not flat (its rim bulges {:.2} mm from its plane), so no cap can stand for the missing surface",
+                hole.place(),
+                hole.bulge_mm
+            ));
         } else {
             let cap = ear_clip(mesh, rim);
             caps.push((hole, cap));
@@ -266,7 +273,10 @@ fn orient(mesh: &mut Mesh, edges: &EdgeGroups) -> usize {
     let boxes: Vec<(DVec3, DVec3)> = shells
         .iter()
         .map(|m| {
-            m.iter().flat_map(|&t| mesh.triangles[t as usize]).map(|v| pos(mesh, v)).fold((DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)), |(lo, hi), p| (lo.min(p), hi.max(p)))
+            m.iter()
+                .flat_map(|&t| mesh.triangles[t as usize])
+                .map(|v| pos(mesh, v))
+                .fold((DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)), |(lo, hi), p| (lo.min(p), hi.max(p)))
         })
         .collect();
     let mut turned = 0usize;

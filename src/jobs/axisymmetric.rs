@@ -885,7 +885,19 @@ fn axes_stage(j: &AxisymJob, ctx: &mut Ctx, tours: &[&tour::Tour], keys: &[crate
             tilt = tilt.max(smoothed.max_tilt_deg);
             layers.push(smoothed.axes);
         }
-        let report = axes_report(&j.tool_axis, tilt, &worst(&raw_all), &worst(&after_all), feed);
+        // The tool's lean from vertical (what a head must reach), over every pose.
+        let from_vertical = layers
+            .iter()
+            .flatten()
+            .map(|a| libm::acos((a[2] / libm::sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).max(1e-12)).clamp(-1.0, 1.0)).to_degrees())
+            .fold(0.0, f64::max);
+        let report = axes_report(&j.tool_axis, tilt, &worst(&raw_all), &worst(&after_all), feed).metric(
+            "max_from_vertical",
+            "Largest tilt from vertical",
+            from_vertical,
+            "°",
+            "The tool axis's largest lean from +Z over the whole path: how far the head must tilt.",
+        );
         Ok((layers, Some(report)))
     })
 }

@@ -1302,6 +1302,22 @@ fn grade_report(
             hint: format!("{} blend over this length, centred on the shared boundary.", weighting_name(&t.weighting)),
             group_index: None,
         });
+        // A weighting that does not meet its regions' values at its ends (the paper's fitted
+        // logarithm) makes V* jump there: said, with the values it jumps to.
+        let (a, b) = (field.pair(t.from).v_star, field.pair(t.to).v_star);
+        let (w0, w1) = (t.weighting.inside(-0.5), t.weighting.inside(0.5));
+        if t.length_mm > 0.0 && (w0.abs() > 1e-6 || (w1 - 1.0).abs() > 1e-6) {
+            for (key, label, w) in [("transition_v_start", "starts at V*", w0), ("transition_v_end", "ends at V*", w1)] {
+                r.metrics.push(Metric {
+                    key: key.into(),
+                    label: format!("Transition {} {label}", i + 1),
+                    value: a + (b - a) * w,
+                    unit: String::new(),
+                    hint: "The weighting's own value at this end of the transition: V* jumps there from the region's.".into(),
+                    group_index: None,
+                });
+            }
+        }
     }
     r
 }

@@ -104,10 +104,11 @@ export async function runExample(page, baseUrl, file, timeout, { confirm = false
 }
 
 /** A binary STL of the axis-aligned box from corner `a` to corner `b` (mm), facing out, with normals. */
-export function boxStl(a, b, header = "weft e2e box") {
+export function boxStl(a, b, header = "weft e2e box", omitFaces = []) {
   const v = (i) => [(i & 1 ? b : a)[0], (i & 2 ? b : a)[1], (i & 4 ? b : a)[2]];
-  // Two triangles per face, counter-clockwise seen from outside.
-  const faces = [[0, 2, 3, 1], [4, 5, 7, 6], [0, 1, 5, 4], [2, 6, 7, 3], [0, 4, 6, 2], [1, 3, 7, 5]];
+  // Two triangles per face, counter-clockwise seen from outside (faces: bottom, top, y = a,
+  // y = b, x = a, x = b; those in `omitFaces` are left out: an open box).
+  const faces = [[0, 2, 3, 1], [4, 5, 7, 6], [0, 1, 5, 4], [2, 6, 7, 3], [0, 4, 6, 2], [1, 3, 7, 5]].filter((_, k) => !omitFaces.includes(k));
   const tris = faces.flatMap(([p, q, r, s]) => [[p, q, r], [p, r, s]]);
   const buf = Buffer.alloc(84 + 50 * tris.length);
   buf.write(header, 0);

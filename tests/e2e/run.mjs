@@ -578,6 +578,46 @@ const afterFoam = await foamChecks({ baseUrl: base, weftBin: WEFT_BIN, check, ne
 const afterFreeform = await freeformChecks({ baseUrl: base, weftBin: WEFT_BIN, check, newPage, outDir: OUT, first: typeof afterFoam === "number" ? afterFoam : 42, timeoutMs: JOB_TIMEOUT });
 await threadsChecks({ browser, baseUrl: base, weftBin: WEFT_BIN, check, outDir: OUT, first: typeof afterFreeform === "number" ? afterFreeform : 47, timeoutMs: JOB_TIMEOUT });
 
+await check(53, "an open part (a box without one wall) is capped out loud: the file's line and the import card say which hole was capped, and the G-code is the CLI's and the closed box's (desktop and phone)", async () => {
+  const open = boxStl([0, 0, 0], [20, 12, 8], "weft e2e open box", [2]);
+  const closed = boxStl([0, 0, 0], [20, 12, 8], "weft e2e open box");
+  const openPath = join(OUT, "open-box.stl");
+  const closedPath = join(OUT, "closed-box.stl");
+  writeFileSync(openPath, open);
+  writeFileSync(closedPath, closed);
+  const said = [];
+  for (const viewport of [{ width: 1280, height: 800 }, { width: 390, height: 844 }]) {
+    const { context, page: p } = await newPage();
+    try {
+      await p.setViewportSize(viewport);
+      await p.goto(`${base}/www/`);
+      await waitReady(p);
+      const before = await p.evaluate(() => window.weft.resultCount);
+      await p.setInputFiles("#file", { name: "open-box.stl", mimeType: "model/stl", buffer: open });
+      await waitResultWithin(p, before, "slicing open-box.stl", JOB_TIMEOUT);
+      const line = await p.$eval("#slots .file-summary", (e) => e.textContent);
+      if (!/capped 1 flat hole of 4 edges, 160\.0 mm²/.test(line)) throw new Error(`the file's line does not say the hole was capped: ${line}`);
+      const card = await p.$eval('.stage-card[data-stage="import"] .stage-notes', (e) => e.textContent).catch(() => "");
+      if (!card.includes("capped 1 flat hole")) throw new Error(`the import card does not say it: "${card}"`);
+      await p.$eval('.stage-card[data-stage="import"]', (e) => e.scrollIntoView());
+      await p.screenshot({ path: join(OUT, `open-part-${viewport.width}.png`) });
+      const web = await downloadGcode(p, join(OUT, `open-box-${viewport.width}.gcode`));
+      const designPath = join(OUT, "open-box.json");
+      writeFileSync(designPath, await p.evaluate(() => window.weft.design));
+      const fromCli = join(OUT, "open-box-cli.gcode");
+      const stderr = cli(["run", designPath, "--input", openPath, "--out", fromCli, "-q"]);
+      const closedCli = join(OUT, "closed-box-cli.gcode");
+      cli(["run", designPath, "--input", `mesh=${closedPath}`, "--out", closedCli, "-q"]);
+      if (!web.bytes.equals(readFileSync(fromCli))) throw new Error(`the page's G-code differs from the CLI's for the same file ${stderr}`);
+      if (!readFileSync(fromCli).equals(readFileSync(closedCli))) throw new Error("the capped box prints other G-code than the closed box");
+      said.push(`${viewport.width}px: ${card.slice(0, 60)}…`);
+    } finally {
+      await context.close();
+    }
+  }
+  return said.join("; ");
+});
+
 if (main.errors.length) console.log(`note: console errors in the main page:\n  ${main.errors.join("\n  ")}`);
 if (offOrigin.length) console.log(`note: blocked requests leaving the origin:\n  ${[...new Set(offOrigin)].join("\n  ")}`);
 await browser.close();

@@ -182,10 +182,11 @@ fn stated_numbers(text: &str) -> Vec<(String, f64, usize)> {
             match chars.get(i) {
                 Some(d) if d.is_ascii_digit() || *d == '.' => s.push(*d),
                 // "1 620": a thousands gap (a space, then exactly three digits).
-                Some(' ') if s.len() <= 3
-                    && !s.contains('.')
-                    && chars.get(i + 1..i + 4).is_some_and(|t| t.iter().all(|c| c.is_ascii_digit()))
-                    && !chars.get(i + 4).is_some_and(|c| c.is_ascii_digit() || *c == '.') => {}
+                Some(' ')
+                    if s.len() <= 3
+                        && !s.contains('.')
+                        && chars.get(i + 1..i + 4).is_some_and(|t| t.iter().all(|c| c.is_ascii_digit()))
+                        && !chars.get(i + 4).is_some_and(|c| c.is_ascii_digit() || *c == '.') => {}
                 _ => break,
             }
             i += 1;
@@ -196,8 +197,8 @@ fn stated_numbers(text: &str) -> Vec<(String, f64, usize)> {
         // A range's second end ("Figs. 5–6") is named when its first is.
         let range_of = before.strip_suffix('–').map(|b| b.trim_end_matches(|c: char| c.is_ascii_digit()).trim_end().to_string());
         let names = ["Fig", "Figs", "Fig.", "Figs.", "equation", "Ω", "al."];
-        let named = names.iter().any(|w| before.ends_with(w) || range_of.as_deref().is_some_and(|b| b.ends_with(w)))
-            || after.starts_with(|c: char| c.is_alphabetic());
+        let named =
+            names.iter().any(|w| before.ends_with(w) || range_of.as_deref().is_some_and(|b| b.ends_with(w))) || after.starts_with(|c: char| c.is_alphabetic());
         if named {
             continue;
         }

@@ -38,6 +38,7 @@ mod import;
 mod import_hostile;
 mod import_same_bytes;
 mod infill_patterns;
+mod input_checks;
 mod isosurface;
 mod job_kinds;
 mod lattice;

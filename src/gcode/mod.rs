@@ -538,8 +538,9 @@ pub fn check_fits(size_mm: [f64; 3], printer: &Printer) -> Result<(), Error> {
 /// [`write_gcode`]: a path reached by a free travel — no strut route, or the very first path
 /// — retracts when the travel's XY length is at least `retraction.min_travel_mm`, never on
 /// the first travel of the file, never with `retraction.length_mm` 0, never for the
-/// pneumatic and poses flavours; measured on the tool tip). The final retraction before the
-/// end template is not counted in any pass.
+/// pneumatic and poses flavours; measured on the tool tip; slivers the writer leaves out are
+/// left out here too). The final retraction before the end template is not counted in any
+/// pass.
 pub fn retractions_per_pass(toolpath: &Toolpath, printer: &Printer) -> Vec<usize> {
     let r = &printer.retraction;
     let on = r.length_mm > 0.0 && printer.flavor == Flavor::Marlin;
@@ -549,7 +550,7 @@ pub fn retractions_per_pass(toolpath: &Toolpath, printer: &Printer) -> Vec<usize
         .iter()
         .map(|pass| {
             let mut n = 0;
-            for path in pass.paths.iter().filter(|p| p.points.len() >= 2) {
+            for path in pass.paths.iter().filter(|p| p.points.len() >= 2 && !writer::is_sliver(p)) {
                 let to = path.points[0];
                 if let Some(from) = pos {
                     let dxy = ((to.x - from.x) * (to.x - from.x) + (to.y - from.y) * (to.y - from.y)).sqrt();

@@ -49,6 +49,12 @@ pub(crate) fn segment_e(options: &Options, path: &Path, height: f64, j: usize, l
 /// ten times over).
 pub const MIN_MOVE_MM: f64 = 0.01;
 
+/// A whole path shorter than [`MIN_MOVE_MM`] with no dwell: the writer leaves it out.
+pub(crate) fn is_sliver(path: &Path) -> bool {
+    let dwells = path.data.as_deref().and_then(|d| d.dwell_s.as_deref());
+    path.length() < MIN_MOVE_MM && !dwells.is_some_and(|d| d.iter().any(|&s| s > 0.0))
+}
+
 /// Which points of `path` a written move ends at, and how many moves were merged: a point
 /// closer than [`MIN_MOVE_MM`] to the last one kept is passed over (its move joins the next),
 /// unless a dwell is asked there; the last point is always kept, and when the last move is
@@ -350,7 +356,7 @@ pub(crate) fn write(toolpath: &Toolpath, options: &Options) -> Result<Gcode, Err
             let dwells = data.and_then(|d| d.dwell_s.as_deref());
             // A whole path shorter than the shortest move (a sliver a clip left) has no
             // neighbour to join: it is left out, with its travel and retraction, and counted.
-            if path.length() < MIN_MOVE_MM && !dwells.is_some_and(|d| d.iter().any(|&s| s > 0.0)) {
+            if is_sliver(path) {
                 dropped_paths += 1;
                 dropped_e +=
                     (1..path.points.len()).map(|j| segment_e(options, path, layer.height, j, path.points[j - 1].distance(path.points[j]))).sum::<f64>();

@@ -19,8 +19,11 @@
 //!    is refused, naming each hole by its place, edges and area.
 //!
 //! Deterministic (sorted edge lists, loops in order of their first edge) and bounded: one
-//! sort of the 3 edges per triangle, a linear walk, and ear clipping of at most
-//! [`MAX_CAP_EDGES`]² steps per hole.
+//! sort of the 3 edges per triangle, a linear walk over the shells, and ear clipping whose
+//! corner tests stop at [`MAX_CLIP_TESTS`] for all holes together (then each corner is found
+//! in linear steps). Memory: about 60 bytes a triangle while the edges are grouped (their
+//! sorted list and the pairs), freed before the caps; under the import's own high-water mark
+//! ([`super::estimate`]).
 
 use crate::geom::{DVec3, Mesh};
 use serde::Serialize;
@@ -36,6 +39,9 @@ pub const MAX_CAP_EDGES: usize = 4096;
 pub const MAX_CAP_SHARE: f64 = 0.5;
 /// Holes listed one by one in a refusal (the rest are counted).
 pub const MAX_LISTED: usize = 6;
+/// Corner tests the ear clipping of all holes together may make; past it, each cap takes its
+/// most convex corner without testing (still a cap, found in linear steps per corner).
+pub const MAX_CLIP_TESTS: u64 = 50_000_000;
 
 /// A hole in the surface: where, how big, how far from flat.
 #[derive(Clone, Debug, PartialEq, Serialize, serde::Deserialize)]
@@ -139,6 +145,7 @@ pub fn close_solid(file: &str, mesh: &mut Mesh) -> Result<Closure, OpenError> {
     let surface: f64 = (0..tris).map(|t| triangle_area(mesh, t)).sum();
     let mut problems = Vec::new();
     let mut caps: Vec<(Hole, Vec<[u32; 3]>)> = Vec::new();
+    let mut tests = MAX_CLIP_TESTS;
     for rim in &loops {
         let hole = measure(mesh, rim);
         let width = 2.0 * rim.iter().map(|&v| pos(mesh, v).distance(DVec3::from(hole.centre))).fold(0.0, f64::max);
@@ -151,7 +158,7 @@ pub fn close_solid(file: &str, mesh: &mut Mesh) -> Result<Closure, OpenError> {
                 hole.bulge_mm
             ));
         } else {
-            let cap = ear_clip(mesh, rim);
+            let cap = ear_clip(mesh, rim, &mut tests);
             caps.push((hole, cap));
         }
     }
@@ -381,7 +388,7 @@ fn measure(mesh: &Mesh, rim: &[u32]) -> Hole {
 
 /// Cap triangles for `rim` (a loop in its boundary half-edges' direction): the rim reversed,
 /// ear-clipped in its best-fit plane, so each cap edge runs opposite to the rim edge it meets.
-fn ear_clip(mesh: &Mesh, rim: &[u32]) -> Vec<[u32; 3]> {
+fn ear_clip(mesh: &Mesh, rim: &[u32], tests: &mut u64) -> Vec<[u32; 3]> {
     let order: Vec<u32> = rim.iter().rev().copied().collect();
     let pts: Vec<DVec3> = order.iter().map(|&v| pos(mesh, v)).collect();
     let centre = pts.iter().copied().sum::<DVec3>() / pts.len().max(1) as f64;
@@ -409,9 +416,10 @@ fn ear_clip(mesh: &Mesh, rim: &[u32]) -> Vec<[u32; 3]> {
             if turn > best.0 {
                 best = (turn, i);
             }
-            if turn <= 0.0 {
+            if turn <= 0.0 || *tests == 0 {
                 continue;
             }
+            *tests = tests.saturating_sub(m as u64);
             let blocked = idx.iter().any(|&k| {
                 let p = flat[k];
                 p != a && p != b && p != c && inside(p, a, b, c)

@@ -98,8 +98,12 @@ fn hostile_files_are_refused_in_words() {
     assert!(e.contains("neither an assembly_instances design"), "{e}");
     let e = read("x.json", br#"{"unit": "furlong", "node_list": [], "element_list": []}"#, &Options::default()).unwrap_err().to_string();
     assert!(e.contains("unit \"furlong\""), "{e}");
-    let e = read("x.obj", b"v 0 0 0\nv 1 0 0\nf 1 2 1\n", &Options::default()).unwrap_err().to_string();
-    assert!(e.contains("no line elements"), "{e}");
+    let e = read("x.obj", b"v 0 0 0\nv 1 0 0\n", &Options::default()).unwrap_err().to_string();
+    assert!(e.contains("no line elements") && e.contains("no faces"), "{e}");
+    // Faces without line elements are a mesh whose edges are the beams, said so.
+    let w = read("x.obj", b"v 0 0 0\nv 1 0 0\nf 1 2 1\n", &Options::default()).unwrap();
+    assert_eq!(w.beams.len(), 1);
+    assert!(w.notes[0].contains("read 1 faces as 1 beams"), "{:?}", w.notes);
     let e = read("x.csv", b"1,2,3,4,5\n", &Options::default()).unwrap_err().to_string();
     assert!(e.contains("line 1") && e.contains("5 numbers"), "{e}");
     let e = read("x.obj", &[0xff, 0xfe, 0x00], &Options::default()).unwrap_err().to_string();

@@ -367,9 +367,9 @@ impl Design {
         };
         apply(&mut value, false)?;
         let kind_name = value.pointer("/job/kind").and_then(Value::as_str).unwrap_or("").to_string();
-        if !inputs.is_empty() {
+        if let Some((first, _)) = inputs.first() {
             let kind =
-                registry.get(&kind_name).ok_or_else(|| Error::Override { assignment: "--input".into(), message: format!("unknown job kind '{kind_name}'") })?;
+                registry.get(&kind_name).ok_or_else(|| Error::Override { assignment: first.clone(), message: format!("unknown job kind '{kind_name}'") })?;
             for (slot, input) in inputs {
                 let spec = kind.slots().iter().find(|s| s.name == slot).ok_or_else(|| Error::Override {
                     assignment: slot.clone(),
@@ -392,21 +392,7 @@ impl Design {
     /// The design with `input` in the slot at design path `slot_path` (e.g. `job.input`),
     /// after the job kind's own rule for a filled slot (a lattice fills a loaded solid).
     pub fn with_slot_input(&self, registry: &Registry, slot: &str, input: Input) -> Result<Design, Error> {
-        let kind_name = self.job.kind().to_string();
-        let kind = registry.get(&kind_name).ok_or_else(|| Error::Override { assignment: slot.into(), message: format!("unknown job kind '{kind_name}'") })?;
-        let spec = kind.slots().iter().find(|s| s.name == slot).ok_or_else(|| Error::Override {
-            assignment: slot.into(),
-            message: format!(
-                "a {kind_name} job has no input slot '{slot}'; its slots are {}",
-                if kind.slots().is_empty() { "none".to_string() } else { kind.slots().iter().map(|s| s.name).collect::<Vec<_>>().join(", ") }
-            ),
-        })?;
-        let mut value = serde_json::to_value(self).unwrap_or(Value::Null);
-        let new = serde_json::to_value(&input).unwrap_or(Value::Null);
-        set_path(&mut value, spec.path, new).map_err(|message| Error::Override { assignment: slot.into(), message })?;
-        let job = value.get("job").cloned().unwrap_or(Value::Null);
-        value["job"] = kind.slot_filled(slot, job);
-        Design::from_value_in(registry, "design", value)
+        self.with_changes_in(registry, &[(slot.to_string(), input)], &[])
     }
 }
 

@@ -391,6 +391,15 @@ fn numbers(line: &str) -> Vec<&str> {
     line.split(|c: char| c == ',' || c == ';' || c.is_whitespace()).filter(|t| !t.is_empty()).collect()
 }
 
+/// An OBJ element's vertex reference (`7`, `-1`, `7/3/2`: the vertex is the first number) as
+/// written and as a 0-based index (negative ones count back from the `count` vertices so far;
+/// the index may be out of range, for the caller to list).
+fn obj_vertex(token: &str, count: usize) -> Result<(i64, i64), String> {
+    let head = token.split('/').next().unwrap_or(token);
+    let i: i64 = head.parse().map_err(|_| format!("\"{token}\" is not a vertex number"))?;
+    Ok((i, if i > 0 { i - 1 } else { count as i64 + i }))
+}
+
 fn obj(text: &str) -> Result<Raw, (usize, String)> {
     let mut raw = Raw::new(Format::Obj);
     // Faces, used as the design only when the file has no line elements.
@@ -411,12 +420,7 @@ fn obj(text: &str) -> Result<Raw, (usize, String)> {
             Some("l") => {
                 let mut ids = Vec::new();
                 for t in it {
-                    // `l v/vt` pairs: the vertex is the first number.
-                    let head = t.split('/').next().unwrap_or(t);
-                    let i: i64 = head.parse().map_err(|_| (n, format!("\"{t}\" is not a vertex number")))?;
-                    let count = raw.joints.len() as i64;
-                    let idx = if i > 0 { i - 1 } else { count + i };
-                    ids.push((i, idx));
+                    ids.push(obj_vertex(t, raw.joints.len()).map_err(|m| (n, m))?);
                 }
                 if ids.len() < 2 {
                     return Err((n, "a line element needs at least two vertices".into()));
@@ -436,12 +440,8 @@ fn obj(text: &str) -> Result<Raw, (usize, String)> {
             Some("f") => {
                 let mut corners = Vec::new();
                 for t in it {
-                    // `f v/vt/vn` triples: the vertex is the first number.
-                    let head = t.split('/').next().unwrap_or(t);
-                    let i: i64 = head.parse().map_err(|_| (n, format!("\"{t}\" is not a vertex number")))?;
-                    let count = raw.joints.len() as i64;
-                    let idx = if i > 0 { i - 1 } else { count + i };
-                    if idx < 0 || idx >= count {
+                    let (i, idx) = obj_vertex(t, raw.joints.len()).map_err(|m| (n, m))?;
+                    if idx < 0 || idx >= raw.joints.len() as i64 {
                         bad_face.get_or_insert((n, format!("vertex {i}")));
                     } else {
                         corners.push(idx as usize);

@@ -267,7 +267,7 @@ fn orient(mesh: &mut Mesh, edges: &EdgeGroups) -> usize {
                 let u = u as usize;
                 if shell[u] == UNSEEN {
                     shell[u] = id;
-                    flip[u] = flip[t] != !agree;
+                    flip[u] = if agree { flip[t] } else { !flip[t] };
                     members.push(u as u32);
                     stack.push(u as u32);
                 }

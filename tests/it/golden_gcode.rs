@@ -219,11 +219,8 @@ fn numbers_of(v: &serde_json::Value, out: &mut Vec<f64>) {
                 out.extend([x, x * 100.0, x.to_degrees(), -x]);
             }
         }
-        serde_json::Value::Array(a) => {
-            if a.len() <= 64 {
-                a.iter().for_each(|x| numbers_of(x, out));
-            }
-        }
+        // Short arrays only: long ones are plot data, where any number may be found.
+        serde_json::Value::Array(a) if a.len() <= 64 => a.iter().for_each(|x| numbers_of(x, out)),
         serde_json::Value::Object(m) => m.values().for_each(|x| numbers_of(x, out)),
         _ => {}
     }

@@ -98,7 +98,7 @@ export async function freeformChecks({ baseUrl, weftBin = process.env.WEFT_BIN, 
       await page.setInputFiles("#file", [four]);
       await page.waitForFunction(() => JSON.parse(window.weft.design).job.kind === "freeform" && JSON.parse(window.weft.design).job.input?.file?.name === "four-frame.json", null, { timeout: jobTimeout });
       const summary = await page.waitForFunction(() => document.querySelector('.slot[data-slot="frame"] .file-summary')?.textContent || false, null, { timeout: jobTimeout }).then((h) => h.jsonValue());
-      if (!/4 beams, 5 joints \(2 grounded\)/.test(summary)) throw new Error(`slot reads "${summary}"`);
+      if (!/4 beams, 5 joints, .* mm \(2 joints grounded, as the file marks them\)/.test(summary)) throw new Error(`slot reads "${summary}"`);
       const before = await page.evaluate(() => window.weft.resultCount);
       await page.click("#slice");
       await waitResult(page, before, "running four-frame.json", jobTimeout);

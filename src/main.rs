@@ -269,9 +269,10 @@ fn file_name(path: &Path) -> String {
     path.file_name().map_or_else(|| path.display().to_string(), |n| n.to_string_lossy().into_owned())
 }
 
-fn load_design(arg: &str) -> Result<Design, String> {
+/// A design read from a file or a share link, with the name its problems are named after.
+fn load_design(arg: &str) -> Result<(Design, String), String> {
     if arg.contains("#d=") || arg.starts_with("d=") {
-        return share::decode(arg).map_err(|e| e.to_string());
+        return share::decode(arg).map(|d| (d, "the share link".to_string())).map_err(|e| e.to_string());
     }
     let path = Path::new(arg);
     // A file over the limit is refused from its size, before it is read.
@@ -281,7 +282,13 @@ fn load_design(arg: &str) -> Result<Design, String> {
     }
     let bytes = read_at_most(path, weft::design::MAX_DESIGN_BYTES as u64 + 1)?;
     let text = String::from_utf8(bytes).map_err(|_| format!("{arg}: this is not a design: a design is a JSON text file and this is not text"))?;
-    Design::from_json(&file_name(path), &text).map_err(|e| e.to_string())
+    // Checked across fields once its inputs and --set are applied (`apply_changes`).
+    Design::from_json_draft(&file_name(path), &text).map(|d| (d, file_name(path))).map_err(|e| e.to_string())
+}
+
+/// A design with nothing to apply, checked across fields.
+fn load_valid(arg: &str) -> Result<Design, String> {
+    apply_changes(&load_design(arg)?, &[], &[], &mut Files::new())
 }
 
 /// The slot and the path of `--input [SLOT=]FILE` (the kind's first slot when none is named).
@@ -305,14 +312,12 @@ fn input_slot(kind_name: &str, kind: &dyn weft::jobs::JobKind, arg: &str) -> Res
 /// `design` with every `--input [SLOT=]FILE` read into `files` and put in its slot and every
 /// `--set` applied, validated once at the end (as the page does): files given one by one, as
 /// a folder or in any order with the settings make the same design.
-fn apply_changes(design: &Design, inputs: &[String], set: &[String], files: &mut Files) -> Result<Design, String> {
+fn apply_changes((design, source): &(Design, String), inputs: &[String], set: &[String], files: &mut Files) -> Result<Design, String> {
     let registry = Registry::builtin();
     let kind_name = design.kind_after(set);
     let slots = read_inputs(&registry, &kind_name, inputs, files)?;
-    if slots.is_empty() && set.is_empty() {
-        return Ok(design.clone());
-    }
-    design.with_changes_in(&registry, &slots, set).map_err(|e| e.to_string())
+    let source = if set.is_empty() { source.clone() } else { format!("{source} with --set") };
+    design.with_changes_from(&registry, &source, &slots, set).map_err(|e| e.to_string())
 }
 
 /// Reads each `--input [SLOT=]FILE` of a `kind_name` job into `files`: each slot's input, in
@@ -475,7 +480,7 @@ fn cmd_run(
 ) -> Result<(), String> {
     let mut design = load_design(design)?;
     if let Some(id) = printer {
-        design.printer = weft::gcode::presets::preset(id).map_err(|e| format!("--printer: {e}"))?.printer;
+        design.0.printer = weft::gcode::presets::preset(id).map_err(|e| format!("--printer: {e}"))?.printer;
     }
     let mut files = Files::new();
     let design = apply_changes(&design, inputs, set, &mut files)?;
@@ -583,7 +588,7 @@ fn where_the_time_went(r: &weft::pipeline::RunReport) -> String {
 fn design_bench(paths: &[String]) -> Result<(), String> {
     let mut rows = Vec::new();
     for p in paths {
-        rows.push(load_design(p).and_then(|d| weft::bench::designs::time_design_threads(&d, 3))?);
+        rows.push(load_valid(p).and_then(|d| weft::bench::designs::time_design_threads(&d, 3))?);
     }
     outln!("{}", weft::bench::designs::threads_table(&rows, rayon::current_num_threads()));
     Ok(())
@@ -768,7 +773,7 @@ fn main() -> ExitCode {
             all.and_then(|a| weft::bench::run_lattice().map(|l| outln!("{a}\n{l}")))
         }
         Command::Inspect { design, view, index, input, set, out } => cmd_inspect(&design, &view, index, &input, &set, out),
-        Command::ExportStl { design, out } => load_design(&design).and_then(|d| {
+        Command::ExportStl { design, out } => load_valid(&design).and_then(|d| {
             let e = weft::export::lattice_stl(&d).map_err(|e| e.to_string())?;
             let out = output_path(Some(&out), &d.name, "stl");
             write(&out, &e.stl)?;

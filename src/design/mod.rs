@@ -241,6 +241,18 @@ impl Design {
 
     /// Parses and validates a design whose job kind is one of `registry`'s.
     pub fn from_json_in(registry: &Registry, source_name: &str, text: &str) -> Result<Design, Error> {
+        Design::parse(registry, source_name, text, true)
+    }
+
+    /// Parses a design (syntax, fields, ranges of single values) without the checks across
+    /// fields that its inputs and overrides may still satisfy (a route that edits a G-code
+    /// the command line gives): for a front end that applies them with
+    /// [`Design::with_changes_in`], which validates the result once.
+    pub fn from_json_draft(source_name: &str, text: &str) -> Result<Design, Error> {
+        Design::parse(&Registry::builtin(), source_name, text, false)
+    }
+
+    fn parse(registry: &Registry, source_name: &str, text: &str, validate: bool) -> Result<Design, Error> {
         if text.len() > MAX_DESIGN_BYTES {
             return Err(Error::TooLarge { source_name: source_name.into(), bytes: text.len() });
         }
@@ -250,7 +262,7 @@ impl Design {
             column: e.column(),
             message: format!("not valid JSON: {}", words::syntax(&e)),
         })?;
-        Design::from_value_in(registry, source_name, value)
+        Design::from_value_checked(registry, source_name, value, validate)
     }
 
     /// Builds a design from a JSON value (used after overrides).
@@ -260,6 +272,10 @@ impl Design {
 
     /// [`Design::from_value`] with the job kinds of `registry`.
     pub fn from_value_in(registry: &Registry, source_name: &str, value: Value) -> Result<Design, Error> {
+        Design::from_value_checked(registry, source_name, value, true)
+    }
+
+    fn from_value_checked(registry: &Registry, source_name: &str, value: Value, validate: bool) -> Result<Design, Error> {
         if let Some(top) = too_deep(&value, MAX_JSON_DEPTH) {
             drop_flat(value);
             let place = if top.is_empty() { "the design".to_string() } else { clip(&top, MAX_QUOTE_CHARS).into_owned() };
@@ -279,7 +295,11 @@ impl Design {
             .get(design.job.kind())
             .ok_or_else(|| invalid(Problem { path: "job.kind".into(), message: words::not_a_choice(design.job.kind(), "the job kind", &registry.names()) }))?;
         design.job.value = kind.normalize(&design.job.value).map_err(|e| invalid(words::problem(&e, "job", &value, &rows)))?;
-        design.validated(registry, source_name)
+        if validate {
+            design.validated(registry, source_name)
+        } else {
+            Ok(design)
+        }
     }
 
     /// Pretty JSON (the on-disk form).
@@ -341,6 +361,12 @@ impl Design {
     /// before the inputs (a `job.kind=…` picks the slots) and again after them (so a value
     /// given wins over a slot's rule, and a row that a file adds can be set).
     pub fn with_changes_in(&self, registry: &Registry, inputs: &[(String, Input)], assignments: &[String]) -> Result<Design, Error> {
+        let source = if assignments.is_empty() { "design" } else { "--set" };
+        self.with_changes_from(registry, source, inputs, assignments)
+    }
+
+    /// [`Design::with_changes_in`], problems named after `source_name` (the design's file).
+    pub fn with_changes_from(&self, registry: &Registry, source_name: &str, inputs: &[(String, Input)], assignments: &[String]) -> Result<Design, Error> {
         let mut value = serde_json::to_value(self).map_err(|e| Error::Override { assignment: String::new(), message: e.to_string() })?;
         let apply = |value: &mut Value, strict: bool| -> Result<(), Error> {
             for a in assignments {
@@ -385,8 +411,7 @@ impl Design {
             }
         }
         apply(&mut value, true)?;
-        let source = if assignments.is_empty() { "design" } else { "--set" };
-        Design::from_value_in(registry, source, value)
+        Design::from_value_in(registry, source_name, value)
     }
 
     /// The design with `input` in the slot at design path `slot_path` (e.g. `job.input`),

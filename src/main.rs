@@ -316,7 +316,7 @@ fn apply_changes((design, source): &(Design, String), inputs: &[String], set: &[
     let registry = Registry::builtin();
     let kind_name = design.kind_after(set);
     let slots = read_inputs(&registry, &kind_name, inputs, files)?;
-    let source = if set.is_empty() { source.clone() } else { format!("{source} with --set") };
+    let source = if set.is_empty() { source.clone() } else { "--set".to_string() };
     design.with_changes_from(&registry, &source, &slots, set).map_err(|e| e.to_string())
 }
 

@@ -438,6 +438,9 @@ fn ear_clip(mesh: &Mesh, rim: &[u32], tests: &mut u64) -> Vec<[u32; 3]> {
     if idx.len() == 3 {
         out.push([order[idx[0]], order[idx[1]], order[idx[2]]]);
     }
+    // A rim through one vertex twice (two holes touching at a corner) gives caps with a
+    // repeated corner: no area, and their two edges cancel; left out.
+    out.retain(|t| t[0] != t[1] && t[1] != t[2] && t[0] != t[2]);
     out
 }
 

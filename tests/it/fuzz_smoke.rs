@@ -155,6 +155,22 @@ fn check(name: &str, seed: u64, input: &[u8], worst: &mut Worst) {
         assert!(im.mesh.triangles.iter().flatten().all(|&i| (i as usize) < n), "{name} seed {seed}: index out of range");
         assert!(im.mesh.vertices.iter().flatten().all(|c| c.is_finite()), "{name} seed {seed}: non-finite vertex");
         assert_eq!(im.report.triangles, im.mesh.triangles.len());
+        // A solid slot's check on whatever the mutation left: closed (every edge used twice)
+        // or refused in words, never a panic.
+        let mut mesh = im.mesh.clone();
+        let closed = std::panic::catch_unwind(move || weft::import::close::close_solid(name, &mut mesh).map(|c| (c, mesh)));
+        match closed {
+            Err(_) => panic!("close_solid panicked on {name} mutation seed {seed}"),
+            Ok(Ok((c, mesh))) if c.nonmanifold_edges == 0 => {
+                let mut edges: Vec<(u32, u32)> =
+                    mesh.triangles.iter().flat_map(|t| (0..3).map(move |k| (t[k].min(t[(k + 1) % 3]), t[k].max(t[(k + 1) % 3])))).collect();
+                edges.sort_unstable();
+                let single = edges.chunk_by(|a, b| a == b).filter(|r| r.len() == 1).count();
+                assert_eq!(single, 0, "{name} seed {seed}: closed, yet {single} edges are used once");
+            }
+            Ok(Ok(_)) => {}
+            Ok(Err(e)) => assert!(e.to_string().contains("is not a closed solid"), "{e}"),
+        }
     }
     worst.items = worst.items.max(w.items);
     worst.bytes = worst.bytes.max(w.bytes);

@@ -405,6 +405,7 @@ fn obj(text: &str) -> Result<Raw, (usize, String)> {
     // Faces, used as the design only when the file has no line elements.
     let mut faces: Vec<(Vec<usize>, String)> = Vec::new();
     let mut bad_face: Option<(usize, String)> = None;
+    let mut face_corners = 0usize;
     for (k, line) in text.lines().enumerate() {
         let n = k + 1;
         let mut it = line.split_whitespace();
@@ -440,6 +441,18 @@ fn obj(text: &str) -> Result<Raw, (usize, String)> {
             Some("f") => {
                 let mut corners = Vec::new();
                 for t in it {
+                    // Bounded as read: the edges of more corners than this would be more
+                    // beams than a design may have.
+                    face_corners += 1;
+                    if face_corners > 3 * MAX_BEAMS {
+                        return Err((
+                            n,
+                            format!(
+                                "the faces have more than {} corners, more than the {MAX_BEAMS} beams a design may have; plan the design in parts",
+                                3 * MAX_BEAMS
+                            ),
+                        ));
+                    }
                     let (i, idx) = obj_vertex(t, raw.joints.len()).map_err(|m| (n, m))?;
                     if idx < 0 || idx >= raw.joints.len() as i64 {
                         bad_face.get_or_insert((n, format!("vertex {i}")));
@@ -447,7 +460,7 @@ fn obj(text: &str) -> Result<Raw, (usize, String)> {
                         corners.push(idx as usize);
                     }
                 }
-                if corners.len() >= 2 && faces.len() <= MAX_BEAMS {
+                if corners.len() >= 2 {
                     faces.push((corners, format!("the face on line {n}")));
                 }
             }

@@ -104,6 +104,11 @@ fn hostile_files_are_refused_in_words() {
     let w = read("x.obj", b"v 0 0 0\nv 1 0 0\nf 1 2 1\n", &Options::default()).unwrap();
     assert_eq!(w.beams.len(), 1);
     assert!(w.notes[0].contains("read 1 faces as 1 beams"), "{:?}", w.notes);
+    // A face of more corners than a design has beams is refused as it is read.
+    let corners = 3 * weft::freeform::wireframe::MAX_BEAMS + 1;
+    let huge = format!("v 0 0 0\nv 1 0 0\nv 0 1 0\nf {}\n", "1 2 3 ".repeat(corners / 3 + 1));
+    let e = read("huge.obj", huge.as_bytes(), &Options::default()).unwrap_err().to_string();
+    assert!(e.contains("line 4") && e.contains("plan the design in parts"), "{e}");
     let e = read("x.csv", b"1,2,3,4,5\n", &Options::default()).unwrap_err().to_string();
     assert!(e.contains("line 1") && e.contains("5 numbers"), "{e}");
     let e = read("x.obj", &[0xff, 0xfe, 0x00], &Options::default()).unwrap_err().to_string();

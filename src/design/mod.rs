@@ -329,21 +329,7 @@ impl Design {
 
     /// [`Design::with_overrides`] with the job kinds of `registry`.
     pub fn with_overrides_in(&self, registry: &Registry, assignments: &[String]) -> Result<Design, Error> {
-        let mut value = serde_json::to_value(self).map_err(|e| Error::Override { assignment: String::new(), message: e.to_string() })?;
-        for a in assignments {
-            let assignment = || clip(a, 200).into_owned();
-            let (path, raw) = a
-                .split_once('=')
-                .ok_or_else(|| Error::Override { assignment: assignment(), message: "expected PATH=VALUE, e.g. job.slice.layer_height_mm=0.1".into() })?;
-            let new: Value = serde_json::from_str(raw).unwrap_or_else(|_| Value::String(raw.to_string()));
-            set_path(&mut value, path.trim(), new).map_err(|message| Error::Override { assignment: assignment(), message })?;
-        }
-        // A switch of job kind lets the new kind put what it needs in place (a machine).
-        let kind = value.pointer("/job/kind").and_then(Value::as_str).map(str::to_string);
-        if let Some(k) = kind.filter(|k| k != self.job.kind()).and_then(|k| registry.get(&k)) {
-            k.adopted(&mut value);
-        }
-        Design::from_value_in(registry, "--set", value)
+        self.with_changes_from(registry, "--set", &[], assignments)
     }
 
     /// The job kind after `assignments` (a `job.kind=…` among them switches it).

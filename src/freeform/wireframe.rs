@@ -654,6 +654,8 @@ pub struct Grounding {
     pub joints: usize,
     /// They are the file's marks (false: the joints within the tolerance of the lowest).
     pub by_file: bool,
+    /// The design is a built-in one (its grounded joints are its own).
+    pub built_in: bool,
     /// The lowest joint's z, mm.
     pub z_mm: f64,
     /// The tolerance used (grounding the lowest), mm.
@@ -674,7 +676,9 @@ impl Grounding {
     pub fn statement(&self) -> String {
         let n = self.joints;
         let joints = if n == 1 { "1 joint grounded".to_string() } else { format!("{n} joints grounded") };
-        if self.by_file {
+        if self.by_file && self.built_in {
+            format!("{joints}, the built-in design's feet")
+        } else if self.by_file {
             format!("{joints}, as the file marks them")
         } else {
             format!("{joints}, the lowest: z {:.2} ± {} mm", self.z_mm, self.tolerance_mm)
@@ -739,6 +743,7 @@ pub fn grounding(w: &Wireframe, tolerance_mm: f64) -> Grounding {
     let mut g = Grounding {
         joints: grounded,
         by_file: w.grounded_by_file,
+        built_in: w.format == Format::Model,
         z_mm: if low.is_finite() { low } else { 0.0 },
         tolerance_mm,
         footprint_share,

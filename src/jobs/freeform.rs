@@ -662,7 +662,8 @@ fn import_stage(j: &FreeformJob, ctx: &mut Ctx) -> Result<Out<Placed>, Error> {
         .metric("height", "Height", size.z, "mm", "Height of the design on the plate.");
         // Assumptions said out loud: how the file was read, what stands on the plate.
         report.notes.extend(wire.notes.iter().cloned());
-        if let Some(g) = &wire.grounding {
+        // The grounding is an assumption only when it is not the file's own marks.
+        if let Some(g) = wire.grounding.as_ref().filter(|g| !g.by_file) {
             report.notes.push(format!("{}: {}", name, g.statement()));
             report.notes.extend(g.warning().map(|w| format!("{name}: {w}")));
         }

@@ -539,32 +539,90 @@ impl<'a> Ctx<'a> {
             &upstream,
             |_| {
                 let (mesh, report) = load_input(slot_name, input, files, place, solid)?;
-                let stage = report.as_ref().map(|r| {
-                    let mut s = StageReport::new("import", "Reading the mesh", r)
-                        .metric("triangles", "Triangles", r.triangles as f64, "", "Facets in the mesh after repairs.")
-                        .metric(
-                            "open_edges",
-                            "Open edges",
-                            r.open_edges as f64,
-                            "",
-                            "Edges with one facet as read: holes in the surface (0 for a closed, printable mesh).",
-                        );
-                    if let Some(c) = &r.closure {
-                        s = s
-                            .metric("holes_capped", "Holes capped", c.capped.len() as f64, "", "Flat holes closed with a cap so the part is a whole solid.")
-                            .metric("capped_area", "Area capped", c.capped_area_mm2(), "mm²", "Surface the caps added.")
-                            .metric("flipped", "Facets turned", c.flipped as f64, "", "Facets that faced inward, turned to face out.");
-                    }
-                    for note in &r.notes {
-                        s = s.note(note);
-                    }
-                    s
-                });
-                Ok((mesh, stage))
+                Ok((mesh, report.as_ref().map(import_report)))
             },
             keep,
         )
     }
+
+    /// The meshes of a slot that takes several, given as one `.zip` (`input`): each mesh file
+    /// in it (STL, OBJ, 3MF; by name, as a folder lists them), imported and cached on its own
+    /// in its file's coordinates, checked as the slot's kind asks. Other files are left out
+    /// and said.
+    pub fn mesh_items_of_zip(&mut self, slot: &Slot, input: &Input) -> Result<Vec<(String, Out<Mesh>)>, Error> {
+        let (bytes, key) = self.file_bytes(slot.name, input)?;
+        let zip_name = match input {
+            Input::File { name, .. } => name.clone(),
+            _ => format!("the {} archive", slot.name),
+        };
+        let all = volume::unzip(&zip_name, &bytes).map_err(|e| Error::NoInput(e.to_string()))?;
+        drop(bytes);
+        let is_mesh = |n: &str| [".stl", ".obj", ".3mf"].iter().any(|x| n.to_ascii_lowercase().ends_with(x));
+        let left_out: Vec<String> = all.iter().filter(|(n, _)| !is_mesh(n)).map(|(n, _)| n.clone()).collect();
+        let meshes: Vec<(String, Vec<u8>)> = all.into_iter().filter(|(n, _)| is_mesh(n)).collect();
+        if meshes.is_empty() {
+            return Err(Error::NoInput(format!("{zip_name} holds no STL, OBJ or 3MF file: zip the mesh files themselves")));
+        }
+        let solid = slot.kind.solid();
+        let mut out = Vec::with_capacity(meshes.len());
+        for (i, (name, entry)) in meshes.iter().enumerate() {
+            let parts = serde_json::json!({ "zip": zip_name, "entry": name, "solid": solid });
+            let id = format!("import-item:{}:{i}", slot.name);
+            let said = if i == 0 && !left_out.is_empty() {
+                let shown: Vec<String> = left_out.iter().take(4).map(|n| crate::settings::clip(n, 60).into_owned()).collect();
+                let more = if left_out.len() > 4 { ", …" } else { "" };
+                Some(format!("{zip_name}: left out {} file(s) that are not meshes ({}{more})", left_out.len(), shown.join(", ")))
+            } else {
+                None
+            };
+            let mesh = self.run_stage(
+                "import",
+                &id,
+                &parts,
+                &[key],
+                |_| {
+                    let (mesh, report) = read_solid(name, entry, solid)?;
+                    let mut stage = import_report(&report);
+                    if let Some(s) = &said {
+                        stage = stage.note(s);
+                    }
+                    Ok((mesh, Some(stage)))
+                },
+                false,
+            )?;
+            out.push((name.clone(), mesh));
+        }
+        Ok(out)
+    }
+}
+
+/// The import stage's card: counts, what closing the solid did, the notes.
+fn import_report(r: &ImportReport) -> StageReport {
+    let mut s = StageReport::new("import", "Reading the mesh", r)
+        .metric("triangles", "Triangles", r.triangles as f64, "", "Facets in the mesh after repairs.")
+        .metric("open_edges", "Open edges", r.open_edges as f64, "", "Edges with one facet as read: holes in the surface (0 for a closed, printable mesh).");
+    if let Some(c) = &r.closure {
+        s = s
+            .metric("holes_capped", "Holes capped", c.capped.len() as f64, "", "Flat holes closed with a cap so the part is a whole solid.")
+            .metric("capped_area", "Area capped", c.capped_area_mm2(), "mm²", "Surface the caps added.")
+            .metric("flipped", "Facets turned", c.flipped as f64, "", "Facets that faced inward, turned to face out.");
+    }
+    for note in &r.notes {
+        s = s.note(note);
+    }
+    s
+}
+
+/// A mesh file's bytes read, and made a closed solid when `solid` (repairs in the notes).
+fn read_solid(name: &str, bytes: &[u8], solid: bool) -> Result<(Mesh, ImportReport), Error> {
+    let mut imported = import::read_mesh(name, bytes, &import::Options::default())?;
+    if solid {
+        let closure = import::close::close_solid(name, &mut imported.mesh).map_err(import::Error::Open)?;
+        imported.report.notes.extend(closure.notes(name));
+        imported.report.triangles = imported.mesh.triangles.len();
+        imported.report.closure = Some(closure);
+    }
+    Ok((imported.mesh, imported.report))
 }
 
 impl<'a> Ctx<'a> {
@@ -875,15 +933,8 @@ fn load_input(slot: &str, input: &Input, files: &Files, place: bool, solid: bool
                 (None, Some(e)) => std::borrow::Cow::Owned(share::unpack(e).map_err(|source| Error::Embedded { name: name.clone(), source })?),
                 (None, None) => return Err(Error::MissingInput { name: name.clone(), slot: slot.into() }),
             };
-            let mut imported = import::read_mesh(name, &bytes, &import::Options::default())?;
-            drop(bytes);
-            if solid {
-                let closure = import::close::close_solid(name, &mut imported.mesh).map_err(import::Error::Open)?;
-                imported.report.notes.extend(closure.notes(name));
-                imported.report.triangles = imported.mesh.triangles.len();
-                imported.report.closure = Some(closure);
-            }
-            (imported.mesh, Some(imported.report))
+            let (mesh, report) = read_solid(name, &bytes, solid)?;
+            (mesh, Some(report))
         }
         Input::Files(_) => return Err(Error::NoInput(format!("the {slot} input takes one mesh file, not several"))),
     };

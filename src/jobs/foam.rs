@@ -769,15 +769,24 @@ fn placed_stage(j: &FoamJob, ctx: &mut Ctx) -> Result<Out<Placed>, Error> {
             Input::Files(names) => names.iter().map(|n| Input::File { name: n.clone(), embedded: None }).collect(),
             other => vec![other.clone()],
         };
+        // One .zip holds the region files (in name order, as a folder gives them).
+        let zipped = matches!(input, Input::File { name, .. } if name.to_ascii_lowercase().ends_with(".zip"));
         if inputs.len() > MAX_REGIONS {
             return Err(Error::NoInput(format!("{} region meshes: a foam takes at most {MAX_REGIONS}", inputs.len())));
         }
-        for (i, input) in inputs.iter().enumerate() {
-            let name = match input {
-                Input::File { name, .. } => name.clone(),
-                _ => format!("region {}", i + 1),
-            };
-            items.push((name, ctx.mesh_item(&SLOTS[0], i, input)?));
+        if zipped {
+            items = ctx.mesh_items_of_zip(&SLOTS[0], input)?;
+        } else {
+            for (i, input) in inputs.iter().enumerate() {
+                let name = match input {
+                    Input::File { name, .. } => name.clone(),
+                    _ => format!("region {}", i + 1),
+                };
+                items.push((name, ctx.mesh_item(&SLOTS[0], i, input)?));
+            }
+        }
+        if items.len() > MAX_REGIONS {
+            return Err(Error::NoInput(format!("{} region meshes: a foam takes at most {MAX_REGIONS}", items.len())));
         }
     }
     let keys: Vec<crate::pipeline::Key> = items.iter().map(|(_, m)| m.key).collect();

@@ -50,7 +50,8 @@ impl SlotKind {
     /// File name extensions a slot of this kind accepts (lower case, with the dot).
     pub fn accept(self) -> &'static [&'static str] {
         match self {
-            SlotKind::Mesh | SlotKind::Meshes | SlotKind::Surface => &[".stl", ".obj", ".3mf"],
+            SlotKind::Mesh | SlotKind::Surface => &[".stl", ".obj", ".3mf"],
+            SlotKind::Meshes => &[".stl", ".obj", ".3mf", ".zip"],
             SlotKind::Volume => &[".dcm", ".zip", ".nrrd", ".nhdr", ".raw"],
             SlotKind::Gcode => &[".gcode", ".gco", ".g", ".nc"],
             SlotKind::Frame => &[".json", ".obj", ".csv", ".stl"],

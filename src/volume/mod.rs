@@ -18,6 +18,17 @@ pub use dicom::{DUPLICATE_MM, GAP_TOLERANCE, MAX_DEPTH};
 pub use nrrd::MAX_HEADER_BYTES;
 pub use read::*;
 
+/// The files of a zip archive (`file` names it in messages), bounded as a series' zip is
+/// (entry count, total unpacked bytes, each entry's declared size), sorted by name, with
+/// folders, macOS metadata and dot-files left out: for a slot that takes several files (a
+/// foam's region meshes) as one archive.
+pub fn unzip(file: &str, bytes: &[u8]) -> Result<Vec<(String, Vec<u8>)>, Error> {
+    let entries = zip::list(file, bytes)?;
+    let mut files = zip::inflate(file, bytes, &entries, None)?;
+    files.sort_by(|a, b| a.0.cmp(&b.0));
+    Ok(files)
+}
+
 use crate::geom::DVec3;
 use serde::Serialize;
 

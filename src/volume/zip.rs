@@ -1,4 +1,4 @@
-//! A zip of a series folder → its entries as a file list.
+//! A zip of a folder (a DICOM series, region meshes) → its entries as a file list.
 //!
 //! Bounded before inflating: the central directory signatures are counted (an upper bound
 //! of what the zip reader will parse) and the entries kept are checked against
@@ -49,48 +49,46 @@ fn open<'a>(file: &str, bytes: &'a [u8]) -> Result<::zip::ZipArchive<Cursor<&'a 
     // is read: refuse it from the signature count first (4× slack for signatures that
     // happen to sit in stored pixel data).
     if count_central_headers(bytes) > 4 * MAX_FILES {
-        return Err(zip_err(file, format!("the archive lists more than {} entries; zip one series folder only", 4 * MAX_FILES)));
+        return Err(zip_err(file, format!("the archive lists more than {} entries; zip one folder only", 4 * MAX_FILES)));
     }
-    ::zip::ZipArchive::new(Cursor::new(bytes))
-        .map_err(|_| zip_err(file, "the zip archive cannot be opened: it is cut short or damaged; zip the series folder again"))
+    ::zip::ZipArchive::new(Cursor::new(bytes)).map_err(|_| zip_err(file, "the zip archive cannot be opened: it is cut short or damaged; zip the folder again"))
 }
 
 /// The entries to read, checked against [`MAX_FILES`] and [`MAX_UNZIPPED_BYTES`].
 pub(crate) fn list(file: &str, bytes: &[u8]) -> Result<Vec<Entry>, Error> {
     let mut zip = open(file, bytes)?;
     if zip.len() > 4 * MAX_FILES {
-        return Err(zip_err(file, format!("the archive has {} entries, more than {}; zip one series folder only", zip.len(), 4 * MAX_FILES)));
+        return Err(zip_err(file, format!("the archive has {} entries, more than {}; zip one folder only", zip.len(), 4 * MAX_FILES)));
     }
     let mut out = Vec::new();
     let mut total: u64 = 0;
     for index in 0..zip.len() {
-        let e =
-            zip.by_index_raw(index).map_err(|_| zip_err(file, format!("entry {index} cannot be read: the archive is damaged; zip the series folder again")))?;
+        let e = zip.by_index_raw(index).map_err(|_| zip_err(file, format!("entry {index} cannot be read: the archive is damaged; zip the folder again")))?;
         let name = e.name().map(|n| n.to_string()).unwrap_or_else(|_| format!("entry-{index}"));
         if e.is_dir() || ignored(&name).is_some() {
             continue;
         }
         if e.encrypted() {
-            return Err(zip_err(file, format!("{} is encrypted; zip the series without a password", clean(&name))));
+            return Err(zip_err(file, format!("{} is encrypted; zip the folder without a password", clean(&name))));
         }
         total = total.saturating_add(e.size());
         out.push(Entry { index, name, size: e.size() });
     }
     if out.len() > MAX_FILES {
-        return Err(zip_err(file, format!("the archive holds {} files, more than the {MAX_FILES} weft reads; zip one series folder only", out.len())));
+        return Err(zip_err(file, format!("the archive holds {} files, more than the {MAX_FILES} weft reads; zip one folder only", out.len())));
     }
     if total > MAX_UNZIPPED_BYTES {
         return Err(zip_err(
             file,
             format!(
-                "the archive would unpack to {} MiB, more than the {} MiB weft unpacks (a zip bomb, or a series too big to import); zip one series, cropped if needed",
+                "the archive would unpack to {} MiB, more than the {} MiB weft unpacks (a zip bomb, or a folder too big to import); zip one folder, a series cropped if needed",
                 total >> 20,
                 MAX_UNZIPPED_BYTES >> 20
             ),
         ));
     }
     if out.is_empty() {
-        return Err(zip_err(file, "the archive holds no files; zip the series folder"));
+        return Err(zip_err(file, "the archive holds no files; zip the folder"));
     }
     Ok(out)
 }
@@ -118,9 +116,9 @@ pub(crate) fn inflate(file: &str, bytes: &[u8], entries: &[Entry], head: Option<
     let mut out = Vec::with_capacity(entries.len());
     for e in entries {
         let shown = clean(&e.name);
-        let entry = zip.by_index(e.index).map_err(|_| {
-            zip_err(file, format!("{shown} cannot be unpacked (unknown compression or damaged); zip the series folder again with plain deflate"))
-        })?;
+        let entry = zip
+            .by_index(e.index)
+            .map_err(|_| zip_err(file, format!("{shown} cannot be unpacked (unknown compression or damaged); zip the folder again with plain deflate")))?;
         let want = match head {
             Some(h) => e.size.min(h as u64),
             None => e.size,
@@ -130,7 +128,7 @@ pub(crate) fn inflate(file: &str, bytes: &[u8], entries: &[Entry], head: Option<
         let got = limited.read_to_end(&mut buf);
         match got {
             Ok(_) if buf.len() as u64 > e.size => {
-                return Err(zip_err(file, format!("{shown} unpacks to more than the {} bytes it declares (a zip bomb?); zip the series folder again", e.size)));
+                return Err(zip_err(file, format!("{shown} unpacks to more than the {} bytes it declares (a zip bomb?); zip the folder again", e.size)));
             }
             Ok(_) if head.is_none() && (buf.len() as u64) < e.size => {
                 return Err(zip_err(file, format!("{shown} unpacks to {} bytes, not the {} it declares; the archive is damaged", buf.len(), e.size)));
@@ -139,7 +137,7 @@ pub(crate) fn inflate(file: &str, bytes: &[u8], entries: &[Entry], head: Option<
             // A head read stops early, before the checksum; a damaged entry is caught by
             // the whole read.
             Err(_) if head.is_some() => {}
-            Err(_) => return Err(zip_err(file, format!("{shown} cannot be unpacked: its data is damaged; zip the series folder again"))),
+            Err(_) => return Err(zip_err(file, format!("{shown} cannot be unpacked: its data is damaged; zip the folder again"))),
         }
         buf.truncate(want as usize);
         out.push((e.name.clone(), buf));

@@ -155,6 +155,35 @@ fn inputs_one_by_one_a_folder_and_settings_in_any_order_make_the_same_gcode() {
     let one_by_one = foam_cli(&dir, "one", &[&["--input", &a, "--input", &b][..], &sets].concat());
     let folder_run = foam_cli(&dir, "folder", &[&["--input", &f][..], &sets].concat());
     let sets_first = foam_cli(&dir, "sets-first", &[&sets[..], &["--input", &a, "--input", &b]].concat());
+    // A zip of the folder (with a file that is not a mesh, left out and said).
+    let zip_path = dir.join("regions.zip");
+    {
+        use std::io::Write;
+        let mut z = zip::ZipWriter::new(std::fs::File::create(&zip_path).unwrap());
+        let stored = zip::write::SimpleFileOptions::default().compression_method(zip::CompressionMethod::Stored);
+        for (name, file) in [("regions/B.stl", folder.join("B.stl")), ("regions/A.stl", folder.join("A.stl"))] {
+            z.start_file(name, stored).unwrap();
+            z.write_all(&std::fs::read(file).unwrap()).unwrap();
+        }
+        z.start_file("regions/readme.txt", stored).unwrap();
+        z.write_all(b"two regions").unwrap();
+        z.finish().unwrap();
+    }
+    let zipped = foam_cli(&dir, "zip", &[&["--input", &format!("regions={}", zip_path.display())][..], &sets].concat());
+    assert!(zipped.0 == folder_run.0, "a zip of the files gives the folder's G-code");
+    let o = weft(&[
+        "run",
+        root().join("examples/foam-dogbone-linear.json").to_str().unwrap(),
+        "--input",
+        &format!("regions={}", zip_path.display()),
+        "--out",
+        dir.join("z.gcode").to_str().unwrap(),
+    ]);
+    assert!(
+        String::from_utf8_lossy(&o.stderr).contains("regions.zip: left out 1 file(s) that are not meshes (regions/readme.txt)"),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
     assert!(one_by_one.0 == folder_run.0 && sets_first.0 == folder_run.0, "the same design however the files come");
     // The second region's V* and H* are in the G-code's report: read back from a run.
     let d = foam_of(&["A.stl", "B.stl"]).with_overrides(&["job.regions.1.v_star=0.35".into(), "job.regions.1.h_star=10".into()]).unwrap();

@@ -774,6 +774,13 @@ fn placed_stage(j: &FoamJob, ctx: &mut Ctx) -> Result<Out<Placed>, Error> {
         if inputs.len() > MAX_REGIONS {
             return Err(Error::NoInput(format!("{} region meshes: a foam takes at most {MAX_REGIONS}", inputs.len())));
         }
+        if let Some(Input::File { name, .. }) =
+            inputs.iter().find(|i| matches!(i, Input::File { name, .. } if name.to_ascii_lowercase().ends_with(".zip"))).filter(|_| !zipped)
+        {
+            return Err(Error::NoInput(format!(
+                "{name} is a zip among other region files: a zip holds all the region meshes, so load it alone (remove the other region files)"
+            )));
+        }
         if zipped {
             items = ctx.mesh_items_of_zip(&SLOTS[0], input)?;
         } else {

@@ -171,6 +171,17 @@ fn inputs_one_by_one_a_folder_and_settings_in_any_order_make_the_same_gcode() {
     }
     let zipped = foam_cli(&dir, "zip", &[&["--input", &format!("regions={}", zip_path.display())][..], &sets].concat());
     assert!(zipped.0 == folder_run.0, "a zip of the files gives the folder's G-code");
+    let mixed = weft(&[
+        "run",
+        root().join("examples/foam-dogbone-linear.json").to_str().unwrap(),
+        "--input",
+        &a,
+        "--input",
+        &format!("regions={}", zip_path.display()),
+        "--out",
+        dir.join("m.gcode").to_str().unwrap(),
+    ]);
+    assert!(!mixed.status.success() && String::from_utf8_lossy(&mixed.stderr).contains("load it alone"), "{}", String::from_utf8_lossy(&mixed.stderr));
     let o = weft(&[
         "run",
         root().join("examples/foam-dogbone-linear.json").to_str().unwrap(),

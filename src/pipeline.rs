@@ -555,14 +555,8 @@ impl<'a> Ctx<'a> {
             Input::File { name, .. } => name.clone(),
             _ => format!("the {} archive", slot.name),
         };
-        let all = volume::unzip(&zip_name, &bytes).map_err(|e| Error::NoInput(e.to_string()))?;
+        let (meshes, left_out) = meshes_of_zip(&zip_name, &bytes).map_err(Error::NoInput)?;
         drop(bytes);
-        let is_mesh = |n: &str| [".stl", ".obj", ".3mf"].iter().any(|x| n.to_ascii_lowercase().ends_with(x));
-        let left_out: Vec<String> = all.iter().filter(|(n, _)| !is_mesh(n)).map(|(n, _)| n.clone()).collect();
-        let meshes: Vec<(String, Vec<u8>)> = all.into_iter().filter(|(n, _)| is_mesh(n)).collect();
-        if meshes.is_empty() {
-            return Err(Error::NoInput(format!("{zip_name} holds no STL, OBJ or 3MF file: zip the mesh files themselves")));
-        }
         let solid = slot.kind.solid();
         let mut out = Vec::with_capacity(meshes.len());
         for (i, (name, entry)) in meshes.iter().enumerate() {
@@ -594,6 +588,21 @@ impl<'a> Ctx<'a> {
         }
         Ok(out)
     }
+}
+
+/// Files as (name, bytes).
+pub type NamedFiles = Vec<(String, Vec<u8>)>;
+
+/// The mesh files of a zip (name order) and the names of the other files in it; refused
+/// when it holds no mesh. Shared by the run and the page's check on loading.
+pub fn meshes_of_zip(zip_name: &str, bytes: &[u8]) -> Result<(NamedFiles, Vec<String>), String> {
+    let all = volume::unzip(zip_name, bytes).map_err(|e| e.to_string())?;
+    let is_mesh = |n: &str| crate::jobs::SlotKind::Mesh.accept().iter().any(|x| n.to_ascii_lowercase().ends_with(x));
+    let (meshes, others): (Vec<_>, Vec<_>) = all.into_iter().partition(|(n, _)| is_mesh(n));
+    if meshes.is_empty() {
+        return Err(format!("{zip_name} holds no STL, OBJ or 3MF file: zip the mesh files themselves"));
+    }
+    Ok((meshes, others.into_iter().map(|(n, _)| n).collect()))
 }
 
 /// The import stage's card: counts, what closing the solid did, the notes.

@@ -337,21 +337,13 @@ impl Session {
             // A zip of region meshes: its mesh files listed now, each read when the job runs.
             SlotKind::Meshes if name.to_ascii_lowercase().ends_with(".zip") => {
                 let listed = match self.files.get(name) {
-                    Some(bytes) => crate::volume::unzip(name, bytes).map_err(|e| e.to_string()),
+                    Some(bytes) => pipeline::meshes_of_zip(name, bytes),
                     None => Err(format!("{name} could not be read; load it again")),
                 };
                 match listed {
-                    Ok(all) => {
-                        let meshes: Vec<&str> = all
-                            .iter()
-                            .map(|(n, _)| n.as_str())
-                            .filter(|n| [".stl", ".obj", ".3mf"].iter().any(|x| n.to_ascii_lowercase().ends_with(x)))
-                            .collect();
-                        if meshes.is_empty() {
-                            self.files.remove(name);
-                            return Err(JsError::new(&format!("{name} holds no STL, OBJ or 3MF file: zip the mesh files themselves")));
-                        }
-                        (format!("a zip of {} mesh(es): {}", meshes.len(), meshes.join(", ")), serde_json::Value::Null)
+                    Ok((meshes, _)) => {
+                        let names: Vec<&str> = meshes.iter().map(|(n, _)| n.as_str()).collect();
+                        (format!("a zip of {} mesh(es): {}", names.len(), names.join(", ")), serde_json::Value::Null)
                     }
                     Err(m) => {
                         self.files.remove(name);

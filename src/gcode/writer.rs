@@ -81,7 +81,8 @@ pub(crate) fn kept_points(path: &Path, dwells: Option<&[f64]>) -> (Vec<bool>, us
         }
     }
     // A short last move joins the one before it.
-    while last > 0 && path.points[last].distance(path.points[n - 1]) < MIN_MOVE_MM && path.points[last].distance(path.points[n - 1]) > 0.0 && !dwell_at(last) {
+    while last > 0 && !dwell_at(last) && (0.0..MIN_MOVE_MM).contains(&path.points[last].distance(path.points[n - 1])) && path.points[last] != path.points[n - 1]
+    {
         keep[last] = false;
         merged += 1;
         last = (0..last).rev().find(|&k| keep[k]).unwrap_or(0);

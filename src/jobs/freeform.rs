@@ -282,7 +282,7 @@ const SLOTS: &[Slot] = &[Slot {
     kind: SlotKind::Frame,
     path: "job.input",
     required: false,
-    doc: "Joints and beams: assembly_instances or conmech JSON, OBJ with line elements, or a CSV of beams (x1 y1 z1 x2 y2 z2, mm).",
+    doc: "Joints and beams: assembly_instances or conmech JSON, OBJ with line elements, a CSV of beams (x1 y1 z1 x2 y2 z2, mm), or a triangle mesh (OBJ faces, STL) whose edges are the beams.",
 }];
 
 const STAGES: &[StageInfo] = &[

@@ -351,6 +351,16 @@ fn paths_report(r: &PathsReport) -> StageReport {
             "",
             "The proven minimum number of paths (half the odd-degree nodes of each connected part, at least one).",
         );
+    let continuous = r.method == Some(crate::paths::Method::Continuous);
+    // What the pairing is, and the problem its certificate is about.
+    let (pairing_label, pairing_hint) = if continuous {
+        (
+            "Deadhead along struts",
+            "Struts walked a second time without extruding. Each piece's walk may start and end anywhere: the fewest possible is the open Chinese postman's optimum.",
+        )
+    } else {
+        ("Pairing", "Straight lines pairing every odd joint of each piece (fewest paths): in circuit order the travel between paths is these lines but one.")
+    };
     for (i, l) in r.layers.iter().enumerate() {
         for (key, label, value, unit, hint) in [
             ("score", "Score", l.score, "", "GIPPO equation 1: higher means longer paths and fewer of them."),
@@ -363,9 +373,22 @@ fn paths_report(r: &PathsReport) -> StageReport {
                 "Equation 3 (optimisation efficiency): length × edges of the long paths over total length × total edges; higher is better.",
             ),
             ("travel", "Travel", l.travel_mm, "mm", "Moves without extruding: into the layer, between paths, and along struts retraced by a continuous walk."),
+            (
+                "free_travel",
+                "Travel through the air",
+                l.free_travel_mm,
+                "mm",
+                "Straight moves without extruding: into the layer, between paths and between pieces.",
+            ),
             ("circuit_travel", "Travel in circuit order", l.circuit_travel_mm, "mm", "The same travel with the paths in the order the optimiser walks them."),
-            ("pairing", "Pairing", l.pairing_mm, "mm", "Length of the odd-joint pairing (euler, continuous): the travel a perfect order would need."),
-            ("travel_per_pairing", "Travel ÷ pairing", ratio(l.travel_mm, l.pairing_mm), "", "Travel over pairing length (0 when there is no pairing)."),
+            ("pairing", pairing_label, l.pairing_mm, "mm", pairing_hint),
+            (
+                "travel_per_pairing",
+                "Travel ÷ pairing",
+                ratio(l.travel_mm, l.pairing_mm),
+                "",
+                "Travel over pairing length (0 when there is no pairing); continuous, one piece: 1 (the travel is the deadhead).",
+            ),
             (
                 "retractions",
                 "Retractions",
@@ -384,17 +407,32 @@ fn paths_report(r: &PathsReport) -> StageReport {
             });
         }
         if l.pairing_mm > 0.0 || l.pairing_lower_bound_mm > 0.0 {
-            let hint = if l.pairing_optimal {
-                "Joining the odd joints: 0 % means provably the shortest possible (solved exactly)."
+            let problem = if continuous {
+                "the fewest mm of struts walked twice by open walks that print every strut once (open Chinese postman, per piece)"
             } else {
-                "Joining the odd joints: at most this far above the shortest possible (pairing ÷ a proven lower bound); solved quickly because an exact solve was estimated over the time budget."
+                "the shortest straight lines pairing every odd joint of each piece (minimum-weight perfect matching)"
+            };
+            let hint = if l.deadhead_added_mm > 0.0 {
+                format!(
+                    "Above {problem}, by choice: the walks' ends take {:.2} mm more struts to save {:.2} mm of travel in all (struts and air).",
+                    l.deadhead_added_mm, l.between_saved_mm
+                )
+            } else if l.pairing_optimal {
+                format!("0 % means provably {problem} (solved exactly, lengths to the nanometre).")
+            } else {
+                format!("At most this far above {problem} (÷ a proven lower bound); solved quickly because an exact solve was estimated over the time budget.")
             };
             report.metrics.push(crate::report::Metric {
                 key: "pairing_gap".into(),
-                label: if l.pairing_optimal { "Pairing: optimal, gap".into() } else { "Pairing: proven within".into() },
+                label: match (l.pairing_optimal, continuous) {
+                    (true, true) => "Deadhead: optimal, gap".into(),
+                    (true, false) => "Pairing: optimal, gap".into(),
+                    (false, true) => "Deadhead: proven within".into(),
+                    (false, false) => "Pairing: proven within".into(),
+                },
                 value: (l.pairing_gap - 1.0) * 100.0,
                 unit: "%".into(),
-                hint: hint.into(),
+                hint,
                 group_index: Some(i),
             });
         }
@@ -443,15 +481,16 @@ fn paths_report(r: &PathsReport) -> StageReport {
             "Lower bound",
             "Paths",
             "Score",
-            "Pairing",
-            "Pairing quality",
-            "Pairing bound",
+            if continuous { "Deadhead" } else { "Pairing" },
+            if continuous { "Deadhead quality" } else { "Pairing quality" },
+            if continuous { "Deadhead bound" } else { "Pairing bound" },
             "Travel",
+            "Through the air",
             "Travel ÷ pairing",
             "Retractions",
         ]
         .iter()
-        .zip(["", "", "", "", "", "", "mm", "", "mm", "mm", "", ""])
+        .zip(["", "", "", "", "", "", "mm", "", "mm", "mm", "mm", "", ""])
         .map(|(label, unit)| Column { label: (*label).into(), unit: unit.into() })
         .collect(),
         rows: r
@@ -471,6 +510,7 @@ fn paths_report(r: &PathsReport) -> StageReport {
                     l.pairing_quality().into(),
                     serde_json::json!((l.pairing_lower_bound_mm * 100.0).round() / 100.0),
                     serde_json::json!((l.travel_mm * 100.0).round() / 100.0),
+                    serde_json::json!((l.free_travel_mm * 100.0).round() / 100.0),
                     serde_json::json!((ratio(l.travel_mm, l.pairing_mm) * 1000.0).round() / 1000.0),
                     l.retractions.into(),
                 ],

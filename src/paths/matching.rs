@@ -32,15 +32,23 @@ const ALL_PAIRS_BELOW: usize = 48;
 /// Candidate generator: candidate pairs `(cost, i, j)` among the given active items.
 pub type Candidates<'a> = dyn FnMut(&[usize]) -> Vec<(f64, usize, usize)> + 'a;
 
+/// A heuristic pairing: every item's partner and the pair's cost, and the first round's
+/// candidates (every item active: what [`dual_lower_bound`] needs).
+pub struct Heuristic {
+    /// Every item's partner.
+    pub partner: Vec<usize>,
+    /// The cost of every item's pair.
+    pub pair_cost: Vec<f64>,
+    /// The first round's candidate pairs `(cost, i, j)`.
+    pub first: Vec<(f64, usize, usize)>,
+    /// Every candidate pair seen (the improvement step's neighbours).
+    pub seen: Vec<(f64, usize, usize)>,
+}
+
 /// Pairs `n` (even) items. `candidates(active)` returns candidate pairs `(cost, i, j)` among
 /// the `active` items; `cost(i, j, limit)` returns the cost of a pair when it is below `limit`
-/// (else `None`) for the improvement step. Returns every item's partner and the first round's
-/// candidates (every item active: what [`dual_lower_bound`] needs).
-pub fn min_pairing(
-    n: usize,
-    candidates: &mut Candidates<'_>,
-    cost: &mut dyn FnMut(usize, usize, f64) -> Option<f64>,
-) -> (Vec<usize>, Vec<(f64, usize, usize)>) {
+/// (else `None`) for the improvement step ([`improve_pairing`]).
+pub fn min_pairing(n: usize, candidates: &mut Candidates<'_>, cost: &mut dyn FnMut(usize, usize, f64) -> Option<f64>) -> Heuristic {
     const NONE: usize = usize::MAX;
     let mut partner = vec![NONE; n];
     let mut pcost = vec![0.0f64; n];
@@ -80,10 +88,26 @@ pub fn min_pairing(
             break;
         }
     }
+    improve_pairing(n, &mut partner, &mut pcost, &all, cost);
+    Heuristic { partner, pair_cost: pcost, first: first.unwrap_or_default(), seen: all }
+}
 
+/// 2-opt pair swaps on a pairing of `n` items (`partner`, each pair's cost `pcost`): for a pair
+/// (a, b) and a neighbour c of a (from `pairs`) paired with d, re-pair as (a, c), (b, d) when
+/// that is shorter, until no swap helps ([`MAX_PASSES`] at most). `cost(i, j, limit)` as in
+/// [`min_pairing`]; a pair it answers `None` for is never made.
+pub fn improve_pairing(
+    n: usize,
+    partner: &mut [usize],
+    pcost: &mut [f64],
+    pairs: &[(f64, usize, usize)],
+    cost: &mut dyn FnMut(usize, usize, f64) -> Option<f64>,
+) {
+    const NONE: usize = usize::MAX;
+    let all = pairs;
     // Neighbour lists (CSR) from every candidate seen.
     let mut start = vec![0usize; n + 1];
-    for &(_, i, j) in &all {
+    for &(_, i, j) in all {
         start[i + 1] += 1;
         start[j + 1] += 1;
     }
@@ -92,7 +116,7 @@ pub fn min_pairing(
     }
     let mut fill = start.clone();
     let mut nbr = vec![0usize; start[n]];
-    for &(_, i, j) in &all {
+    for &(_, i, j) in all {
         nbr[fill[i]] = j;
         fill[i] += 1;
         nbr[fill[j]] = i;
@@ -142,7 +166,6 @@ pub fn min_pairing(
             break;
         }
     }
-    (partner, first.unwrap_or_default())
 }
 
 /// A pairing and how good it is provably.
@@ -183,7 +206,7 @@ pub fn pair_points(points: &[DVec2], method: PairingMethod) -> Pairing {
     };
     let optimal = exact.is_some();
     let partner = exact.unwrap_or_else(|| {
-        min_pairing(n, &mut |active| knn_candidates(points, active, CANDIDATES_PER_NODE), &mut |i, j, _| Some(points[i].distance(points[j]))).0
+        min_pairing(n, &mut |active| knn_candidates(points, active, CANDIDATES_PER_NODE), &mut |i, j, _| Some(points[i].distance(points[j]))).partner
     });
     let mut pairs = Vec::with_capacity(n / 2);
     let mut total = 0.0;
@@ -412,6 +435,27 @@ impl Grid {
 /// (index order, a few passes), each capped at half the distance to its k-th candidate so
 /// that non-candidate pairs stay feasible; returns Σ potentials.
 pub fn dual_lower_bound(n: usize, cands: &[(f64, usize, usize)], k: usize) -> f64 {
+    dual_potentials(n, cands, k).iter().sum()
+}
+
+/// A lower bound on the cheapest pairing of all but two of the items (the two left over are
+/// free: an open walk's ends), from feasible potentials `y` of the pairing's dual
+/// ([`dual_potentials`]). Two ends joined to every item at cost 0 have potentials −t, so every
+/// potential is capped at t; the best t is the third largest potential (the bound
+/// Σ min(y, t) − 2t grows while more than two potentials exceed t). 0 with two items or fewer.
+pub fn open_lower_bound(y: &[f64]) -> f64 {
+    if y.len() <= 2 {
+        return 0.0;
+    }
+    let mut sorted = y.to_vec();
+    sorted.sort_by(|a, b| b.total_cmp(a));
+    let t = sorted[2];
+    y.iter().map(|&v| v.min(t)).sum::<f64>() - 2.0 * t
+}
+
+/// Feasible potentials of the pairing's dual (no odd-set constraints) from candidate pairs, as
+/// [`dual_lower_bound`] describes: `y_u + y_v ≤ cost(u, v)` for every pair.
+pub fn dual_potentials(n: usize, cands: &[(f64, usize, usize)], k: usize) -> Vec<f64> {
     // CSR of (partner, cost), one per partner (the smaller cost when found twice).
     let mut start = vec![0usize; n + 1];
     for &(_, i, j) in cands {
@@ -460,7 +504,7 @@ pub fn dual_lower_bound(n: usize, cands: &[(f64, usize, usize)], k: usize) -> f6
             }
         }
     }
-    y.iter().sum()
+    y
 }
 
 /// Coordinate-ascent passes of [`dual_lower_bound`].

@@ -155,9 +155,22 @@ pub struct LayerPaths {
     /// (0 on the first layer), then between paths — straight for free travels, along the
     /// struts for a continuous walk's travelled runs (what the G-code moves).
     pub travel_mm: f64,
+    /// The part of `travel_mm` walked along printed struts without extruding (a continuous
+    /// walk's deadhead), mm.
+    pub strut_travel_mm: f64,
+    /// The part of `travel_mm` moved straight through the air: into the layer, between paths
+    /// and between pieces, mm.
+    pub free_travel_mm: f64,
     /// The same travel with the paths in circuit order (as the method emits them), mm:
     /// `min_travel` is never above it.
     pub circuit_travel_mm: f64,
+    /// Continuous with `min_travel` on a layer of several pieces: deadhead above the fewest
+    /// possible that the walks' ends accept because it shortens the travel between pieces by
+    /// more (`between_saved_mm`), mm; 0 when the ends cost nothing.
+    pub deadhead_added_mm: f64,
+    /// What choosing the walks' ends for the travel between pieces saved, deadhead added
+    /// included, mm.
+    pub between_saved_mm: f64,
     /// Retractions the G-code makes in this layer: free travels (no strut route) at least the
     /// printer's `min_travel_mm` long, 0 with retraction off or a pneumatic printer
     /// ([`crate::gcode::retractions_per_pass`]). They depend on the printer, which [`optimise`]
@@ -165,15 +178,18 @@ pub struct LayerPaths {
     pub retractions: usize,
     /// Duplicate edges collapsed while building the graph.
     pub duplicates_collapsed: usize,
-    /// Total length of the odd-node pairing, mm: euler — the virtual edges (Euclidean);
-    /// continuous — the struts travelled twice (graph distance, duplicates of a strut
-    /// cancelled in pairs, before the longest travelled run is dropped to open the walk);
-    /// 0 for GIPPO.
+    /// Total length of the odd-node pairing, mm. euler: the straight lines pairing *every* odd
+    /// node of a piece (a closed pairing: the paths' free travels in circuit order, one of
+    /// them skipped). continuous: the struts walked without extruding (deadhead), which pair
+    /// all but two odd nodes of a piece (its walk's ends) along the struts. 0 for GIPPO.
     pub pairing_mm: f64,
-    /// A proven lower bound on the shortest possible `pairing_mm` (the exact optimum where
-    /// solved exactly, else a dual bound), mm; 0 for GIPPO.
+    /// A proven lower bound on the shortest possible `pairing_mm`, mm (the exact optimum where
+    /// solved exactly, else a dual bound): euler — the minimum-weight perfect matching of each
+    /// piece's odd nodes by straight distance; continuous — the open Chinese postman's
+    /// deadhead of each piece (walks that start and end anywhere). 0 for GIPPO.
     pub pairing_lower_bound_mm: f64,
-    /// The pairing is provably the shortest (solved exactly, or at its lower bound).
+    /// `pairing_mm` is provably the shortest of the problem `pairing_lower_bound_mm` names
+    /// (solved exactly, lengths to the nanometre, or at its lower bound).
     pub pairing_optimal: bool,
     /// Certified gap: `pairing_mm ÷ pairing_lower_bound_mm` (≥ 1; 1 when optimal or nothing
     /// to pair): the pairing is at most this factor above the optimum.
@@ -194,9 +210,10 @@ impl LayerPaths {
         };
     }
 
-    /// "optimal" or "within x %" (the certified gap), "" when nothing was paired.
+    /// "optimal" or "within x %" (the certified gap), with the reason when deadhead was
+    /// added for the travel between pieces; "" when nothing was paired.
     pub fn pairing_quality(&self) -> String {
-        if self.pairing_mm <= 0.0 && self.pairing_lower_bound_mm <= 0.0 {
+        let base = if self.pairing_mm <= 0.0 && self.pairing_lower_bound_mm <= 0.0 {
             String::new()
         } else if self.pairing_optimal {
             "optimal".into()
@@ -204,6 +221,11 @@ impl LayerPaths {
             format!("within {:.1} %", (self.pairing_gap - 1.0) * 100.0)
         } else {
             "no bound".into()
+        };
+        if self.deadhead_added_mm > 0.0 {
+            format!("{base} (+{:.2} mm of struts for {:.2} mm less travel in all)", self.deadhead_added_mm, self.between_saved_mm)
+        } else {
+            base
         }
     }
 }
@@ -265,7 +287,7 @@ pub fn optimise(layers: &[StrokeLayer], options: &Options, line_width_mm: f64, s
             let end = (li + window).min(n);
             solved.extend(crate::par::map(end - li, &mut |_| {}, |k| solve_layer(&layers[li + k], options, seed, li + k)));
         }
-        let Some(Solved { graph, chains, mut stats, gippo_score }) = solved.pop_front() else { break };
+        let Some(Solved { graph, chains, mut stats, gippo_score, postman }) = solved.pop_front() else { break };
         let layer = &layers[li];
         let mut chains = chains;
         let ends: Vec<[DVec2; 2]> = chains.iter().map(|c| order::printed_ends(c, &graph)).collect();
@@ -287,6 +309,11 @@ pub fn optimise(layers: &[StrokeLayer], options: &Options, line_width_mm: f64, s
             }
             Order::CentreOut => order::sort_directional(chains, &graph, None),
         };
+        if let (Order::MinTravel, Some(first)) = (options.order, &postman) {
+            if chains.len() >= 2 {
+                chains = replan_ends(&graph, first, chains, last_end, options.exact_pairing_seconds, &mut stats);
+            }
+        }
 
         let mut out = Pass::layer(layer.z, layer.height, Vec::new());
         let mut runs = Vec::new();
@@ -314,12 +341,13 @@ pub fn optimise(layers: &[StrokeLayer], options: &Options, line_width_mm: f64, s
                         q = r;
                     }
                 }
-                (_, Some(a)) => stats.travel_mm += a.distance(b),
+                (_, Some(a)) => stats.free_travel_mm += a.distance(b),
                 (_, None) => {}
             }
             cur = Some(p.points.last().expect("path has points").truncate());
         }
-        stats.travel_mm += walked;
+        stats.strut_travel_mm = walked;
+        stats.travel_mm = stats.free_travel_mm + walked;
         stats.circuit_travel_mm += walked;
         if let Some(p) = out.paths.last() {
             last_end = Some(p.points.last().expect("path has points").truncate());
@@ -337,6 +365,30 @@ struct Solved {
     chains: Vec<Chain>,
     stats: LayerPaths,
     gippo_score: Option<f64>,
+    /// Continuous: the walks' pairings, for [`replan_ends`].
+    postman: Option<postman::PostmanPaths>,
+}
+
+/// Continuous walks of a layer of several pieces, in the order `chains` are printed: each piece's
+/// walk re-planned with its ends joined to the travel around it ([`postman::replan`]); kept when
+/// the deadhead plus the straight travel (from `from`, the previous layer's end, and between the
+/// pieces) is shorter, and then said in `stats`.
+fn replan_ends(graph: &Graph, first: &postman::PostmanPaths, chains: Vec<Chain>, from: Option<DVec2>, budget: f64, stats: &mut LayerPaths) -> Vec<Chain> {
+    let links = |chs: &[Chain]| {
+        let ends: Vec<[DVec2; 2]> = chs.iter().map(|c| order::printed_ends(c, graph)).collect();
+        let seq: Vec<(usize, bool)> = (0..chs.len()).map(|i| (i, false)).collect();
+        order::travel_of(&seq, &ends, from)
+    };
+    let re = postman::replan(graph, first, &chains, from, budget);
+    let (before, after) = (links(&chains), links(&re.chains));
+    let saved = first.pairing_mm + before - (re.pairing_mm + after);
+    if saved <= order::GAIN_MM {
+        return chains;
+    }
+    stats.deadhead_added_mm = (re.pairing_mm - first.pairing_mm).max(0.0);
+    stats.between_saved_mm = saved;
+    stats.set_pairing(re.pairing_mm, re.lower_bound_mm, re.optimal);
+    re.chains
 }
 
 /// Builds layer `li`'s graph and covers its edges with the method's chains (GIPPO seeded from
@@ -354,6 +406,7 @@ fn solve_layer(layer: &StrokeLayer, options: &Options, seed: u64, li: usize) -> 
         ..LayerPaths::default()
     };
     let mut gippo_score = None;
+    let mut postman = None;
     let chains = match options.method {
         Method::GippoMax | Method::GippoMin => {
             let mut rng = Pcg64::seed_from_u64(layer_seed(seed, li));
@@ -368,12 +421,14 @@ fn solve_layer(layer: &StrokeLayer, options: &Options, seed: u64, li: usize) -> 
             r.chains
         }
         Method::Continuous => {
-            let r = postman::run(&graph, options.exact_pairing_seconds);
+            let mut r = postman::run(&graph, options.exact_pairing_seconds);
             stats.set_pairing(r.pairing_mm, r.lower_bound_mm, r.optimal);
-            r.chains
+            let chains = std::mem::take(&mut r.chains);
+            postman = Some(r);
+            chains
         }
     };
-    Solved { graph, chains, stats, gippo_score }
+    Solved { graph, chains, stats, gippo_score, postman }
 }
 
 /// GIPPO's RNG seed for layer `index`: the job seed mixed with the layer index (SplitMix64

@@ -5,9 +5,11 @@
 //!   both descending (stable).
 //! * circuit order: the chains as the method emits them (for euler / continuous the walk
 //!   order, where every travel between two paths is one pairing edge).
-//! * [`min_travel`]: never worse than the circuit order. Two candidates — the circuit order
-//!   rotated (either direction) to start nearest the previous layer's end, and a nearest
-//!   neighbour tour over both ends of every chain — are each improved by windowed 2-opt
+//! * [`min_travel`]: up to [`EXACT_CHAINS`] chains, the least travel exactly (a dynamic
+//!   programme over the chains printed). Beyond, never worse than the circuit order: two
+//!   candidates — the circuit order rotated (either direction) to start nearest the previous
+//!   layer's end, and a nearest neighbour tour over both ends of every chain — are each
+//!   improved by windowed 2-opt
 //!   (segment reversal with chain flips) and or-opt (one chain moved, maybe flipped), moves
 //!   accepted only when they shorten the travel; the shorter wins (ties: the circuit one).
 //!   The travel measured is the straight distance from the previous layer's end to the first
@@ -26,7 +28,7 @@ const MAX_PASSES: usize = 16;
 /// Below this many chains left, nearest neighbour scans them all.
 const BRUTE_BELOW: usize = 96;
 /// Smallest improvement a local-search move must make, mm.
-const GAIN_MM: f64 = 1e-9;
+pub(crate) const GAIN_MM: f64 = 1e-9;
 
 /// The paper's order: most segments first, then longest printed length first; stable.
 pub(crate) fn sort_longest_first(chains: &mut [Chain], graph: &Graph) {
@@ -301,11 +303,19 @@ pub(crate) fn min_travel(chains: Vec<Chain>, graph: &Graph, from: Option<DVec2>,
         return chains;
     }
     let ends: Vec<[DVec2; 2]> = chains.iter().map(|c| printed_ends(c, graph)).collect();
-    let mut circuit = best_rotation(&ends, from);
-    improve(&mut circuit, &ends, from);
-    let mut nn = nearest_neighbour(&ends, from.unwrap_or(ends[0][0]));
-    improve(&mut nn, &ends, from);
-    let mut order = if travel_of(&nn, &ends, from) < travel_of(&circuit, &ends, from) - GAIN_MM { nn } else { circuit };
+    let mut order = if m <= EXACT_CHAINS {
+        exact_order(&ends, from)
+    } else {
+        let mut circuit = best_rotation(&ends, from);
+        improve(&mut circuit, &ends, from);
+        let mut nn = nearest_neighbour(&ends, from.unwrap_or(ends[0][0]));
+        improve(&mut nn, &ends, from);
+        if travel_of(&nn, &ends, from) < travel_of(&circuit, &ends, from) - GAIN_MM {
+            nn
+        } else {
+            circuit
+        }
+    };
     if from.is_none() {
         let (first, last) = (order[0], order[m - 1]);
         if hint.distance(ends[last.0][last.1 as usize ^ 1]) < hint.distance(ends[first.0][first.1 as usize]) {
@@ -316,6 +326,64 @@ pub(crate) fn min_travel(chains: Vec<Chain>, graph: &Graph, from: Option<DVec2>,
         }
     }
     apply(chains, order)
+}
+
+/// Up to this many chains, [`min_travel`] finds the least travel exactly ([`exact_order`]).
+pub(crate) const EXACT_CHAINS: usize = 10;
+
+/// The order and directions of the chains with the least travel ([`travel_of`]), exactly: a
+/// dynamic programme over the sets of chains printed (Held–Karp), each state the last chain
+/// and its direction; 2^m · 2m states, for m ≤ [`EXACT_CHAINS`]. Ties: the first found in
+/// index order.
+fn exact_order(ends: &[[DVec2; 2]], from: Option<DVec2>) -> Vec<(usize, bool)> {
+    let m = ends.len();
+    let states = 2 * m;
+    let full = (1usize << m) - 1;
+    let mut best = vec![f64::INFINITY; (full + 1) * states];
+    let mut back = vec![usize::MAX; (full + 1) * states];
+    for i in 0..m {
+        for r in 0..2 {
+            best[(1 << i) * states + 2 * i + r] = link(from, Some(ends[i][r]));
+        }
+    }
+    for mask in 1..=full {
+        for last in 0..states {
+            let here = best[mask * states + last];
+            if !here.is_finite() {
+                continue;
+            }
+            let at = ends[last / 2][1 - last % 2];
+            for j in 0..m {
+                if mask & (1 << j) != 0 {
+                    continue;
+                }
+                let next = mask | (1 << j);
+                for r in 0..2 {
+                    let t = here + at.distance(ends[j][r]);
+                    let slot = next * states + 2 * j + r;
+                    if t < best[slot] {
+                        best[slot] = t;
+                        back[slot] = last;
+                    }
+                }
+            }
+        }
+    }
+    crate::work::add((full + 1) * states * states);
+    let mut last = (0..states).fold(0, |b, k| if best[full * states + k] < best[full * states + b] { k } else { b });
+    let mut mask = full;
+    let mut order = Vec::with_capacity(m);
+    loop {
+        order.push((last / 2, last % 2 == 1));
+        let prev = back[mask * states + last];
+        mask &= !(1 << (last / 2));
+        if prev == usize::MAX {
+            break;
+        }
+        last = prev;
+    }
+    order.reverse();
+    order
 }
 
 /// The chains in `order`, reversed where asked.

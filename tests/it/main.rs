@@ -45,6 +45,7 @@ mod lattice;
 mod lattice_estimate;
 mod lattice_pipeline;
 mod nonplanar;
+mod papers_table;
 mod path_order;
 mod paths;
 mod pipeline;

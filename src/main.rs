@@ -118,6 +118,10 @@ enum Command {
         /// loaded and its surface extracted; a 50 MB PrusaSlicer-style G-code edited.
         #[arg(long)]
         graded: bool,
+        /// Run only the papers' table: each paper's checkable numbers beside weft's, how weft's
+        /// is measured, whether the input is the paper's or weft's stand-in (a Markdown table).
+        #[arg(long)]
+        papers: bool,
         /// Run only these designs, each timed stage by stage (best of 3 runs, no cache): e.g.
         /// the axisymmetric examples.
         #[arg(long, num_args = 1..)]
@@ -755,6 +759,7 @@ fn main() -> ExitCode {
         Command::Bench { scaling: true, .. } => scaling_bench(),
         Command::Bench { design, .. } if !design.is_empty() => design_bench(&design),
         Command::Bench { pairing: true, .. } => weft::bench::pairing::run_all().map(|t| outln!("{t}")),
+        Command::Bench { papers: true, .. } => weft::bench::papers::run_all().map(|t| outln!("{t}")),
         Command::Bench { graded: true, .. } => weft::bench::graded::run_graded().map(|t| outln!("{t}")),
         Command::Bench { triangles, gcode_mb, lattice, cache, .. } => {
             if cache {

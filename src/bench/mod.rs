@@ -35,6 +35,8 @@ pub fn repeat_to(seed: &str, bytes: usize) -> String {
 pub mod designs;
 pub mod graded;
 pub mod pairing;
+#[cfg(not(target_arch = "wasm32"))]
+pub mod papers;
 pub mod scaling;
 
 /// CPU time of the calling thread, seconds (Linux: the scheduler's count in nanoseconds, so

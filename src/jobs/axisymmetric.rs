@@ -1202,7 +1202,7 @@ fn points_report(d: &uniform::Distribution, o: &uniform::Options, width: f64) ->
             if o.grading.is_some() {
                 "In mm, which a graded density spreads on purpose: see the spread against the target below."
             } else {
-                "How much repulsion evened the spacing (the paper: 71.7 %, 71.6 %, 44 % on its three cases)."
+                "How much repulsion evened the spacing, against this run's own seed (the paper: 71.7 % on Ω1, 44 % on Ω3; its Ω2 polygon is not published, so barrel-omega2 is weft's stand-in)."
             },
         )
         .metric("mean", "Mean neighbour distance", m.nn_mean_mm, "mm", "Mean distance to the 2n nearest neighbours after repulsion.")

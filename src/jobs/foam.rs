@@ -7,8 +7,8 @@
 //! where the last ended, [`foam::raster`]), `grade` (pieces of the set length, each with the
 //! pair π of its end point, [`foam::field`], and the VTP numbers of section 3.2.4).
 //!
-//! The report draws the weighting functions, and V*, H*, ΔE/mm and the predicted modulus along
-//! a probe line (the paper's Fig. 6); views show the shared boundaries and each layer's path.
+//! The report draws the weighting functions, and V*, H*, ΔE/mm and the modulus the calibration
+//! (by default the paper's fit) gives at each V* along a probe line (the paper's Fig. 6); views show the shared boundaries and each layer's path.
 //!
 //! Beyond the paper: a region's V* may be set by a target modulus through the calibration of
 //! [`foam::stiffness`]; a transition may keep the modulus linear exactly
@@ -144,7 +144,8 @@ pub struct Options {
     pub many_neighbours: bool,
     /// How a point near several boundaries of its region takes its pair.
     pub junction: Junction,
-    /// The modulus of the foam against V* (regions set by a modulus, the predicted modulus).
+    /// The modulus of the foam against V* (regions set by a modulus, the modulus plotted along
+    /// the probe): by default the paper's fit, applied, not measured.
     pub calibration: Calibration,
     /// Axis of the probe line (through the middle of the part).
     pub probe_axis: ProbeAxis,
@@ -416,7 +417,7 @@ fn indexed_rows() -> Vec<Row> {
                     1e-6,
                     1e6,
                     0.1,
-                    "Target compressive modulus; weft picks the V* that prints it (the paper's TPU: 1.01 to 22.68 kPa).",
+                    "Target compressive modulus; weft picks the V* the calibration gives for it (the paper's fit for its TPU: 1.01 to 22.68 kPa).",
                 ),
                 "set_by",
                 "modulus",
@@ -442,7 +443,7 @@ fn indexed_rows() -> Vec<Row> {
                 &[
                     "w = x + ½: V* and H* change at a constant rate.",
                     "w = 4(1 − s)x³ + s·x + ½: slope s at the boundary (1.5: smooth ends).",
-                    "The paper's fit: the foam's modulus, not V*, changes linearly (it misses the ends a little).",
+                    "The paper's fitted inverse: its foam's measured modulus, not V*, changed linearly (it misses the ends a little).",
                     "w = ∛(x/4) + ½: steep at the boundary, flat at the ends.",
                     "w = sin(πx)/2 + ½: smooth at both ends.",
                     "The modulus changes linearly from region to region by the calibration, exact at both ends.",
@@ -1288,7 +1289,10 @@ fn grade_report(
             // Outside the calibration's sweep the fit is extrapolated: the title says so.
             let (lo, hi) = (cal.v_star_from.min(cal.v_star_to), cal.v_star_from.max(cal.v_star_to));
             let outside = vs.iter().any(|&v| v < lo * (1.0 - 1e-9) || v > hi * (1.0 + 1e-9));
-            let title = if outside { format!("Predicted modulus (extrapolated outside V* {lo}–{hi})") } else { "Predicted modulus".to_string() };
+            // The calibration (by default the paper's own fit) applied to V*: not a measurement,
+            // so it cannot confirm the paper's moduli; the title says so.
+            let fit = "Modulus by the calibration's fit at each V* (not measured)";
+            let title = if outside { format!("{fit}, extrapolated outside V* {lo}–{hi}") } else { fit.to_string() };
             r.plots.push(plot("probe_modulus", &title, "E", "kPa", ms));
         }
     }

@@ -41,7 +41,7 @@ mod graph;
 mod grids;
 mod honeycomb;
 mod penrose;
-mod pores;
+pub(crate) mod pores;
 mod reentrant;
 mod snub_square;
 mod thumbnail;

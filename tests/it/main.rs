@@ -46,6 +46,7 @@ mod lattice_estimate;
 mod lattice_pipeline;
 mod nonplanar;
 mod optimality;
+mod papers_table;
 mod path_order;
 mod paths;
 mod pipeline;

@@ -1,6 +1,7 @@
 // Browser checks of the lattice job (GIPPO print paths): example from the menu, the paths
 // stage card's score plot and path classes drawn by the generic plot code from the run
-// report, 3D preview, the layer2d view through inspect, euler's minimal paths, share link vs
+// report, 3D preview, the layer2d view through inspect, euler's minimal paths, continuous's
+// certificate named (the open postman's deadhead), share link vs
 // the native CLI, pattern thumbnails. Called by run.mjs with its browser, server and check() so the summary line
 // counts these too:
 //
@@ -146,6 +147,36 @@ export async function latticeChecks({ browser, baseUrl, weftBin = process.env.WE
       const bad = metrics.quality.filter((q) => !/^(optimal|within \d+(\.\d)? %)$/.test(q));
       if (bad.length) throw new Error(`pairing quality cells that say neither "optimal" nor "within x %": ${bad.slice(0, 5).join(" | ")}`);
       return `${metrics.paths} paths = bound${metrics.line ? "" : " (no iteration plot for euler)"}; pairing per layer: ${[...new Set(metrics.quality)].join(", ")}`;
+    });
+
+    await check(n++, "lattice: optimiser continuous → the paths card names what is optimal (deadhead of open walks) and shows travel through the air apart", async () => {
+      await waitReady(page);
+      const before = await page.evaluate(() => window.weft.resultCount);
+      await page.selectOption("#f-job-paths-method", JSON.stringify("continuous"));
+      await page.click("#slice");
+      await waitResult(page, before, "running with continuous", jobTimeout);
+      const card = await page.evaluate(() => {
+        const el = document.querySelector('#report .stage-card[data-stage="paths"]');
+        const item = (key) => {
+          const dd = el?.querySelector(`.metrics [data-key="${key}"]`);
+          return dd ? { label: dd.querySelector("dt")?.textContent ?? "", value: dd.querySelector("dd")?.firstChild?.textContent ?? "", hint: dd.getAttribute("title") ?? dd.querySelector("[title]")?.getAttribute("title") ?? "" } : null;
+        };
+        return { gap: item("pairing_gap"), pairing: item("pairing"), air: item("free_travel"), ratio: item("travel_per_pairing"), text: el?.textContent ?? "" };
+      });
+      if (!card.gap || !card.pairing || !card.air || !card.ratio) throw new Error(`the paths card lacks pairing_gap / pairing / free_travel / travel_per_pairing: ${JSON.stringify(card).slice(0, 400)}`);
+      if (!/Deadhead: optimal/.test(card.gap.label)) throw new Error(`the certificate reads "${card.gap.label}", not "Deadhead: optimal"`);
+      if (!/Deadhead along struts/.test(card.pairing.label)) throw new Error(`the pairing metric reads "${card.pairing.label}"`);
+      if (!/open Chinese postman/.test(card.text + card.gap.hint + card.pairing.hint)) throw new Error("nothing on the card names the open Chinese postman");
+      if (Number(card.ratio.value) !== 1) throw new Error(`travel ÷ pairing ${card.ratio.value} on one piece, not 1`);
+      await page.evaluate(() => document.querySelector('#report .stage-card[data-stage="paths"]')?.scrollIntoView());
+      for (const [w, h, name] of [[1280, 800, "lattice-continuous-desktop.png"], [390, 844, "lattice-continuous-phone.png"]]) {
+        await page.setViewportSize({ width: w, height: h });
+        await page.waitForTimeout(300);
+        await page.evaluate(() => document.querySelector('#report .stage-card[data-stage="paths"]')?.scrollIntoView());
+        await page.screenshot({ path: join(out, name) });
+      }
+      await page.setViewportSize({ width: 1400, height: 900 });
+      return `${card.gap.label} ${card.gap.value} %; ${card.pairing.label} ${card.pairing.value} mm; travel through the air ${card.air.value} mm`;
     });
 
     await check(n++, "lattice: share link in a fresh browser gives the same G-code (SHA-256) as `weft run design.json`", async () => {

@@ -418,7 +418,7 @@ fn paths_report(r: &PathsReport) -> StageReport {
                     l.deadhead_added_mm, l.between_saved_mm
                 )
             } else if l.pairing_optimal {
-                format!("0 % means provably {problem} (solved exactly, lengths to the nanometre).")
+                format!("0 % means provably {problem}: solved exactly, lengths to the nanometre.")
             } else {
                 format!("At most this far above {problem} (÷ a proven lower bound); solved quickly because an exact solve was estimated over the time budget.")
             };

@@ -58,7 +58,8 @@ pub enum Method {
     GippoMin,
     /// Minimum number of paths (Euler trails after pairing odd nodes).
     Euler,
-    /// One nozzle path per component (Chinese postman; pairing edges travelled, not printed).
+    /// One nozzle path per component (the open Chinese postman: the fewest mm of struts
+    /// travelled twice, not printed, by a walk that may start and end anywhere).
     Continuous,
 }
 
@@ -68,9 +69,11 @@ pub enum Method {
 pub enum Order {
     /// Longest to shortest (the paper's).
     LongestFirst,
-    /// Travel-minimising, never more travel than [`Order::Circuit`]: the circuit order
-    /// rotated to start near the previous layer's end, or a nearest-neighbour tour, improved
-    /// by 2-opt and or-opt, the shorter kept.
+    /// Travel-minimising: up to 10 paths a layer the least travel of every order and direction
+    /// (exactly); beyond, never more travel than [`Order::Circuit`] (the circuit order rotated
+    /// to start near the previous layer's end, or a nearest-neighbour tour, improved by 2-opt
+    /// and or-opt, the shorter kept). Continuous walks of several pieces also re-choose their
+    /// ends for the travel between pieces.
     MinTravel,
     /// As the method emits the paths (for euler / continuous the walk order: each travel is
     /// one pairing edge).
@@ -467,7 +470,7 @@ pub const FIELDS: &[Field] = &[
         other("order", "Paths", "Path order", Kind::Choice, &["longest_first", "min_travel", "circuit", "direction", "centre_out"], "The order the paths are printed in."),
         &[
             "Longest paths first, as the paper prints them.",
-            "Each next path starts near where the last ended, and each layer near where the one below ended: the least travel (never more than the circuit order).",
+            "Each next path starts near where the last ended, and each layer near where the one below ended: the least travel possible up to 10 paths a layer, never more than the circuit order beyond.",
             "In the order the optimiser walks them (euler and continuous: one pairing edge between paths).",
             "Swept along a direction you choose (the angle below): every path printed that way.",
             "From the centre of each layer outwards.",

@@ -22,6 +22,7 @@
 pub mod analyze;
 pub mod axisym;
 pub mod budget;
+pub mod catalog;
 pub mod clock;
 pub mod design;
 pub mod gcode;
@@ -42,6 +43,7 @@ pub mod scaffold;
 pub mod settings;
 pub mod slice;
 pub mod source;
+pub mod stage;
 pub mod testgen;
 pub mod thread_cache;
 pub mod thumbnail;

@@ -4,7 +4,8 @@ use clap::{Parser, Subcommand};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
-use weft::design::{share, Design};
+use weft::catalog::share;
+use weft::design::Design;
 use weft::jobs::Registry;
 use weft::pipeline::{self, Files, RunOptions};
 

@@ -207,7 +207,7 @@ mod tests {
         let far = Counted(bytes.clone(), Default::default());
         assert!(read_all(&far).unwrap().as_ref() == bytes.as_slice());
         assert_eq!(far.1.get(), 3, "three reads for two whole pieces and a rest");
-        assert_eq!(crate::pipeline::Key::of_source(&far).unwrap(), crate::pipeline::Key::of_bytes(&bytes));
+        assert_eq!(crate::stage::Key::of_source(&far).unwrap(), crate::stage::Key::of_bytes(&bytes));
         assert_eq!(far.1.get(), 6);
     }
 }

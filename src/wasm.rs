@@ -8,7 +8,8 @@
 //! transfers (not copies) to the page.
 
 use crate::analyze::{self, Preview};
-use crate::design::{schema, share, Design, Input};
+use crate::catalog::{schema, share};
+use crate::design::{Design, Input};
 
 use crate::gcode_edit;
 use crate::import::group;

@@ -26,9 +26,9 @@ use crate::axisym::platform::{self, Platform, Profile};
 use crate::axisym::{dynamics, surface::Surface, tour, uniform};
 use crate::design::{Design, Input};
 use crate::geom::{DVec3, Feature, Pass, PassKind, Path, PointData, Toolpath};
-use crate::pipeline::{Ctx, Error, Out};
 use crate::report::{Axis, Plot, PlotKind, Series, StageReport};
 use crate::settings::{choice_docs, int, mount, num, other, points, rings, when, Field, Kind as FieldKind, Problem, Row};
+use crate::stage::{Ctx, Error, Out};
 use serde::{Deserialize, Serialize};
 
 /// The printer profile a design switching to this kind gets when its machine cannot tilt.
@@ -863,7 +863,7 @@ fn path_stage(
 /// The tool axes along each layer's tour, one unit axis per pose (the normals, or smoothed within the tilt) and what
 /// they ask of the machine at the infill speed, before and after smoothing: the largest speed
 /// and acceleration of each axis over the layers (each layer is its own pass).
-fn axes_stage(j: &AxisymJob, ctx: &mut Ctx, tours: &[&tour::Tour], keys: &[crate::pipeline::Key]) -> Result<Out<Vec<Vec<[f64; 3]>>>, Error> {
+fn axes_stage(j: &AxisymJob, ctx: &mut Ctx, tours: &[&tour::Tour], keys: &[crate::stage::Key]) -> Result<Out<Vec<Vec<[f64; 3]>>>, Error> {
     let design = ctx.design;
     let (h, feed, machine) = (j.layer_height_mm, design.speeds.infill_mm_s, &design.printer.machine);
     ctx.stage("axes", "axes", &(&j.tool_axis, h, feed, machine), keys, |_| {

@@ -25,10 +25,10 @@ use crate::foam::regions::{self, Regions};
 use crate::foam::stiffness::Calibration;
 use crate::foam::{Junction, Pair, Process, Transition, Weighting};
 use crate::geom::{DVec2, DVec3, Feature, Mesh, Pass, PassKind, Path, PointData, PointFlow, Polygon, Toolpath};
-use crate::pipeline::{Ctx, Error, Out};
 use crate::report::{Axis, Metric, Plot, PlotKind, Series, StageReport};
 use crate::settings::{mount, num, other, percent, when, Field as Row0, Kind as FieldKind, Problem, Row};
 use crate::slice;
+use crate::stage::{Ctx, Error, Out};
 use serde::{Deserialize, Serialize};
 
 /// Most regions a foam may have (the form shows this many).
@@ -797,7 +797,7 @@ fn placed_stage(j: &FoamJob, ctx: &mut Ctx) -> Result<Out<Placed>, Error> {
             return Err(Error::NoInput(format!("{} region meshes: a foam takes at most {MAX_REGIONS}", items.len())));
         }
     }
-    let keys: Vec<crate::pipeline::Key> = items.iter().map(|(_, m)| m.key).collect();
+    let keys: Vec<crate::stage::Key> = items.iter().map(|(_, m)| m.key).collect();
     let names: Vec<&str> = items.iter().map(|(n, _)| n.as_str()).collect();
     ctx.stage_kept("place", "place", &(&j.model, &names), &keys, |_| {
         let (names, mut meshes): (Vec<String>, Vec<Mesh>) = match &j.model {

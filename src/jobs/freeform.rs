@@ -23,9 +23,9 @@ use crate::freeform::plan::{self, Assembly, Cost, Mode, Plan, Unconstructable};
 use crate::freeform::precedence::{self, Constraints, Nozzle};
 use crate::freeform::wireframe::{self, Ground, Wireframe};
 use crate::geom::{DVec3, Feature, Pass, PassKind, Path, PointData, PointFlow, Toolpath};
-use crate::pipeline::{Ctx, Error, Out};
 use crate::report::{Axis, Column, Plot, PlotKind, Row as TableRow, Series, StageReport, Table};
 use crate::settings::{mount, num, other, Field as Row0, Kind as FieldKind, Problem, Row};
+use crate::stage::{Ctx, Error, Out};
 use serde::{Deserialize, Serialize};
 
 /// Default beam diameter, mm (the paper's isomalt filaments: 100–200 µm).

@@ -23,12 +23,12 @@ use crate::design::{Design, Input};
 use crate::gcode_edit;
 use crate::geom::{DVec3, Mesh};
 use crate::isosurface;
-use crate::pipeline::{Ctx, Error, Out};
 use crate::report::{Axis, Column, Plot, PlotKind, Row as TableRow, Series, StageReport, Table};
 use crate::scaffold::{self, grade, Calibration, Cell, LayerStat, Limit};
 use crate::settings::{choice_docs, mount, num, other, percent, points, vec3, when, Field, Kind as FieldKind, Problem, Row};
 use crate::slice::{self, InfillPattern};
 use crate::source::ByteSource;
+use crate::stage::{Ctx, Error, Out};
 use crate::volume::{self, Axis as SliceAxis, Roi, Volume};
 use serde::{Deserialize, Serialize};
 use std::sync::Arc;
@@ -1024,7 +1024,7 @@ fn compare(
         .map(|r| r.layers)
         .unwrap_or_default();
     let design = ctx.design;
-    let writer = crate::pipeline::writer_options(design);
+    let writer = crate::stage::writer_options(design);
     // G-code point = volume point + placement offset + the bed's origin offset.
     let to_volume = -(offset + crate::gcode::bed_offset(&writer));
     let options = gcode_edit::Options {

@@ -13,10 +13,10 @@ use crate::geom::StrokeLayer;
 use crate::lattice::{self, Domain, LayerDomain};
 use crate::nonplanar;
 use crate::paths::{self, PathsReport};
-use crate::pipeline::{Ctx, Error, Out};
 use crate::report::{Axis, Column, Plot, PlotKind, Row as TableRow, Series, StageReport, Table};
 use crate::settings::{mount, other, widget, Field, Kind as FieldKind, Problem, Row};
 use crate::slice;
+use crate::stage::{Ctx, Error, Out};
 use serde::{Deserialize, Serialize};
 
 /// Settings of a `lattice` job.
@@ -271,9 +271,9 @@ impl Kind for LatticeKind {
 
 /// The lattice strokes of every layer of a lattice design (for `export-stl` and benchmarks):
 /// the same stages as a run, without a cache.
-pub fn lattice_strokes(design: &Design, files: &crate::pipeline::Files) -> Result<Vec<StrokeLayer>, Error> {
+pub fn lattice_strokes(design: &Design, files: &crate::stage::Files) -> Result<Vec<StrokeLayer>, Error> {
     let j: LatticeJob = design.job.settings().ok_or_else(|| Error::BadJob(format!("a {} job has no lattice", design.job.kind())))?;
-    let mut cache = crate::pipeline::Cache::disabled();
+    let mut cache = crate::stage::Cache::disabled();
     let mut quiet = |_: &str, _: f32| {};
     let mut ctx = Ctx::new(design, files, &mut cache, &mut quiet);
     let out = strokes(&j, &mut ctx)?;

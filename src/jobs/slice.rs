@@ -4,9 +4,9 @@ use super::{Kind, Product, Slot, SlotKind, StageInfo};
 use crate::budget::Estimate;
 use crate::design::Input;
 use crate::geom::shapes::{self, Shape};
-use crate::pipeline::{Ctx, Error};
 use crate::settings::{mount, Row};
 use crate::slice;
+use crate::stage::{Ctx, Error};
 use serde::{Deserialize, Serialize};
 
 /// Settings of a `slice` job.

@@ -6,7 +6,7 @@
 
 use rand_core::{Rng, SeedableRng};
 use rand_pcg::Pcg64;
-use weft::design::share;
+use weft::catalog::share;
 use weft::gcode::{expand_template, MAX_EXPANDED_BYTES};
 use weft::testgen::design as gen;
 use weft::Design;

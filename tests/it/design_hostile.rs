@@ -1,5 +1,5 @@
 //! Hostile strings in what the G-code writer is given: names cannot start a G-code line,
-//! templates cannot blow up. A design refuses such names already (`design::schema`); the writer
+//! templates cannot blow up. A design refuses such names already (`catalog::schema`); the writer
 //! is also called with options built in code, so it keeps names on one line itself.
 
 use weft::gcode::{write_gcode, Error, Options, MAX_EXPANDED_BYTES, MAX_TEMPLATE_BYTES};

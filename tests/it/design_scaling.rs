@@ -4,7 +4,8 @@
 //! and checks it against linear growth; a quadratic cost gives about 16.
 
 use crate::work::{assert_linear, work};
-use weft::design::{share, Design};
+use weft::catalog::share;
+use weft::design::Design;
 use weft::gcode::{expand_template, MAX_TEMPLATE_BYTES};
 use weft::testgen::design as gen;
 

@@ -4,7 +4,8 @@
 //! surface STL.
 
 use std::path::PathBuf;
-use weft::design::{share, Design, Input};
+use weft::catalog::share;
+use weft::design::{Design, Input};
 use weft::geom::DVec3;
 use weft::pipeline::{self, Files, RunOptions};
 use weft::testgen::dicom::{bone_phantom, write_series, zip_files, SeriesOptions};

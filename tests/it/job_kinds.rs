@@ -3,7 +3,8 @@
 
 use serde::{Deserialize, Serialize};
 use weft::budget::Estimate;
-use weft::design::{schema, Design, Input};
+use weft::catalog::schema;
+use weft::design::{Design, Input};
 use weft::geom::{DVec3, Feature, Pass, PassKind, Path, PointData, PointFlow, Toolpath};
 use weft::jobs::{Inspection, Kind, Product, Registry, Shape, Slot, SlotKind, StageInfo, ViewInfo};
 use weft::pipeline::{self, Cache, Ctx, Error, Files, RunOptions};

@@ -12,6 +12,7 @@ mod analyze_basic;
 mod analyze_fixtures;
 mod analyze_fuzz;
 mod analyze_hostile;
+mod architecture;
 mod axisym_job;
 mod axisym_tour;
 mod cli;

@@ -2,7 +2,8 @@
 //! stage's own validator accept and refuse exactly the same values.
 
 use serde_json::Value;
-use weft::design::{schema, Design};
+use weft::catalog::schema;
+use weft::design::Design;
 use weft::jobs::Registry;
 use weft::settings::{Field, Kind};
 

@@ -3,8 +3,8 @@
 //! slots and views, and the menus' default values. [`validate`] checks a design with the same
 //! rows plus each job kind's own rules.
 
-use super::share::MAX_EMBEDDED_CHARS;
-use super::{Design, Input, Problem, MAX_DESCRIPTION_BYTES, MAX_FILE_NAME_BYTES, MAX_INPUT_FILES, MAX_NAME_BYTES};
+use crate::design::share::MAX_EMBEDDED_CHARS;
+use crate::design::{Design, Input, Problem, MAX_DESCRIPTION_BYTES, MAX_FILE_NAME_BYTES, MAX_INPUT_FILES, MAX_NAME_BYTES};
 use crate::geom::shapes::Shape;
 use crate::geom::Feature;
 use crate::jobs::{Registry, Slot, StageInfo, ViewInfo};
@@ -165,7 +165,7 @@ pub fn schema(registry: &Registry) -> Schema {
         })
         .collect();
     let printer_presets = crate::gcode::presets::presets();
-    Schema { version: super::DESIGN_VERSION, fields: rows(registry), features, job_kinds, builtin_shapes, patterns, flavors, printer_presets }
+    Schema { version: crate::design::DESIGN_VERSION, fields: rows(registry), features, job_kinds, builtin_shapes, patterns, flavors, printer_presets }
 }
 
 /// The schema as JSON (the CLI's `weft schema`, tests).

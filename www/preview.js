@@ -12,219 +12,35 @@
 // (Fit, top, front, iso views); its near and far planes follow the part's bounding sphere on
 // every frame, and the zoom is limited to the part's scale, so zoom never clips the part.
 // Feature names and colours come from the schema (setFeatures).
+// The parts: preview-gl.js (shaders, data textures), preview-colors.js (colour modes, legend),
+// preview-camera.js (plate, framing, clipping).
 import * as THREE from "./vendor/three.module.js";
 import { OrbitControls } from "./vendor/OrbitControls.js";
+import * as Colors from "./preview-colors.js";
+import * as Camera from "./preview-camera.js";
+import { DEFAULT_WIDTH, LINE_FRAGMENT, LINE_VERTEX, STILL_TUBE_LIMIT, TUBE_FRAGMENT, TUBE_LIMIT, TUBE_VERTEX, dotTexture, segmentGeometry, segmentTexture, textureArray } from "./preview-gl.js";
+import { UNKNOWN_COLOR, hexRgb } from "./preview-colors.js";
+import { VIEWS, boundsOf, farthestFrom } from "./preview-camera.js";
+
+export { STILL_TUBE_LIMIT, TUBE_LIMIT };
 
 // Colours are given in sRGB and drawn as they are: no colour management.
 THREE.ColorManagement.enabled = false;
 
 const BACKGROUND = 0x1f232a;
 const DEFAULT_BED = [200, 200, 200];
-const UNKNOWN_COLOR = [190, 190, 190];
 const TRAVEL_COLOR = 0x5aa0ff;
 const START_COLOR = 0xffffff;
 const AXIS_COLOR = 0xf2f2f2;
 /** Size of a path-start marker, CSS pixels. */
 const START_SIZE_PX = 7;
 
-/** 256-entry "turbo"-like ramp (blue → green → yellow → red), sRGB bytes. */
-/** Colour modes drawn on the colour ramp: preview buffer, legend label and unit. */
-const RAMP_MODES = {
-  flow: { key: "flow", label: "flow", unit: "mm³/s", title: "volumetric flow, mm³/s" },
-  e_per_mm: { key: "ePerMm", label: "ΔE/mm", unit: "mm/mm", title: "filament fed per mm of travel (ΔE ÷ length), mm/mm" },
-  speed: { key: "speed", label: "speed", unit: "mm/s", title: "feed rate, mm/s (for a VTP foam: V* × the thread's speed)" },
-};
-
-const RAMP = buildRamp();
-
-/**
- * Over this many extrusion segments the preview draws lines (lit by their direction, darker
- * with depth) while the camera moves, and tubes again once it rests (REST_MS): the count where
- * orbiting tubes drops under 10 frames a second in headless Chromium with SwiftShader
- * (tests/e2e/preview-bench.mjs; ARCHITECTURE.md, "The 3D preview"). `setStyle` overrides it.
- */
-export const TUBE_LIMIT = 10000;
-/** Over this many segments, lines at rest too: one frame of tubes takes over a second there. */
-export const STILL_TUBE_LIMIT = 150000;
 /** Tubes come back this long after the camera stops (ms). */
 const REST_MS = 250;
 /** Vertical field of view, degrees. */
 const FOV = 30;
-/** Fit: the part's projection spans this fraction of the canvas in its limiting direction. */
-const FILL = 0.86;
-/** Tube width (mm) when the result has no width per segment. */
-const DEFAULT_WIDTH = 0.45;
-/** Directions from the target to the camera of the camera buttons (z up). */
-const VIEWS = {
-  iso: new THREE.Vector3(-0.55, -1, 0.75).normalize(),
-  top: new THREE.Vector3(0, -1e-3, 1).normalize(), // a hair to the front: +y is up on screen
-  front: new THREE.Vector3(0, -1, 0),
-};
 /** Keys on the focused canvas (shown in the buttons' titles and aria-keyshortcuts). */
 const CAMERA_KEYS = { f: "fit", Home: "fit", 1: "top", 2: "front", 3: "iso" };
-
-// One light fixed to the camera (upper left, in front), a weak fill from the lower right and a
-// small highlight; colours are sRGB bytes, shaded as they are (no colour management).
-const LIGHTS = /* glsl */ `
-const vec3 KEY = vec3(-0.4082, 0.5443, 0.7328);
-const vec3 FILL_LIGHT = vec3(0.6727, -0.3363, 0.6590);
-const vec3 HALF_KEY = vec3(-0.2193, 0.2924, 0.9308);
-`;
-/** Width of the segment data textures (texels); a segment's texels are found from its index. */
-const TEX_WIDTH = 4096;
-const TEX_SHIFT = 12;
-// Segment data is pulled from textures by gl_VertexID (no instancing: SwiftShader, the software
-// WebGL of headless browsers and GPU-less machines, pays about 30 µs per instance).
-const SEGMENT_DATA = /* glsl */ `
-uniform highp sampler2D uEnds;   // 2 texels per segment: x y z width, x y z 0 (mm)
-uniform lowp sampler2D uColors;  // 1 texel per segment: sRGB of the colour mode
-uniform float uPixel;
-uniform vec2 uDepth;
-ivec2 texel(int i) { return ivec2(i & ${TEX_WIDTH - 1}, i >> ${TEX_SHIFT}); }
-`;
-
-/**
- * A tube: a camera-facing quad round each segment, half a width wider than it on every side,
- * shaded as a round tube with round ends (an impostor: 4 vertices and 2 triangles a segment,
- * the round ends cut out in the fragment shader), so consecutive segments join without gaps.
- */
-const TUBE_VERTEX = /* glsl */ `${SEGMENT_DATA}
-varying vec3 vColor;
-varying vec2 vAt;              // across (-1 … 1) and along (-1 … len + 1), in radii
-flat varying float vLen;       // the segment's length on screen, in radii
-flat varying vec3 vSide;       // view-space frame of the tube: across, along, towards the eye
-flat varying vec3 vAlong;
-flat varying vec3 vFacing;
-flat varying float vRadius;
-varying vec3 vView;            // the point on the quad, view space
-varying float vFar;
-void main() {
-  int seg = gl_VertexID >> 2;
-  int q = gl_VertexID & 3; // the quad's corners: start or end (q >> 1), one side or the other (q & 1)
-  vec4 a = texelFetch(uEnds, texel(2 * seg), 0);
-  vec4 b = texelFetch(uEnds, texel(2 * seg + 1), 0);
-  vec3 p0 = (modelViewMatrix * vec4(a.xyz, 1.0)).xyz;
-  vec3 p1 = (modelViewMatrix * vec4(b.xyz, 1.0)).xyz;
-  vec3 mid = 0.5 * (p0 + p1);
-  vec3 eye = isOrthographic ? vec3(0.0, 0.0, 1.0) : normalize(-mid);
-  vec3 d = p1 - p0;
-  // The segment's direction on screen (any, when it points at the eye).
-  vec3 ds = d - eye * dot(d, eye);
-  vec3 along = dot(ds, ds) > 1e-12 ? normalize(ds) : normalize(cross(eye, vec3(0.0, 1.0, 0.0)) + vec3(1e-6, 0.0, 0.0));
-  vec3 side = normalize(cross(along, eye));
-  // Never thinner than about a pixel, however far away.
-  float r = max(0.5 * a.w, 0.6 * uPixel * (isOrthographic ? 1.0 : max(-mid.z, 1e-6)));
-  float len = dot(d, along) / r;
-  float s = (q & 1) == 0 ? -1.0 : 1.0;
-  vec3 p = (q < 2 ? p0 - along * r : p1 + along * r) + side * (s * r);
-  gl_Position = projectionMatrix * vec4(p, 1.0);
-  vView = p;
-  vRadius = r;
-  vAt = vec2(s, q < 2 ? -1.0 : len + 1.0);
-  vLen = len;
-  vec3 axis = dot(d, d) > 1e-12 ? normalize(d) : along;
-  vSide = side;
-  vAlong = along;
-  vFacing = normalize(cross(side, axis));
-  if (dot(vFacing, eye) < 0.0) vFacing = -vFacing;
-  vColor = texelFetch(uColors, texel(seg), 0).rgb;
-  vFar = clamp((-mid.z - uDepth.x) / uDepth.y, 0.0, 1.0);
-}
-`;
-const TUBE_FRAGMENT = /* glsl */ `${LIGHTS}
-uniform mat4 projectionMatrix;
-varying vec3 vColor;
-varying vec2 vAt;
-flat varying float vLen;
-flat varying vec3 vSide;
-flat varying vec3 vAlong;
-flat varying vec3 vFacing;
-flat varying float vRadius;
-varying vec3 vView;
-varying float vFar;
-void main() {
-  float end = vAt.y - clamp(vAt.y, 0.0, vLen); // beyond an end, in radii
-  float q = vAt.x * vAt.x + end * end;
-  if (q > 1.0) discard;
-  float h = sqrt(1.0 - q);
-  vec3 n = normalize(vSide * vAt.x + vAlong * end + vFacing * h);
-  // The depth of the tube's surface, not of the quad: tubes that meet or cross intersect as
-  // tubes do (the round end of one segment hides inside the next).
-  vec4 clip = projectionMatrix * vec4(vView + vFacing * (h * vRadius), 1.0);
-  gl_FragDepth = 0.5 + 0.5 * clip.z / clip.w;
-  float key = max(dot(n, KEY), 0.0);
-  float fill = max(dot(n, FILL_LIGHT), 0.0);
-  float spec = pow(max(dot(n, HALF_KEY), 0.0), 24.0);
-  vec3 c = vColor * (0.12 + 0.8 * key + 0.18 * fill) + 0.25 * spec;
-  gl_FragColor = vec4(c * (1.12 - 0.8 * sqrt(vFar)), 1.0);
-}
-`;
-/** A line per segment: lit by its direction (bright across the light, dim along it) and darker with depth. */
-const LINE_VERTEX = /* glsl */ `${SEGMENT_DATA}${LIGHTS}
-varying vec3 vColor;
-void main() {
-  int seg = gl_VertexID >> 1;
-  vec3 a = texelFetch(uEnds, texel(2 * seg), 0).xyz;
-  vec3 b = texelFetch(uEnds, texel(2 * seg + 1), 0).xyz;
-  vec4 mv = modelViewMatrix * vec4((gl_VertexID & 1) == 0 ? a : b, 1.0);
-  gl_Position = projectionMatrix * mv;
-  vec3 t = mat3(modelViewMatrix) * (b - a);
-  float lt = dot(t, t) > 0.0 ? dot(normalize(t), KEY) : 0.0;
-  float lit = sqrt(max(1.0 - lt * lt, 0.0));
-  float far = clamp((-mv.z - uDepth.x) / uDepth.y, 0.0, 1.0);
-  vColor = texelFetch(uColors, texel(seg), 0).rgb * (0.4 + 0.6 * lit) * (1.15 - 0.85 * sqrt(far));
-}
-`;
-const LINE_FRAGMENT = /* glsl */ `
-varying vec3 vColor;
-void main() {
-  gl_FragColor = vec4(vColor, 1.0);
-}
-`;
-
-/** A geometry without attributes: the shaders pull segments by vertex index; drawRange picks them. */
-function segmentGeometry() {
-  const g = new THREE.BufferGeometry();
-  g.setDrawRange(0, 0);
-  g.boundingSphere = new THREE.Sphere(new THREE.Vector3(), 1e9); // never culled or sorted by it
-  return g;
-}
-
-/** A data texture of `texels` texels (TEX_WIDTH wide), `channels` RGBA values each. */
-function segmentTexture(data, texels, type) {
-  const t = new THREE.DataTexture(data, TEX_WIDTH, Math.max(1, Math.ceil(texels / TEX_WIDTH)), THREE.RGBAFormat, type);
-  t.minFilter = t.magFilter = THREE.NearestFilter;
-  t.generateMipmaps = false;
-  t.colorSpace = THREE.NoColorSpace;
-  t.needsUpdate = true;
-  return t;
-}
-
-/** Room for `texels` texels, RGBA, in a TEX_WIDTH-wide texture. */
-function textureArray(Type, texels) {
-  return new Type(Math.max(1, Math.ceil(texels / TEX_WIDTH)) * TEX_WIDTH * 4);
-}
-
-/** Distance from `c` to the farthest of (about 300k of) the points x y z … */
-function farthestFrom(c, p) {
-  const step = 3 * Math.max(1, Math.ceil(p.length / 3 / 300000));
-  let r2 = 0;
-  for (let i = 0; i < p.length; i += step) {
-    const dx = p[i] - c.x, dy = p[i + 1] - c.y, dz = p[i + 2] - c.z;
-    const d2 = dx * dx + dy * dy + dz * dz;
-    if (d2 > r2) r2 = d2;
-  }
-  return Math.sqrt(r2);
-}
-
-/** The 8 corners of a box, x y z each. */
-function boxCorners(b) {
-  const out = [];
-  for (let i = 0; i < 8; i++) {
-    out.push(i & 1 ? b.max.x : b.min.x, i & 2 ? b.max.y : b.min.y, i & 4 ? b.max.z : b.min.z);
-  }
-  return new Float32Array(out);
-}
 
 export class Preview {
   /**
@@ -770,413 +586,57 @@ export class Preview {
     if (render) this.requestRender();
   }
 
-  /** @returns {Uint8Array} RGBA per segment (A unused), as long as a colour texture */
+  // --- colours and legend (preview-colors.js) ---
+  /** RGBA per segment for a colour mode (A unused), as long as a colour texture. */
   computeColors(mode, segments) {
-    const d = this.data;
-    const out = textureArray(Uint8Array, segments);
-    const put = (i, r, g, b) => {
-      out[i * 4] = r;
-      out[i * 4 + 1] = g;
-      out[i * 4 + 2] = b;
-    };
-    if (mode === "feature" && d.feature.length >= segments) {
-      for (let i = 0; i < segments; i++) {
-        const c = this.featureRgb[d.feature[i]] ?? UNKNOWN_COLOR;
-        put(i, c[0], c[1], c[2]);
-      }
-    } else if (RAMP_MODES[mode] && d[RAMP_MODES[mode].key]?.length >= segments) {
-      const values = d[RAMP_MODES[mode].key];
-      const [lo, hi] = this.getRange(mode);
-      const scale = hi > lo ? 255 / (hi - lo) : 0;
-      for (let i = 0; i < segments; i++) {
-        const k = Math.max(0, Math.min(255, Math.round((values[i] - lo) * scale))) * 3;
-        put(i, RAMP[k], RAMP[k + 1], RAMP[k + 2]);
-      }
-    } else if (mode === "path" && d.path.length >= segments) {
-      const palette = PATH_PALETTE;
-      const n = palette.length / 3;
-      for (let i = 0; i < segments; i++) {
-        // Consecutive paths are a golden-ratio hue step (≈ 137.5°) apart.
-        const k = (d.path[i] % n) * 3;
-        put(i, palette[k], palette[k + 1], palette[k + 2]);
-      }
-    } else {
-      out.fill(200);
-    }
-    return out;
+    return Colors.computeColors(this, mode, segments);
   }
 
-  /** [lo, hi] of a ramp mode's values over the whole print. */
+  /** [lo, hi] of a ramp mode's values over the whole print (cached). */
   getRange(mode) {
-    if (mode === "flow") return this.getFlowRange();
-    if (this.ranges.has(mode)) return this.ranges.get(mode);
-    const values = this.data[RAMP_MODES[mode].key] ?? [];
-    let lo = Infinity;
-    let hi = -Infinity;
-    for (let i = 0; i < values.length; i++) {
-      const f = values[i];
-      if (f < lo) lo = f;
-      if (f > hi) hi = f;
-    }
-    if (!(lo <= hi)) lo = hi = 0;
-    this.ranges.set(mode, [lo, hi]);
-    return [lo, hi];
+    return Colors.getRange(this, mode);
   }
 
+  /** [lo, hi] of the flow over the whole print (cached). */
   getFlowRange() {
-    if (this.flowRange) return this.flowRange;
-    const flow = this.data.flow;
-    let lo = Infinity;
-    let hi = -Infinity;
-    for (let i = 0; i < flow.length; i++) {
-      const f = flow[i];
-      if (f < lo) lo = f;
-      if (f > hi) hi = f;
-    }
-    if (!(lo <= hi)) lo = hi = 0;
-    this.flowRange = [lo, hi];
-    return this.flowRange;
+    return Colors.getFlowRange(this);
   }
 
+  /** Segments per feature code (cached). */
   getFeatureCounts() {
-    if (this.featureCounts) return this.featureCounts;
-    const counts = new Uint32Array(256);
-    const f = this.data.feature;
-    for (let i = 0; i < f.length; i++) counts[f[i]]++;
-    this.featureCounts = counts;
-    return counts;
+    return Colors.getFeatureCounts(this);
   }
 
+  /** The legend under the canvas for a colour mode. */
   updateLegend(mode, segments) {
-    const legend = this.ui.legend;
-    legend.replaceChildren();
-    if (segments === 0) {
-      legend.append(item(null, "no toolpath yet: slice a design or drop a file"));
-      return;
-    }
-    if (mode === "feature") {
-      const counts = this.getFeatureCounts();
-      for (const code of this.featureOrder) {
-        if (counts[code] > 0) legend.append(item(this.featureRgb[code], this.featureLabel[code]));
-      }
-      let unknown = 0;
-      for (let code = 0; code < 256; code++) if (!this.featureRgb[code]) unknown += counts[code];
-      if (unknown > 0) legend.append(item(UNKNOWN_COLOR, "unknown"));
-    } else if (RAMP_MODES[mode]) {
-      const { label, unit, title } = RAMP_MODES[mode];
-      const [lo, hi] = this.getRange(mode);
-      const bar = document.createElement("span");
-      bar.className = "ramp";
-      const stops = [];
-      for (let k = 0; k <= 8; k++) {
-        const j = Math.round((k / 8) * 255) * 3;
-        stops.push(`rgb(${RAMP[j]},${RAMP[j + 1]},${RAMP[j + 2]})`);
-      }
-      bar.style.background = `linear-gradient(to right, ${stops.join(",")})`;
-      const text = (v) => `${v.toFixed(v < 1 ? 3 : v < 10 ? 2 : 1)}`;
-      const low = document.createElement("span");
-      low.textContent = text(lo);
-      const high = document.createElement("span");
-      high.textContent = `${text(hi)} ${unit}`;
-      const wrap = document.createElement("span");
-      wrap.className = "legend-item flow-legend";
-      wrap.title = title;
-      wrap.append(`${label} `, low, bar, high);
-      legend.append(wrap);
-    } else {
-      const paths = this.data.path.length ? this.data.path[this.data.path.length - 1] + 1 : 0;
-      legend.append(item(null, `one colour per extrusion path (${paths.toLocaleString()} paths)`));
-    }
-    if (this.starts.visible) legend.append(item([255, 255, 255], "path start", true));
-    const asLines = this.restStyle() === "lines" && segments > 0;
-    const count = item(null, `${segments.toLocaleString()} segments${asLines ? " · lines" : ""}`);
-    if (asLines) {
-      count.title = this.style === "auto"
-        ? `Drawn as lines: over ${STILL_TUBE_LIMIT.toLocaleString()} segments, tubes are too slow without a fast GPU`
-        : "Drawn as lines";
-    } else if (this.style === "auto" && segments > TUBE_LIMIT) {
-      count.title = `Drawn as lines while the view moves (over ${TUBE_LIMIT.toLocaleString()} segments)`;
-    }
-    legend.append(count);
+    return Colors.updateLegend(this, mode, segments);
   }
 
+  // --- plate and camera (preview-camera.js) ---
   /** Draws the build plate: outline, 10 mm grid, origin axes. */
   setBed(bed, origin) {
-    const [bx, by] = bed;
-    const key = `${bx}x${by}:${origin}`;
-    if (key === this.bedKey) return;
-    this.bedKey = key;
-    for (const child of this.plate.children) child.geometry.dispose();
-    this.plate.clear();
-    const x0 = origin === "center" ? -bx / 2 : 0;
-    const y0 = origin === "center" ? -by / 2 : 0;
-    this.bedBox = new THREE.Box3(new THREE.Vector3(x0, y0, 0), new THREE.Vector3(x0 + bx, y0 + by, Math.min(bx, by) * 0.25));
-    this.bedSphere = this.bedBox.getBoundingSphere(new THREE.Sphere());
-
-    const grid = [];
-    for (let x = Math.ceil(x0 / 10) * 10; x <= x0 + bx; x += 10) grid.push(x, y0, 0, x, y0 + by, 0);
-    for (let y = Math.ceil(y0 / 10) * 10; y <= y0 + by; y += 10) grid.push(x0, y, 0, x0 + bx, y, 0);
-    this.plate.add(lines(grid, 0x3a414d));
-    this.plate.add(lines([x0, y0, 0, x0 + bx, y0, 0, x0 + bx, y0, 0, x0 + bx, y0 + by, 0,
-      x0 + bx, y0 + by, 0, x0, y0 + by, 0, x0, y0 + by, 0, x0, y0, 0], 0x8a93a3));
-    // Origin: X red, Y green, Z blue, drawn over the plate lines.
-    const a = Math.max(5, Math.min(bx, by) * 0.08);
-    for (const [flat, color] of [[[0, 0, 0, a, 0, 0], 0xff5a5f], [[0, 0, 0, 0, a, 0], 0x4cc76a], [[0, 0, 0, 0, 0, a], 0x5b8cff]]) {
-      const axis = lines(flat, color);
-      axis.material.depthTest = false;
-      axis.renderOrder = 1;
-      this.plate.add(axis);
-    }
-    const plane = new THREE.Mesh(
-      new THREE.PlaneGeometry(bx, by),
-      new THREE.MeshBasicMaterial({ color: 0x262b33, side: THREE.DoubleSide, polygonOffset: true, polygonOffsetFactor: 1, polygonOffsetUnits: 1 }),
-    );
-    plane.position.set(x0 + bx / 2, y0 + by / 2, -0.01);
-    this.plate.add(plane);
+    return Camera.setBed(this, bed, origin);
   }
 
-  /**
-   * Frames the part (the plate when there is none) from the camera's current direction: the
-   * camera looks at the centre of the part's projection, at the distance where the part's
-   * points span FILL of the canvas in its limiting direction.
-   */
+  /** Frames the part from the camera's current direction. */
   fit() {
-    const cam = this.camera;
-    const back = cam.position.clone().sub(this.controls.target);
-    if (back.lengthSq() < 1e-12) back.copy(VIEWS.iso);
-    back.normalize();
-    const right = new THREE.Vector3(0, 0, 1).cross(back);
-    if (right.lengthSq() < 1e-12) right.set(1, 0, 0);
-    right.normalize();
-    const up = back.clone().cross(right);
-    // The controls drawn over the canvas (top row(s), legend and camera buttons at the bottom)
-    // cover bands of it: frame the part in the band between them.
-    const { top, bottom } = this.overlayBands();
-    const free = Math.max(0.3, 1 - top - bottom);
-    const tanHalf = Math.tan((cam.fov * Math.PI) / 360);
-    const tanY = tanHalf * FILL * free;
-    const tanX = tanHalf * FILL * cam.aspect;
-    const points = this.data && this.bounds ? this.data.positions : boxCorners(this.bedBox);
-    // At most ~300k points: enough to frame, fast at 2M segments.
-    const step = 3 * Math.max(1, Math.ceil(points.length / 3 / 300000));
-    const box = this.bounds ?? this.bedBox;
-    const center = box.getCenter(new THREE.Vector3());
-    let dist = 0;
-    for (let pass = 0; pass < 2; pass++) {
-      // Distance that fits every point: |x| ≤ tanX · depth, |y| ≤ tanY · depth, depth = dist - z.
-      dist = 0;
-      const cx = center.x, cy = center.y, cz = center.z;
-      for (let i = 0; i < points.length; i += step) {
-        const px = points[i] - cx, py = points[i + 1] - cy, pz = points[i + 2] - cz;
-        const x = px * right.x + py * right.y + pz * right.z;
-        const y = px * up.x + py * up.y + pz * up.z;
-        const z = px * back.x + py * back.y + pz * back.z;
-        const need = Math.max(Math.abs(x) / tanX, Math.abs(y) / tanY) + z;
-        if (need > dist) dist = need;
-      }
-      if (pass === 1) break;
-      // Centre the projection: shift the target by the middle of the projected extent.
-      let x0 = Infinity, x1 = -Infinity, y0 = Infinity, y1 = -Infinity;
-      for (let i = 0; i < points.length; i += step) {
-        const px = points[i] - cx, py = points[i + 1] - cy, pz = points[i + 2] - cz;
-        const depth = dist - (px * back.x + py * back.y + pz * back.z);
-        const x = (px * right.x + py * right.y + pz * right.z) / depth;
-        const y = (px * up.x + py * up.y + pz * up.z) / depth;
-        if (x < x0) x0 = x;
-        if (x > x1) x1 = x;
-        if (y < y0) y0 = y;
-        if (y > y1) y1 = y;
-      }
-      center.addScaledVector(right, ((x0 + x1) / 2) * dist).addScaledVector(up, ((y0 + y1) / 2) * dist);
-    }
-    // Centre of the free band, in the canvas's [-1, 1] vertical: move the target so the part
-    // sits there (a positive offset moves the picture up).
-    const shift = bottom - top;
-    center.addScaledVector(up, -shift * tanHalf * dist);
-    const radius = (this.sphere ?? this.bedSphere).radius;
-    dist = Math.max(dist, radius * 0.05, 1);
-    this.controls.minDistance = Math.max(0.05, radius * 0.02);
-    this.controls.maxDistance = Math.max(dist, radius / Math.sin((cam.fov * Math.PI) / 360)) * 6;
-    cam.position.copy(center).addScaledVector(back, dist);
-    this.controls.target.copy(center);
-    this.controls.update();
-    this.autoFit = true;
-    this.requestRender();
+    return Camera.fit(this);
   }
 
-  /**
-   * Fractions of the canvas height covered by the controls drawn over it: from the top (the
-   * view controls) and from the bottom (legend, camera buttons). Zero when they are not laid
-   * out (hidden page, tests without the controls).
-   */
+  /** Fractions of the canvas height the page's controls cover: {top, bottom}. */
   overlayBands() {
-    const c = this.canvas.getBoundingClientRect();
-    if (!(c.height > 0)) return { top: 0, bottom: 0 };
-    const topEl = this.ui.colorBy?.closest(".view-controls");
-    const bottomEls = [this.ui.legend, this.ui.camera].filter(Boolean);
-    let top = 0;
-    let bottom = 0;
-    const t = topEl?.getBoundingClientRect();
-    if (t && t.height > 0) top = Math.max(0, t.bottom - c.top);
-    for (const el of bottomEls) {
-      const r = el.getBoundingClientRect();
-      if (r.height > 0 && r.top > c.top + c.height / 2) bottom = Math.max(bottom, c.bottom - r.top);
-    }
-    // Each band at most a third of the canvas: a tall overlay still leaves the part room.
-    return { top: Math.min(top / c.height, 1 / 3), bottom: Math.min(bottom / c.height, 1 / 3) };
+    return Camera.overlayBands(this);
   }
 
-  /**
-   * A camera view: "fit" frames the part from where the camera looks now; "top", "front" and
-   * "iso" look from that side, then frame the part.
-   * @param {"fit"|"top"|"front"|"iso"} which
-   */
+  /** A camera view: "fit", "top", "front" or "iso". */
   view(which) {
-    const dir = VIEWS[which];
-    if (dir) this.camera.position.copy(this.controls.target).add(dir);
-    this.fit();
+    return Camera.view(this, which);
   }
 
-  /**
-   * Near and far planes from the part's bounding sphere and the camera's distance to it (the
-   * plate is kept inside the far plane), the depth range of the line shading and the size of a
-   * pixel for the tubes' minimum width. Called before every frame, so after every camera change.
-   */
+  /** Near and far planes, depth shading range and pixel size; before every frame. */
   updateClipping() {
-    const cam = this.camera;
-    const part = this.sphere ?? this.bedSphere;
-    cam.updateMatrixWorld();
-    const d = cam.position.distanceTo(part.center);
-    const r = part.radius * 1.02 + 2 * DEFAULT_WIDTH;
-    const near = Math.max(d * 0.002, Math.min(d - r, d * 0.05), 1e-4);
-    const far = Math.max(d + r, cam.position.distanceTo(this.bedSphere.center) + this.bedSphere.radius) * 1.01;
-    if (near !== cam.near || far !== cam.far) {
-      cam.near = near;
-      cam.far = far;
-      cam.updateProjectionMatrix();
-    }
-    // Depth shading over the part's own depth in this view: the tighter of its box's corners
-    // and the sphere round its centre through its farthest point (a ball's depth is its
-    // diameter, a flat part seen from the top has almost none).
-    const m = cam.matrixWorldInverse.elements;
-    const depthOf = (x, y, z) => -(m[2] * x + m[6] * y + m[10] * z + m[14]);
-    const c = part.center;
-    const shade = this.sphere ? this.shadeRadius : part.radius;
-    let front = depthOf(c.x, c.y, c.z) - shade;
-    let back = front + 2 * shade;
-    const b = this.bounds ?? this.bedBox;
-    let lo = Infinity, hi = -Infinity;
-    for (let i = 0; i < 8; i++) {
-      const z = depthOf(i & 1 ? b.max.x : b.min.x, i & 2 ? b.max.y : b.min.y, i & 4 ? b.max.z : b.min.z);
-      lo = Math.min(lo, z);
-      hi = Math.max(hi, z);
-    }
-    front = Math.max(front, lo);
-    back = Math.min(back, hi);
-    this.uniforms.uDepth.value.set(front, Math.max(back - front, 0.1 * shade, 1e-3));
-    const height = this.renderer.getDrawingBufferSize(this.tmp2 ??= new THREE.Vector2()).y || 1;
-    this.uniforms.uPixel.value = (2 * Math.tan((cam.fov * Math.PI) / 360)) / height;
+    return Camera.updateClipping(this);
   }
-}
-
-function lines(flat, color) {
-  const g = new THREE.BufferGeometry();
-  g.setAttribute("position", new THREE.Float32BufferAttribute(flat, 3));
-  return new THREE.LineSegments(g, new THREE.LineBasicMaterial({ color }));
-}
-
-function item(rgb, text, round = false) {
-  const el = document.createElement("span");
-  el.className = "legend-item";
-  if (rgb) {
-    const sw = document.createElement("span");
-    sw.className = round ? "swatch round" : "swatch";
-    sw.style.background = `rgb(${rgb[0]},${rgb[1]},${rgb[2]})`;
-    el.append(sw);
-  }
-  el.append(text);
-  return el;
-}
-
-/** Bounding box of x0 y0 z0 x1 y1 z1 segments. */
-function boundsOf(p) {
-  let minX = Infinity, minY = Infinity, minZ = Infinity;
-  let maxX = -Infinity, maxY = -Infinity, maxZ = -Infinity;
-  for (let i = 0; i < p.length; i += 3) {
-    const x = p[i], y = p[i + 1], z = p[i + 2];
-    if (x < minX) minX = x;
-    if (x > maxX) maxX = x;
-    if (y < minY) minY = y;
-    if (y > maxY) maxY = y;
-    if (z < minZ) minZ = z;
-    if (z > maxZ) maxZ = z;
-  }
-  return new THREE.Box3(new THREE.Vector3(minX, minY, minZ), new THREE.Vector3(maxX, maxY, maxZ));
-}
-
-function buildRamp() {
-  // Piecewise-linear through a few "turbo" colour-map stops.
-  const stops = [
-    [0.0, 48, 18, 59], [0.15, 70, 107, 227], [0.3, 41, 187, 236], [0.45, 49, 241, 153],
-    [0.6, 163, 253, 61], [0.75, 237, 208, 58], [0.88, 251, 128, 34], [1.0, 180, 20, 10],
-  ];
-  const out = new Uint8Array(256 * 3);
-  for (let i = 0; i < 256; i++) {
-    const t = i / 255;
-    let s = 0;
-    while (s < stops.length - 2 && t > stops[s + 1][0]) s++;
-    const [t0, r0, g0, b0] = stops[s];
-    const [t1, r1, g1, b1] = stops[s + 1];
-    const u = (t - t0) / (t1 - t0);
-    out[i * 3] = Math.round(r0 + (r1 - r0) * u);
-    out[i * 3 + 1] = Math.round(g0 + (g1 - g0) * u);
-    out[i * 3 + 2] = Math.round(b0 + (b1 - b0) * u);
-  }
-  return out;
-}
-
-/** A round white dot (alpha) for the path-start markers. */
-function dotTexture() {
-  const size = 32;
-  const c = document.createElement("canvas");
-  c.width = c.height = size;
-  const ctx = c.getContext("2d");
-  ctx.fillStyle = "#000";
-  ctx.beginPath();
-  ctx.arc(size / 2, size / 2, size / 2 - 1, 0, Math.PI * 2);
-  ctx.fill();
-  ctx.fillStyle = "#fff";
-  ctx.beginPath();
-  ctx.arc(size / 2, size / 2, size / 2 - 6, 0, Math.PI * 2);
-  ctx.fill();
-  const t = new THREE.CanvasTexture(c);
-  t.colorSpace = THREE.NoColorSpace;
-  return t;
-}
-
-/**
- * 256 colours for colouring by path, entry i at hue i × golden ratio: consecutive paths are
- * ≈ 137.5° apart on the colour wheel, and lightness cycles over three levels.
- */
-const PATH_PALETTE = (() => {
-  const n = 256;
-  const out = new Uint8Array(n * 3);
-  const c = new THREE.Color();
-  for (let i = 0; i < n; i++) {
-    c.setHSL((i * 0.618034) % 1, 0.8, [0.55, 0.68, 0.45][i % 3]);
-    out[i * 3] = Math.round(c.r * 255);
-    out[i * 3 + 1] = Math.round(c.g * 255);
-    out[i * 3 + 2] = Math.round(c.b * 255);
-  }
-  return out;
-})();
-
-/** "#rrggbb" → [r, g, b], or null. */
-function hexRgb(hex) {
-  const m = /^#?([0-9a-f]{6})$/i.exec(String(hex ?? "").trim());
-  if (!m) return null;
-  const v = parseInt(m[1], 16);
-  return [(v >> 16) & 255, (v >> 8) & 255, v & 255];
 }
 
 /** First index whose value is >= x (sorted array). */

@@ -45,7 +45,9 @@ pub mod slice;
 pub mod source;
 pub mod stage;
 pub mod testgen;
-pub mod thread_cache;
+/// The threaded browser module's allocator: compiled there (and for its own unit tests) only.
+#[cfg(any(test, all(target_arch = "wasm32", feature = "wasm-threads")))]
+mod thread_cache;
 pub mod thumbnail;
 pub mod volume;
 pub mod work;

@@ -162,18 +162,25 @@ impl<'a> Ctx<'a> {
     }
 }
 
+/// The bytes of the file `name` of `slot`: loaded, or unpacked from the share link it came
+/// `embedded` in; the one place an embedded input is decoded.
+pub(super) fn named_bytes<'f>(files: &'f Files, slot: &str, name: &str, embedded: &Option<String>) -> Result<std::borrow::Cow<'f, [u8]>, Error> {
+    match (files.whole(name), embedded) {
+        (Some(b), _) => b,
+        (None, Some(e)) => Ok(std::borrow::Cow::Owned(share::unpack(e).map_err(|source| Error::Embedded { name: name.to_string(), source })?)),
+        (None, None) => Err(Error::MissingInput { name: name.to_string(), slot: slot.into() }),
+    }
+}
+
 /// [`Ctx::file_bytes`] over `files`.
 pub(super) fn file_bytes_in<'f>(files: &'f Files, slot: &str, input: &Input) -> Result<(std::borrow::Cow<'f, [u8]>, Key), Error> {
     match input {
-        Input::File { name, embedded } => match (files.whole(name), files.hash(name), embedded) {
-            (Some(b), Some(h), _) => Ok((b?, h)),
-            (_, _, Some(e)) => {
-                let bytes = share::unpack(e).map_err(|source| Error::Embedded { name: name.clone(), source })?;
-                let key = Key::of_bytes(&bytes);
-                Ok((std::borrow::Cow::Owned(bytes), key))
-            }
-            _ => Err(Error::MissingInput { name: name.clone(), slot: slot.into() }),
-        },
+        Input::File { name, embedded } => {
+            let bytes = named_bytes(files, slot, name, embedded)?;
+            // A loaded file's hash was taken once, on loading; an embedded one is hashed here.
+            let key = files.hash(name).unwrap_or_else(|| Key::of_bytes(&bytes));
+            Ok((bytes, key))
+        }
         Input::Files(_) => Err(Error::NoInput(format!("the {slot} input takes one file, not several"))),
         Input::Builtin(_) => Err(Error::NoInput(format!("the {slot} input takes a file, not a built-in shape"))),
     }
@@ -217,11 +224,7 @@ pub(super) fn load_input(slot: &str, input: &Input, files: &Files, place: bool, 
     let (mut mesh, report) = match input {
         Input::Builtin(shape) => (shape.mesh(), None),
         Input::File { name, embedded } => {
-            let bytes = match (files.whole(name), embedded) {
-                (Some(b), _) => b?,
-                (None, Some(e)) => std::borrow::Cow::Owned(share::unpack(e).map_err(|source| Error::Embedded { name: name.clone(), source })?),
-                (None, None) => return Err(Error::MissingInput { name: name.clone(), slot: slot.into() }),
-            };
+            let bytes = named_bytes(files, slot, name, embedded)?;
             let (mesh, report) = read_solid(name, &bytes, solid)?;
             (mesh, Some(report))
         }

@@ -22,7 +22,7 @@ pub use load::{meshes_of_zip, NamedFiles};
 
 // Shared among the runtime's files (each file takes what it needs of these with `use super::*`).
 use cache::Entry;
-use load::{import_report, load_input, read_solid};
+use load::{import_report, load_input, named_bytes, read_solid};
 
 use crate::analyze;
 use crate::budget::Estimate;

@@ -294,24 +294,23 @@ fn rng(mut s: u64) -> impl FnMut() -> f64 {
     }
 }
 
-/// A connected random subgraph of a jittered 4 × 3 grid (no crossings): strokes and edges.
-fn random_piece(seed: u64, offset: DVec2) -> (Vec<Stroke>, Vec<DVec2>, Vec<(usize, usize)>) {
+/// A connected random subgraph of a `w` × `h` grid of 2 mm cells, its nodes moved by up to
+/// `jitter` mm, each edge kept with probability `keep` (no crossings): strokes, nodes, edges.
+fn random_piece(seed: u64, offset: DVec2, (w, h): (usize, usize), jitter: f64, keep: f64) -> (Vec<Stroke>, Vec<DVec2>, Vec<(usize, usize)>) {
     let mut r = rng(seed);
-    let (w, h) = (4usize, 3usize);
-    let pts: Vec<DVec2> = (0..w * h).map(|i| offset + DVec2::new((i % w) as f64 * 2.0 + r() * 0.6, (i / w) as f64 * 2.0 + r() * 0.6)).collect();
+    let pts: Vec<DVec2> = (0..w * h).map(|i| offset + DVec2::new((i % w) as f64 * 2.0 + r() * jitter, (i / w) as f64 * 2.0 + r() * jitter)).collect();
     loop {
         let mut edges = Vec::new();
         for i in 0..w * h {
-            if i % w + 1 < w && r() < 0.85 {
+            if i % w + 1 < w && r() < keep {
                 edges.push((i, i + 1));
             }
-            if i + w < w * h && r() < 0.85 {
+            if i + w < w * h && r() < keep {
                 edges.push((i, i + w));
             }
         }
         let used: BTreeSet<usize> = edges.iter().flat_map(|&(a, b)| [a, b]).collect();
-        let e3: Vec<(usize, usize, f64)> = edges.iter().map(|&(a, b)| (a, b, 1.0)).collect();
-        let comp = components(w * h, &e3);
+        let comp = components(w * h, &edges.iter().map(|&(a, b)| (a, b, 1.0)).collect::<Vec<_>>());
         if used.len() == w * h && comp.iter().collect::<BTreeSet<_>>().len() == 1 {
             let strokes = edges.iter().map(|&(a, b)| Stroke { points: vec![pts[a], pts[b]], feature: Feature::Lattice, curved: false }).collect();
             return (strokes, pts, edges);
@@ -341,7 +340,7 @@ fn toolpath_deadhead(o: &weft::paths::Optimised) -> f64 {
 fn continuous_on_random_small_graphs_equals_trying_every_set_of_struts() {
     let mut gaps = 0;
     for seed in 1..=30u64 {
-        let (strokes, pts, edges) = random_piece(seed * 7919, DVec2::ZERO);
+        let (strokes, pts, edges) = random_piece(seed * 7919, DVec2::ZERO, (4, 3), 0.6, 0.85);
         let layer = StrokeLayer { z: 0.2, height: 0.2, strokes };
         let weighted: Vec<(usize, usize, f64)> = edges.iter().map(|&(a, b)| (a, b, pts[a].distance(pts[b]))).collect();
         let opt = open_postman_by_subsets(pts.len(), &weighted);
@@ -485,7 +484,7 @@ fn continuous_pieces_report_deadhead_and_travel_apart_and_choose_ends_for_the_tr
         let mut pieces = Vec::new();
         for k in 0..3u64 {
             let (s, pts, edges) =
-                random_piece_small(round * 101 + k * 13 + 5, DVec2::new(k as f64 * (7.0 + round as f64 * 0.2), k as f64 * 0.7 * round as f64));
+                random_piece(round * 101 + k * 13 + 5, DVec2::new(k as f64 * (7.0 + round as f64 * 0.2), k as f64 * 0.7 * round as f64), (3, 3), 0.8, 0.8);
             strokes.extend(s);
             pieces.push((pts, edges));
         }
@@ -530,28 +529,4 @@ fn continuous_pieces_report_deadhead_and_travel_apart_and_choose_ends_for_the_tr
     eprintln!("replanned {replanned} of 8; worst {worst:.4}× the least");
     assert!(replanned > 0, "no layer chose its walks' ends for the travel");
     assert!(worst <= 1.05, "travel {worst}× the least possible");
-}
-
-/// A connected random subgraph of a jittered 3 × 3 grid, for exhaustive ends.
-fn random_piece_small(seed: u64, offset: DVec2) -> (Vec<Stroke>, Vec<DVec2>, Vec<(usize, usize)>) {
-    let mut r = rng(seed);
-    let w = 3usize;
-    let pts: Vec<DVec2> = (0..w * w).map(|i| offset + DVec2::new((i % w) as f64 * 2.0 + r() * 0.8, (i / w) as f64 * 2.0 + r() * 0.8)).collect();
-    loop {
-        let mut edges = Vec::new();
-        for i in 0..w * w {
-            if i % w + 1 < w && r() < 0.8 {
-                edges.push((i, i + 1));
-            }
-            if i + w < w * w && r() < 0.8 {
-                edges.push((i, i + w));
-            }
-        }
-        let used: BTreeSet<usize> = edges.iter().flat_map(|&(a, b)| [a, b]).collect();
-        let comp = components(w * w, &edges.iter().map(|&(a, b)| (a, b, 1.0)).collect::<Vec<_>>());
-        if used.len() == w * w && comp.iter().collect::<BTreeSet<_>>().len() == 1 {
-            let strokes = edges.iter().map(|&(a, b)| Stroke { points: vec![pts[a], pts[b]], feature: Feature::Lattice, curved: false }).collect();
-            return (strokes, pts, edges);
-        }
-    }
 }

@@ -6,12 +6,14 @@
 //! ([`vtp`], section 3.2.4). The job kind `foam` (`crate::jobs::foam`) runs them as stages:
 //! [`regions`] (parry3d-f64 solids, shared boundaries, the paper's region rules), the
 //! foundation's slicer on the union, [`raster`] (one continuous path per layer), [`field`]
-//! (π along the path with few queries); [`models`] builds the examples' regions. Beyond the
+//! (π along the path with few queries), [`grade`] (each piece printed with its pair);
+//! [`models`] builds the examples' regions. Beyond the
 //! paper: [`stiffness`] turns a target modulus into V*, and [`blend`] joins several
 //! transitions where regions meet along lines.
 
 pub mod blend;
 pub mod field;
+pub mod grade;
 pub mod models;
 pub mod raster;
 pub mod regions;

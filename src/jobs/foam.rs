@@ -20,11 +20,11 @@ use crate::budget::Estimate;
 use crate::design::{Design, Input};
 use crate::foam::field::Field;
 use crate::foam::models::{self, Model};
-use crate::foam::raster;
 use crate::foam::regions::{self, Regions};
 use crate::foam::stiffness::Calibration;
+use crate::foam::{grade, raster};
 use crate::foam::{Junction, Pair, Process, Transition, Weighting};
-use crate::geom::{DVec2, DVec3, Feature, Mesh, Pass, PassKind, Path, PointData, PointFlow, Polygon, Toolpath};
+use crate::geom::{DVec2, DVec3, Feature, Mesh, Polygon, Toolpath};
 use crate::report::{Axis, Metric, Plot, PlotKind, Series, StageReport};
 use crate::settings::{mount, num, other, percent, when, Field as Row0, Kind as FieldKind, Problem, Row};
 use crate::slice;
@@ -1059,9 +1059,9 @@ fn inset(polygon: &Polygon, d: f64, z: f64) -> Result<Polygon, InsetError> {
     }
 }
 
-/// The toolpath: each layer's path cut into pieces, each piece with the pair of its end, as
-/// one free pass per layer whose first point is the last layer's end (one uninterrupted
-/// extrusion), and the report with its plots.
+/// The toolpath ([`grade::grade`]: each layer's path cut into pieces, each with the pair of
+/// its end) once the design's pairs and transitions are checked against the regions loaded,
+/// and the report with its plots.
 fn grade(
     j: &FoamJob,
     p: &Process,
@@ -1104,63 +1104,9 @@ fn grade(
         }
     }
     let field = Field::new(regions, pairs.clone(), &transitions, j.foam.junction);
-    let h = j.foam.layer_height_mm;
-    let piece = j.foam.piece_mm;
-    let width = p.die_swell * p.nozzle_mm;
-    let mut passes = Vec::with_capacity(paths.len());
-    let (mut pieces, mut queries) = (0usize, 0usize);
-    let (mut v_lo, mut v_hi) = (f64::INFINITY, f64::NEG_INFINITY);
-    let mut prev_end: Option<DVec3> = None;
-    for (k, (path, layer)) in paths.iter().zip(layers).enumerate() {
-        let mut walker = field.walker();
-        let n_est = path.points.len() * 2;
-        let mut pts: Vec<DVec3> = Vec::with_capacity(n_est);
-        let mut flow: Vec<f64> = Vec::with_capacity(n_est);
-        let mut feed: Vec<f64> = Vec::with_capacity(n_est);
-        let mut push = |q: DVec2, pts: &mut Vec<DVec3>, flow: &mut Vec<f64>, feed: &mut Vec<f64>| {
-            let (pair, _) = walker.next(DVec3::new(q.x, q.y, layer.z - h / 2.0));
-            v_lo = v_lo.min(pair.v_star);
-            v_hi = v_hi.max(pair.v_star);
-            pts.push(DVec3::new(q.x, q.y, layer.z + p.z_offset_mm(pair.h_star, h)));
-            flow.push(p.filament_per_mm(pair.v_star));
-            feed.push(p.speed_mm_s(pair.v_star));
-        };
-        // The rise from the last layer's end is extruded too.
-        if let Some(e) = prev_end {
-            pts.push(e);
-            flow.push(0.0);
-            feed.push(0.0);
-        }
-        let Some(&first) = path.points.first() else { continue };
-        push(first, &mut pts, &mut flow, &mut feed);
-        for w in path.points.windows(2) {
-            let len = w[0].distance(w[1]);
-            let n = (len / piece).ceil().max(1.0) as usize;
-            for i in 1..=n {
-                push(w[0].lerp(w[1], i as f64 / n as f64), &mut pts, &mut flow, &mut feed);
-            }
-        }
-        queries += walker.queries;
-        if prev_end.is_none() {
-            // The first point of the print: nothing is extruded up to it.
-            flow[0] = 0.0;
-            feed[0] = 0.0;
-        }
-        pieces += pts.len() - 1;
-        prev_end = pts.last().copied();
-        let data = PointData { flow: Some(PointFlow::FilamentPerMm(flow)), feed_mm_s: Some(feed), tool_axis: None, dwell_s: None };
-        let path = Path {
-            points: pts,
-            feature: Feature::Infill,
-            width,
-            speed_factor: 1.0,
-            approach: if k == 0 { None } else { Some(Vec::new()) },
-            data: Some(Box::new(data)),
-        };
-        passes.push(Pass { kind: PassKind::Free, z: layer.z, height: h, paths: vec![path] });
-        progress((k + 1) as f32 / paths.len() as f32);
-    }
-    let toolpath = Toolpath { passes };
+    let rasters: Vec<grade::LayerRaster> = paths.iter().zip(layers).map(|(path, layer)| grade::LayerRaster { z: layer.z, points: &path.points }).collect();
+    let g = grade::grade(&field, p, &rasters, j.foam.layer_height_mm, j.foam.piece_mm, p.die_swell * p.nozzle_mm, progress);
+    let (toolpath, pieces, queries, (v_lo, v_hi)) = (g.toolpath, g.pieces, g.queries, g.v_range);
     let mut report = grade_report(j, p, &field, regions, &transitions, pieces, queries, (v_lo, v_hi));
     report.notes.extend(notes);
     Ok((toolpath, Some(report)))

@@ -261,27 +261,7 @@ fn continuous_deadhead_read_from_the_gcode_is_the_open_postman_optimum() {
 /// nodes: the open postman with no theory in between.
 fn open_postman_by_subsets(n: usize, edges: &[(usize, usize, f64)]) -> f64 {
     assert!(edges.len() <= 20);
-    let mut degree = vec![0u32; n];
-    for &(a, b, _) in edges {
-        degree[a] += 1;
-        degree[b] += 1;
-    }
-    let mut best = f64::INFINITY;
-    for set in 0u32..(1 << edges.len()) {
-        let mut deg = degree.clone();
-        let mut len = 0.0;
-        for (k, &(a, b, l)) in edges.iter().enumerate() {
-            if set & (1 << k) != 0 {
-                deg[a] += 1;
-                deg[b] += 1;
-                len += l;
-            }
-        }
-        if deg.iter().filter(|&&d| d % 2 == 1).count() <= 2 {
-            best = best.min(len);
-        }
-    }
-    best
+    walks_by_ends(n, edges).values().copied().fold(f64::INFINITY, f64::min)
 }
 
 /// A xorshift stream in [0, 1).

@@ -139,7 +139,7 @@ fn main() {
         let d = weft::Design::from_json(&args[2], &text).unwrap();
         let sets: Vec<String> = args.iter().skip(3).cloned().collect();
         let d = d.with_overrides(&sets).unwrap();
-        let registry = weft::jobs::Registry::builtin();
+        let registry = weft::kinds::Registry::builtin();
         let files = weft::pipeline::Files::new();
         let mut cache = weft::pipeline::Cache::new();
         let mut quiet = |_: &str, _: f32| {};

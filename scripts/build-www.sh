@@ -79,10 +79,10 @@ if [ -z "${SKIP_WASM:-}" ]; then
     shift 3
     local feature_args=()
     [ -n "$feats" ] && feature_args=(--features "$feats")
-    say "cargo build --lib --profile wasm --target wasm32-unknown-unknown${feats:+ --features $feats}${BUILD_STD:+ $BUILD_STD}"
+    say "cargo build --lib --profile wasm --target wasm32-unknown-unknown --no-default-features${feats:+ --features $feats}${BUILD_STD:+ $BUILD_STD}"
     # shellcheck disable=SC2086
     CARGO_TARGET_DIR=$tdir cargo build --lib --profile wasm --target wasm32-unknown-unknown \
-      "${feature_args[@]}" ${BUILD_STD:-}
+      --no-default-features "${feature_args[@]}" ${BUILD_STD:-}
     local input=$tdir/wasm32-unknown-unknown/wasm/weft.wasm
     local wasm=$out/weft_bg.wasm stamp=$out/.build-stamp
     # pkg_stamp: what the outputs were made from and what they are. When the stamp holds the

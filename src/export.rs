@@ -20,7 +20,7 @@
 
 use crate::design::Design;
 use crate::geom::{DVec2, Mesh};
-use crate::jobs::lattice::LatticeJob;
+use crate::kinds::lattice::LatticeJob;
 use crate::pipeline::{self, Files};
 
 /// An exported lattice.
@@ -49,7 +49,7 @@ pub enum Error {
 /// Builds the STL of `design`'s struts.
 pub fn lattice_stl(design: &Design) -> Result<Exported, Error> {
     let job: LatticeJob = design.job.settings().ok_or_else(|| Error::NotLattice(design.job.kind().to_string()))?;
-    let layers = crate::jobs::lattice::lattice_strokes(design, &Files::new())?;
+    let layers = crate::kinds::lattice::lattice_strokes(design, &Files::new())?;
     let w = design.printer.nozzle_diameter_mm;
     let mut mesh = Mesh::default();
     let mut struts = 0;

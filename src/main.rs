@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use weft::catalog::share;
 use weft::design::Design;
-use weft::jobs::Registry;
+use weft::kinds::Registry;
 use weft::pipeline::{self, Files, RunOptions};
 
 #[derive(Parser)]
@@ -239,15 +239,15 @@ fn read_at_most(path: &Path, max: u64) -> Result<Vec<u8>, String> {
 }
 
 /// A file its slot would refuse anyway (a mesh over the import's limits, volume files or
-/// G-code over theirs: [`weft::jobs::SlotKind::check_file`]), refused from its head and size
+/// G-code over theirs: [`weft::kinds::SlotKind::check_file`]), refused from its head and size
 /// before it is read into memory.
-fn refuse_huge_file(kind: Option<weft::jobs::SlotKind>, path: &Path, name: &str) -> Result<(), String> {
+fn refuse_huge_file(kind: Option<weft::kinds::SlotKind>, path: &Path, name: &str) -> Result<(), String> {
     use std::io::Read;
     let Some(kind) = kind else { return Ok(()) };
     let Ok(mut file) = std::fs::File::open(path) else { return Ok(()) };
     let len = file.metadata().map(|m| m.len()).unwrap_or(0);
-    let mut head = Vec::with_capacity(weft::jobs::FILE_HEAD_BYTES);
-    if file.by_ref().take(weft::jobs::FILE_HEAD_BYTES as u64).read_to_end(&mut head).is_err() {
+    let mut head = Vec::with_capacity(weft::kinds::FILE_HEAD_BYTES);
+    if file.by_ref().take(weft::kinds::FILE_HEAD_BYTES as u64).read_to_end(&mut head).is_err() {
         // The full read that follows names the problem.
         return Ok(());
     }
@@ -297,7 +297,7 @@ fn load_valid(arg: &str) -> Result<Design, String> {
 }
 
 /// The slot and the path of `--input [SLOT=]FILE` (the kind's first slot when none is named).
-fn input_slot(kind_name: &str, kind: &dyn weft::jobs::JobKind, arg: &str) -> Result<(String, PathBuf), String> {
+fn input_slot(kind_name: &str, kind: &dyn weft::kinds::JobKind, arg: &str) -> Result<(String, PathBuf), String> {
     match arg.split_once('=') {
         Some((slot, path)) if kind.slots().iter().any(|s| s.name == slot) => Ok((slot.to_string(), PathBuf::from(path))),
         Some((slot, _)) if !Path::new(arg).exists() => {
@@ -339,17 +339,17 @@ fn read_inputs(registry: &Registry, kind_name: &str, inputs: &[String], files: &
     let mut series_bytes: std::collections::BTreeMap<String, u64> = std::collections::BTreeMap::new();
     for arg in inputs {
         let (slot, path) = input_slot(kind_name, kind, arg)?;
-        if kind.slots().iter().any(|s| s.name == slot && s.kind == weft::jobs::SlotKind::Volume) {
+        if kind.slots().iter().any(|s| s.name == slot && s.kind == weft::kinds::SlotKind::Volume) {
             let size = |p: &Path| std::fs::metadata(p).map_or(0, |m| m.len());
             let (bytes, what) = if path.is_dir() {
                 (files_in_folder(&path)?.iter().map(|(_, f)| size(f)).fold(0u64, u64::saturating_add), format!("{} (all its files)", file_name(&path)))
             } else {
                 (size(&path), file_name(&path))
             };
-            weft::jobs::SlotKind::Volume.check_file(&what, &[], bytes)?;
+            weft::kinds::SlotKind::Volume.check_file(&what, &[], bytes)?;
             let total = series_bytes.entry(slot.clone()).or_default();
             *total = total.saturating_add(bytes);
-            weft::jobs::SlotKind::Volume.check_file(&format!("the files given for '{slot}'"), &[], *total)?;
+            weft::kinds::SlotKind::Volume.check_file(&format!("the files given for '{slot}'"), &[], *total)?;
         }
     }
     // Per slot: the names given and whether a folder was among them.
@@ -443,7 +443,7 @@ fn cmd_inspect(design: &str, view: &str, index: usize, inputs: &[String], set: &
     let registry = Registry::builtin();
     let found = weft::pipeline::inspect(&registry, &mut weft::pipeline::Cache::disabled(), &design, &files, view, index.saturating_sub(1))
         .map_err(|e| e.to_string())?;
-    if found.shape == weft::jobs::Shape::Mesh {
+    if found.shape == weft::kinds::Shape::Mesh {
         let mesh = weft::geom::Mesh::from_triangle_floats(&found.data);
         let path = output_path(Some(&out), &format!("{}-{view}", design.name), "stl");
         write(&path, &weft::isosurface::write_stl(&mesh, &design.name))?;
@@ -590,6 +590,7 @@ fn where_the_time_went(r: &weft::pipeline::RunReport) -> String {
 
 /// `weft bench --design FILE…`: each design timed stage by stage, at 1 thread and at every
 /// core (the G-code is the same bytes).
+#[cfg(feature = "bench")]
 fn design_bench(paths: &[String]) -> Result<(), String> {
     let mut rows = Vec::new();
     for p in paths {
@@ -675,13 +676,14 @@ fn cmd_jobs() {
         let stages: Vec<&str> = k.stages().iter().map(|s| s.name).collect();
         outln!("  stages: {} → gcode → analyze", stages.join(" → "));
         for s in k.slots() {
-            let what = if s.kind == weft::jobs::SlotKind::Volume { "FOLDER|FILE" } else { "FILE" };
+            let what = if s.kind == weft::kinds::SlotKind::Volume { "FOLDER|FILE" } else { "FILE" };
             outln!("  --input {}={what}   {} ({}): {}", s.name, s.label, s.kind.accept().join(" "), s.doc);
         }
     }
 }
 
 /// This process's peak resident memory, KiB (Linux).
+#[cfg(feature = "bench")]
 fn peak_kib() -> Option<u64> {
     let status = std::fs::read_to_string("/proc/self/status").ok()?;
     let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
@@ -690,6 +692,7 @@ fn peak_kib() -> Option<u64> {
 
 /// `weft bench --scaling`: each case at each scale in a child process (so each peak memory is
 /// its own), then the growth exponents of time and of memory above an idle child's.
+#[cfg(feature = "bench")]
 fn scaling_bench() -> Result<(), String> {
     use weft::bench::scaling::{cases, exponent, MAX_EXPONENT, SCALES};
     let exe = std::env::current_exe().map_err(|e| e.to_string())?;
@@ -734,6 +737,36 @@ fn scaling_bench() -> Result<(), String> {
     }
 }
 
+/// `weft bench`: the workloads of BENCHMARKS.md.
+#[cfg(feature = "bench")]
+fn cmd_bench(command: Command) -> Result<(), String> {
+    match command {
+        Command::Bench { scaling_case: Some(name), scale, .. } => weft::bench::scaling::run_case(&name, scale).map(|(size, seconds)| {
+            outln!("{size} {seconds} {}", peak_kib().unwrap_or(0));
+        }),
+        Command::Bench { scaling: true, .. } => scaling_bench(),
+        Command::Bench { design, .. } if !design.is_empty() => design_bench(&design),
+        Command::Bench { pairing: true, .. } => weft::bench::pairing::run_all().map(|t| outln!("{t}")),
+        Command::Bench { papers: true, .. } => weft::bench::papers::run_all().map(|t| outln!("{t}")),
+        Command::Bench { graded: true, .. } => weft::bench::graded::run_graded().map(|t| outln!("{t}")),
+        Command::Bench { triangles, gcode_mb, lattice, cache, .. } => {
+            if cache {
+                return weft::bench::run_cache(triangles).map(|t| outln!("{t}"));
+            }
+            let all = if lattice { Ok(String::new()) } else { weft::bench::run_all(triangles, gcode_mb) };
+            all.and_then(|a| weft::bench::run_lattice().map(|l| outln!("{a}\n{l}")))
+        }
+        _ => Err("not a bench command".into()),
+    }
+}
+
+/// `weft bench` in a build without the `bench` feature (a library build with
+/// `--no-default-features`): says how to get it.
+#[cfg(not(feature = "bench"))]
+fn cmd_bench(_: Command) -> Result<(), String> {
+    Err("this weft was built without its benchmarks (feature `bench`): build it with `cargo build --release` (the default features)".into())
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
@@ -754,30 +787,7 @@ fn main() -> ExitCode {
             cmd_jobs();
             Ok(())
         }
-        Command::Bench { scaling_case: Some(name), scale, .. } => weft::bench::scaling::run_case(&name, scale).map(|(size, seconds)| {
-            outln!("{size} {seconds} {}", peak_kib().unwrap_or(0));
-        }),
-        Command::Bench { scaling: true, .. } => scaling_bench(),
-        Command::Bench { design, .. } if !design.is_empty() => design_bench(&design),
-        Command::Bench { pairing: true, .. } => weft::bench::pairing::run_all().map(|t| outln!("{t}")),
-        Command::Bench { papers: true, .. } => weft::bench::papers::run_all().map(|t| outln!("{t}")),
-        Command::Bench { graded: true, .. } => weft::bench::graded::run_graded().map(|t| outln!("{t}")),
-        Command::Bench { triangles, gcode_mb, lattice, cache, .. } => {
-            if cache {
-                return match weft::bench::run_cache(triangles) {
-                    Ok(t) => {
-                        outln!("{t}");
-                        ExitCode::SUCCESS
-                    }
-                    Err(e) => {
-                        errln!("weft: error: {}", e.replace('\n', "; "));
-                        ExitCode::FAILURE
-                    }
-                };
-            }
-            let all = if lattice { Ok(String::new()) } else { weft::bench::run_all(triangles, gcode_mb) };
-            all.and_then(|a| weft::bench::run_lattice().map(|l| outln!("{a}\n{l}")))
-        }
+        bench @ Command::Bench { .. } => cmd_bench(bench),
         Command::Inspect { design, view, index, input, set, out } => cmd_inspect(&design, &view, index, &input, &set, out),
         Command::ExportStl { design, out } => load_valid(&design).and_then(|d| {
             let e = weft::export::lattice_stl(&d).map_err(|e| e.to_string())?;

@@ -1,4 +1,4 @@
-//! Runs a [`Design`]: its job kind's stages ([`crate::jobs`]), then G-code and analysis;
+//! Runs a [`Design`]: its job kind's stages ([`crate::kinds`]), then G-code and analysis;
 //! estimates a run and answers a view's `inspect`. Nothing else here: the stage runtime
 //! (files, keys, the cache, [`Ctx`], loaders, errors) is [`crate::stage`], re-exported for
 //! callers of the pipeline.
@@ -13,7 +13,7 @@ use crate::budget::Plan;
 use crate::design::Design;
 use crate::gcode::{self, GcodeStats};
 use crate::geom::Toolpath;
-use crate::jobs::Registry;
+use crate::kinds::Registry;
 use crate::report::StageReport;
 pub use crate::stage::{
     meshes_of_zip, writer_options, Ahead, Cache, Ctx, Error, FileSource, Files, Inspection, Key, NamedFiles, Out, Product, Sender, Slot, StageTime,
@@ -167,7 +167,7 @@ pub fn estimate(registry: &Registry, cache: &mut Cache, design: &Design, files: 
 
 /// The job's stage estimates, then the writer's and the analyzer's (unless a job stage is
 /// already refused).
-fn plan(kind: &dyn crate::jobs::JobKind, ctx: &mut Ctx) -> Result<Plan, Error> {
+fn plan(kind: &dyn crate::kinds::JobKind, ctx: &mut Ctx) -> Result<Plan, Error> {
     let mut stages = kind.estimate(ctx)?;
     if stages.iter().all(|e| e.refused.is_none()) {
         let segments = stages.last().map_or(0.0, |e| e.get("segments"));

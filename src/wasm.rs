@@ -13,7 +13,7 @@ use crate::design::{Design, Input};
 
 use crate::gcode_edit;
 use crate::import::group;
-use crate::jobs::{Registry, SlotKind};
+use crate::kinds::{Registry, SlotKind};
 use crate::pipeline::{self, Cache, Files, RunOptions};
 use crate::source::ByteSource;
 use serde::Serialize;
@@ -304,9 +304,9 @@ impl Session {
         // fit this memory; hashing it takes seconds).
         let size = blob.size();
         let source = BlobSource::new(blob)?;
-        let mut head = vec![0u8; source.len.min(crate::jobs::FILE_HEAD_BYTES)];
+        let mut head = vec![0u8; source.len.min(crate::kinds::FILE_HEAD_BYTES)];
         source.read_at(0, &mut head).map_err(|m| JsError::new(&format!("{name} could not be read ({m}); load it again")))?;
-        // Every kind's limit is under 4 GiB (a unit test in `jobs` holds it), so `source.len`,
+        // Every kind's limit is under 4 GiB (a unit test in `kinds` holds it), so `source.len`,
         // a `usize` here, is the file's whole size past this check.
         kind.check_file(name, &head, size as u64).map_err(|m| JsError::new(&m))?;
         match kind {
@@ -327,7 +327,7 @@ impl Session {
         self.slot(slot).map(|s| s.kind)
     }
 
-    fn slot(&self, slot: &str) -> Result<&'static crate::jobs::Slot, JsError> {
+    fn slot(&self, slot: &str) -> Result<&'static crate::kinds::Slot, JsError> {
         self.registry.slot(slot).ok_or_else(|| JsError::new(&format!("no job kind has an input slot '{slot}'")))
     }
 

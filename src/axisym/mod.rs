@@ -1,6 +1,6 @@
 //! Axisymmetric build platforms (groundwork for issue 10, job kind `axisymmetric`).
 //!
-//! The geometry behind job kind `axisymmetric` ([`crate::jobs::axisymmetric`]); each stage is a
+//! The geometry behind job kind `axisymmetric` ([`crate::kinds::axisymmetric`]); each stage is a
 //! pure function of its inputs.
 //!
 //! - [`platform`]: the generatrix, a composition of degree-6 Bézier segments in the (x = radius,

@@ -5,7 +5,7 @@
 //! axisymmetric examples: the paper's Ω1–Ω3).
 
 use crate::design::Design;
-use crate::jobs::Registry;
+use crate::kinds::Registry;
 use crate::pipeline::{self, Cache, Files, RunOptions, RunOutput};
 use std::time::Instant;
 

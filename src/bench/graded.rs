@@ -8,7 +8,7 @@
 //! G-code's bytes ([`Workload::memory_target`]).
 
 use crate::design::{Design, Input, Job};
-use crate::jobs::graded::{AlignMode, Alignment, GradedJob, Route};
+use crate::kinds::graded::{AlignMode, Alignment, GradedJob, Route};
 use crate::testgen::dicom::{bone_phantom, write_series, SeriesOptions};
 use crate::testgen::foreign::{sized, Slicer};
 
@@ -101,7 +101,7 @@ mod native {
     use super::*;
     use crate::bench::designs::timed_run;
     use crate::bench::native::{peak_rss_mb, reset_peak_rss, rss_mb};
-    use crate::jobs::Registry;
+    use crate::kinds::Registry;
     use crate::pipeline::{self, Cache, Files, RunOptions};
     use std::time::Instant;
 

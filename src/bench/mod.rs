@@ -4,7 +4,7 @@
 use crate::design::{Design, Input};
 use crate::geom::shapes::uv_sphere;
 use crate::geom::Mesh;
-use crate::jobs::{lattice::LatticeJob, slice::SliceJob};
+use crate::kinds::{lattice::LatticeJob, slice::SliceJob};
 
 /// Radius of the benchmark sphere, mm (500 layers at 0.2 mm).
 pub const BENCH_SPHERE_RADIUS_MM: f64 = 50.0;
@@ -107,7 +107,7 @@ impl LatticeBench {
         }
         let options = job.paths.clone();
         design.job = crate::design::Job::new("lattice", &job);
-        let mut strokes = crate::jobs::lattice::lattice_strokes(&design, &Default::default()).map_err(|e| e.to_string())?;
+        let mut strokes = crate::kinds::lattice::lattice_strokes(&design, &Default::default()).map_err(|e| e.to_string())?;
         strokes.truncate(1);
         Ok(LatticeBench { name, strokes, options, line_width_mm: design.printer.nozzle_diameter_mm, seed: design.seed })
     }
@@ -331,7 +331,7 @@ pub fn uncached_before_gcode(stages: &[crate::report::StageReport]) -> Vec<Strin
 #[cfg(not(target_arch = "wasm32"))]
 mod cache_native {
     use super::*;
-    use crate::jobs::Registry;
+    use crate::kinds::Registry;
     use crate::pipeline::{self, Cache, Files, RunOptions};
     use std::time::Instant;
 

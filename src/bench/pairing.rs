@@ -5,7 +5,7 @@
 
 use super::{DISC_48MM_JSON, EULER_SQUARE_MM, HONEYCOMB_10MM_JSON};
 use crate::design::Design;
-use crate::jobs::lattice::LatticeJob;
+use crate::kinds::lattice::LatticeJob;
 use crate::paths::Method;
 
 /// Side of the square honeycomb of the 10k-edge case, mm (a tenth of the euler-100k area).
@@ -112,7 +112,7 @@ impl PairingBench {
         job.paths.exact_pairing_seconds = if exact { EXACT_BUDGET_S } else { 0.0 };
         let options = job.paths.clone();
         design.job = crate::design::Job::new("lattice", &job);
-        let mut strokes = crate::jobs::lattice::lattice_strokes(&design, &Default::default()).map_err(|e| e.to_string())?;
+        let mut strokes = crate::kinds::lattice::lattice_strokes(&design, &Default::default()).map_err(|e| e.to_string())?;
         strokes.truncate(1);
         Ok(PairingBench { case, exact, strokes, options, line_width_mm: design.printer.nozzle_diameter_mm, seed: design.seed })
     }

@@ -13,7 +13,7 @@ use crate::analyze;
 use crate::design::Design;
 use crate::foam::stiffness::Calibration;
 use crate::geom::{DVec2, Feature, Polygon, Stroke};
-use crate::jobs::axisymmetric::PointsSummary;
+use crate::kinds::axisymmetric::PointsSummary;
 use crate::pipeline::{self, Cache, Files, RunOptions, RunOutput};
 use crate::report::StageReport;
 
@@ -395,7 +395,7 @@ const OMEGA3_SEEDS: [(&str, &str, f64, f64); 3] = [("EBNS", "ebns", 2425.2, 0.34
 /// Best-of-`repeats` points-stage wall time on one thread, and the points report.
 fn timed_points(design: &Design, repeats: usize) -> Result<(f64, PointsSummary), String> {
     let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().map_err(|e| e.to_string())?;
-    let registry = crate::jobs::Registry::builtin();
+    let registry = crate::kinds::Registry::builtin();
     let mut best: Option<(f64, PointsSummary)> = None;
     for _ in 0..repeats.max(1) {
         let (_, stages, out) = pool.install(|| super::designs::timed_run(&registry, &mut Cache::disabled(), design, &Files::new(), &RunOptions::default()))?;
@@ -539,7 +539,7 @@ fn neck_v_stars(d: &Design, out: &RunOutput) -> Result<Vec<(f64, f64)>, String> 
         nozzle_mm: d.printer.nozzle_diameter_mm,
         die_swell: d.material.swell_ratio,
         filament_mm: d.printer.filament_diameter_mm,
-        feed_mm_s: d.job.value["foam"]["feed_mm_s"].as_f64().unwrap_or(crate::jobs::foam::DEFAULT_FEED_MM_S),
+        feed_mm_s: d.job.value["foam"]["feed_mm_s"].as_f64().unwrap_or(crate::kinds::foam::DEFAULT_FEED_MM_S),
     };
     let flat = |s: &Segment| (s.b[2] - s.a[2]).abs() < 1e-6 && (s.b[0] - s.a[0]).hypot(s.b[1] - s.a[1]) >= 0.2;
     Ok(segs
@@ -621,7 +621,7 @@ const TOWER_6120_JSON: &str = include_str!("../../tests/fixtures/freeform-tower-
 
 fn freeform_timing_rows() -> Result<Vec<Row>, String> {
     let d = example("freeform-tower-6120-exact", TOWER_6120_JSON)?;
-    let registry = crate::jobs::Registry::builtin();
+    let registry = crate::kinds::Registry::builtin();
     let (_, stages, out) = super::designs::timed_run(&registry, &mut Cache::disabled(), &d, &Files::new(), &RunOptions::default())?;
     let t = |name: &str| stages.iter().find(|s| s.0 == name).map_or(0.0, |s| s.1);
     let a = gcode_segments(&out)?.report;

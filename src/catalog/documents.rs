@@ -1,4 +1,4 @@
-//! The design document checked against the job kinds ([`crate::jobs::Registry`]): reading
+//! The design document checked against the job kinds ([`crate::kinds::Registry`]): reading
 //! (syntax, fields, each kind's settings and rules), changes (`--set`, slot inputs) validated
 //! once, and the default design. Methods of [`Design`] live here, above the kinds, so the
 //! document itself ([`crate::design`]) knows no kind.
@@ -7,7 +7,7 @@ use super::schema;
 use crate::design::words;
 use crate::design::{drop_flat, set_path, too_deep, Design, Error, Input, Job, Problem, DESIGN_VERSION, MAX_DESIGN_BYTES, MAX_JSON_DEPTH, MAX_QUOTE_CHARS};
 use crate::gcode::{Material, Printer, Speeds};
-use crate::jobs::Registry;
+use crate::kinds::Registry;
 use crate::settings::clip;
 use serde_json::Value;
 
@@ -21,7 +21,7 @@ impl Default for Design {
             printer: Printer::default(),
             material: Material::default(),
             speeds: Speeds::default(),
-            job: Job::new("slice", &crate::jobs::slice::SliceJob::default()),
+            job: Job::new("slice", &crate::kinds::slice::SliceJob::default()),
         }
     }
 }

@@ -7,7 +7,7 @@ use crate::design::share::MAX_EMBEDDED_CHARS;
 use crate::design::{Design, Input, Problem, MAX_DESCRIPTION_BYTES, MAX_FILE_NAME_BYTES, MAX_INPUT_FILES, MAX_NAME_BYTES};
 use crate::geom::shapes::Shape;
 use crate::geom::Feature;
-use crate::jobs::{Registry, Slot, StageInfo, ViewInfo};
+use crate::kinds::{Registry, Slot, StageInfo, ViewInfo};
 use crate::settings::{self, int, max_len, mount, other, Field, Kind, Row, MAX_TEXT_BYTES};
 use serde::Serialize;
 use serde_json::Value;

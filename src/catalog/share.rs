@@ -28,7 +28,7 @@ pub fn encode(design: &Design, files: &[(&str, &[u8])]) -> ShareLink {
     let mut embedded = Vec::new();
     let mut missing = Vec::new();
     let mut used = 0usize;
-    let registry = crate::jobs::Registry::builtin();
+    let registry = crate::kinds::Registry::builtin();
     let slots = registry.get(design.job.kind()).map(|k| k.slots()).unwrap_or(&[]);
     for slot in slots {
         match design.job.input_at(slot.path) {
@@ -110,7 +110,7 @@ mod tests {
 
     #[test]
     fn small_mesh_is_embedded_and_large_is_not() {
-        let registry = crate::jobs::Registry::builtin();
+        let registry = crate::kinds::Registry::builtin();
         let d = Design::default().with_slot_input(&registry, "mesh", Input::File { name: "part.stl".into(), embedded: None }).unwrap();
         let small = vec![7u8; 1000];
         let link = encode(&d, &[("part.stl", &small)]);

@@ -488,7 +488,7 @@ mod tests {
     #[test]
     fn overrides_apply_and_validate() {
         let d = Design::default().with_overrides(&["job.slice.layer_height_mm=0.1".into(), "name=part 2".into()]).unwrap();
-        let j: crate::jobs::slice::SliceJob = d.job.settings().expect("slice job expected");
+        let j: crate::kinds::slice::SliceJob = d.job.settings().expect("slice job expected");
         assert_eq!(j.slice.layer_height_mm, 0.1);
         assert_eq!(d.name, "part 2");
         assert!(Design::default().with_overrides(&["job.slice.nonsense=1".into()]).is_err());

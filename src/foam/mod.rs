@@ -3,7 +3,7 @@
 //! printed foams*): the weighting functions of a transition between two regions
 //! ([`weight`], appendix A), a point's pair from its region and its distances to the shared
 //! boundaries ([`blend`], Algorithm 2) and the printing numbers of one piece of toolpath
-//! ([`vtp`], section 3.2.4). The job kind `foam` (`crate::jobs::foam`) runs them as stages:
+//! ([`vtp`], section 3.2.4). The job kind `foam` (`crate::kinds::foam`) runs them as stages:
 //! [`regions`] (parry3d-f64 solids, shared boundaries, the paper's region rules), the
 //! foundation's slicer on the union, [`raster`] (one continuous path per layer), [`field`]
 //! (π along the path with few queries), [`grade`] (each piece printed with its pair);

@@ -3,7 +3,7 @@
 //! deterministic; the bytes made grow at most linearly in `n`.
 
 use crate::design::{Design, Job};
-use crate::jobs::lattice::LatticeJob;
+use crate::kinds::lattice::LatticeJob;
 use crate::lattice::{Domain, Pattern};
 use crate::nonplanar;
 use crate::paths::Method;

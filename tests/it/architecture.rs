@@ -94,11 +94,75 @@ fn an_upward_use_is_caught() {
     let floors = floors();
     // `design` (the data) naming the kinds, and the runtime naming the pipeline.
     let mut uses = Vec::new();
-    uses_in("src/design/mod.rs", "use crate::jobs::Registry;\n", "design", &mut uses);
+    uses_in("src/design/mod.rs", "use crate::kinds::Registry;\n", "design", &mut uses);
     uses_in("src/stage/ctx.rs", "    let x = crate::pipeline::run(d);\n#[cfg(test)]\nuse crate::pipeline::Files;\n", "stage", &mut uses);
-    uses_in("src/gcode/mod.rs", "use crate::geom::DVec3; // crate::jobs in a comment\n", "gcode", &mut uses);
+    uses_in("src/gcode/mod.rs", "use crate::geom::DVec3; // crate::kinds in a comment\n", "gcode", &mut uses);
     let bad = breaches(&floors, &uses);
     assert_eq!(bad.len(), 2, "{bad:?}");
-    assert!(bad[0].contains("src/design/mod.rs:1") && bad[0].contains("crate::jobs"), "{}", bad[0]);
+    assert!(bad[0].contains("src/design/mod.rs:1") && bad[0].contains("crate::kinds"), "{}", bad[0]);
     assert!(bad[1].contains("src/stage/ctx.rs:1") && bad[1].contains("crate::pipeline"), "{}", bad[1]);
+}
+
+/// `(file, line number, other kind)` for each name of another kind in `kind`'s files: a kind
+/// uses the runtime, the vocabulary of `kinds` and the algorithms, never another kind.
+fn other_kinds_named(file: &str, text: &str, kind: &str, kinds: &[String]) -> Vec<String> {
+    let mut out = Vec::new();
+    for (i, line) in text.lines().enumerate() {
+        let code = line.split("//").next().unwrap_or("");
+        // `prefix` followed by the whole name (not `kinds::slice_report` for `slice`).
+        let names = |prefix: &str, other: &str| {
+            let p = format!("{prefix}{other}");
+            code.match_indices(&p).any(|(at, _)| !code[at + p.len()..].starts_with(|c: char| c.is_ascii_alphanumeric() || c == '_'))
+        };
+        for other in kinds.iter().filter(|k| *k != kind) {
+            if names("kinds::", other) || names("super::super::", other) || (file.ends_with("/mod.rs") && names("super::", other)) {
+                out.push(format!("{file}:{}: the kind `{kind}` names the kind `{other}`: move what both need into an algorithm module or the runtime", i + 1));
+            }
+        }
+    }
+    out
+}
+
+/// Most lines of one file of a kind's folder: the folder reads top to bottom, a concern a file.
+const MAX_KIND_FILE_LINES: usize = 500;
+
+#[test]
+fn each_kind_is_a_folder_of_small_files_that_names_no_other_kind() {
+    let dir = crate::common::root().join("src/kinds");
+    let mut kinds: Vec<String> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.is_dir())
+        .map(|p| p.file_name().unwrap().to_string_lossy().to_string())
+        .collect();
+    kinds.sort();
+    assert!(kinds.len() >= 6, "kinds found: {kinds:?}");
+    let loose: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().to_string())
+        .filter(|n| n.ends_with(".rs") && n != "mod.rs")
+        .collect();
+    assert!(loose.is_empty(), "kinds outside a folder of their own: {loose:?}");
+    let mut bad = Vec::new();
+    for kind in &kinds {
+        let mut files = Vec::new();
+        sources(&dir.join(kind), Some(kind), &mut files);
+        assert!(files.iter().any(|(_, f)| f.ends_with("/mod.rs")), "src/kinds/{kind}/ has no mod.rs");
+        for (_, file) in &files {
+            let text = std::fs::read_to_string(file).unwrap();
+            let lines = text.lines().count();
+            if lines > MAX_KIND_FILE_LINES {
+                bad.push(format!("{file}: {lines} lines (at most {MAX_KIND_FILE_LINES}): split it by concern"));
+            }
+            bad.extend(other_kinds_named(file, &text, kind, &kinds));
+        }
+    }
+    assert!(bad.is_empty(), "{}", bad.join("\n"));
+    let caught = other_kinds_named(
+        "src/kinds/foam/stages.rs",
+        "use crate::kinds::lattice::LatticeJob;\nuse super::*; // kinds::slice\nlet r = crate::kinds::slice_report(&s, \"\");\n",
+        "foam",
+        &kinds,
+    );
+    assert_eq!(caught.len(), 1, "{caught:?}");
 }

@@ -2,7 +2,7 @@
 //! through the design, the pipeline, the 5-axis writer and the analyzer.
 
 use weft::design::Design;
-use weft::jobs::axisymmetric::{PathSummary, PointsSummary};
+use weft::kinds::axisymmetric::{PathSummary, PointsSummary};
 use weft::pipeline::{self, Files, RunOptions};
 
 fn example(name: &str) -> Design {
@@ -186,7 +186,7 @@ fn switching_to_the_kind_puts_a_five_axis_head_in_place() {
     // The default design (a slice on a Cartesian printer) switched to axisymmetric is valid:
     // the kind puts the five-axis-head profile in place, and runs.
     let d = Design::default().with_overrides(&["job.kind=axisymmetric".to_string()]).unwrap();
-    let preset = weft::gcode::presets::preset(weft::jobs::axisymmetric::FIVE_AXIS_PRESET).unwrap();
+    let preset = weft::gcode::presets::preset(weft::kinds::axisymmetric::FIVE_AXIS_PRESET).unwrap();
     assert_eq!(serde_json::to_value(&d.printer).unwrap(), serde_json::to_value(&preset.printer).unwrap());
     // A poses CSV printer is kept (it needs no machine).
     let csv = Design::default().with_overrides(&["printer.flavor=poses_csv".to_string(), "job.kind=axisymmetric".to_string()]).unwrap();
@@ -210,7 +210,7 @@ fn a_tip_below_the_plate_is_refused_before_the_points() {
     // Raised by the amount the message states (rounded up), the same domain prints.
     let raise: f64 = e.split("at least ").nth(1).unwrap().split(' ').next().unwrap().parse().unwrap();
     let raised: Vec<[f64; 2]> =
-        d.job.settings::<weft::jobs::axisymmetric::AxisymJob>().unwrap().platform.control_points.iter().map(|p| [p[0], p[1] + raise + 1e-3]).collect();
+        d.job.settings::<weft::kinds::axisymmetric::AxisymJob>().unwrap().platform.control_points.iter().map(|p| [p[0], p[1] + raise + 1e-3]).collect();
     // (The tool points almost straight down there: the head's B limit is opened for it.)
     let d = d
         .with_overrides(&[
@@ -238,7 +238,7 @@ fn xyz_of(gcode: &str) -> Vec<[String; 3]> {
 
 #[test]
 fn smoothing_the_tool_axis_lowers_every_rotary_acceleration_and_keeps_the_tip() {
-    use weft::jobs::axisymmetric::AxesSummary;
+    use weft::kinds::axisymmetric::AxesSummary;
     for name in ["barrel-omega1", "hourglass-omega3"] {
         let d = example(name);
         let plain = run(&d);
@@ -347,7 +347,7 @@ fn bad_grading_is_named() {
 /// (u, θ) points of layer `layer` after repulsion, read from the map view (each point is a
 /// cross: its horizontal bar is the first of its two segments).
 fn map_points(d: &Design, files: &Files, cache: &mut weft::pipeline::Cache, layer: usize) -> (Vec<[f64; 2]>, serde_json::Value, usize) {
-    let v = pipeline::inspect(&weft::jobs::Registry::builtin(), cache, d, files, "map", 3 * layer + 1).unwrap();
+    let v = pipeline::inspect(&weft::kinds::Registry::builtin(), cache, d, files, "map", 3 * layer + 1).unwrap();
     let lattice = weft::geom::Feature::Lattice.code() as f32;
     let segs: Vec<&[f32]> = v.data.chunks(v.stride).filter(|s| s[4] == lattice).collect();
     let pts = segs.chunks(2).map(|c| [c[0][1] as f64, 0.5 * (c[0][0] + c[0][2]) as f64]).collect();
@@ -398,11 +398,11 @@ fn three_layers_stack_along_the_normal() {
     let d = example("barrel-omega1").with_overrides(&sets).unwrap();
     let h = d.job.value["layer_height_mm"].as_f64().unwrap_or(0.2);
     // The estimate states every layer's points before running (the sum, refused as a whole).
-    let plan = pipeline::estimate(&weft::jobs::Registry::builtin(), &mut weft::pipeline::Cache::disabled(), &d, &Files::default()).unwrap();
+    let plan = pipeline::estimate(&weft::kinds::Registry::builtin(), &mut weft::pipeline::Cache::disabled(), &d, &Files::default()).unwrap();
     let stated = plan.stages.iter().find(|e| e.stage == "axisym_uniform").unwrap().get("points");
     assert!((stated - 3.0 * 538.0).abs() <= 0.03 * 3.0 * 538.0, "{stated}");
     let many = example("barrel-omega1").with_overrides(&["job.layers=100".to_string(), "job.points.density=1".to_string()]).unwrap();
-    let plan = pipeline::estimate(&weft::jobs::Registry::builtin(), &mut weft::pipeline::Cache::disabled(), &many, &Files::default()).unwrap();
+    let plan = pipeline::estimate(&weft::kinds::Registry::builtin(), &mut weft::pipeline::Cache::disabled(), &many, &Files::default()).unwrap();
     eprintln!("100 layers at 100 %: {:?}", plan.refusal);
     assert!(plan.refusal.is_some());
     // The G-code: three extrusion paths (one pass per layer).
@@ -584,17 +584,17 @@ fn switching_the_domain_to_a_polygon_starts_from_the_rectangle() {
     // The form switches the kind alone: the design stays valid, the outline is the rectangle's.
     let d = example("barrel-omega1").with_overrides(&["job.domain.kind=polygon".into()]).unwrap();
     assert!(d.validate().is_empty(), "{:?}", d.validate());
-    let j: weft::jobs::axisymmetric::AxisymJob = d.job.settings().unwrap();
+    let j: weft::kinds::axisymmetric::AxisymJob = d.job.settings().unwrap();
     assert_eq!(j.domain.polygon, vec![[0.8, 0.0], [1.2, 0.0], [1.2, 1.0], [0.8, 1.0]]);
     // Same points as the rectangle: the same (u, θ) region.
     let a: PointsSummary = run(&example("barrel-omega1")).report.stage("points").unwrap();
     let b: PointsSummary = run(&d).report.stage("points").unwrap();
     assert_eq!(a.points, b.points);
-    assert!(serde_json::from_str::<weft::jobs::axisymmetric::DomainSpec>(r#"{"kind":"polygon","polgon":[]}"#).is_err(), "unknown fields are still refused");
+    assert!(serde_json::from_str::<weft::kinds::axisymmetric::DomainSpec>(r#"{"kind":"polygon","polgon":[]}"#).is_err(), "unknown fields are still refused");
     // The map offers to draw a polygon domain (which field, and that its pairs are (u, θ) =
     // (y, x) of the map), and not a rectangle.
     let mut cache = weft::pipeline::Cache::new();
-    let registry = weft::jobs::Registry::builtin();
+    let registry = weft::kinds::Registry::builtin();
     let v = pipeline::inspect(&registry, &mut cache, &d, &Files::default(), "map", 1).unwrap();
     assert_eq!(v.meta["draw"]["path"], "job.domain.polygon");
     assert_eq!(v.meta["draw"]["pair"], serde_json::json!(["y", "x"]));

@@ -143,7 +143,7 @@ fn every_curved_strut_is_printed_exactly_once() {
     {
         let d = design(pattern.clone(), |v| v["job"]["paths"]["method"] = serde_json::json!(method));
         let out = pipeline::run(&d, &Files::new(), &RunOptions::default(), &mut |_, _| {}).unwrap();
-        let layer = weft::jobs::lattice::lattice_strokes(&d, &Files::new()).unwrap().remove(0);
+        let layer = weft::kinds::lattice::lattice_strokes(&d, &Files::new()).unwrap().remove(0);
         let g = weft::paths::build_graph(&layer, 0.005);
         // The bed centre (corner origin, 220 × 220) is the lattice's origin.
         let printed = extruded_segments(&out.gcode, DVec2::new(110.0, 110.0));

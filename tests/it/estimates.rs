@@ -7,7 +7,7 @@ use weft::budget::{Estimate, MAX_STAGE_BYTES};
 use weft::design::Design;
 use weft::geom::shapes::Shape;
 use weft::geom::Mesh;
-use weft::jobs::Registry;
+use weft::kinds::Registry;
 use weft::pipeline::{self, Cache, Files, RunOptions};
 use weft::{gcode, slice};
 

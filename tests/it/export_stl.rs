@@ -25,7 +25,7 @@ fn seg_seg(a: DVec2, b: DVec2, c: DVec2, d: DVec2) -> f64 {
 fn check(name: &str, json: &str) -> (usize, usize) {
     let design = Design::from_json("test.json", json).unwrap();
     let w = design.printer.nozzle_diameter_mm;
-    let layers = weft::jobs::lattice::lattice_strokes(&design, &Files::new()).unwrap();
+    let layers = weft::kinds::lattice::lattice_strokes(&design, &Files::new()).unwrap();
     let (mut pairs, mut touching, mut triangles) = (0, 0, 0);
     for layer in &layers {
         let g = weft::paths::build_graph(layer, 0.005);

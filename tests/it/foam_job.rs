@@ -14,7 +14,7 @@ use common::{example, run};
 
 /// The process of a design with its feed C.
 fn process(d: &Design) -> Process {
-    let c = d.job.value["foam"]["feed_mm_s"].as_f64().unwrap_or(weft::jobs::foam::DEFAULT_FEED_MM_S);
+    let c = d.job.value["foam"]["feed_mm_s"].as_f64().unwrap_or(weft::kinds::foam::DEFAULT_FEED_MM_S);
     Process { nozzle_mm: d.printer.nozzle_diameter_mm, die_swell: d.material.swell_ratio, filament_mm: d.printer.filament_diameter_mm, feed_mm_s: c }
 }
 

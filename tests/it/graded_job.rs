@@ -29,11 +29,11 @@ fn example_json() -> String {
     let mut d: serde_json::Value = serde_json::from_str(&Design::default().to_json_pretty()).unwrap();
     d["name"] = "graded-phantom".into();
     d["description"] = "A CT bone phantom (cortical shell, graded trabecular core, medullary canal; a 48 × 48 × 30 DICOM series of 1 × 1 × 2 mm voxels written by weft's test helpers) cropped to a 20 mm segment, surface at 350 HU with the canal filled, gyroid infill at ρ_s 47 % graded by the femur case's HU → porosity line (equation 7).".into();
-    d["job"] = serde_json::to_value(weft::jobs::graded::GradedJob::default()).unwrap();
+    d["job"] = serde_json::to_value(weft::kinds::graded::GradedJob::default()).unwrap();
     d["job"]["kind"] = "graded".into();
     d["job"]["volume"] = serde_json::json!({"file": {"name": "bone-phantom.zip", "embedded": share::pack(&zip)}});
     d["job"]["roi"] = serde_json::json!({"min_mm": [0.0, 0.0, 20.0], "max_mm": [47.0, 47.0, 40.0]});
-    weft::jobs::Registry::builtin().get("graded").unwrap().adopted(&mut d);
+    weft::kinds::Registry::builtin().get("graded").unwrap().adopted(&mut d);
     let design = Design::from_json("example", &d.to_string()).unwrap();
     design.to_json_pretty()
 }
@@ -259,7 +259,7 @@ fn edit_route_rewrites_only_the_infill_of_another_slicers_gcode() {
     let foreign = String::from_utf8(weft::testgen::foreign::generate(&spec).text).unwrap();
     files.insert("part.gcode".into(), foreign.clone().into_bytes());
     // Filling the G-code slot switches the route to `edit`.
-    design = design.with_slot_input(&weft::jobs::Registry::builtin(), "gcode", Input::File { name: "part.gcode".into(), embedded: None }).unwrap();
+    design = design.with_slot_input(&weft::kinds::Registry::builtin(), "gcode", Input::File { name: "part.gcode".into(), embedded: None }).unwrap();
     let out = run(&design, &files);
     let edit: serde_json::Value = out.report.stage_data("edit").unwrap().clone();
     assert!(edit["edited_moves"].as_u64().unwrap() > 100, "{edit}");
@@ -309,9 +309,9 @@ fn files_kept_outside_give_the_same_gcode_and_a_gone_one_is_named() {
     // A G-code over one read piece (4 MiB), so the edit reads it in several.
     let foreign = weft::testgen::foreign::sized(weft::testgen::foreign::Slicer::PrusaSlicer, false, 9 << 20).text;
     let input = Input::File { name: "part.gcode".into(), embedded: None };
-    let design = example().with_slot_input(&weft::jobs::Registry::builtin(), "gcode", input).unwrap();
+    let design = example().with_slot_input(&weft::kinds::Registry::builtin(), "gcode", input).unwrap();
     let names: Vec<String> = series().into_iter().map(|(n, _)| n).collect();
-    let design = design.with_slot_input(&weft::jobs::Registry::builtin(), "volume", Input::Files(names)).unwrap();
+    let design = design.with_slot_input(&weft::kinds::Registry::builtin(), "volume", Input::Files(names)).unwrap();
 
     let mut inside = Files::new();
     let mut outside = Files::new();
@@ -331,7 +331,7 @@ fn files_kept_outside_give_the_same_gcode_and_a_gone_one_is_named() {
 
     // A session re-running the same design reads no slice again: the volume, its estimate and
     // the keys come from the cache and the hashes made on loading.
-    let registry = weft::jobs::Registry::builtin();
+    let registry = weft::kinds::Registry::builtin();
     let mut cache = weft::pipeline::Cache::new();
     let opts = RunOptions::default();
     pipeline::run_in(&registry, &mut cache, &design, &outside, &opts, &mut |_, _| {}).unwrap();
@@ -360,7 +360,7 @@ fn a_broken_series_is_refused_by_name_and_the_design_keeps_its_inputs() {
         files.insert(name.clone(), bytes);
         names.push(name);
     }
-    let design = example().with_slot_input(&weft::jobs::Registry::builtin(), "volume", Input::Files(names.clone())).unwrap();
+    let design = example().with_slot_input(&weft::kinds::Registry::builtin(), "volume", Input::Files(names.clone())).unwrap();
     let e = pipeline::run(&design, &files, &RunOptions::default(), &mut |_, _| {}).expect_err("a truncated slice must be refused").to_string();
     assert!(e.contains(&names[7]), "the message does not name the file: {e}");
     // The design still names every file (nothing was dropped from it).
@@ -438,7 +438,7 @@ fn a_series_over_the_limit_together_is_refused_before_it_is_read() {
         sources.push(z);
     }
     let read_on_loading: Vec<usize> = sources.iter().map(|z| z.reads.load(Relaxed)).collect();
-    let design = example().with_slot_input(&weft::jobs::Registry::builtin(), "volume", Input::Files(vec!["s0.dcm".into(), "s1.dcm".into()])).unwrap();
+    let design = example().with_slot_input(&weft::kinds::Registry::builtin(), "volume", Input::Files(vec!["s0.dcm".into(), "s1.dcm".into()])).unwrap();
     let e = pipeline::run(&design, &files, &RunOptions::default(), &mut |_, _| {}).expect_err("refused").to_string();
     assert!(e.contains("the files given for 'volume':") && e.contains("MiB is more than the") && e.contains("crop or resample"), "{e}");
     let read_later: Vec<usize> = sources.iter().map(|z| z.reads.load(Relaxed)).collect();

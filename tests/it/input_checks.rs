@@ -50,7 +50,7 @@ fn notes(out: &weft::pipeline::RunOutput) -> Vec<String> {
 fn foam_of(names: &[&str]) -> weft::design::Design {
     let d = example("foam-dogbone-linear");
     let input = Input::Files(names.iter().map(|n| n.to_string()).collect());
-    d.with_changes_in(&weft::jobs::Registry::builtin(), &[("regions".into(), input)], &[]).unwrap()
+    d.with_changes_in(&weft::kinds::Registry::builtin(), &[("regions".into(), input)], &[]).unwrap()
 }
 
 #[test]
@@ -84,7 +84,7 @@ fn holes_that_cannot_be_capped_are_refused_by_place_with_the_real_cause() {
     assert!(e.contains("A.stl is not a closed solid") && e.contains("is not flat") && e.contains("mm² around (") && !e.contains("do not touch"), "{e}");
     // The slice job refuses it the same way (one check per slot kind), and so does the CLI.
     let mut d = example("cube-20mm");
-    d = d.with_changes_in(&weft::jobs::Registry::builtin(), &[("mesh".into(), Input::File { name: "A.stl".into(), embedded: None })], &[]).unwrap();
+    d = d.with_changes_in(&weft::kinds::Registry::builtin(), &[("mesh".into(), Input::File { name: "A.stl".into(), embedded: None })], &[]).unwrap();
     let e = run_files(&d, &[("A.stl", bent.clone())]).unwrap_err();
     assert!(e.contains("A.stl is not a closed solid"), "{e}");
     let dir = temp_dir("refused");
@@ -116,7 +116,7 @@ fn an_inside_out_part_slices_as_the_part_and_says_so() {
         t.swap(1, 2);
     }
     let d = example("cube-20mm")
-        .with_changes_in(&weft::jobs::Registry::builtin(), &[("mesh".into(), Input::File { name: "part.stl".into(), embedded: None })], &[])
+        .with_changes_in(&weft::kinds::Registry::builtin(), &[("mesh".into(), Input::File { name: "part.stl".into(), embedded: None })], &[])
         .unwrap();
     let good = run_files(&d, &[("part.stl", right.to_stl_binary())]).unwrap();
     let turned = run_files(&d, &[("part.stl", inverted.to_stl_binary())]).unwrap();
@@ -124,9 +124,9 @@ fn an_inside_out_part_slices_as_the_part_and_says_so() {
     assert!(good.report.analysis.extruded_mm > 1000.0);
     assert!(notes(&turned).iter().any(|n| n.contains("turned 12 triangles facing inward")), "{:?}", notes(&turned));
     // A surface slot takes an open mesh as it is: nothing capped, nothing said.
-    let registry = weft::jobs::Registry::builtin();
+    let registry = weft::kinds::Registry::builtin();
     let surface = registry.slot("surface").unwrap();
-    assert_eq!(surface.kind, weft::jobs::SlotKind::Surface);
+    assert_eq!(surface.kind, weft::kinds::SlotKind::Surface);
     assert!(!surface.kind.solid() && registry.slot("mesh").unwrap().kind.solid() && registry.slot("regions").unwrap().kind.solid());
 }
 
@@ -205,7 +205,7 @@ fn inputs_one_by_one_a_folder_and_settings_in_any_order_make_the_same_gcode() {
     let v_max = grade.metrics.iter().find(|m| m.key == "v_star_max").unwrap().value;
     assert!((v_max - 0.35).abs() < 1e-9, "region 2's V* is printed: {v_max}");
     // A page-style load, one file then the other: region 2's row survives the first load.
-    let registry = weft::jobs::Registry::builtin();
+    let registry = weft::kinds::Registry::builtin();
     let start = example("foam-dogbone-linear").with_overrides(&["job.regions.1.v_star=0.35".into(), "job.regions.1.h_star=10".into()]).unwrap();
     let first = start.with_slot_input(&registry, "regions", Input::File { name: "A.stl".into(), embedded: None }).unwrap();
     let both = first.with_slot_input(&registry, "regions", Input::Files(vec!["A.stl".into(), "B.stl".into()])).unwrap();

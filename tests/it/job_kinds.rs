@@ -6,7 +6,7 @@ use weft::budget::Estimate;
 use weft::catalog::schema;
 use weft::design::{Design, Input};
 use weft::geom::{DVec3, Feature, Pass, PassKind, Path, PointData, PointFlow, Toolpath};
-use weft::jobs::{Inspection, Kind, Product, Registry, Shape, Slot, SlotKind, StageInfo, ViewInfo};
+use weft::kinds::{Inspection, Kind, Product, Registry, Shape, Slot, SlotKind, StageInfo, ViewInfo};
 use weft::pipeline::{self, Cache, Ctx, Error, Files, RunOptions};
 use weft::report::{Axis, Plot, PlotKind, Series, StageReport};
 use weft::settings::{mount, num, Field, Problem, Row};

@@ -6,8 +6,8 @@
 use weft::budget::{Estimate, Plan, MAX_STAGE_BYTES};
 use weft::design::Job;
 use weft::geom::{DVec2, DVec3, Feature, Mesh, Pass, Path, StrokeLayer, Toolpath};
-use weft::jobs::lattice::{lattice_strokes, LatticeJob};
-use weft::jobs::{Product, Registry};
+use weft::kinds::lattice::{lattice_strokes, LatticeJob};
+use weft::kinds::{Product, Registry};
 use weft::lattice::{self, Domain, DomainSize, Options, Pattern, MAX_STRUTS_PER_LAYER};
 use weft::nonplanar::{self, Surface, SurfaceSize};
 use weft::paths::{self, Method, Order, MAX_GIPPO_STEPS};

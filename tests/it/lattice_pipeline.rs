@@ -6,7 +6,7 @@ use crate::common;
 
 use std::collections::BTreeMap;
 use weft::design::Job;
-use weft::jobs::lattice::{lattice_strokes, LatticeJob};
+use weft::kinds::lattice::{lattice_strokes, LatticeJob};
 use weft::nonplanar::ProjectionReport;
 use weft::paths::{build_graph, Method, PathsReport};
 use weft::pipeline::{self, Files, RunOptions};

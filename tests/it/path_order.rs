@@ -5,7 +5,7 @@
 use crate::common;
 
 use weft::design::Job;
-use weft::jobs::lattice::{lattice_strokes, LatticeJob};
+use weft::kinds::lattice::{lattice_strokes, LatticeJob};
 use weft::paths::{optimise, Method, Options, Order, PathsReport};
 use weft::pipeline::{self, Files, RunOptions};
 use weft::Design;

@@ -2,7 +2,7 @@
 
 use weft::design::Input;
 use weft::import::ImportReport;
-use weft::jobs::Registry;
+use weft::kinds::Registry;
 use weft::pipeline::{self, Files, RunOptions};
 use weft::slice::SliceReport;
 use weft::Design;

@@ -8,7 +8,7 @@
 use std::cmp::Reverse;
 use std::collections::BinaryHeap;
 use weft::geom::{DVec2, Feature, Stroke, StrokeLayer};
-use weft::jobs::lattice::{lattice_strokes, LatticeJob};
+use weft::kinds::lattice::{lattice_strokes, LatticeJob};
 use weft::paths::{build_graph, optimise, Graph, Method, Options};
 use weft::pipeline::Files;
 use weft::Design;

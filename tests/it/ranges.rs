@@ -4,7 +4,7 @@
 use serde_json::Value;
 use weft::catalog::schema;
 use weft::design::Design;
-use weft::jobs::Registry;
+use weft::kinds::Registry;
 use weft::settings::{Field, Kind};
 
 fn example(name: &str) -> Design {

@@ -99,7 +99,7 @@ fn a_sphere_of_several_import_chunks_slices_to_the_same_bytes_at_one_two_and_fou
     let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/examples/cube-20mm.json")).unwrap();
     let design = Design::from_json("cube-20mm", &text)
         .unwrap()
-        .with_slot_input(&weft::jobs::Registry::builtin(), "mesh", Input::File { name: "sphere.stl".into(), embedded: None })
+        .with_slot_input(&weft::kinds::Registry::builtin(), "mesh", Input::File { name: "sphere.stl".into(), embedded: None })
         .unwrap();
     let mut outputs = Vec::new();
     for threads in [1, 2, 4] {

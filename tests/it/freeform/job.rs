@@ -19,8 +19,8 @@ fn read_back(name: &str, d: &Design) {
     let beams = order.len();
     assert_eq!(out.report.analysis.extrusion_paths, beams, "{name}: one extrusion path per beam");
     let job = &d.job.value;
-    let diameter = job["beam"]["diameter_mm"].as_f64().unwrap_or(weft::jobs::freeform::DEFAULT_BEAM_DIAMETER_MM);
-    let speed = job["print"]["speed_mm_s"].as_f64().unwrap_or(weft::jobs::freeform::DEFAULT_SPEED_MM_S);
+    let diameter = job["beam"]["diameter_mm"].as_f64().unwrap_or(weft::kinds::freeform::DEFAULT_BEAM_DIAMETER_MM);
+    let speed = job["print"]["speed_mm_s"].as_f64().unwrap_or(weft::kinds::freeform::DEFAULT_SPEED_MM_S);
     let fd = d.printer.filament_diameter_mm;
     let nominal = diameter * diameter / (fd * fd) * d.material.extrusion_multiplier;
     // Segments by path: every path is one straight beam, printed once, in the stated order.
@@ -131,7 +131,7 @@ fn a_file_gives_the_bytes_of_the_same_file_embedded_and_runs_repeat() {
     assert_eq!(embedded.gcode, from_file.gcode);
     // The sequence view scrubs the steps: the current beam, printed ones before it.
     let mut cache = pipeline::Cache::new();
-    let reg = weft::jobs::Registry::builtin();
+    let reg = weft::kinds::Registry::builtin();
     let v = pipeline::inspect(&reg, &mut cache, &d, &Files::new(), "sequence", 2).unwrap();
     assert_eq!((v.count, v.index), (4, 2));
     let codes: Vec<u32> = v.data.chunks_exact(7).map(|s| s[6] as u32).collect();
@@ -211,7 +211,7 @@ fn a_tilting_head_prints_the_truss_a_3_axis_printer_cannot() {
     assert!(out.gcode.lines().any(|l| l.starts_with("G1 ") && l.contains(" B30")), "no B30 in the G-code");
     // The sequence view names a tilted step's tilt.
     let mut cache = pipeline::Cache::new();
-    let reg = weft::jobs::Registry::builtin();
+    let reg = weft::kinds::Registry::builtin();
     let captions: Vec<String> = (0..6)
         .map(|i| pipeline::inspect(&reg, &mut cache, &d, &Files::new(), "sequence", i).unwrap().meta["caption"].as_str().unwrap_or("").to_string())
         .collect();
@@ -309,7 +309,7 @@ fn moves(text: &str) -> &str {
 #[test]
 fn the_first_beams_are_sent_ahead_and_the_final_gcode_begins_with_their_moves() {
     use std::cell::RefCell;
-    use weft::jobs::Registry;
+    use weft::kinds::Registry;
     use weft::pipeline::{Ahead, Cache, RunOptions};
     for name in ["freeform-voronoi", "freeform-klein-bottle-relaxed", "freeform-cantilever-truss-tilt"] {
         let d = example(name);

@@ -1,0 +1,32 @@
+//! The lattice job's view: one layer's strokes and paths in the plane.
+
+use super::*;
+
+/// One of the kind's views at `index` (`Kind::inspect`).
+pub(super) fn inspect(j: &LatticeJob, ctx: &mut Ctx, view: &str, index: usize) -> Result<Inspection, Error> {
+    if view != "layer2d" {
+        return Err(Error::UnknownView { view: view.into(), job: LatticeKind::NAME });
+    }
+    let strokes = strokes(j, ctx)?;
+    let count = strokes.len();
+    let index = index.min(count.saturating_sub(1));
+    let mut data = Vec::new();
+    if let Some(l) = strokes.get(index) {
+        for s in &l.strokes {
+            for w in s.points.windows(2) {
+                data.extend_from_slice(&[w[0].x as f32, w[0].y as f32, w[1].x as f32, w[1].y as f32, s.feature.code() as f32]);
+            }
+        }
+    }
+    let z = strokes.get(index).map_or(0.0, |l| l.z);
+    Ok(Inspection {
+        view: view.into(),
+        shape: Shape::Lines2d,
+        index,
+        count,
+        stride: Shape::Lines2d.stride(),
+        data,
+        overlay: Vec::new(),
+        meta: serde_json::json!({ "z_mm": z }),
+    })
+}

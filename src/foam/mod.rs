@@ -5,7 +5,7 @@
 //! boundaries ([`blend`], Algorithm 2) and the printing numbers of one piece of toolpath
 //! ([`vtp`], section 3.2.4). The job kind `foam` (`crate::kinds::foam`) runs them as stages:
 //! [`regions`] (parry3d-f64 solids, shared boundaries, the paper's region rules), the
-//! foundation's slicer on the union, [`raster`] (one continuous path per layer), [`field`]
+//! foundation's slicer on the union, [`layers`] (one outline a layer), [`raster`] (one continuous path per layer), [`field`]
 //! (π along the path with few queries), [`grade`] (each piece printed with its pair);
 //! [`models`] builds the examples' regions. Beyond the
 //! paper: [`stiffness`] turns a target modulus into V*, and [`blend`] joins several
@@ -14,6 +14,7 @@
 pub mod blend;
 pub mod field;
 pub mod grade;
+pub mod layers;
 pub mod models;
 pub mod raster;
 pub mod regions;

@@ -32,12 +32,13 @@ use super::{Inspection, Kind, Product, Shape, Slot, SlotKind, StageInfo, ViewInf
 use crate::budget::Estimate;
 use crate::design::{Design, Input};
 use crate::foam::field::Field;
+use crate::foam::layers::{check_layers, inset, Cut, Layer};
 use crate::foam::models::{self, Model};
 use crate::foam::regions::{self, Regions};
 use crate::foam::stiffness::Calibration;
 use crate::foam::{grade, raster};
 use crate::foam::{Junction, Pair, Process, Transition, Weighting};
-use crate::geom::{DVec2, DVec3, Feature, Mesh, Polygon, Toolpath};
+use crate::geom::{DVec2, DVec3, Feature, Mesh, Toolpath};
 use crate::report::{Axis, Metric, Plot, PlotKind, Series, StageReport};
 use crate::settings::{mount, num, other, percent, when, Field as Row0, Kind as FieldKind, Problem, Row};
 use crate::slice;

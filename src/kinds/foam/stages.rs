@@ -134,14 +134,6 @@ pub(super) fn regions_stage(j: &FoamJob, ctx: &mut Ctx) -> Result<Out<Regions>, 
     })
 }
 
-/// One layer's outline.
-pub struct Layer {
-    /// Top of the layer, mm.
-    pub z: f64,
-    /// The union's one outline.
-    pub polygon: Polygon,
-}
-
 /// The union sliced: one outline per layer, or refused naming the layer and the regions.
 pub(super) fn slice_stage(j: &FoamJob, ctx: &mut Ctx, regions: &Out<Regions>) -> Result<Out<Vec<Layer>>, Error> {
     let placed = placed_stage(j, ctx)?;
@@ -156,7 +148,8 @@ pub(super) fn slice_stage(j: &FoamJob, ctx: &mut Ctx, regions: &Out<Regions>) ->
             progress(0.5 + 0.5 * (k + 1) as f32 / placed.meshes.len() as f32);
         }
         let names: Vec<&str> = placed.names.iter().map(String::as_str).collect();
-        let layers = check_layers(&sliced.layers, &per_region, &names).map_err(|e| Error::stage("slicing", e))?;
+        let per_region: Vec<Vec<Cut>> = per_region.iter().map(|l| cuts(l)).collect();
+        let layers = check_layers(&cuts(&sliced.layers), &per_region, &names).map_err(|e| Error::stage("slicing", e))?;
         let report = crate::kinds::slice_report(&sliced.report, "Slicing the union").metric(
             "layers",
             "Layers",
@@ -168,96 +161,9 @@ pub(super) fn slice_stage(j: &FoamJob, ctx: &mut Ctx, regions: &Out<Regions>) ->
     })
 }
 
-/// Why the union cannot be printed as one thread.
-#[derive(Debug, thiserror::Error, Clone, PartialEq)]
-pub enum LayerError {
-    /// A layer with several outlines.
-    #[error("the layer at z = {z:.2} mm is {count} separate outlines ({regions}); one continuous thread needs one outline per layer: join the parts, or print them as separate foams")]
-    Several {
-        /// Top of the layer.
-        z: f64,
-        /// Outlines.
-        count: usize,
-        /// The regions in the layer.
-        regions: String,
-    },
-    /// An empty layer between two printed ones.
-    #[error("nothing to print at z = {z:.2} mm between regions below and above: the regions do not make one connected foam (close the gap)")]
-    Gap {
-        /// Top of the layer.
-        z: f64,
-    },
-    /// Two regions overlap in a layer.
-    #[error("regions {a} and {b} overlap by {area:.2} mm² in the layer at z = {z:.2} mm; regions must only touch (move or trim one of them)")]
-    Overlap {
-        /// One region.
-        a: String,
-        /// The other.
-        b: String,
-        /// The overlap's area.
-        area: f64,
-        /// Top of the layer.
-        z: f64,
-    },
-    /// Nothing at all.
-    #[error("the regions slice to nothing: check that the meshes are closed solids")]
-    Empty,
-}
-
-pub(super) fn polygon_area(shapes: &[Polygon]) -> f64 {
-    shapes.iter().map(|p| p.area()).sum()
-}
-
-pub(super) fn contours(p: &[Polygon]) -> Vec<Vec<[f64; 2]>> {
-    p.iter().flat_map(|p| std::iter::once(&p.outer).chain(&p.holes)).map(|r| r.iter().map(|q| [q.x, q.y]).collect()).collect()
-}
-
-/// Area of the intersection of two sets of polygons, mm².
-pub(super) fn overlap_area(a: &[Polygon], b: &[Polygon]) -> f64 {
-    use i_overlay::core::fill_rule::FillRule;
-    use i_overlay::core::overlay_rule::OverlayRule;
-    use i_overlay::float::single::SingleFloatOverlay;
-    let shapes = contours(a).overlay(&contours(b), OverlayRule::Intersect, FillRule::NonZero);
-    shapes.iter().flatten().map(|r| crate::geom::signed_area(&r.iter().map(|p| DVec2::new(p[0], p[1])).collect::<Vec<_>>())).sum()
-}
-
-/// The per-layer rules: one outline per layer, no empty layer inside the stack, no overlap of
-/// two regions in a layer (beyond 0.1 % of the layer's area and 0.01 mm²).
-pub(super) fn check_layers(union: &[slice::SlicedLayer], per_region: &[Vec<slice::SlicedLayer>], names: &[&str]) -> Result<Vec<Layer>, LayerError> {
-    let first = union.iter().position(|l| !l.regions.is_empty()).ok_or(LayerError::Empty)?;
-    let last = union.iter().rposition(|l| !l.regions.is_empty()).unwrap_or(first);
-    let mut out = Vec::new();
-    for (k, l) in union.iter().enumerate().take(last + 1).skip(first) {
-        // Every slicing starts its stack at the plate with the same heights: layer k of a
-        // region is layer k of the union (a lower region just has fewer).
-        let here: Vec<(usize, &[Polygon])> = per_region
-            .iter()
-            .enumerate()
-            .filter_map(|(r, layers)| layers.get(k).filter(|x| (x.slice_z - l.slice_z).abs() < 1e-9).map(|x| (r, x.regions.as_slice())))
-            .filter(|(_, p)| !p.is_empty())
-            .collect();
-        let listed = || here.iter().map(|(r, _)| names[*r]).collect::<Vec<_>>().join(", ");
-        if l.regions.is_empty() {
-            return Err(LayerError::Gap { z: l.z });
-        }
-        let total = polygon_area(&l.regions);
-        let sum: f64 = here.iter().map(|(_, p)| polygon_area(p)).sum();
-        if sum > total + total * 1e-3 + 0.01 {
-            for (x, (ra, pa)) in here.iter().enumerate() {
-                for (rb, pb) in &here[x + 1..] {
-                    let area = overlap_area(pa, pb);
-                    if area > 0.01 {
-                        return Err(LayerError::Overlap { a: names[*ra].into(), b: names[*rb].into(), area, z: l.z });
-                    }
-                }
-            }
-        }
-        if l.regions.len() > 1 {
-            return Err(LayerError::Several { z: l.z, count: l.regions.len(), regions: listed() });
-        }
-        out.push(Layer { z: l.z, polygon: l.regions[0].clone() });
-    }
-    Ok(out)
+/// The slicer's layers as the foam's layer checks read them.
+fn cuts(layers: &[slice::SlicedLayer]) -> Vec<Cut<'_>> {
+    layers.iter().map(|l| Cut { z: l.z, slice_z: l.slice_z, regions: &l.regions }).collect()
 }
 
 /// One layer's continuous path, as the raster made it.
@@ -306,40 +212,6 @@ pub(super) fn raster_stage(j: &FoamJob, ctx: &mut Ctx, layers: &Out<Vec<Layer>>)
 pub(super) struct RasterAt {
     z: f64,
     source: raster::Error,
-}
-
-/// An outline that cannot be inset for the raster's turns.
-#[derive(Debug, thiserror::Error)]
-#[error("layer at z = {z:.2} mm: the outline inset by {d:.2} mm {what}; lower the turn inset or the line spacing")]
-pub(super) struct InsetError {
-    z: f64,
-    d: f64,
-    what: &'static str,
-}
-
-/// `polygon` shrunk by `d` mm (the raster's turns run there); refused when it vanishes or splits.
-pub(super) fn inset(polygon: &Polygon, d: f64, z: f64) -> Result<Polygon, InsetError> {
-    use i_overlay::mesh::float::outline::offset::OutlineOffset;
-    use i_overlay::mesh::float::style::OutlineStyle;
-    if d <= 0.0 {
-        return Ok(polygon.clone());
-    }
-    let shape = contours(std::slice::from_ref(polygon));
-    let out = shape.outline(&OutlineStyle::new(-d));
-    let mut polys: Vec<Polygon> = out
-        .iter()
-        .filter(|s| !s.is_empty())
-        .map(|s| {
-            let ring = |r: &Vec<[f64; 2]>| r.iter().map(|p| DVec2::new(p[0], p[1])).collect::<Vec<_>>();
-            Polygon { outer: ring(&s[0]), holes: s[1..].iter().map(ring).collect() }
-        })
-        .filter(|p| p.area() > 1e-9)
-        .collect();
-    match polys.len() {
-        0 => Err(InsetError { z, d, what: "vanishes (the part is too thin)" }),
-        1 => Ok(polys.remove(0)),
-        _ => Err(InsetError { z, d, what: "splits into several parts (a neck narrower than twice the inset)" }),
-    }
 }
 
 /// The toolpath ([`grade::grade`]: each layer's path cut into pieces, each with the pair of

@@ -11,7 +11,7 @@ static HOST: OnceLock<fn() -> f64> = OnceLock::new();
 
 /// Sets the clock (once; later calls are ignored): the browser's binding does, natively
 /// `Instant` is the clock.
-#[cfg_attr(not(target_arch = "wasm32"), allow(dead_code))]
+#[cfg(target_arch = "wasm32")]
 pub fn set(now_s: fn() -> f64) {
     let _ = HOST.set(now_s);
 }

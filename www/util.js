@@ -4,6 +4,16 @@
 
 export const $ = (id) => document.getElementById(id);
 
+/** A `<button type="button">` of class `className` showing `text`, hidden unless `hidden` is false. */
+export function button(className, text = "", hidden = true) {
+  const b = document.createElement("button");
+  b.type = "button";
+  b.className = className;
+  b.textContent = text;
+  b.hidden = hidden;
+  return b;
+}
+
 /** Bytes as a person reads them. */
 export function humanBytes(n) {
   const units = ["bytes", "KiB", "MiB", "GiB"];

@@ -3,7 +3,7 @@
 // window, STL download), drawn by views.js. Cards live in state.viewCards.
 import { state } from "./state.js";
 import { MSG } from "./protocol.js";
-import { $, download, fileStem, messageOf, setMessage } from "./util.js";
+import { $, button, download, fileStem, messageOf, setMessage } from "./util.js";
 import { jobKind, missingFiles, setFields } from "./design.js";
 import { workers } from "./worker-client.js";
 import { drawView } from "./views.js";
@@ -70,31 +70,14 @@ export function buildViews() {
     const tools = document.createElement("div");
     tools.className = "view-tools";
     tools.hidden = true;
-    const drawButton = document.createElement("button");
-    drawButton.type = "button";
-    drawButton.className = "view-draw";
-    const finishButton = document.createElement("button");
-    finishButton.type = "button";
-    finishButton.className = "view-finish";
-    finishButton.hidden = true;
-    const cancelButton = document.createElement("button");
-    cancelButton.type = "button";
-    cancelButton.className = "view-cancel";
-    cancelButton.textContent = "Cancel";
-    cancelButton.hidden = true;
+    const drawButton = button("view-draw", "", false);
+    const finishButton = button("view-finish");
+    const cancelButton = button("view-cancel", "Cancel");
     // A mesh view whose answer says `meta.stl` can be downloaded as an STL.
-    const stlButton = document.createElement("button");
-    stlButton.type = "button";
-    stlButton.className = "view-stl";
-    stlButton.textContent = "Download STL";
-    stlButton.hidden = true;
+    const stlButton = button("view-stl", "Download STL");
     // A view whose answer says `meta.play` steps through its indices by itself (a print
     // sequence): Play advances one index per answer, at most every PLAY_STEP_MS.
-    const playButton = document.createElement("button");
-    playButton.type = "button";
-    playButton.className = "view-play";
-    playButton.textContent = "▶ Play";
-    playButton.hidden = true;
+    const playButton = button("view-play", "▶ Play");
     tools.append(playButton, drawButton, finishButton, cancelButton, stlButton);
     card.append(tools);
     // An image's value window (black … white): starts at the answer's meta.window, kept

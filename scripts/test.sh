@@ -60,6 +60,19 @@ setsid nice -n 15 bash -c 'set -o pipefail
   echo "== lint: cargo clippy --all-targets -- -D warnings"
   cargo clippy --all-targets -- -D warnings' unit-tests "${unit_opt[@]}" > "$rust_log" 2>&1 &
 rust_pid=$!
+# Real print hosts for Send (tests/hosts/): Moonraker and OctoPrint from PyPI in a venv under
+# target/, started on 127.0.0.1 for the browser checks and the CLI's (check_weft.py); they stop
+# when this script ends (the trap, and their watchdog watches this shell and a deadline).
+echo "== print hosts: Moonraker and OctoPrint from PyPI (target/hosts-venv)"
+bash tests/hosts/setup.sh target/hosts-venv
+hosts_dir="$PWD/target/hosts-run"
+hosts_json="$hosts_dir.json"
+rm -rf "$hosts_dir"
+trap 'target/hosts-venv/bin/python tests/hosts/hosts.py stop --dir "$hosts_dir" >/dev/null 2>&1 || true; kill -- -"$www_pid" 2>/dev/null || true; [ -n "$rust_pid" ] && kill -- -"$rust_pid" 2>/dev/null; rm -f "$www_log" "$rust_log" "$e2e_log"' EXIT
+target/hosts-venv/bin/python tests/hosts/hosts.py start --dir "$hosts_dir" --cors-origin 'http://127.0.0.1:*' --cors-exact \
+  --parent-pid $$ --max-minutes 30 > "$hosts_json"
+echo "== weft's G-code on the print hosts (weft send, Moonraker's metadata, OctoPrint's virtual printer, .bgcode by libbgcode)"
+target/hosts-venv/bin/python tests/hosts/check_weft.py --weft "$PWD/target/release/weft" --hosts "$hosts_json" --out target/hosts-out
 echo "== wasm + page (built in the background)"
 www_ok=0
 wait "$www_pid" || www_ok=$?
@@ -67,7 +80,7 @@ cat "$www_log"
 [ "$www_ok" = 0 ] || { echo "scripts/build-www.sh failed (exit $www_ok)"; exit 1; }
 echo "== browser end-to-end (headless Chromium)"
 e2e_ok=0
-WEFT_BIN="$PWD/target/release/weft" node tests/e2e/run.mjs 2>&1 | tee "$e2e_log" || e2e_ok=$?
+WEFT_HOSTS="$hosts_json" WEFT_BIN="$PWD/target/release/weft" node tests/e2e/run.mjs 2>&1 | tee "$e2e_log" || e2e_ok=$?
 echo "== Rust tests and clippy (ran in the background)"
 rust_ok=0
 wait "$rust_pid" || rust_ok=$?

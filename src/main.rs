@@ -9,6 +9,8 @@ use weft::design::Design;
 use weft::kinds::Registry;
 use weft::pipeline::{self, Files, RunOptions};
 
+mod send;
+
 #[derive(Parser)]
 #[command(
     name = "weft",
@@ -23,6 +25,8 @@ use weft::pipeline::{self, Files, RunOptions};
   weft run big.json --input part.stl --dry-run        state the work and check the budgets first
   weft analyze part.gcode --json                     measure any slicer's G-code
   weft share cube.json                               print a share-link fragment
+  weft send part.gcode --to octoprint --url http://192.168.1.20:5000   upload it (key: --key or $WEFT_HOST_KEY)
+  weft run cube.json --send-to moonraker --send-url http://pi:7125 --send-start   slice, upload, print
   weft bench                                         run the benchmarks of BENCHMARKS.md"
 )]
 struct Cli {
@@ -36,7 +40,8 @@ enum Command {
     Run {
         /// The design (JSON), or a share link / fragment (`#d=…`).
         design: String,
-        /// Output file, or a folder to write <design name>.gcode in (.nc for the pneumatic
+        /// Output file, or a folder to write <design name>.gcode in (.bgcode when the printer
+        /// asks for binary G-code or the file's name ends in .bgcode; .nc for the pneumatic
         /// flavour, .csv for poses); default: that file in the current folder. The name is made
         /// safe (no folders, no hidden or device names), since a design may come from anyone.
         #[arg(long, short)]
@@ -52,7 +57,7 @@ enum Command {
         #[arg(long = "set", value_name = "PATH=VALUE")]
         set: Vec<String>,
         /// Use a printer profile (replaces the design's printer section, before any --set):
-        /// generic-220, prusa-mk4, ender-3, bioprinter-pneumatic.
+        /// generic-220, prusa-mk4, klipper-220, ender-3, five-axis-head, bioprinter-pneumatic.
         #[arg(long, value_name = "ID")]
         printer: Option<String>,
         /// Threads to compute on (default: every core). 1 computes on one thread, as the
@@ -72,8 +77,33 @@ enum Command {
         /// it is within the budgets; write nothing but the --report (the plan as JSON).
         #[arg(long)]
         dry_run: bool,
+        /// Send the written G-code to a print host (see `weft send`).
+        #[command(flatten)]
+        send: SendOptions,
     },
     /// Analyse a G-code file (weft's or any other slicer's).
+    /// Send a G-code file to a print host (Moonraker/Klipper or OctoPrint) and say its job state.
+    Send {
+        /// The G-code file (sent under its own name, byte for byte).
+        file: PathBuf,
+        /// The kind of host: moonraker (Klipper) or octoprint.
+        #[arg(long, value_name = "KIND")]
+        to: send::HostKind,
+        /// The host's address, http://HOST:PORT (Moonraker usually :7125, OctoPrint :80 or :5000).
+        #[arg(long, value_name = "URL")]
+        url: String,
+        /// The host's API key (OctoPrint: Settings → Application Keys; Moonraker: only when this
+        /// computer is not a trusted client). Default: the environment variable WEFT_HOST_KEY,
+        /// which keeps it out of the shell's history.
+        #[arg(long, value_name = "KEY")]
+        key: Option<String>,
+        /// Start printing once the host has the file.
+        #[arg(long)]
+        start: bool,
+        /// No progress on stderr.
+        #[arg(long, short)]
+        quiet: bool,
+    },
     Analyze {
         /// The G-code file.
         file: PathBuf,
@@ -482,6 +512,7 @@ fn cmd_run(
     printer: Option<&str>,
     quiet: bool,
     dry_run: bool,
+    send_opts: SendOptions,
 ) -> Result<(), String> {
     let mut design = load_design(design)?;
     if let Some(id) = printer {
@@ -550,8 +581,23 @@ fn cmd_run(
     if let Some(e) = ahead_failed.into_inner() {
         return Err(format!("--ahead: {e}"));
     }
-    let out = output_path(out.as_deref(), &design.name, design.printer.flavor.file_extension());
-    write(&out, output.gcode.as_bytes())?;
+    // Binary G-code when the printer asks for it or the output's name ends in .bgcode.
+    let named_binary = out.as_deref().is_some_and(|p| !p.is_dir() && p.extension().is_some_and(|e| e.eq_ignore_ascii_case("bgcode")));
+    if named_binary && design.printer.flavor != weft::gcode::Flavor::Marlin {
+        return Err(format!(
+            "{}: binary G-code is Marlin G-code; the {} flavour writes .{}",
+            out.as_deref().map(Path::display).map(|d| d.to_string()).unwrap_or_default(),
+            design.printer.flavor.name(),
+            design.printer.flavor.file_extension()
+        ));
+    }
+    let binary = output.bgcode.clone().or_else(|| named_binary.then(|| std::sync::Arc::new(weft::gcode::binary::from_text(&output.gcode))));
+    let extension = if binary.is_some() { "bgcode" } else { design.printer.flavor.file_extension() };
+    let out = output_path(out.as_deref(), &design.name, extension);
+    match &binary {
+        Some(b) => write(&out, b)?,
+        None => write(&out, output.gcode.as_bytes())?,
+    }
     // What the stages repaired or assumed is said even with --quiet: it changes what prints.
     for stage in &output.report.stages {
         for note in &stage.notes {
@@ -576,7 +622,11 @@ fn cmd_run(
         );
         errln!("{}", where_the_time_went(&output.report));
     }
-    Ok(())
+    let written: &[u8] = match &binary {
+        Some(b) => b,
+        None => output.gcode.as_bytes(),
+    };
+    send_after_run(send_opts, written, &out, quiet)
 }
 
 /// One line: each stage's wall time, the slowest first, and the threads used.
@@ -770,16 +820,22 @@ fn cmd_bench(_: Command) -> Result<(), String> {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
-        Command::Run { design, out, report, input, set, printer, threads, ahead, quiet, dry_run } => {
+        Command::Run { design, out, report, input, set, printer, threads, ahead, quiet, dry_run, send } => {
             if let Err(e) = use_threads(threads) {
                 errln!("weft: error: {e}");
                 return ExitCode::from(2);
             }
-            cmd_run(&design, out, report, ahead, &input, &set, printer.as_deref(), quiet, dry_run)
+            if dry_run && send.send_to.is_some() {
+                errln!("weft: error: --send-to sends the G-code a run writes, and --dry-run writes none: leave one out");
+                return ExitCode::from(2);
+            }
+            cmd_run(&design, out, report, ahead, &input, &set, printer.as_deref(), quiet, dry_run, send)
         }
+        Command::Send { file, to, url, key, start, quiet } => cmd_send(&file, to, &url, key, start, quiet),
         Command::Analyze { file, json } => cmd_analyze(&file, json),
         Command::New => {
-            out!("{}", Design::default().to_json_pretty());
+            let now = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0, |d| d.as_secs());
+            out!("{}", Design { date: weft::gcode::utc_date(now), ..Design::default() }.to_json_pretty());
             Ok(())
         }
         Command::Share { design, input } => cmd_share(&design, &input),
@@ -804,4 +860,83 @@ fn main() -> ExitCode {
             ExitCode::FAILURE
         }
     }
+}
+
+/// `weft run`'s options that send the G-code to a print host once it is written.
+#[derive(clap::Args, Default)]
+struct SendOptions {
+    /// Send the G-code to this print host after writing it: moonraker (Klipper) or octoprint.
+    #[arg(long, value_name = "KIND", requires = "send_url")]
+    send_to: Option<send::HostKind>,
+    /// The print host's address, http://HOST:PORT (Moonraker usually :7125, OctoPrint :80 or :5000).
+    #[arg(long, value_name = "URL", requires = "send_to")]
+    send_url: Option<String>,
+    /// The host's API key (OctoPrint: Settings → Application Keys; Moonraker: only when this
+    /// computer is not a trusted client). Default: the environment variable WEFT_HOST_KEY,
+    /// which keeps it out of the shell's history.
+    #[arg(long, value_name = "KEY", requires = "send_to")]
+    send_key: Option<String>,
+    /// Start printing once the host has the file.
+    #[arg(long, requires = "send_to")]
+    send_start: bool,
+}
+
+/// The API key given, else WEFT_HOST_KEY's (an empty one is none).
+fn host_key(given: Option<String>) -> Option<String> {
+    given.or_else(|| std::env::var("WEFT_HOST_KEY").ok()).map(|k| k.trim().to_string()).filter(|k| !k.is_empty())
+}
+
+/// `weft send FILE --to KIND --url URL [--key KEY] [--start]`.
+fn cmd_send(file: &Path, to: send::HostKind, url: &str, key: Option<String>, start: bool, quiet: bool) -> Result<(), String> {
+    let bytes = read(file)?;
+    let name = file.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_else(|| "weft.gcode".into());
+    send_gcode(&bytes, &name, to, url, host_key(key).as_deref(), start, quiet)
+}
+
+/// Sends `bytes` as `name` with progress on stderr (`weft: send: 45 % (1.2 MiB of 2.7 MiB)`),
+/// then says what the host did and its job state. The key is never printed.
+fn send_gcode(bytes: &[u8], name: &str, to: send::HostKind, url: &str, key: Option<&str>, start: bool, quiet: bool) -> Result<(), String> {
+    let terminal = std::io::stderr().is_terminal();
+    // A terminal sees the line change; a log gets a line at every quarter.
+    let mut shown: Option<u64> = None;
+    let mut progress = |sent: u64, total: u64| {
+        if quiet {
+            return;
+        }
+        let pct = (sent * 100).checked_div(total).unwrap_or(100);
+        let step = if terminal { pct } else { pct / 25 * 25 };
+        if shown == Some(step) {
+            return;
+        }
+        shown = Some(step);
+        let line = format!("weft: send: {pct} % ({} of {})", send::size(sent), send::size(total));
+        if terminal {
+            err!("\r{line:<60}");
+        } else {
+            errln!("{line}");
+        }
+    };
+    let result = send::send(bytes, name, to, url, key, start, &mut progress);
+    if terminal && shown.is_some() {
+        err!("\r{:<60}\r", "");
+    }
+    let sent = result.map_err(|e| e.to_string())?;
+    let started = if sent.started { "; printing started" } else { "" };
+    errln!("weft: sent {} to {} {} ({} in {:.1} s){started}", sent.name, to.label(), sent.host, send::size(sent.bytes), sent.seconds);
+    if start {
+        // The host needs a moment to begin the job it was given.
+        std::thread::sleep(std::time::Duration::from_millis(1000));
+    }
+    match send::job_state(to, url, key) {
+        Ok(job) => errln!("weft: host {job}"),
+        Err(e) => errln!("weft: send: no job state: {e}"),
+    }
+    Ok(())
+}
+
+/// After `weft run` wrote its G-code: sends it when --send-to asks.
+fn send_after_run(opts: SendOptions, gcode: &[u8], out: &Path, quiet: bool) -> Result<(), String> {
+    let (Some(to), Some(url)) = (opts.send_to, opts.send_url.as_deref()) else { return Ok(()) };
+    let name = out.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_else(|| "weft.gcode".into());
+    send_gcode(gcode, &name, to, url, host_key(opts.send_key).as_deref(), opts.send_start, quiet)
 }

@@ -69,6 +69,9 @@ pub struct RunOutput {
     pub report: RunReport,
     /// Preview buffers, when asked for.
     pub preview: Option<Arc<Preview>>,
+    /// The G-code as Prusa binary G-code (`.bgcode`), when the printer asks for it
+    /// ([`gcode::Printer::binary_gcode`], Marlin flavour).
+    pub bgcode: Option<Arc<Vec<u8>>>,
 }
 
 /// Runs the design with the built-in job kinds and no cache. `progress(stage, fraction)` is
@@ -137,7 +140,9 @@ pub fn run_sending(
         threads: crate::par::threads(),
         timings: std::mem::take(&mut ctx.timings),
     };
-    Ok(RunOutput { gcode: written.text.clone(), report, preview: analysed.preview.clone() })
+    let binary = design.printer.binary_gcode && design.printer.flavor == gcode::Flavor::Marlin;
+    let bgcode = if binary { Some(Arc::new(gcode::binary::from_text(&written.text))) } else { None };
+    Ok(RunOutput { gcode: written.text.clone(), report, preview: analysed.preview.clone(), bgcode })
 }
 
 /// Writer totals of G-code weft did not write (an edited file), as the analyzer measured them.
@@ -152,6 +157,8 @@ fn stats_of(a: &analyze::Report) -> GcodeStats {
         merged_moves: 0,
         dropped_paths: 0,
         dropped_filament_mm: 0.0,
+        arcs: 0,
+        arc_bytes_saved: 0,
     }
 }
 
@@ -188,9 +195,17 @@ fn plan(kind: &dyn crate::kinds::JobKind, ctx: &mut Ctx) -> Result<Plan, Error> 
 
 fn write_stage(ctx: &mut Ctx, toolpath: &Out<Toolpath>) -> Result<Out<Written>, Error> {
     let design = ctx.design;
-    let parts = (&design.printer, &design.material, &design.speeds, &design.name);
+    let parts = (&design.printer, &design.material, &design.speeds, &design.name, &design.date);
     ctx.stage("gcode", "gcode", &parts, &[toolpath.key], |_| {
-        let g = gcode::write_gcode(toolpath, &writer_options(design))?;
+        let options = writer_options(design);
+        let mut g = gcode::write_gcode(toolpath, &options)?;
+        if g.stats.arcs > 0 {
+            // What the arcs saved: the same file with straight segments only.
+            let mut lines = options.clone();
+            lines.printer.arc_tolerance_mm = 0.0;
+            let plain = gcode::write_gcode(toolpath, &lines)?;
+            g.stats.arc_bytes_saved = plain.text.len() as i64 - g.text.len() as i64;
+        }
         // Its numbers are the run report's `gcode` totals, which the page shows once, in its
         // overall statistics; the stage report says whether the writer ran.
         let mut report = StageReport::new("gcode", "Writing G-code", &g.stats);
@@ -199,6 +214,14 @@ fn write_stage(ctx: &mut Ctx, toolpath: &Out<Toolpath>) -> Result<Out<Written>, 
                 "joined {} extruding move(s) shorter than {} mm to their neighbours, with their filament (such dust stutters a printer's planner)",
                 g.stats.merged_moves,
                 gcode::MIN_MOVE_MM
+            ));
+        }
+        if g.stats.arcs > 0 {
+            let kb = g.stats.arc_bytes_saved as f64 / 1024.0;
+            let pct = 100.0 * g.stats.arc_bytes_saved as f64 / (g.text.len() as f64 + g.stats.arc_bytes_saved as f64);
+            report = report.note(&format!(
+                "fitted {} arcs (G2/G3) within {} mm of the straight segments: the file is {kb:.1} KB ({pct:.1} %) smaller, with the same filament",
+                g.stats.arcs, design.printer.arc_tolerance_mm
             ));
         }
         if g.stats.dropped_paths > 0 {

@@ -249,6 +249,8 @@ pub struct Session {
     files: Files,
     cache: Cache,
     gcode: Arc<String>,
+    /// The last run's binary G-code, when its printer asks for it.
+    bgcode: Option<Arc<Vec<u8>>>,
     preview: Arc<Preview>,
     bed: [f64; 3],
 }
@@ -277,6 +279,7 @@ impl Session {
             files: Files::new(),
             cache: Cache::new(),
             gcode: Arc::default(),
+            bgcode: None,
             preview: Arc::default(),
             bed: Design::default().printer.bed_size_mm,
         }
@@ -462,6 +465,7 @@ impl Session {
         let out = pipeline::run_sending(&self.registry, &mut self.cache, &design, &self.files, &RunOptions { collect_preview: true }, &mut progress, &ahead)
             .map_err(js_err)?;
         self.gcode = out.gcode;
+        self.bgcode = out.bgcode;
         self.preview = out.preview.unwrap_or_default();
         self.bed = design.printer.bed_size_mm;
         to_js(&out.report)
@@ -515,6 +519,7 @@ impl Session {
         // The bytes become the text without a copy (the analysis refused control bytes; any
         // invalid UTF-8 is replaced, as the download would show it).
         self.gcode = Arc::new(String::from_utf8(bytes).unwrap_or_else(|e| String::from_utf8_lossy(e.as_bytes()).into_owned()));
+        self.bgcode = None;
         self.preview = Arc::new(a.preview.unwrap_or_default());
         #[derive(Serialize)]
         struct Out<'a> {
@@ -526,6 +531,10 @@ impl Session {
     /// G-code bytes of the last result.
     pub fn gcode(&self) -> js_sys::Uint8Array {
         js_sys::Uint8Array::from(self.gcode.as_bytes())
+    }
+    /// Binary G-code (`.bgcode`) of the last run when its printer asks for it, else empty.
+    pub fn bgcode(&self) -> js_sys::Uint8Array {
+        js_sys::Uint8Array::from(self.bgcode.as_deref().map_or(&[][..], Vec::as_slice))
     }
     /// Extrusion segments, 6 floats each (mm).
     #[wasm_bindgen(js_name = previewPositions)]

@@ -16,16 +16,22 @@ export function downloadResult() {
   const r = state.result;
   if (!r?.gcode) return;
   if (!staleReason()) {
-    download(r.gcode, r.fileName, "text/x-gcode");
+    saveResult(r);
     return;
   }
   if (invalidFields().length) {
     runDesign(); // says which field to fix
     return;
   }
-  runDesign({ then: () => download(state.result.gcode, state.result.fileName, "text/x-gcode") });
+  runDesign({ then: () => saveResult(state.result) });
   showNotice("The settings changed since the last run: running the design first; the download starts when it is done.");
 }
+/** Saves a result: its binary G-code when the run made one (the file name says .bgcode), else its text. */
+function saveResult(r) {
+  if (r.bgcode?.byteLength) download(r.bgcode, r.fileName, "application/octet-stream");
+  else download(r.gcode, r.fileName, "text/x-gcode");
+}
+
 /**
  * Runs the design after stating its work: a run over a budget is refused with the estimate's
  * message, a big one (over the soft thresholds of the plan) is asked about first.

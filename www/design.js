@@ -122,6 +122,8 @@ export function redo() {
  */
 export function setFields(assignments) {
   let next = state.json;
+  // An edit dates the design (UTC): the G-code header's date, the same on every later run.
+  if (!assignments.some(([path]) => path === "date")) assignments = [...assignments, ["date", utcNow()]];
   try {
     for (const [path, value] of assignments) next = state.weft.setField(next, path, value);
   } catch (err) {
@@ -131,10 +133,17 @@ export function setFields(assignments) {
   return null;
 }
 
+/** Now as `YYYY-MM-DD HH:MM:SS` in UTC (the design's `date`). */
+export function utcNow() {
+  return new Date().toISOString().slice(0, 19).replace("T", " ");
+}
+
 /** Extension of the output for the design's flavour (from the schema: `.gcode`, `.nc`, `.csv`). */
 export function gcodeExtension() {
   const flavor = state.design?.printer?.flavor;
-  return state.schema.flavors?.find((f) => f.name === flavor)?.extension ?? "gcode";
+  const ext = state.schema.flavors?.find((f) => f.name === flavor)?.extension ?? "gcode";
+  // Prusa binary G-code: the run also gives the .bgcode bytes (`printer.binary_gcode`).
+  return ext === "gcode" && state.design?.printer?.binary_gcode === true ? "bgcode" : ext;
 }
 
 export function designName() {

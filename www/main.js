@@ -10,6 +10,7 @@
 //   worker-client.js  worker.js and its thread pool: requests (protocol.js), the progress bar
 //   results.js        freshness, the estimate line, a result's numbers and stage cards
 //   actions.js        Run, Download, Share, opening files and examples
+//   send.js           Send: the G-code to a print host (send-hosts.js: what hosts answer)
 //   messages.js       the error and notice bars
 //   util.js           small shared helpers
 // Nothing here knows a job kind: the form, the job selector, the input slots, the progress
@@ -26,6 +27,7 @@ import { cancel, workers } from "./worker-client.js";
 import { AUTO_RUN_KEY, autoRunWanted, maybeAutoRun } from "./results.js";
 import { downloadResult, openExample, openFiles, runDesign, share } from "./actions.js";
 import { featureStyles } from "./views.js";
+import { sendResult } from "./send.js";
 
 const ready = start();
 ready.catch(() => {}); // reported in #error
@@ -129,6 +131,7 @@ function wireUi() {
   $("undo").addEventListener("click", undo);
   $("redo").addEventListener("click", redo);
   $("download").addEventListener("click", downloadResult);
+  $("send").addEventListener("click", sendResult);
   $("stale-run").addEventListener("click", () => runDesign());
   $("auto-run").checked = autoRunWanted();
   $("auto-run").addEventListener("change", (e) => {

@@ -194,6 +194,7 @@ export const PREVIEW_BUFFERS = Object.freeze({
  * @property {Object} report       the run report ({name, job, stages, gcode, analysis}) or {analysis}
  * @property {PreviewBuffers} preview  every buffer transferred
  * @property {Uint8Array} gcode    transferred
+ * @property {Uint8Array} bgcode   transferred: the Prusa binary G-code when the printer asks for it, else empty
  * @property {number} ms           worker time spent
  */
 /**

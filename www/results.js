@@ -149,8 +149,11 @@ export function maybeAutoRun() {
 export function showResult(res, fileName, json = null, files = state.filesVersion) {
   state.resultCount++;
   const { report, preview: buffers, gcode } = res;
-  state.result = { report, gcode, fileName, ms: res.ms, json, files };
+  // `bgcode`: the run's Prusa binary G-code (printer.binary_gcode), else absent.
+  const bgcode = res.bgcode?.byteLength ? res.bgcode : undefined;
+  state.result = { report, gcode, bgcode, fileName, ms: res.ms, json, files };
   $("download").disabled = !(gcode && gcode.byteLength);
+  $("send").disabled = $("download").disabled;
   const origin = state.design?.printer?.origin;
   state.preview?.setResult(buffers, { origin: typeof origin === "string" ? origin : "corner" });
   performance.mark("weft:preview-set");

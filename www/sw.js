@@ -1,18 +1,19 @@
 // Service worker: keeps the app shell, the wasm packages and three.js so the page works
 // offline once it has been opened. Network first (a rebuilt page is seen at once), the cache
-// when the network fails. Only same-origin GETs are handled; nothing leaves the origin.
+// when the network fails. Only same-origin GETs are handled (Send's requests to a print host
+// go past it, straight to the host).
 //
 // It also makes the page cross-origin isolated where the host cannot send the headers (a
 // plain static host, or offline from the cache): every response it serves carries COOP
 // same-origin and COEP require-corp, so the worker may share memory with its thread pool
 // (main.js reloads once when this worker first takes control). Everything the page loads is
 // same-origin, so require-corp blocks nothing.
-const CACHE = "weft-v4";
+const CACHE = "weft-v5";
 const SHELL = [
   "./", "index.html", "style.css", "main.js", "worker.js", "pool-worker.js", "protocol.js",
   // main.js's modules (see its header)
   "state.js", "util.js", "messages.js", "design.js", "form.js", "slots.js", "view-cards.js",
-  "worker-client.js", "results.js", "actions.js",
+  "worker-client.js", "results.js", "actions.js", "send.js", "send-hosts.js",
   "preview.js", "preview-gl.js", "preview-colors.js", "preview-camera.js",
   "plot.js", "report.js", "views.js",
   "vendor/three.module.js", "vendor/three.core.js", "vendor/OrbitControls.js",

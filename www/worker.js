@@ -199,9 +199,10 @@ function postResult(id, request, report, t0) {
     preview[key] = owned(session[method](), Type);
   }
   const gcode = owned(session.gcode(), Uint8Array);
+  const bgcode = owned(session.bgcode(), Uint8Array);
   self.postMessage(
-    { type: MSG.RESULT, id, request, report, preview, gcode, ms: performance.now() - t0 },
-    transferList([...Object.values(preview), gcode]),
+    { type: MSG.RESULT, id, request, report, preview, gcode, bgcode, ms: performance.now() - t0 },
+    transferList([...Object.values(preview), gcode, bgcode]),
   );
 }
 

@@ -8,6 +8,8 @@ use crate::motion::{Motion, Move, Step};
 
 /// Z-based layer detection: a Z change larger than this starts a layer, mm.
 const LAYER_Z_EPS: f64 = 1e-6;
+/// Most objects a file's labels may declare (more share the last one).
+const MAX_OBJECTS: usize = 1000;
 
 struct LayerAcc {
     z: f64,
@@ -68,6 +70,10 @@ pub(crate) struct Machine<'o> {
     est: Estimate,
     /// Chords of the arcs read so far beyond the one per arc the estimate counted.
     arc_extra: usize,
+    /// Labelled objects and the one being printed ([`super::Report::objects`]).
+    objects: Vec<super::ObjectReport>,
+    object: Option<usize>,
+    unlabelled_mm: f64,
 }
 
 impl<'o> Machine<'o> {
@@ -106,6 +112,9 @@ impl<'o> Machine<'o> {
             axis: None,
             est: *est,
             arc_extra: 0,
+            objects: Vec::new(),
+            object: None,
+            unlabelled_mm: 0.0,
         }
     }
 
@@ -114,6 +123,9 @@ impl<'o> Machine<'o> {
     pub fn line(&mut self, l: &Line<'_>) -> Result<(), String> {
         if let Some(c) = l.comment {
             self.comment(c);
+        }
+        if let Some(args) = l.args {
+            self.label(l.cmd, args);
         }
         // Whether the position or the angles may have changed, and the tip is not yet known.
         let stale = match self.m.line(l.cmd, &l.words, self.preview.is_some()) {
@@ -234,6 +246,76 @@ impl<'o> Machine<'o> {
         }
     }
 
+    /// The object named `name`, added when new.
+    fn object_named(&mut self, name: &str) -> usize {
+        match self.objects.iter().position(|o| o.name.eq_ignore_ascii_case(name)) {
+            Some(i) => i,
+            None => {
+                // A hostile file cannot grow this without bound: past the cap, names share one.
+                if self.objects.len() >= MAX_OBJECTS {
+                    return self.objects.len() - 1;
+                }
+                self.objects.push(super::ObjectReport { name: name.to_string(), extruded_mm: 0.0 });
+                self.objects.len() - 1
+            }
+        }
+    }
+
+    /// Object labels: `M486 T<n>`, `M486 S<i> [A"name"]`, `EXCLUDE_OBJECT_DEFINE/_START/_END
+    /// NAME=…`.
+    fn label(&mut self, cmd: Command, args: &[u8]) {
+        let text = String::from_utf8_lossy(args);
+        let mut words = text.split_ascii_whitespace();
+        if cmd == Command::M(486) {
+            let (mut index, mut name): (Option<i64>, Option<String>) = (None, None);
+            let rest: Vec<&str> = words.collect();
+            for (k, w) in rest.iter().enumerate() {
+                let (letter, value) = w.split_at(w.chars().next().map_or(0, char::len_utf8));
+                match letter.to_ascii_uppercase().as_str() {
+                    "T" => {
+                        for i in 0..value.parse::<usize>().unwrap_or(0).min(MAX_OBJECTS) {
+                            if self.objects.len() <= i {
+                                self.objects.push(super::ObjectReport { name: i.to_string(), extruded_mm: 0.0 });
+                            }
+                        }
+                    }
+                    "S" => index = value.parse().ok(),
+                    "A" => name = Some(rest[k..].join(" ")[1..].trim_matches('"').to_string()),
+                    _ => {}
+                }
+                if name.is_some() {
+                    break;
+                }
+            }
+            match index {
+                Some(i) if i >= 0 && (i as usize) < MAX_OBJECTS => {
+                    let i = i as usize;
+                    while self.objects.len() <= i {
+                        let n = self.objects.len();
+                        self.objects.push(super::ObjectReport { name: n.to_string(), extruded_mm: 0.0 });
+                    }
+                    if let Some(n) = name.filter(|n| !n.is_empty()) {
+                        self.objects[i].name = n;
+                    }
+                    self.object = Some(i);
+                }
+                Some(_) => self.object = None,
+                None => {}
+            }
+            return;
+        }
+        let Some(command) = words.next() else { return };
+        let name = words.find_map(|w| w.strip_prefix("NAME=").or_else(|| w.strip_prefix("name="))).map(|n| n.trim_matches('"').to_string());
+        match (command.to_ascii_uppercase().as_str(), name) {
+            ("EXCLUDE_OBJECT_DEFINE", Some(n)) => {
+                self.object_named(&n);
+            }
+            ("EXCLUDE_OBJECT_START", Some(n)) => self.object = Some(self.object_named(&n)),
+            ("EXCLUDE_OBJECT_END", _) => self.object = None,
+            _ => {}
+        }
+    }
+
     fn retract(&mut self) {
         if !self.retracted {
             self.retractions += 1;
@@ -320,6 +402,10 @@ impl<'o> Machine<'o> {
             path.1 += 1;
         }
         self.extruded_mm += len;
+        match self.object {
+            Some(i) => self.objects[i].extruded_mm += len,
+            None => self.unlabelled_mm += len,
+        }
         let w = self.width;
         let path_index = (self.paths_total - 1) as u32;
         let mut a = p0;
@@ -452,6 +538,8 @@ impl<'o> Machine<'o> {
             ijk_moves: self.m.ijk_moves,
             filament_mm: self.e_high,
             per_layer,
+            unlabelled_mm: if self.objects.is_empty() { 0.0 } else { self.unlabelled_mm },
+            objects: std::mem::take(&mut self.objects),
         };
         let preview = self.preview.take().map(|mut pv| {
             pv.layer_segment_start.push((pv.positions.len() / 6) as u32);

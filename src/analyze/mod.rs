@@ -129,6 +129,22 @@ pub struct Report {
     pub rotary_moves: usize,
     /// `G0`/`G1` moves with an `I`, `J` or `K` tool-vector word.
     pub ijk_moves: usize,
+    /// Objects the file labels (Klipper's `EXCLUDE_OBJECT_DEFINE`/`_START`/`_END`, or
+    /// `M486 T`/`S`/`A`), in the order they are declared or first started, with the extrusion
+    /// printed inside each; empty when the file labels none.
+    pub objects: Vec<ObjectReport>,
+    /// Extruded length printed outside any object in a file that labels objects, mm (0 in a
+    /// file that labels none).
+    pub unlabelled_mm: f64,
+}
+
+/// One labelled object ([`Report::objects`]).
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct ObjectReport {
+    /// Its name (`NAME=`, `A"…"`; the index for an `M486` object without one).
+    pub name: String,
+    /// Extruded length printed while it was the current object, mm.
+    pub extruded_mm: f64,
 }
 
 /// Buffers for the 3D preview, in printer coordinates (mm). Segments are in file order,

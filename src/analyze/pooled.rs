@@ -65,6 +65,7 @@ struct Rec<'a> {
     mask: u32,
     flags: u32,
     comment: Option<&'a [u8]>,
+    args: Option<&'a [u8]>,
 }
 
 /// A block's lines, lexed.
@@ -94,14 +95,14 @@ fn lex_block(text: &[u8]) -> Lexed<'_> {
         out.lines += 1;
         match lex_line(line) {
             // The interpreter does nothing with these (no words read, no comment).
-            Ok(l) if matches!(l.cmd, Command::None | Command::Other) && l.comment.is_none() => {}
+            Ok(l) if matches!(l.cmd, Command::None | Command::Other) && l.comment.is_none() && l.args.is_none() => {}
             Ok(l) => {
                 let mut mask = l.words.mask;
                 while mask != 0 {
                     out.vals.push(l.words.vals[mask.trailing_zeros() as usize]);
                     mask &= mask - 1;
                 }
-                out.recs.push(Rec { line: n as u32, cmd: l.cmd, mask: l.words.mask, flags: l.words.flags, comment: l.comment });
+                out.recs.push(Rec { line: n as u32, cmd: l.cmd, mask: l.words.mask, flags: l.words.flags, comment: l.comment, args: l.args });
             }
             Err(problem) => {
                 out.error = Some((n, problem));
@@ -171,7 +172,7 @@ pub(super) fn run(file: &str, bytes: &[u8], m: Machine<'_>, width: f64) -> Resul
         let mut spawned = 0;
         let (mut batch, mut batch_segs, mut in_flight) = (Vec::new(), 0usize, 0usize);
         let mut line_base = 0usize;
-        let mut line = Line { cmd: Command::None, words: Words::default(), comment: None };
+        let mut line = Line { cmd: Command::None, words: Words::default(), comment: None, args: None };
         for k in 0..bounds.len() {
             while spawned < bounds.len() && spawned <= k + AHEAD_BLOCKS {
                 spawn_lex(spawned);
@@ -189,6 +190,7 @@ pub(super) fn run(file: &str, bytes: &[u8], m: Machine<'_>, width: f64) -> Resul
                 // Only the letters in the mask are read, so the others' old values may stay.
                 line.cmd = r.cmd;
                 line.comment = r.comment;
+                line.args = r.args;
                 line.words.mask = r.mask;
                 line.words.flags = r.flags;
                 let mut mask = r.mask;

@@ -17,6 +17,7 @@ impl Default for Design {
             version: DESIGN_VERSION,
             name: "cube-20mm".into(),
             description: String::new(),
+            date: String::new(),
             seed: 1,
             printer: Printer::default(),
             material: Material::default(),

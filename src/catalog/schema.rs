@@ -16,6 +16,7 @@ use serde_json::Value;
 pub const DESIGN_FIELDS: &[Field] = &[
     max_len(other("name", "Design", "Name", Kind::Text, &[], "Names the downloaded file and the G-code header."), MAX_NAME_BYTES),
     max_len(other("description", "Design", "Description", Kind::Text, &[], "One line on what the design makes (optional)."), MAX_DESCRIPTION_BYTES),
+    other("date", "Design", "Date (UTC)", Kind::Text, &[], "YYYY-MM-DD HH:MM:SS: when the design was made or last changed; the G-code header's date."),
     int("seed", "Design", "Random seed", 0.0, 9.007199254740991e15, "Seeds every random choice: the same seed gives the same G-code."),
 ];
 
@@ -193,6 +194,12 @@ pub fn validate(design: &Design, registry: &Registry) -> Vec<Problem> {
         if let Some(Value::String(s)) = path.split('.').try_fold(&root, |v, k| v.get(k)).filter(|v| v.as_str().is_some_and(|s| s.len() <= MAX_NAME_BYTES)) {
             out.extend(one_line(path, s, "a name"));
         }
+    }
+    if !design.date.is_empty() && !crate::gcode::is_date(&design.date) {
+        out.push(Problem {
+            path: "date".into(),
+            message: format!("'{}' is not a date YYYY-MM-DD HH:MM:SS (UTC), e.g. 2026-12-06 14:30:00; or leave it empty", design.date.escape_debug()),
+        });
     }
     for slot in kind.slots() {
         if let Some(Input::File { name, .. }) = design.job.input_at(slot.path) {

@@ -68,6 +68,11 @@ pub struct Design {
     /// One line on what the design makes (the page's example list shows it); optional.
     #[serde(default, skip_serializing_if = "String::is_empty")]
     pub description: String,
+    /// When the design was made or last changed, `YYYY-MM-DD HH:MM:SS` in UTC (`weft new` and
+    /// the page's edits set it); the G-code header's date, so the same design gives the same
+    /// bytes on any day. Optional.
+    #[serde(default, skip_serializing_if = "String::is_empty")]
+    pub date: String,
     /// Seed of every random choice (same seed → same G-code).
     #[serde(default)]
     pub seed: u64,
@@ -412,7 +417,7 @@ mod tests {
             ("printer.relative_e=1", "printer.relative_e: Relative extrusion (M83) must be true or false (got 1)"),
             ("name=3", "name: Name must be text in double quotes (got 3)"),
             ("seed=-1", "seed: Random seed must be a whole number from 0 to 9.007199254740991e15 (got -1)"),
-            ("colour=red", "colour: is not a setting; the settings of the design are: version, name, description, seed, printer, material, speeds, job"),
+            ("colour=red", "colour: is not a setting; the settings of the design are: version, name, description, date, seed, printer, material, speeds, job"),
             ("job.paths.iteratons=5", "job.paths.iteratons: is not a setting (did you mean 'iterations'?); the settings of job.paths are: method, iterations, order, merge_tolerance_mm, short_path_segments, short_path_speed_factor, exact_pairing_seconds, direction_deg"),
             ("job.lattice.overrides=[{\"layer\":\"top\"}]", "job.lattice.overrides.0.layer: must be a whole number from 0 to 4294967295 (got \"top\")"),
             ("job={}", "job: needs a \"kind\", the job kind (e.g. \"slice\" or \"lattice\")"),

@@ -218,6 +218,25 @@ impl Out {
         self.pos = Some(to);
     }
 
+    /// `G2` (clockwise) or `G3 X<x> Y<y> I<i> J<j> E<e> [F<feed>]` in the XY plane, feeding
+    /// `e` mm; `ij` is the centre relative to the start (4 decimals). Z is not written: the
+    /// arc stays at the current height.
+    pub fn extrude_arc(&mut self, to: DVec3, ij: [f64; 2], clockwise: bool, e: f64, feed: u64) {
+        let g = if clockwise { 2 } else { 3 };
+        self.text.push_str(if clockwise { "G2" } else { "G3" });
+        let mut words = Words::default();
+        self.word(&mut words, b'X', to.x, 3);
+        self.word(&mut words, b'Y', to.y, 3);
+        self.word(&mut words, b'I', ij[0], 4);
+        self.word(&mut words, b'J', ij[1], 4);
+        self.e_total += e;
+        let e_word = if self.relative_e { e } else { self.e_total };
+        self.word(&mut words, b'E', e_word, 5);
+        self.push_feed(&mut words, feed);
+        self.end(Command::G(g, 0), &words);
+        self.pos = Some(to);
+    }
+
     /// `G1 E<e> [F<feed>]` without motion; `e` is the word's value.
     pub fn e_only(&mut self, e: f64, feed: u64) {
         let (cmd, mut words) = self.begin(1);

@@ -61,5 +61,5 @@ pub(crate) fn write(toolpath: &Toolpath, options: &Options, offset: DVec3) -> Gc
         }
     }
     let moves_end = text.len();
-    Gcode { text, stats, header_len: 0, moves_end }
+    Gcode { text, stats, header_len: 0, moves_end, footer_len: 0 }
 }

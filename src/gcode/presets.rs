@@ -43,6 +43,20 @@ pub fn presets() -> Vec<Preset> {
                 travel_speed_mm_s: 180.0,
                 z_speed_mm_s: 12.0,
                 acceleration_mm_s2: 2000.0,
+                // The sizes Prusa's screens show (the list and the preview).
+                thumbnails: vec![[16, 16], [313, 173]],
+                ..Printer::default()
+            },
+        },
+        Preset {
+            id: "klipper-220",
+            label: "Klipper (Moonraker) 220 mm",
+            doc: "Any Klipper printer with a 220 × 220 mm bed behind Moonraker (Mainsail, Fluidd): Klipper's object labels, thumbnails for its screens, Send to Moonraker.",
+            printer: Printer {
+                name: "Klipper 220 × 220".into(),
+                object_labels: super::ObjectLabels::ExcludeObject,
+                host: super::HostKind::Moonraker,
+                acceleration_mm_s2: 3000.0,
                 ..Printer::default()
             },
         },

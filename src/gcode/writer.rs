@@ -3,9 +3,11 @@
 
 use super::flavor::{dialect, feed_mm_min, PathCtx};
 use super::format::{duration, fixed, push_fixed, push_u64};
+use super::objects::{self, Objects};
 use super::out::{AxisWords, Out};
 use super::template::expand;
-use super::{Error, Flavor, Gcode, GcodeStats, Options, Origin};
+use super::{meta, thumbs};
+use super::{Error, Flavor, Gcode, GcodeStats, ObjectLabels, Options, Origin};
 use super::{DEFAULT_END_GCODE, DEFAULT_PNEUMATIC_END_GCODE, DEFAULT_PNEUMATIC_START_GCODE, DEFAULT_START_GCODE};
 use crate::geom::{DVec3, Feature, PassKind, Path, PointFlow, Toolpath};
 use crate::machine::{AxisOutput, Machine};
@@ -208,7 +210,7 @@ fn plan_five_axis(toolpath: &Toolpath, options: &Options, offset: DVec3) -> Resu
 /// `s` on one line: a name written into a comment or a placeholder cannot start a G-code
 /// line of its own (control characters, including CR, LF and NEL, and the Unicode line and
 /// paragraph separators become spaces).
-fn one_line(s: &str) -> String {
+pub(super) fn one_line(s: &str) -> String {
     s.chars().map(|c| if c.is_control() || matches!(c, '\u{2028}' | '\u{2029}') { ' ' } else { c }).collect()
 }
 
@@ -256,6 +258,60 @@ fn check_bed(toolpath: &Toolpath, options: &Options, offset: DVec3) -> Result<()
     Ok(())
 }
 
+/// Writes a path's extruding moves as lines and arcs: the moves kept by `keep` (zero-length
+/// ones dropped) in printer coordinates, fitted by [`super::arcs::fit`]; each arc feeds the
+/// filament of the segments it replaces. Returns the length written (arcs along their
+/// circle) and the arcs written.
+#[allow(clippy::too_many_arguments)]
+fn write_with_arcs(
+    out: &mut Out,
+    d: &mut dyn super::flavor::Dialect,
+    path: &Path,
+    keep: &[bool],
+    offset: DVec3,
+    tol: f64,
+    feed: u64,
+    e_of: impl Fn(usize, f64) -> f64,
+) -> (f64, usize) {
+    // Kept points and, per move to each, its length and filament.
+    let mut pts = vec![path.points[0] + offset];
+    let mut moves: Vec<(f64, f64)> = Vec::new();
+    let (mut len, mut e) = (0.0f64, 0.0f64);
+    for (i, w) in path.points.windows(2).enumerate() {
+        let j = i + 1;
+        let step = w[0].distance(w[1]);
+        if step > 0.0 {
+            len += step;
+            e += e_of(j, step);
+        }
+        if keep[j] && len > 0.0 {
+            pts.push(path.points[j] + offset);
+            moves.push((len, e));
+            (len, e) = (0.0, 0.0);
+        }
+    }
+    let (mut written, mut arcs) = (0.0, 0usize);
+    for (start, m) in super::arcs::spans(&super::arcs::fit(&pts, tol)) {
+        match *m {
+            super::arcs::Move::Line { end } => {
+                for k in start + 1..=end {
+                    d.segment(out, pts[k], moves[k - 1].1, feed);
+                    written += moves[k - 1].0;
+                }
+            }
+            super::arcs::Move::Arc { end, center, clockwise } => {
+                let e: f64 = moves[start..end].iter().map(|m| m.1).sum();
+                let from = pts[start].truncate();
+                let ij = super::arcs::center_offset(from, center);
+                out.extrude_arc(pts[end], [ij.x, ij.y], clockwise, e, feed);
+                written += super::arcs::arc_length(from, pts[end].truncate(), center, clockwise);
+                arcs += 1;
+            }
+        }
+    }
+    (written, arcs)
+}
+
 /// Writes the G-code; see [`super::write_gcode`].
 pub(crate) fn write(toolpath: &Toolpath, options: &Options) -> Result<Gcode, Error> {
     if toolpath.passes.iter().all(|l| l.paths.iter().all(|p| p.points.len() < 2)) {
@@ -299,6 +355,15 @@ pub(crate) fn write(toolpath: &Toolpath, options: &Options) -> Result<Gcode, Err
     let rotary_xyz = plan.is_some() && machine.axis_output == AxisOutput::Rotary;
     let mut out = Out::new(printer.relative_e, axes);
     let mut d = dialect(printer.flavor);
+    // Object labels (Marlin flavour): declared before the start code, each path inside its
+    // object's start and end lines, every object ended at its layer's end.
+    let labels = if printer.flavor == Flavor::Marlin { printer.object_labels } else { ObjectLabels::None };
+    let objects = if labels == ObjectLabels::None { Objects::default() } else { objects::find(toolpath, offset, &options.design_name) };
+    let defined = objects::define(&objects.list, labels);
+    if !defined.is_empty() {
+        out.line(defined.strip_suffix('\n').unwrap_or(&defined));
+    }
+    let mut in_object: Option<usize> = None;
     if !start.is_empty() {
         out.code(start.strip_suffix('\n').unwrap_or(&start));
     }
@@ -314,11 +379,16 @@ pub(crate) fn write(toolpath: &Toolpath, options: &Options) -> Result<Gcode, Err
     let mut line = String::new();
     let mut route_buf: Vec<DVec3> = Vec::new();
     let mut merged_moves = 0usize;
+    let arc_tol = if printer.flavor == Flavor::Marlin && printer.arc_tolerance_mm.is_finite() { printer.arc_tolerance_mm.max(0.0) } else { 0.0 };
+    let mut arcs_written = 0usize;
     let (mut dropped_paths, mut dropped_e) = (0usize, 0.0f64);
     for layer in &toolpath.passes {
         if layer.paths.iter().all(|p| p.points.len() < 2) {
             path_no += layer.paths.len();
             continue;
+        }
+        if let Some(i) = in_object.take() {
+            out.line(&objects::end(&objects.list, i, labels));
         }
         let n = layers_written;
         layers_written += 1;
@@ -348,6 +418,7 @@ pub(crate) fn write(toolpath: &Toolpath, options: &Options) -> Result<Gcode, Err
         let mut width: Option<i64> = None;
         for path in &layer.paths {
             let poses: &[Pose] = plan.as_ref().map_or(&[], |p| &p[path_no]);
+            let object = objects.of_path.get(path_no).copied().flatten();
             path_no += 1;
             if path.points.len() < 2 {
                 continue;
@@ -376,6 +447,15 @@ pub(crate) fn write(toolpath: &Toolpath, options: &Options) -> Result<Gcode, Err
                     };
                 }
             };
+            if object != in_object {
+                if let Some(i) = in_object {
+                    out.line(&objects::end(&objects.list, i, labels));
+                }
+                if let Some(i) = object {
+                    out.line(&objects::start(&objects.list, i, labels));
+                }
+                in_object = object;
+            }
             aim(&mut out, 0);
             let first = at(0);
             match &path.approach {
@@ -417,6 +497,16 @@ pub(crate) fn write(toolpath: &Toolpath, options: &Options) -> Result<Gcode, Err
             // printer's planner): their filament goes with it, so the total is unchanged.
             let (keep, merged) = kept_points(path, dwells);
             merged_moves += merged;
+            // Arcs (Marlin, 3-axis, a planar path without per-point feeds or dwells): the kept
+            // moves, fitted with G2/G3 where they lie within the tolerance of an arc.
+            if arc_tol > 0.0 && plan.is_none() && feeds.is_none() && dwells.is_none() && lead <= 0.0 && path.points.iter().all(|q| q.z == path.points[0].z) {
+                let (written, arcs) =
+                    write_with_arcs(&mut out, &mut *d, path, &keep, offset, arc_tol, feed, |j, step| segment_e(options, path, layer.height, j, step));
+                extruded_mm += written;
+                arcs_written += arcs;
+                d.path_end(&mut out, options);
+                continue;
+            }
             let (mut from, mut len, mut e) = (0usize, 0.0f64, 0.0f64);
             for (i, w) in path.points.windows(2).enumerate() {
                 let j = i + 1;
@@ -464,6 +554,9 @@ pub(crate) fn write(toolpath: &Toolpath, options: &Options) -> Result<Gcode, Err
             }
         }
     }
+    if let Some(i) = in_object.take() {
+        out.line(&objects::end(&objects.list, i, labels));
+    }
     let moves_end = out.text.len();
     d.epilogue(&mut out, options);
     if !end.is_empty() {
@@ -484,12 +577,16 @@ pub(crate) fn write(toolpath: &Toolpath, options: &Options) -> Result<Gcode, Err
         merged_moves,
         dropped_paths,
         dropped_filament_mm: dropped_e,
+        arcs: arcs_written,
+        arc_bytes_saved: 0,
     };
 
-    let fd = printer.filament_diameter_mm;
-    let volume_cm3 = out.e_total * std::f64::consts::PI * fd * fd / 4.0 / 1000.0;
-    let mut header = String::new();
-    header.push_str(&format!("; generated by weft {}\n", env!("CARGO_PKG_VERSION")));
+    let volume_cm3 = meta::volume_cm3(out.e_total, printer.filament_diameter_mm);
+    let mut header = meta::generated_line(&options.date);
+    if printer.flavor == Flavor::Marlin && !printer.thumbnails.is_empty() {
+        let pngs: Vec<(u32, u32, Vec<u8>)> = printer.thumbnails.iter().take(super::MAX_THUMBNAILS).map(|&[w, h]| (w, h, thumbs::png(toolpath, w, h))).collect();
+        header.push_str(&meta::thumbnail_blocks(&pngs));
+    }
     header.push_str(&format!("; design: {}\n", one_line(&options.design_name)));
     header.push_str(&format!("; printer: {}\n", one_line(&printer.name)));
     header.push_str(&format!("; material: {}\n", one_line(&material.name)));
@@ -503,5 +600,9 @@ pub(crate) fn write(toolpath: &Toolpath, options: &Options) -> Result<Gcode, Err
     header.push_str(&format!(";LAYER_COUNT:{layers_written}\n"));
     let header_len = header.len();
     header.push_str(&out.text);
-    Ok(Gcode { text: header, stats, header_len, moves_end: header_len + moves_end })
+    let body_len = header.len();
+    header.push_str(";\n");
+    header.push_str(&meta::footer(toolpath, options, &meta::Totals { filament_mm: out.e_total, time_s, layers: layers_written }));
+    let footer_len = header.len() - body_len;
+    Ok(Gcode { text: header, stats, header_len, moves_end: header_len + moves_end, footer_len })
 }

@@ -136,6 +136,9 @@ pub enum Command {
     Other,
     /// Parameters without a command word (`X10 Y5`): repeats the modal motion.
     Modal,
+    /// A named command (Klipper's extended G-code: `EXCLUDE_OBJECT_START NAME=part`,
+    /// `SET_PRINT_STATS_INFO`, a macro): a letter followed by a letter or `_`.
+    Named,
 }
 
 /// One lexed line.
@@ -147,6 +150,22 @@ pub struct Line<'a> {
     pub words: Words,
     /// Text after `;`, if any.
     pub comment: Option<&'a [u8]>,
+    /// The text of a [`Command::Named`] line and the arguments of `M486` (object labels),
+    /// before any comment; `None` for other lines.
+    pub args: Option<&'a [u8]>,
+}
+
+/// `s[i..]` up to its comment, and the comment (text after `;`).
+fn split_comment(s: &[u8], i: usize) -> (&[u8], Option<&[u8]>) {
+    let mut j = i;
+    while j < s.len() {
+        match s[j] {
+            b';' => return (&s[i..j], Some(&s[j + 1..])),
+            b'(' => j = skip_paren(s, j),
+            _ => j += 1,
+        }
+    }
+    (&s[i.min(s.len())..], None)
 }
 
 /// Whether the analyzer reads this command's parameters (and so checks them strictly).
@@ -185,7 +204,7 @@ pub fn lex_line(s: &[u8]) -> Result<Line<'_>, String> {
         let b = s[i];
         match b {
             b' ' | b'\t' | b'\r' | 0x0b | 0x0c => i += 1,
-            b';' => return Ok(Line { cmd, words, comment: Some(&s[i + 1..]) }),
+            b';' => return Ok(Line { cmd, words, comment: Some(&s[i + 1..]), args: None }),
             b'(' => i = skip_paren(s, i),
             b'*' => {
                 // Checksum: skip its digits, keep reading (a comment may follow).
@@ -225,13 +244,21 @@ pub fn lex_line(s: &[u8]) -> Result<Line<'_>, String> {
                             _ => Command::Other,
                         }
                     };
+                    if cmd == Command::M(486) {
+                        let (args, comment) = split_comment(s, i);
+                        return Ok(Line { cmd, words, comment, args: Some(args) });
+                    }
                     if !interpreted(cmd) {
                         // Free-form arguments (M117 text, file names): only look for a comment.
-                        return Ok(Line { cmd, words, comment: find_comment(s, i) });
+                        return Ok(Line { cmd, words, comment: find_comment(s, i), args: None });
                     }
                     continue;
                 }
                 if cmd == Command::None {
+                    if matches!(s.get(i), Some(c) if c.is_ascii_alphabetic() || *c == b'_') {
+                        let (args, comment) = split_comment(s, i - 1);
+                        return Ok(Line { cmd: Command::Named, words, comment, args: Some(args) });
+                    }
                     cmd = Command::Modal;
                 }
                 let k = (letter - b'A') as usize;
@@ -287,11 +314,11 @@ pub fn lex_line(s: &[u8]) -> Result<Line<'_>, String> {
                     return Err(format!("unexpected '{}'", printable(b)));
                 }
                 // Junk on an otherwise empty line: ignore the line but keep its comment.
-                return Ok(Line { cmd: Command::None, words, comment: find_comment(s, i) });
+                return Ok(Line { cmd: Command::None, words, comment: find_comment(s, i), args: None });
             }
         }
     }
-    Ok(Line { cmd, words, comment: None })
+    Ok(Line { cmd, words, comment: None, args: None })
 }
 
 /// Length of an exponent (`e5`, `e-3`, `e+10`) at the start of `s`, if there is one. Only a

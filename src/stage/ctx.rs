@@ -292,5 +292,11 @@ impl<'a> Ctx<'a> {
 /// The printer, material, speeds and name: what the writer reads of the design (also for
 /// a job that writes a toolpath itself, e.g. to compare routes).
 pub fn writer_options(design: &Design) -> gcode::Options {
-    gcode::Options { printer: design.printer.clone(), material: design.material.clone(), speeds: design.speeds.clone(), design_name: design.name.clone() }
+    gcode::Options {
+        printer: design.printer.clone(),
+        material: design.material.clone(),
+        speeds: design.speeds.clone(),
+        design_name: design.name.clone(),
+        date: design.date.clone(),
+    }
 }

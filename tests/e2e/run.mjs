@@ -26,6 +26,7 @@ import { latticeChecks } from "./lattice-checks.mjs";
 import { newcomerChecks } from "./newcomer-checks.mjs";
 import { previewChecks } from "./preview-checks.mjs";
 import { threadsChecks } from "./threads-checks.mjs";
+import { hostsFromEnv, sendChecks } from "./send-checks.mjs";
 import {
   boxStl, collectErrors, colouredPixels, confirmBigJobs, downloadGcode, launchChromium, stageMarks, waitReady, waitResult as waitResultWithin, watchAfterCancel,
 } from "./page-helpers.mjs";
@@ -617,6 +618,9 @@ await check(53, "an open part (a box without one wall) is capped out loud: the f
   }
   return said.join("; ");
 });
+
+// Send to real print hosts (tests/hosts/hosts.py, started by scripts/test.sh: WEFT_HOSTS).
+await sendChecks({ browser, baseUrl: base, hosts: hostsFromEnv(), check, outDir: OUT, first: 54 });
 
 if (main.errors.length) console.log(`note: console errors in the main page:\n  ${main.errors.join("\n  ")}`);
 if (offOrigin.length) console.log(`note: blocked requests leaving the origin:\n  ${[...new Set(offOrigin)].join("\n  ")}`);

@@ -394,3 +394,23 @@ fn huge_volumes_gcode_and_designs_are_refused_before_they_are_read() {
     }
     let _ = std::fs::remove_dir_all(dir);
 }
+
+#[test]
+fn an_output_named_bgcode_is_binary_gcode_of_the_same_text() {
+    let (text, binary) = (tmp("cube.gcode"), tmp("cube.bgcode"));
+    run_ok(&["run", &repo("examples/cube-20mm.json"), "-q", "-o", text.to_str().unwrap()]);
+    run_ok(&["run", &repo("examples/cube-20mm.json"), "-q", "-o", binary.to_str().unwrap()]);
+    let (t, b) = (std::fs::read_to_string(&text).unwrap(), std::fs::read(&binary).unwrap());
+    assert_eq!(b, weft::gcode::binary::from_text(&t));
+    // The printer's setting does it too, into <name>.bgcode; a non-Marlin flavour refuses it.
+    let dir = tmp("bg");
+    std::fs::create_dir_all(&dir).unwrap();
+    run_ok(&["run", &repo("examples/cube-20mm.json"), "-q", "--set", "printer.binary_gcode=true", "-o", dir.to_str().unwrap()]);
+    assert_eq!(std::fs::read(dir.join("cube-20mm.bgcode")).unwrap(), b);
+    let out = weft()
+        .args(["run", &repo("examples/cube-20mm.json"), "-q", "--set", "printer.flavor=pneumatic", "-o", tmp("x.bgcode").to_str().unwrap()])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success() && err.contains("binary G-code is Marlin G-code"), "{err}");
+}

@@ -34,6 +34,7 @@ fn names_cannot_start_a_gcode_line() {
                     line.starts_with("; design: ")
                         || line.starts_with("; printer: ")
                         || line.starts_with("; material: ")
+                        || line.starts_with("; filament_type = ")
                         || line.starts_with("M117 x")
                         || line.starts_with("; x"),
                     "{line:?}"

@@ -30,6 +30,7 @@ mod fuzz_smoke;
 mod gcode_edit;
 mod gcode_features;
 mod gcode_five_axis;
+mod gcode_host;
 mod gcode_roundtrip;
 mod gcode_timing;
 mod gcode_writer;

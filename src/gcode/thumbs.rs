@@ -4,8 +4,9 @@
 //! darker (the top layer in the colour itself), on a transparent background; paths are drawn
 //! in print order, so what is printed later covers what is under it.
 //!
-//! Bounded: the projected length drawn is at most [`MAX_DRAWN_PX`] pixels (whole passes are
-//! skipped evenly past it, the top one always kept), and the picture at most
+//! Bounded: the projected length drawn is at most [`MAX_DRAWN_PX`] pixels and 10 times the
+//! picture's area (whole passes are skipped evenly past it, the top one always kept), points
+//! under half a pixel apart are drawn as one, and the picture is at most
 //! [`super::MAX_THUMBNAIL_PX`] a side. The PNG is 8-bit RGBA, deflated with `miniz_oxide`
 //! (already in the tree for the share links) and checksummed with `crc32fast` (in the tree
 //! through `flate2`): the format's three chunks are a few lines, and a PNG crate would add
@@ -14,7 +15,7 @@
 use crate::geom::{Feature, Toolpath};
 
 /// Most pixels of line drawn per picture (sum of the projected lengths).
-pub const MAX_DRAWN_PX: f64 = 4.0e6;
+pub const MAX_DRAWN_PX: f64 = 1.5e6;
 /// Tilt of the view: 0 = straight from above, 1 = isometric.
 const TILT: f64 = 0.6;
 
@@ -64,9 +65,11 @@ pub fn rgba(toolpath: &Toolpath, w: u32, h: u32) -> Vec<u8> {
         let (u, v) = project(x, y, z);
         (ox + (u - lo.0) * scale, oy + (v - lo.1) * scale)
     };
-    // Passes drawn: every `step`-th from the top, so the drawn length stays under the cap.
+    // Passes drawn: every `step`-th from the top, so the drawn length stays under the cap (and
+    // under 10 times the picture's area: a small picture needs few layers).
+    let cap = MAX_DRAWN_PX.min(10.0 * f64::from(w) * f64::from(h));
     let drawn_px: f64 = toolpath.passes.iter().flat_map(|p| &p.paths).map(|p| p.length() * scale).sum();
-    let step = if drawn_px > MAX_DRAWN_PX { (drawn_px / MAX_DRAWN_PX).ceil() as usize } else { 1 };
+    let step = if drawn_px > cap { (drawn_px / cap).ceil() as usize } else { 1 };
     let n = toolpath.passes.len();
     let dz = zhi - zlo;
     for (k, pass) in toolpath.passes.iter().enumerate() {
@@ -76,32 +79,44 @@ pub fn rgba(toolpath: &Toolpath, w: u32, h: u32) -> Vec<u8> {
         for p in pass.paths.iter().filter(|p| p.points.len() >= 2) {
             let base = rgb(p.feature.color());
             let thick = (p.width * scale).clamp(1.0, 6.0);
-            for s in p.points.windows(2) {
-                let shade = if dz > 0.0 { 0.45 + 0.55 * ((s[1].z - zlo) / dz).clamp(0.0, 1.0) } else { 1.0 };
+            // Points closer than half a pixel to the last one drawn are passed over.
+            let q = p.points[0];
+            let mut a = to_px(q.x, q.y, q.z);
+            let last = p.points.len() - 1;
+            for (i, q) in p.points.iter().enumerate().skip(1) {
+                let b = to_px(q.x, q.y, q.z);
+                if i < last && (b.0 - a.0).abs() + (b.1 - a.1).abs() < 0.5 {
+                    continue;
+                }
+                let shade = if dz > 0.0 { 0.45 + 0.55 * ((q.z - zlo) / dz).clamp(0.0, 1.0) } else { 1.0 };
                 let c = base.map(|x| (f64::from(x) * shade).round() as u8);
-                let a = to_px(s[0].x, s[0].y, s[0].z);
-                let b = to_px(s[1].x, s[1].y, s[1].z);
                 line(&mut img, wu, hu, a, b, thick, c);
+                a = b;
             }
         }
     }
     img
 }
 
-/// A line of `thick` px from `a` to `b`: squares stamped every half pixel.
+/// A line of `thick` px from `a` to `b`: squares of that side stamped every 0.7 side (at least
+/// every half pixel), so the work is about 1.4 × the length times the thickness.
 fn line(img: &mut [u8], w: usize, h: usize, a: (f64, f64), b: (f64, f64), thick: f64, c: [u8; 3]) {
     let len = ((b.0 - a.0) * (b.0 - a.0) + (b.1 - a.1) * (b.1 - a.1)).sqrt();
-    let n = (len * 2.0).ceil().max(1.0) as usize;
+    let n = (len / (thick * 0.7).max(0.5)).ceil().max(1.0) as usize;
     let r = thick / 2.0;
     for k in 0..=n {
         let t = k as f64 / n as f64;
         let (x, y) = (a.0 + (b.0 - a.0) * t, a.1 + (b.1 - a.1) * t);
         let (x0, x1) = ((x - r).round().max(0.0) as usize, ((x + r).round() as usize).min(w));
         let (y0, y1) = ((y - r).round().max(0.0) as usize, ((y + r).round() as usize).min(h));
+        let px = [c[0], c[1], c[2], 255];
+        let xe = x1.max(x0 + 1).min(w);
+        if x0 >= xe {
+            continue;
+        }
         for yy in y0..y1.max(y0 + 1).min(h) {
-            for xx in x0..x1.max(x0 + 1).min(w) {
-                let i = (yy * w + xx) * 4;
-                img[i..i + 4].copy_from_slice(&[c[0], c[1], c[2], 255]);
+            for p in img[(yy * w + x0) * 4..(yy * w + xe) * 4].chunks_exact_mut(4) {
+                p.copy_from_slice(&px);
             }
         }
     }
@@ -121,7 +136,7 @@ pub fn encode(w: u32, h: u32, rgba: &[u8]) -> Vec<u8> {
     ihdr.extend(h.to_be_bytes());
     ihdr.extend([8, 6, 0, 0, 0]);
     chunk(&mut out, b"IHDR", &ihdr);
-    chunk(&mut out, b"IDAT", &miniz_oxide::deflate::compress_to_vec_zlib(&raw, 9));
+    chunk(&mut out, b"IDAT", &miniz_oxide::deflate::compress_to_vec_zlib(&raw, 6));
     chunk(&mut out, b"IEND", &[]);
     out
 }

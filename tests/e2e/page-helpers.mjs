@@ -228,3 +228,23 @@ export async function watchAfterCancel(page) {
     }, { once: true });
   });
 }
+
+/**
+ * The checks' runner: `check(n, title, fn)` runs `fn`, prints `PASS n. title (detail) [s]` or
+ * `FAIL n. title: message`, and records the outcome in `results` (true/false).
+ */
+export function checker() {
+  const results = [];
+  const check = async (n, title, fn) => {
+    const t0 = Date.now();
+    try {
+      const detail = await fn();
+      results.push(true);
+      console.log(`PASS ${n}. ${title}${detail ? ` (${detail})` : ""} [${((Date.now() - t0) / 1000).toFixed(1)} s]`);
+    } catch (err) {
+      results.push(false);
+      console.log(`FAIL ${n}. ${title}: ${err.message.split("\n").join("\n       ")}`);
+    }
+  };
+  return { results, check };
+}

@@ -28,7 +28,7 @@ import { previewChecks } from "./preview-checks.mjs";
 import { threadsChecks } from "./threads-checks.mjs";
 import { hostsFromEnv, sendChecks } from "./send-checks.mjs";
 import {
-  boxStl, collectErrors, colouredPixels, confirmBigJobs, downloadGcode, launchChromium, stageMarks, waitReady, waitResult as waitResultWithin, watchAfterCancel,
+  boxStl, checker, collectErrors, colouredPixels, confirmBigJobs, downloadGcode, launchChromium, stageMarks, waitReady, waitResult as waitResultWithin, watchAfterCancel,
 } from "./page-helpers.mjs";
 
 const OUT = join(ROOT, "tests/e2e/out");
@@ -78,18 +78,7 @@ async function dropFile(page, name, buffer, mimeType = "application/octet-stream
 // ---------------------------------------------------------------------------------------
 // Checks
 // ---------------------------------------------------------------------------------------
-const results = [];
-async function check(n, title, fn) {
-  const t0 = Date.now();
-  try {
-    const detail = await fn();
-    results.push(true);
-    console.log(`PASS ${n}. ${title}${detail ? ` (${detail})` : ""} [${((Date.now() - t0) / 1000).toFixed(1)} s]`);
-  } catch (err) {
-    results.push(false);
-    console.log(`FAIL ${n}. ${title}: ${err.message.split("\n").join("\n       ")}`);
-  }
-}
+const { results, check } = checker();
 
 // Static server of the repository root, localhost only (tests/e2e/server.mjs).
 const server = await serve({ root: ROOT, pkgDir: PKG_DIR });

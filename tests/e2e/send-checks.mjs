@@ -27,7 +27,7 @@ import { existsSync, readFileSync } from "node:fs";
 import { join, resolve } from "node:path";
 import { pathToFileURL } from "node:url";
 import { ROOT, serve } from "./server.mjs";
-import { collectErrors, downloadGcode, launchChromium, runExample, waitResult } from "./page-helpers.mjs";
+import { checker, collectErrors, downloadGcode, launchChromium, runExample, waitResult } from "./page-helpers.mjs";
 
 const EXAMPLE = "cube-20mm.json";
 const sha256 = (buf) => createHash("sha256").update(buf).digest("hex");
@@ -350,18 +350,7 @@ if (import.meta.url === pathToFileURL(process.argv[1] ?? "").href) {
   }
   const server = await serve({ root: ROOT, pkgDir });
   const browser = await launchChromium();
-  const results = [];
-  const check = async (n, title, fn) => {
-    const t0 = Date.now();
-    try {
-      const detail = await fn();
-      results.push(true);
-      console.log(`PASS ${n}. ${title}${detail ? ` (${detail})` : ""} [${((Date.now() - t0) / 1000).toFixed(1)} s]`);
-    } catch (err) {
-      results.push(false);
-      console.log(`FAIL ${n}. ${title}: ${err.message.split("\n").join("\n       ")}`);
-    }
-  };
+  const { results, check } = checker();
   let hosts = null;
   try {
     hosts = hostsFromEnv();

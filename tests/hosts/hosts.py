@@ -397,21 +397,17 @@ def start(args):
         "tmpdirs": tmpdirs,
     }
 
-    def launch(name, argv):
-        log = open(os.path.join(rundir, name, "stdout.log"), "wb")
-        p = subprocess.Popen(
-            argv,
-            cwd=os.path.join(rundir, name),
-            env=env,
-            stdin=subprocess.DEVNULL,
-            stdout=log,
-            stderr=subprocess.STDOUT,
-            start_new_session=True,
-            close_fds=True,
-        )
+    def spawn(argv, cwd, log_path, environ):
+        """A process in a session of its own, its output in log_path, its start time kept."""
+        log = open(log_path, "wb")
+        p = subprocess.Popen(argv, cwd=cwd, env=environ, stdin=subprocess.DEVNULL, stdout=log,
+                             stderr=subprocess.STDOUT, start_new_session=True, close_fds=True)
         log.close()
         state["starts"][str(p.pid)] = proc_start_time(p.pid)
         return p
+
+    def launch(name, argv):
+        return spawn(argv, os.path.join(rundir, name), os.path.join(rundir, name, "stdout.log"), env)
 
     procs = {
         "moonraker": launch("moonraker", [mr_python] + mr_argv),
@@ -426,22 +422,12 @@ def start(args):
     parent = os.getppid() if args.parent_pid is None else args.parent_pid
     deadline = time.time() + args.max_minutes * 60
     wd_env = {k: v for k, v in env.items() if k != TAG_VAR}
-    wd_log = open(os.path.join(rundir, "watchdog.log"), "wb")
-    wd = subprocess.Popen(
-        [sys.executable, os.path.abspath(__file__), "_watchdog", "--dir", rundir,
-         "--tag", tag, "--parent", str(parent),
-         "--parent-start", str(proc_start_time(parent) if parent else 0),
-         "--deadline", str(deadline)],
-        env=wd_env,
-        stdin=subprocess.DEVNULL,
-        stdout=wd_log,
-        stderr=subprocess.STDOUT,
-        start_new_session=True,
-        close_fds=True,
-    )
-    wd_log.close()
+    wd = spawn([sys.executable, os.path.abspath(__file__), "_watchdog", "--dir", rundir,
+                "--tag", tag, "--parent", str(parent),
+                "--parent-start", str(proc_start_time(parent) if parent else 0),
+                "--deadline", str(deadline)],
+               None, os.path.join(rundir, "watchdog.log"), wd_env)
     state["watchdog"] = wd.pid
-    state["starts"][str(wd.pid)] = proc_start_time(wd.pid)
     state["deadline"] = deadline
     write_state(rundir, state)
 

@@ -131,6 +131,9 @@ pub enum SendError {
         "{url} is not a printer address: give it as http://HOST:PORT (e.g. http://192.168.1.20:7125 for Moonraker, http://192.168.1.20:5000 for OctoPrint)"
     )]
     BadUrl { url: String },
+    /// An API key that cannot go in a request header.
+    #[error("the API key has a character a key never has (a line break, a space or a non-ASCII letter): paste the key alone, as the host shows it")]
+    BadKey,
     /// An https address (or a redirect to one): the CLI has no TLS.
     #[error("{host} is served over https, which the weft CLI does not speak (printers on a local network serve http): give its http:// address, or download the file and upload it in the host's page")]
     Https { host: String },
@@ -195,7 +198,11 @@ fn base(url: &str) -> Result<Base, SendError> {
     if path.contains(['?', '#']) || path.chars().any(|c| c.is_whitespace() || c.is_control()) {
         return Err(bad());
     }
-    // A port, when given, is a number (an IPv6 literal keeps its colons inside brackets).
+    // An IPv6 literal is closed by its bracket; a port, when given, is a number (the literal
+    // keeps its colons inside the brackets).
+    if authority.starts_with('[') != authority.contains(']') {
+        return Err(bad());
+    }
     let port = if authority.starts_with('[') { authority.rsplit_once("]:").map(|(_, p)| p) } else { authority.rsplit_once(':').map(|(_, p)| p) };
     if port.is_some_and(|p| p.parse::<u16>().is_err()) {
         return Err(bad());
@@ -430,6 +437,9 @@ pub fn send(
 ) -> Result<Sent, SendError> {
     let base = base(url)?;
     let key = key.map(str::trim).filter(|k| !k.is_empty());
+    if key.is_some_and(|k| !k.bytes().all(|b| b.is_ascii_graphic())) {
+        return Err(SendError::BadKey);
+    }
     // A small request first: an address, port or key that is wrong is said before megabytes go.
     get_json(to, &base, to.hello_path(), key)?;
     let (content_type, prefix, suffix) = form(to, file_name, start, bytes);
@@ -582,8 +592,18 @@ mod tests {
         assert_eq!(base("http://pi/octoprint/").unwrap().url, "http://pi/octoprint");
         assert_eq!(base("HTTP://[::1]:7125").unwrap().host, "[::1]:7125");
         assert!(matches!(base("https://pi:443"), Err(SendError::Https { .. })));
-        for bad in ["", "ftp://pi", "http://", "http://user:pw@pi", "http://pi:port", "http://pi:99999", "http://pi/x?y"] {
+        for bad in ["", "ftp://pi", "http://", "http://user:pw@pi", "http://pi:port", "http://pi:99999", "http://pi/x?y", "http://[::1", "http://::1]"] {
             assert!(matches!(base(bad), Err(SendError::BadUrl { .. })), "{bad}");
+        }
+    }
+
+    #[test]
+    fn a_key_that_cannot_be_a_header_is_refused_before_any_request() {
+        // Port 9 on 127.0.0.1 is not reached: the key is refused first.
+        for key in ["ab\ncd", "ab cd", "clé"] {
+            let e = send(b"G28\n", "x.gcode", HostKind::OctoPrint, "http://127.0.0.1:9", Some(key), false, &mut |_, _| {}).unwrap_err();
+            assert_eq!(e, SendError::BadKey, "{key:?}");
+            assert!(!e.to_string().contains(key));
         }
     }
 

@@ -294,6 +294,10 @@ function writeField(view, value) {
   if (f.kind === "bool") inputs[0].checked = Boolean(value);
   else if (f.kind === "section") inputs[0].checked = value !== undefined && value !== null;
   else if (f.kind === "choice") {
+    // A choice left out of the design (the cartesian `printer.machine`, written only when it
+    // differs) has its default, which is the first choice.
+    const first = f.choices?.[0];
+    if (value === undefined && first !== undefined) value = typeof first === "object" && first !== null ? first.value ?? first.name : first;
     inputs[0].value = JSON.stringify(value);
     const i = (f.choices ?? []).findIndex((c) => (typeof c === "object" && c !== null ? c.value ?? c.name : c) === value);
     if (view.doc && f.choice_docs?.[i]) view.doc.textContent = `${f.choice_docs[i]}`;

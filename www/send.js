@@ -318,6 +318,12 @@ async function sendNow() {
     $("send-url").focus();
     return;
   }
+  // A key is visible ASCII; anything else cannot go in a header (the browser would throw).
+  if (key && !/^[\x21-\x7e]+$/.test(key)) {
+    say("", "The API key has a character a key never has (a space, a line break or a non-ASCII letter): paste the key alone, as the host shows it.");
+    $("send-key").focus();
+    return;
+  }
   const blocked = blockedBeforeTrying(parsed, location.href);
   if (blocked) {
     say("", blocked);

@@ -189,7 +189,7 @@ pub fn validate(design: &Design, registry: &Registry) -> Vec<Problem> {
     let kind_rows = kind.fields();
     settings::check_rows(&root, &kind_rows, &mut out);
     check_strings(&root, &[common_rows(), kind_rows].concat(), &mut out);
-    for path in ["name", "description", "printer.name", "material.name"] {
+    for path in ["name", "description", "printer.name", "material.name", "printer.model"] {
         // A name over its length limit is refused for that already.
         if let Some(Value::String(s)) = path.split('.').try_fold(&root, |v, k| v.get(k)).filter(|v| v.as_str().is_some_and(|s| s.len() <= MAX_NAME_BYTES)) {
             out.extend(one_line(path, s, "a name"));

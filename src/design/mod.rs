@@ -600,7 +600,14 @@ mod tests {
 
     #[test]
     fn names_are_one_line() {
-        for (path, bad) in [("name", "x\nG28"), ("name", "x\rG28"), ("printer.name", "p\u{2028}M84"), ("material.name", "m\u{85}"), ("name", "tab\there")] {
+        for (path, bad) in [
+            ("name", "x\nG28"),
+            ("name", "x\rG28"),
+            ("printer.name", "p\u{2028}M84"),
+            ("material.name", "m\u{85}"),
+            ("name", "tab\there"),
+            ("printer.model", "MK4\nG28"),
+        ] {
             let mut v = serde_json::to_value(Design::default()).unwrap();
             set_path(&mut v, path, bad.into()).unwrap();
             let e = Design::from_json("d", &v.to_string()).unwrap_err();

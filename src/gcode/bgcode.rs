@@ -68,6 +68,10 @@ pub struct Input<'a> {
     pub slicer_metadata: &'a [(String, String)],
     /// The G-code text.
     pub gcode: &'a str,
+    /// More G-code text after `gcode`, cut into blocks on its own (so the caller need not join
+    /// the two: a header rewritten in a copy, the body borrowed). `gcode` should end at a line
+    /// end.
+    pub gcode_more: &'a str,
 }
 
 /// Encodes `input` as a binary G-code file (the bytes of a `.bgcode` file).
@@ -98,7 +102,8 @@ pub fn encode(input: &Input) -> Vec<u8> {
 
     // Readers (libbgcode's converter among them) expect at least one G-code block, so empty G-code still
     // gets one, holding only MeatPack's opening commands.
-    let chunks = gcode_chunks(input.gcode.as_bytes());
+    let mut chunks = gcode_chunks(input.gcode.as_bytes());
+    chunks.extend(gcode_chunks(input.gcode_more.as_bytes()));
     let empty: [&[u8]; 1] = [&[]];
     let chunks: &[&[u8]] = if chunks.is_empty() { &empty } else { &chunks };
     let params = GCODE_MEATPACK_COMMENTS.to_le_bytes();
@@ -426,7 +431,7 @@ mod tests {
     }
 
     fn input<'a>(printer: &'a [(String, String)], gcode: &'a str) -> Input<'a> {
-        Input { file_metadata: &[], printer_metadata: printer, thumbnails: &[], print_metadata: &[], slicer_metadata: &[], gcode }
+        Input { file_metadata: &[], printer_metadata: printer, thumbnails: &[], print_metadata: &[], slicer_metadata: &[], gcode, gcode_more: "" }
     }
 
     /// Bit-by-bit CRC-32 (reflected 0xEDB88320), independent of crc32fast.
@@ -684,8 +689,15 @@ mod tests {
             Thumbnail { width: 313, height: 173, png: vec![5; 1000] },
         ];
         let gcode = sample_gcode(200_000);
-        let input =
-            Input { file_metadata: &file_md, printer_metadata: &printer, thumbnails: &thumbs, print_metadata: &print, slicer_metadata: &slicer, gcode: &gcode };
+        let input = Input {
+            file_metadata: &file_md,
+            printer_metadata: &printer,
+            thumbnails: &thumbs,
+            print_metadata: &print,
+            slicer_metadata: &slicer,
+            gcode: &gcode,
+            gcode_more: "",
+        };
         let file = encode(&input);
         let blocks = parse(&file);
         let kinds: Vec<u16> = blocks.iter().map(|b| b.kind).collect();

@@ -32,13 +32,21 @@ const PRINT_KEYS: &[&str] = &[
     "total layers count",
 ];
 
-/// The `.bgcode` bytes of `text`.
+/// The `.bgcode` bytes of `text`. Only the text up to the end of its last thumbnail block is
+/// copied (the blocks left out); the rest is encoded where it lies, so a large file is not held
+/// twice.
 pub fn from_text(text: &str) -> Vec<u8> {
-    let mut gcode = String::with_capacity(text.len());
+    let mut head = String::new();
     let mut thumbnails = Vec::new();
     let mut meta: Vec<(String, String)> = Vec::new();
     let mut thumb: Option<(u16, u16, String)> = None;
+    // The head's length before the open block's preceding text was added.
+    let mut open_head = 0;
+    // Where the last thumbnail block ends: the text before it is rewritten into `head`.
+    let mut head_end = 0;
+    let mut at = 0;
     for line in text.split_inclusive('\n') {
+        at += line.len();
         let body = line.trim_end_matches(['\n', '\r']);
         if let Some((w, h, b64)) = &mut thumb {
             if body.trim() == "; thumbnail end" {
@@ -46,6 +54,7 @@ pub fn from_text(text: &str) -> Vec<u8> {
                     thumbnails.push(Thumbnail { width: *w, height: *h, png });
                 }
                 thumb = None;
+                head_end = at;
             } else {
                 b64.push_str(body.trim_start_matches(';').trim());
             }
@@ -55,6 +64,9 @@ pub fn from_text(text: &str) -> Vec<u8> {
             let size = rest.split_whitespace().next().unwrap_or("");
             if let Some((w, h)) = size.split_once('x') {
                 if let (Ok(w), Ok(h)) = (w.parse(), h.parse()) {
+                    // The text since the last block joins the head.
+                    open_head = head.len();
+                    head.push_str(&text[head_end..at - line.len()]);
                     thumb = Some((w, h, String::new()));
                     continue;
                 }
@@ -65,7 +77,10 @@ pub fn from_text(text: &str) -> Vec<u8> {
                 meta.push((k.to_string(), v.to_string()));
             }
         }
-        gcode.push_str(line);
+    }
+    // A block that never ends is no thumbnail: from the last one's end on, the text is kept.
+    if thumb.is_some() {
+        head.truncate(open_head);
     }
     let pick = |keys: &[&str]| -> Vec<(String, String)> { keys.iter().filter_map(|k| meta.iter().find(|(key, _)| key == k).cloned()).collect() };
     let file = vec![("Producer".to_string(), format!("weft {}", env!("CARGO_PKG_VERSION")))];
@@ -75,7 +90,8 @@ pub fn from_text(text: &str) -> Vec<u8> {
         thumbnails: &thumbnails,
         print_metadata: &pick(PRINT_KEYS),
         slicer_metadata: &meta,
-        gcode: &gcode,
+        gcode: &head,
+        gcode_more: &text[head_end..],
     })
 }
 
@@ -94,5 +110,9 @@ mod tests {
         assert!(b.windows(png.len()).any(|w| w == png.as_slice()));
         assert!(b.windows(b"layer_height=0.2".len()).any(|w| w == b"layer_height=0.2"));
         assert_eq!(from_text(&text), b, "same bytes twice");
+        // A block that never ends is text, kept once.
+        let open = format!("{text}; thumbnail begin 2x2 99\n; abc\nG1 X9\n");
+        let ob = from_text(&open);
+        assert_eq!(ob.windows(png.len()).filter(|w| *w == png.as_slice()).count(), 1);
     }
 }

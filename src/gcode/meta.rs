@@ -15,18 +15,24 @@ use base64::Engine;
 /// Date written when the design has none.
 pub const NO_DATE: &str = "1970-01-01 00:00:00";
 
-/// Whether `s` is a date `YYYY-MM-DD HH:MM:SS` with a month 1–12, a day 1–31, an hour under
-/// 24 and minutes and seconds under 60.
+/// Whether `s` is a date `YYYY-MM-DD HH:MM:SS`: a day of its month (29 February in leap
+/// years), an hour under 24, minutes and seconds under 60.
 pub fn is_date(s: &str) -> bool {
     let b = s.as_bytes();
     if b.len() != 19 || b[4] != b'-' || b[7] != b'-' || b[10] != b' ' || b[13] != b':' || b[16] != b':' {
         return false;
     }
     let num = |r: std::ops::Range<usize>| s.get(r).filter(|t| t.bytes().all(|c| c.is_ascii_digit())).and_then(|t| t.parse::<u32>().ok());
-    matches!(
-        (num(0..4), num(5..7), num(8..10), num(11..13), num(14..16), num(17..19)),
-        (Some(_), Some(1..=12), Some(1..=31), Some(0..=23), Some(0..=59), Some(0..=59))
-    )
+    let (Some(y), Some(m), Some(d)) = (num(0..4), num(5..7), num(8..10)) else { return false };
+    let leap = y % 4 == 0 && (y % 100 != 0 || y % 400 == 0);
+    let days = match m {
+        1 | 3 | 5 | 7 | 8 | 10 | 12 => 31,
+        4 | 6 | 9 | 11 => 30,
+        2 if leap => 29,
+        2 => 28,
+        _ => return false,
+    };
+    (1..=days).contains(&d) && matches!((num(11..13), num(14..16), num(17..19)), (Some(0..=23), Some(0..=59), Some(0..=59)))
 }
 
 /// `YYYY-MM-DD HH:MM:SS` of `unix_s` seconds since 1970 (UTC), for `weft new`.
@@ -139,7 +145,18 @@ mod tests {
         assert_eq!(utc_date(1_796_561_999), "2026-12-06 12:59:59");
         assert_eq!(utc_date(951_782_400), "2000-02-29 00:00:00");
         assert!(is_date("2026-12-06 12:00:00"));
-        for bad in ["2026-13-01 00:00:00", "2026-12-06T12:00:00", "2026-12-06 24:00:00", "", "2026-12-6 1:00:00", "２０２６-12-06 12:00:00"] {
+        assert!(is_date("2024-02-29 00:00:00") && is_date("2000-02-29 23:59:59"));
+        for bad in [
+            "2026-02-29 00:00:00",
+            "1900-02-29 00:00:00",
+            "2026-04-31 00:00:00",
+            "2026-13-01 00:00:00",
+            "2026-12-06T12:00:00",
+            "2026-12-06 24:00:00",
+            "",
+            "2026-12-6 1:00:00",
+            "２０２６-12-06 12:00:00",
+        ] {
             assert!(!is_date(bad), "{bad}");
         }
         assert!(generated_line("2026-12-06 12:00:00").ends_with("on 2026-12-06 at 12:00:00 UTC\n"));

@@ -29,6 +29,7 @@ mod order;
 mod perimeters;
 mod plane;
 mod regions;
+mod skirt;
 mod stitch;
 
 use crate::geom::tolerance::UNITS_PER_MM;
@@ -60,6 +61,12 @@ pub const DEFAULT_INFILL_DENSITY: f64 = 0.2;
 pub const DEFAULT_INFILL_ANGLE_DEG: f64 = 45.0;
 /// Default distance under which open contour ends are joined, mm.
 pub const DEFAULT_GAP_CLOSING_MM: f64 = 0.05;
+/// Default skirt loops.
+pub const DEFAULT_SKIRT_LOOPS: u32 = 1;
+/// Default gap between the skirt and the part (or its brim), mm.
+pub const DEFAULT_SKIRT_DISTANCE_MM: f64 = 3.0;
+/// Default brim width, mm (none).
+pub const DEFAULT_BRIM_WIDTH_MM: f64 = 0.0;
 /// Default number of solid layers at the bottom and at the top.
 pub const DEFAULT_SOLID_LAYERS: u32 = 3;
 
@@ -144,6 +151,14 @@ pub struct Options {
     pub solid_layers: u32,
     /// Open contour ends closer than this are joined (and reported), mm. Default 0.05.
     pub gap_closing_mm: f64,
+    /// Skirt loops around the first layer, printed first to prime the nozzle; 0: none.
+    /// Default 1.
+    pub skirt_loops: u32,
+    /// Gap between the skirt and the part (or its brim), mm. Default 3.
+    pub skirt_distance_mm: f64,
+    /// Brim: loops of this width around the first layer, touching the part, so it holds to
+    /// the bed, mm; 0: none. Default 0.
+    pub brim_width_mm: f64,
     /// Pattern of the sparse infill. Default rectilinear (not written then, so designs without
     /// it read and hash as before).
     #[serde(skip_serializing_if = "InfillPattern::is_default")]
@@ -172,6 +187,9 @@ impl Default for Options {
             infill_angle_deg: DEFAULT_INFILL_ANGLE_DEG,
             solid_layers: DEFAULT_SOLID_LAYERS,
             gap_closing_mm: DEFAULT_GAP_CLOSING_MM,
+            skirt_loops: DEFAULT_SKIRT_LOOPS,
+            skirt_distance_mm: DEFAULT_SKIRT_DISTANCE_MM,
+            brim_width_mm: DEFAULT_BRIM_WIDTH_MM,
             infill_pattern: InfillPattern::Rectilinear,
             infill_cell_mm: None,
             infill_cell_field: None,
@@ -274,6 +292,9 @@ pub const FIELDS: &[Field] = &[
     num("infill_angle_deg", "Slicing", "Infill angle", "°", -360.0, 360.0, 1.0, "Direction of the infill lines; every other layer turns by 90°."),
     int("solid_layers", "Slicing", "Solid layers (top and bottom)", 0.0, 1000.0, "Fully filled layers that close the part at its top and bottom."),
     num("gap_closing_mm", "Slicing", "Gap closing", "mm", 0.0, 5.0, 0.01, "Repairs small holes in a mesh: outline ends closer than this are joined."),
+    int("skirt_loops", "Slicing", "Skirt loops", 0.0, 20.0, "Loops around the first layer, printed first to prime the nozzle; 0: no skirt."),
+    num("skirt_distance_mm", "Slicing", "Skirt distance", "mm", 0.0, 50.0, 0.1, "Gap between the skirt and the part (or its brim)."),
+    num("brim_width_mm", "Slicing", "Brim width", "mm", 0.0, 50.0, 0.1, "Loops around the first layer that touch the part and hold it to the bed; 0: no brim."),
     choice_docs(
         other(
             "infill_pattern",
@@ -471,7 +492,14 @@ pub fn slice(mesh: &Mesh, options: &Options, progress: &mut dyn FnMut(f32)) -> R
     let mut pos = DVec2::ZERO;
     for (i, works) in filled.into_iter().enumerate() {
         let (z, h, slice_z) = stack[i];
-        let paths = order::order_layer(works, &mut pos, z, w);
+        let mut paths = Vec::new();
+        if i == 0 {
+            // Skirt and brim before the part, the last brim loop ending beside it.
+            let um = |mm: f64| (mm * UNITS_PER_MM).round().clamp(0.0, i32::MAX as f64) as i32;
+            let loops = skirt::loops(&layer_shapes[0], o.skirt_loops, um(o.skirt_distance_mm), um(o.brim_width_mm), w_um);
+            paths.extend(order::order_skirt(loops.iter().map(|l| to_mm_loop(l)).collect(), &mut pos, z, w));
+        }
+        paths.extend(order::order_layer(works, &mut pos, z, w));
         toolpath.passes.push(Pass::layer(z, h, paths));
         layers.push(SlicedLayer { slice_z, z, height: h, regions: regions::to_polygons(&layer_shapes[i]) });
         tick(0.9 + 0.1 * (i + 1) as f32 / n as f32, progress);

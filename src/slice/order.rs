@@ -57,6 +57,18 @@ pub(crate) fn order_layer(regions: Vec<RegionWork>, pos: &mut DVec2, z: f64, wid
     paths
 }
 
+/// Skirt and brim loops in the order given (outside in), each started at its vertex nearest
+/// the nozzle and closed; `pos` ends at the last one's end.
+pub(crate) fn order_skirt(loops: Vec<Vec<DVec2>>, pos: &mut DVec2, z: f64, width: f64) -> Vec<Path> {
+    let mut paths = Vec::with_capacity(loops.len());
+    for l in loops {
+        for pts in order_loops(vec![l], pos) {
+            paths.push(Path::new(pts.into_iter().map(|p| DVec3::new(p.x, p.y, z)).collect(), Feature::Skirt, width));
+        }
+    }
+    paths
+}
+
 /// Nearest-first loops, each rotated to start at its vertex nearest `pos` and closed.
 fn order_loops(loops: Vec<Vec<DVec2>>, pos: &mut DVec2) -> Vec<Vec<DVec2>> {
     let mut left: Vec<Option<Vec<DVec2>>> = loops.into_iter().filter(|l| l.len() >= 2).map(Some).collect();

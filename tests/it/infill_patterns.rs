@@ -263,8 +263,19 @@ fn sliced_layers_change_with_height() {
 fn default_options_json_has_no_new_keys() {
     let v = serde_json::to_value(Options::default()).unwrap();
     let keys: Vec<&str> = v.as_object().unwrap().keys().map(String::as_str).collect();
-    let mut old =
-        vec!["first_layer_height_mm", "layer_height_mm", "perimeters", "line_width_mm", "infill_density", "infill_angle_deg", "solid_layers", "gap_closing_mm"];
+    let mut old = vec![
+        "first_layer_height_mm",
+        "layer_height_mm",
+        "perimeters",
+        "line_width_mm",
+        "infill_density",
+        "infill_angle_deg",
+        "solid_layers",
+        "gap_closing_mm",
+        "skirt_loops",
+        "skirt_distance_mm",
+        "brim_width_mm",
+    ];
     old.sort();
     let mut keys_sorted = keys.clone();
     keys_sorted.sort();

@@ -298,7 +298,7 @@ fn infill_angle_alternates() {
 
 #[test]
 fn perimeter_count_and_order() {
-    let o = Options { perimeters: 3, ..Default::default() };
+    let o = Options { perimeters: 3, skirt_loops: 0, ..Default::default() };
     let s = run(&Shape::Cylinder { radius: 10.0, height: 2.0, segments: 64 }.mesh(), &o);
     for tl in &s.toolpath.passes {
         let per: Vec<_> = tl.paths.iter().filter(|p| matches!(p.feature, Feature::ExternalPerimeter | Feature::Perimeter)).collect();
@@ -324,7 +324,8 @@ fn toolpath_stays_inside_regions() {
     m.append(&moved(cube([6.0, 20.0, 5.0]), [6.0, 0.0, 0.0]));
     let s = run(&m, &Options::default());
     for (l, tl) in s.layers.iter().zip(&s.toolpath.passes) {
-        for p in &tl.paths {
+        // The skirt lies outside the part by design (slice::skirt_and_brim_around_the_first_layer).
+        for p in tl.paths.iter().filter(|p| p.feature != Feature::Skirt) {
             for q in &p.points {
                 let q2 = q.truncate();
                 assert!(l.regions.iter().any(|r| inside_or_near(r, q2, 0.2 + 1e-6)), "layer z {} point {q2:?} outside", l.z);
@@ -409,7 +410,7 @@ fn deterministic_and_progress_reported() {
 
 #[test]
 fn no_infill_when_hollow_and_no_skins() {
-    let o = Options { infill_density: 0.0, solid_layers: 0, ..Default::default() };
+    let o = Options { infill_density: 0.0, solid_layers: 0, skirt_loops: 0, ..Default::default() };
     let s = run(&cube([20.0, 20.0, 2.0]), &o);
     for tl in &s.toolpath.passes {
         assert_eq!(tl.paths.len(), 2);
@@ -440,4 +441,25 @@ fn inconsistently_oriented_triangles_are_tolerated() {
         assert_eq!(l.regions.len(), 1);
         assert!((l.regions[0].area() - 400.0).abs() < 1e-6);
     }
+}
+
+#[test]
+fn skirt_and_brim_around_the_first_layer() {
+    // A 20 mm cube: the default skirt is one loop 3 mm out, printed first, on the first layer only.
+    let s = run(&cube([20.0, 20.0, 1.0]), &Options::default());
+    let first = &s.toolpath.passes[0].paths;
+    assert_eq!(first[0].feature, Feature::Skirt);
+    assert_eq!(first.iter().filter(|p| p.feature == Feature::Skirt).count(), 1);
+    let reach = |p: &weft::geom::Path| p.points.iter().map(|q| q.x.abs().max(q.y.abs())).fold(0.0, f64::max);
+    assert!((reach(&first[0]) - 13.2).abs() < 1e-3, "{}", reach(&first[0]));
+    assert!(s.toolpath.passes[1..].iter().all(|l| l.paths.iter().all(|p| p.feature != Feature::Skirt)));
+    // A 2 mm brim (5 loops of 0.4 mm, the last at 10.2 mm, touching the part) and the skirt
+    // 3 mm beyond it; no skirt: the brim alone.
+    let o = Options { brim_width_mm: 2.0, ..Default::default() };
+    let s = run(&cube([20.0, 20.0, 1.0]), &o);
+    let reaches: Vec<f64> =
+        s.toolpath.passes[0].paths.iter().take_while(|p| p.feature == Feature::Skirt).map(|p| (reach(p) * 1000.0).round() / 1000.0).collect();
+    assert_eq!(reaches, [15.2, 11.8, 11.4, 11.0, 10.6, 10.2]);
+    let o = Options { brim_width_mm: 2.0, skirt_loops: 0, ..Default::default() };
+    assert_eq!(run(&cube([20.0, 20.0, 1.0]), &o).toolpath.passes[0].paths.iter().filter(|p| p.feature == Feature::Skirt).count(), 5);
 }

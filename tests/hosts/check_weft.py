@@ -163,8 +163,10 @@ def main():
     ga = info.get("gcodeAnalysis") or {}
     length = ga.get("filament", {}).get("tool0", {}).get("length", -1)
     check(abs(length - analysis["filament_mm"]) < 0.01 * analysis["filament_mm"], f"OctoPrint's filament {length} mm, weft says {analysis['filament_mm']}")
+    # The 20 mm cube and its skirt loop 3 mm out: centre lines 2 × (10 + 3 + 0.2) = 26.4 mm apart.
     dims = ga.get("dimensions", {})
-    check(abs(dims.get("width", 0) - 20) < 1 and abs(dims.get("depth", 0) - 20) < 1, f"OctoPrint's dimensions {dims}")
+    check(abs(dims.get("width", 0) - 26.4) < 0.5 and abs(dims.get("depth", 0) - 26.4) < 0.5 and abs(dims.get("height", 0) - 20) < 0.5,
+          f"OctoPrint's dimensions {dims}, want 26.4 × 26.4 × 20 (the cube and its skirt)")
     print(f"OctoPrint: printed to 100 % on the virtual printer; its analysis: {length:.1f} mm filament, "
           f"{dims.get('width', 0):.1f} × {dims.get('depth', 0):.1f} × {dims.get('height', 0):.1f} mm")
     print(f"check_weft: OK ({time.monotonic() - t0:.1f} s)")

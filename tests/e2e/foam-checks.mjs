@@ -12,7 +12,7 @@
 import { readFileSync, writeFileSync } from "node:fs";
 import { execFileSync } from "node:child_process";
 import { join } from "node:path";
-import { boxStl, colouredPixels, downloadGcode, runExample, waitReady, waitResult } from "./page-helpers.mjs";
+import { boxStl, colouredPixels, downloadGcode, runExample, setFieldUntil, waitReady, waitResult } from "./page-helpers.mjs";
 
 const EXAMPLE = "foam-dogbone-linear.json";
 
@@ -87,9 +87,7 @@ export async function foamChecks({ baseUrl, weftBin = process.env.WEFT_BIN, chec
       const job = await page.evaluate(() => JSON.parse(window.weft.design).job);
       if (job.model !== undefined || job.regions.length !== 2) throw new Error(`job after loading: ${JSON.stringify(job).slice(0, 200)}`);
       for (const f of ["#f-job-regions-0-v_star", "#f-job-regions-1-h_star"]) await page.waitForSelector(f, { state: "attached", timeout: 5000 });
-      await page.evaluate(() => document.querySelector("#f-job-regions-1-v_star")?.closest("details")?.setAttribute("open", ""));
-      await page.fill("#f-job-regions-1-v_star", "0.35");
-      await page.dispatchEvent("#f-job-regions-1-v_star", "change");
+      await setFieldUntil(page, "#f-job-regions-1-v_star", "0.35", (d) => d.job.regions[1].v_star === 0.35, "region 2's V*");
       const before = await page.evaluate(() => window.weft.resultCount);
       await page.click("#slice");
       await waitResult(page, before, "running two dropped regions", jobTimeout);

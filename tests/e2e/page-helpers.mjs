@@ -42,6 +42,25 @@ export async function waitReady(page) {
   await page.waitForFunction(() => window.weft && window.weft.design && !window.weft.busy, null, { timeout: 60000 });
 }
 
+/**
+ * Types `value` into the form field `selector` and waits until the design holds it (`holds`
+ * runs in the page on the parsed design). The form may be drawn again while a dropped file is
+ * read, which loses an edit made on the old field, so the edit is made again until it holds.
+ */
+export async function setFieldUntil(page, selector, value, holds, what) {
+  for (let attempt = 0; attempt < 6; attempt++) {
+    await page.waitForSelector(selector, { state: "attached", timeout: 10000 });
+    await page.evaluate((sel) => document.querySelector(sel)?.closest("details")?.setAttribute("open", ""), selector);
+    await page.fill(selector, value);
+    await page.dispatchEvent(selector, "change");
+    const ok = await page
+      .waitForFunction(`(${holds.toString()})(JSON.parse(window.weft.design))`, null, { timeout: 2000, polling: 50 })
+      .then(() => true, () => false);
+    if (ok) return;
+  }
+  throw new Error(`${what}: the design never took ${value} from ${selector}`);
+}
+
 /** Waits for the page to show one more result than `before`; fails on a visible error. */
 export async function waitResult(page, before, what, timeout) {
   const handle = await page.waitForFunction(

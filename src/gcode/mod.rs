@@ -323,6 +323,10 @@ pub struct Material {
     pub flow: Flow,
     /// Density, g/cm³, for the filament weight hosts show. Default 1.24 (PLA).
     pub density_g_cm3: f64,
+    /// Part fan on bridges and overhanging perimeters, percent (0: as the rest). Default 100.
+    pub bridge_fan_percent: f64,
+    /// Multiplies a bridge's filament: a round strand of the line width. Default 1.
+    pub bridge_flow: f64,
     /// Expected die swell ratio B = D_extrudate / D_nozzle: the strand leaving the nozzle
     /// swells by elastic recovery of the melt (GIPPO, Discussion), so a strut prints about
     /// B × the nominal width. A user-entered number, [`MIN_SWELL_RATIO`]–[`MAX_SWELL_RATIO`];
@@ -368,6 +372,8 @@ impl Default for Material {
             k: 1.0,
             flow: Flow::default(),
             density_g_cm3: 1.24,
+            bridge_fan_percent: 100.0,
+            bridge_flow: 1.0,
             swell_ratio: DEFAULT_SWELL_RATIO,
             compensate_swell: DEFAULT_COMPENSATE_SWELL,
         }
@@ -390,11 +396,17 @@ pub struct Speeds {
     pub lattice_mm_s: f64,
     /// Every feature on the first layer. Default 20.
     pub first_layer_mm_s: f64,
+    /// Support and its interface. Default 50.
+    pub support_mm_s: f64,
+    /// Bridges (lines across air). Default 25.
+    pub bridge_mm_s: f64,
+    /// Perimeters overhanging more than half their width. Default 15.
+    pub overhang_mm_s: f64,
 }
 
 impl Default for Speeds {
     fn default() -> Self {
-        Speeds { external_perimeter_mm_s: 30.0, perimeter_mm_s: 45.0, infill_mm_s: 60.0, solid_infill_mm_s: 45.0, lattice_mm_s: 20.0, first_layer_mm_s: 20.0 }
+        Speeds { external_perimeter_mm_s: 30.0, perimeter_mm_s: 45.0, infill_mm_s: 60.0, solid_infill_mm_s: 45.0, lattice_mm_s: 20.0, first_layer_mm_s: 20.0, support_mm_s: 50.0, bridge_mm_s: 25.0, overhang_mm_s: 15.0 }
     }
 }
 
@@ -762,6 +774,8 @@ pub const MATERIAL_FIELDS: &[Field] = &[
     num("fan_percent", "Material", "Fan", "%", 0.0, 100.0, 1.0, ""),
     int("fan_start_layer", "Material", "Fan from layer", 0.0, 1000.0, "0-based layer index."),
     num("extrusion_multiplier", "Material", "Extrusion multiplier EM", "", 0.1, 3.0, 0.01, "EM in GIPPO equation 4."),
+    num("bridge_fan_percent", "Material", "Fan on bridges and overhangs", "%", 0.0, 100.0, 1.0, "Cools lines printed over air so they set before they sag; 0: the usual fan."),
+    num("bridge_flow", "Material", "Bridge flow", "", 0.5, 2.0, 0.01, "Multiplies the filament of a bridge, which is laid as a round strand of the line width."),
     num("density_g_cm3", "Material", "Density", "g/cm³", 0.1, 25.0, 0.01, "For the filament weight print hosts show (PLA 1.24, PETG 1.27, ABS 1.04)."),
     num("k", "Material", "Cross-section correction k", "", 0.1, 3.0, 0.01, "k in GIPPO equation 4 (elliptical rather than rectangular strands)."),
     num(
@@ -800,6 +814,9 @@ pub const SPEED_FIELDS: &[Field] = &[
     num("solid_infill_mm_s", "Speeds", "Solid infill", "mm/s", 1.0, 500.0, 1.0, ""),
     num("lattice_mm_s", "Speeds", "Lattice", "mm/s", 1.0, 500.0, 1.0, ""),
     num("first_layer_mm_s", "Speeds", "First layer", "mm/s", 1.0, 500.0, 1.0, ""),
+    num("support_mm_s", "Speeds", "Support", "mm/s", 1.0, 500.0, 1.0, "Support and its interface layers."),
+    num("bridge_mm_s", "Speeds", "Bridges", "mm/s", 1.0, 500.0, 1.0, "Lines printed across air between two anchors; slower sags less."),
+    num("overhang_mm_s", "Speeds", "Overhangs", "mm/s", 1.0, 500.0, 1.0, "Perimeters that hang more than half their width over the layer below."),
 ];
 
 /// Every out-of-range value of the writer's options, with paths from the design root

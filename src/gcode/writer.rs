@@ -24,6 +24,9 @@ fn feature_speed(options: &Options, feature: Feature, first_layer: bool) -> f64 
         Feature::Infill => s.infill_mm_s,
         Feature::SolidInfill => s.solid_infill_mm_s,
         Feature::Lattice | Feature::Contour | Feature::Handle | Feature::Beam => s.lattice_mm_s,
+        Feature::Support | Feature::SupportInterface => s.support_mm_s,
+        Feature::Bridge => s.bridge_mm_s,
+        Feature::OverhangPerimeter => s.overhang_mm_s,
     }
 }
 
@@ -39,6 +42,10 @@ pub(crate) fn segment_e(options: &Options, path: &Path, height: f64, j: usize, l
     let m = &options.material;
     let fd = options.printer.filament_diameter_mm;
     match path.data.as_deref().and_then(|d| d.flow.as_ref()) {
+        // A bridge is a round strand of the line's width (nothing under it to flatten it).
+        None if path.feature == Feature::Bridge => {
+            m.k * m.extrusion_multiplier * m.bridge_flow * len * path.width * path.width / (fd * fd)
+        }
         None if m.compensate_swell => equation4_e(len, height, m.swollen_width(path.width), m.extrusion_multiplier, m.k, fd),
         None => equation4_e(len, height, path.width, m.extrusion_multiplier, m.k, fd),
         Some(PointFlow::AreaMm2(a)) => m.k * m.extrusion_multiplier * len * a[j] / (std::f64::consts::PI * fd * fd / 4.0),
@@ -329,6 +336,7 @@ pub(crate) fn write(toolpath: &Toolpath, options: &Options) -> Result<Gcode, Err
     check_point_data(toolpath, !machine.is_five_axis())?;
     let plan = if machine.is_five_axis() { Some(plan_five_axis(toolpath, options, offset)?) } else { None };
     let pwm = fan_pwm(material.fan_percent);
+    let boost_pwm = fan_pwm(material.bridge_fan_percent);
     let vars: Vec<(&str, String)> = vec![
         ("nozzle_temp_c", fixed(material.nozzle_temp_c, 1)),
         ("first_layer_nozzle_temp_c", fixed(material.first_layer_nozzle_temp_c, 1)),
@@ -374,6 +382,8 @@ pub(crate) fn write(toolpath: &Toolpath, options: &Options) -> Result<Gcode, Err
     // Planar layers written (first-layer rules and the fan count only these).
     let mut planar = 0usize;
     let mut fan_on = false;
+    // The fan as last written: bridges and overhangs raise it to `boost_pwm` for their paths.
+    let mut fan_now = 0u64;
     let mut temp_switched = false;
     let mut path_no = 0usize;
     let mut line = String::new();
@@ -406,6 +416,7 @@ pub(crate) fn write(toolpath: &Toolpath, options: &Options) -> Result<Gcode, Err
         if pwm > 0 && !fan_on && (free || planar as u64 == material.fan_start_layer as u64) {
             out.line(&format!("M106 S{pwm}"));
             fan_on = true;
+            fan_now = pwm;
         }
         if !temp_switched && (free || planar == 1) {
             out.line(&format!("M104 S{}", fixed(material.nozzle_temp_c, 1)));
@@ -467,6 +478,12 @@ pub(crate) fn write(toolpath: &Toolpath, options: &Options) -> Result<Gcode, Err
                 _ => d.travel(&mut out, first, options),
             }
             out.flush_axes();
+            let boost = matches!(path.feature, Feature::Bridge | Feature::OverhangPerimeter) && boost_pwm > 0;
+            let want = if boost { boost_pwm.max(if fan_on { pwm } else { 0 }) } else if fan_on { pwm } else { 0 };
+            if want != fan_now {
+                out.line(&if want == 0 { "M107".to_string() } else { format!("M106 S{want}") });
+                fan_now = want;
+            }
             if feature != Some(path.feature) {
                 out.line(&format!(";TYPE:{}", path.feature.gcode_name()));
                 feature = Some(path.feature);

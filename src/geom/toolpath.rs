@@ -23,11 +23,20 @@ pub enum Feature {
     Skirt,
     /// A wireframe beam printed in free space (freeform jobs).
     Beam,
+    /// Support under overhangs (its sparse body).
+    Support,
+    /// The dense top layers of a support, under the part (and a Z gap).
+    SupportInterface,
+    /// Straight lines across air, anchored on both sides (round strand, bridge speed, full fan).
+    Bridge,
+    /// A stretch of perimeter that hangs more than half its width over the layer below
+    /// (overhang speed, full fan).
+    OverhangPerimeter,
 }
 
 impl Feature {
     /// Every feature, in a stable order (its index is the feature's code in preview buffers).
-    pub const ALL: [Feature; 9] = [
+    pub const ALL: [Feature; 13] = [
         Feature::ExternalPerimeter,
         Feature::Perimeter,
         Feature::Infill,
@@ -37,6 +46,10 @@ impl Feature {
         Feature::Handle,
         Feature::Skirt,
         Feature::Beam,
+        Feature::Support,
+        Feature::SupportInterface,
+        Feature::Bridge,
+        Feature::OverhangPerimeter,
     ];
 
     /// The name written after `;TYPE:`, as PrusaSlicer's G-code viewer spells it where it has one.
@@ -51,6 +64,10 @@ impl Feature {
             Feature::Handle => "Handle",
             Feature::Skirt => "Skirt/Brim",
             Feature::Beam => "Beam",
+            Feature::Support => "Support material",
+            Feature::SupportInterface => "Support material interface",
+            Feature::Bridge => "Bridge infill",
+            Feature::OverhangPerimeter => "Overhang perimeter",
         }
     }
 
@@ -59,14 +76,18 @@ impl Feature {
         let n = name.trim();
         Some(match n {
             "External perimeter" | "WALL-OUTER" | "Outer wall" => Feature::ExternalPerimeter,
-            "Perimeter" | "Overhang perimeter" | "WALL-INNER" | "Inner wall" => Feature::Perimeter,
+            "Perimeter" | "WALL-INNER" | "Inner wall" => Feature::Perimeter,
             "Internal infill" | "FILL" | "Sparse infill" => Feature::Infill,
-            "Solid infill" | "Top solid infill" | "Bridge infill" | "SKIN" | "Gap fill" => Feature::SolidInfill,
+            "Solid infill" | "Top solid infill" | "SKIN" | "Gap fill" => Feature::SolidInfill,
             "Lattice" => Feature::Lattice,
             "Contour" => Feature::Contour,
             "Handle" => Feature::Handle,
             "Skirt/Brim" | "SKIRT" | "Skirt" | "Brim" => Feature::Skirt,
             "Beam" => Feature::Beam,
+            "Support material" | "SUPPORT" | "Support" => Feature::Support,
+            "Support material interface" | "SUPPORT-INTERFACE" | "Support interface" | "Support transition" => Feature::SupportInterface,
+            "Bridge infill" | "Bridge" | "Internal Bridge" => Feature::Bridge,
+            "Overhang perimeter" | "Overhang wall" => Feature::OverhangPerimeter,
             _ => return None,
         })
     }
@@ -83,6 +104,10 @@ impl Feature {
             Feature::Handle => "handle",
             Feature::Skirt => "skirt",
             Feature::Beam => "beam",
+            Feature::Support => "support",
+            Feature::SupportInterface => "support_interface",
+            Feature::Bridge => "bridge",
+            Feature::OverhangPerimeter => "overhang_perimeter",
         }
     }
 
@@ -98,6 +123,10 @@ impl Feature {
             Feature::Handle => "#a0a0a0",
             Feature::Skirt => "#00876e",
             Feature::Beam => "#5fb8e0",
+            Feature::Support => "#00ff00",
+            Feature::SupportInterface => "#008000",
+            Feature::Bridge => "#4d80ba",
+            Feature::OverhangPerimeter => "#0000ff",
         }
     }
 

@@ -20,6 +20,7 @@
 //! each layer is cut at its middle, and layers are made while that middle is below the top
 //! of the mesh.
 
+mod anchor;
 mod estimate;
 pub mod gyroid;
 pub mod gyroid_graded;
@@ -31,6 +32,7 @@ mod plane;
 mod regions;
 mod skirt;
 mod stitch;
+pub mod support;
 
 use crate::geom::tolerance::UNITS_PER_MM;
 use crate::geom::{DVec2, Feature, Mesh, Pass, Polygon, Toolpath};
@@ -159,6 +161,8 @@ pub struct Options {
     /// Brim: loops of this width around the first layer, touching the part, so it holds to
     /// the bed, mm; 0: none. Default 0.
     pub brim_width_mm: f64,
+    /// Support under overhangs (off by default).
+    pub support: support::Options,
     /// Pattern of the sparse infill. Default rectilinear (not written then, so designs without
     /// it read and hash as before).
     #[serde(skip_serializing_if = "InfillPattern::is_default")]
@@ -190,6 +194,7 @@ impl Default for Options {
             skirt_loops: DEFAULT_SKIRT_LOOPS,
             skirt_distance_mm: DEFAULT_SKIRT_DISTANCE_MM,
             brim_width_mm: DEFAULT_BRIM_WIDTH_MM,
+            support: support::Options::default(),
             infill_pattern: InfillPattern::Rectilinear,
             infill_cell_mm: None,
             infill_cell_field: None,
@@ -431,6 +436,38 @@ fn sparse_lines(o: &Options, area: &IntShapes<i32>, w_um: i32, layer: usize, sli
 /// `infill_density` 0 there is no sparse infill but top and bottom skins are still printed
 /// (set `solid_layers` to 0 as well for no infill at all); with density 1 all infill is solid.
 pub fn slice(mesh: &Mesh, options: &Options, progress: &mut dyn FnMut(f32)) -> Result<Sliced, Error> {
+    slice_with(mesh, &Extra::default(), options, progress)
+}
+
+/// Meshes that shape the slice without being printed, in the part's frame.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Extra<'a> {
+    /// Support is built under every overhang inside these, whatever its angle.
+    pub support_enforcers: Option<&'a Mesh>,
+    /// No support is built for overhangs inside these.
+    pub support_blockers: Option<&'a Mesh>,
+}
+
+/// The regions of `mesh` at every cutting height of `stack` (empty layers where it is not).
+fn cut_layers(mesh: &Mesh, stack: &[(f64, f64, f64)], gap_um: f64) -> Vec<IntShapes<i32>> {
+    let sweep = plane::Sweep::new(mesh);
+    if stack.is_empty() || mesh.triangles.is_empty() {
+        return vec![Vec::new(); stack.len()];
+    }
+    let mut cursor = sweep.cursor(stack[0].2);
+    let mut segs = Vec::new();
+    stack
+        .iter()
+        .map(|l| {
+            cursor.segments(l.2, &mut segs);
+            let (loops, _) = stitch::stitch(&mut segs, gap_um);
+            regions::union_loops(&loops).0
+        })
+        .collect()
+}
+
+/// [`slice`] with support enforcer and blocker meshes.
+pub fn slice_with(mesh: &Mesh, extra: &Extra, options: &Options, progress: &mut dyn FnMut(f32)) -> Result<Sliced, Error> {
     validate(options)?;
     if mesh.triangles.is_empty() {
         return Err(Error::EmptyMesh);
@@ -482,14 +519,33 @@ pub fn slice(mesh: &Mesh, options: &Options, progress: &mut dyn FnMut(f32)) -> R
         layer_shapes.push(shapes);
     }
 
+    // Support, from the regions of every layer (and the enforcer and blocker meshes).
+    let w_um = (o.line_width_mm * UNITS_PER_MM).round() as i32;
+    let support = if o.support.enabled {
+        let cut = |m: Option<&Mesh>| m.map_or_else(Vec::new, |m| cut_layers(m, &stack, gap_um));
+        let input = support::Input {
+            part: &layer_shapes,
+            heights: stack.iter().map(|l| l.1).collect(),
+            bridged: Vec::new(),
+            enforcers: cut(extra.support_enforcers),
+            blockers: cut(extra.support_blockers),
+            w_um,
+            layer_height_mm: o.layer_height_mm,
+        };
+        support::generate(&o.support, &input, &mut |f| tick(0.4 + 0.1 * f, progress))
+    } else {
+        Vec::new()
+    };
+
     // Pass 2: perimeters and infill of each layer side by side, then the order of each layer's
     // paths, which starts where the layer below ended (in turn).
     let w = o.line_width_mm;
-    let w_um = (w * UNITS_PER_MM).round() as i32;
-    let filled = crate::par::map(n, &mut |d| tick(0.4 + 0.5 * d as f32 / n.max(1) as f32, progress), |i| fill_layer(o, &layer_shapes, &stack, i, w_um));
+    let filled = crate::par::map(n, &mut |d| tick(0.5 + 0.4 * d as f32 / n.max(1) as f32, progress), |i| fill_layer(o, &layer_shapes, &stack, i, w_um));
+    let filled = trim_infill(o, filled, &support);
     let mut layers = Vec::with_capacity(n);
     let mut toolpath = Toolpath { passes: Vec::with_capacity(n) };
     let mut pos = DVec2::ZERO;
+    let mut support = support.into_iter();
     for (i, works) in filled.into_iter().enumerate() {
         let (z, h, slice_z) = stack[i];
         let mut paths = Vec::new();
@@ -499,6 +555,9 @@ pub fn slice(mesh: &Mesh, options: &Options, progress: &mut dyn FnMut(f32)) -> R
             let loops = skirt::loops(&layer_shapes[0], o.skirt_loops, um(o.skirt_distance_mm), um(o.brim_width_mm), w_um);
             paths.extend(order::order_skirt(loops.iter().map(|l| to_mm_loop(l)).collect(), &mut pos, z, w));
         }
+        if let Some(sup) = support.next() {
+            paths.extend(order::order_support(sup.base, sup.interface, &mut pos, z, w));
+        }
         paths.extend(order::order_layer(works, &mut pos, z, w));
         toolpath.passes.push(Pass::layer(z, h, paths));
         layers.push(SlicedLayer { slice_z, z, height: h, regions: regions::to_polygons(&layer_shapes[i]) });
@@ -506,6 +565,56 @@ pub fn slice(mesh: &Mesh, options: &Options, progress: &mut dyn FnMut(f32)) -> R
     }
     tick(1.0, progress);
     Ok(Sliced { layers, toolpath, report })
+}
+
+/// Infill cut back where it would end in air: a stub past the last line of the layer below,
+/// or a connector over a gap in it, is left out (see [`anchor`]): any such stretch of
+/// rectilinear sparse infill, and of other infill those no longer than the larger of 3 mm and
+/// 1.5 sparse line spacings; lines across the layer below (bridges) and longer stretches stay. Layer `i` is checked against layer `i − 1`'s perimeters, infill and support.
+fn trim_infill(o: &Options, filled: Vec<Vec<order::RegionWork>>, support: &[support::LayerSupport]) -> Vec<Vec<order::RegionWork>> {
+    let w = o.line_width_mm;
+    let reach = 1.05 * w;
+    let spacing = if o.infill_density > 0.0 { w / o.infill_density } else { 0.0 };
+    let max_cut = (1.5 * spacing).max(3.0);
+    let n = filled.len();
+    let trimmed = crate::par::map(n, &mut |_| {}, |i| {
+        if i == 0 || filled[i].iter().all(|r| r.infill.is_empty()) {
+            return None;
+        }
+        let mut below: Vec<Vec<DVec2>> = Vec::new();
+        for r in &filled[i - 1] {
+            for l in r.perimeters.iter().flatten() {
+                let mut c = l.clone();
+                if let Some(&p) = l.first() {
+                    c.push(p);
+                }
+                below.push(c);
+            }
+            below.extend(r.infill.iter().map(|(_, l)| l.clone()));
+        }
+        if let Some(sup) = support.get(i - 1) {
+            below.extend(sup.base.iter().chain(&sup.interface).cloned());
+        }
+        let near = anchor::Near::new(below.iter().map(|l| l.as_slice()), reach);
+        let held = |p: DVec2| near.holds(p);
+        let regions: Vec<order::RegionWork> = filled[i]
+            .iter()
+            .map(|r| {
+                let mut infill = Vec::with_capacity(r.infill.len());
+                for (f, l) in &r.infill {
+                    let mut pieces = Vec::new();
+                    // Sparse straight lines only ever hang over the sparse lines below
+                    // (a part's overhangs are solid): everything unheld is a stub.
+                    let cut = if *f == Feature::Infill && o.infill_pattern == InfillPattern::Rectilinear { f64::INFINITY } else { max_cut };
+                    anchor::held_pieces(l, &held, 0.1 * w.max(0.1) * 2.5, 0.25 * w, cut, &mut pieces);
+                    infill.extend(pieces.into_iter().map(|p| (*f, p)));
+                }
+                order::RegionWork { infill, ..r.clone() }
+            })
+            .collect();
+        Some(regions)
+    });
+    filled.into_iter().zip(trimmed).map(|(orig, t)| t.unwrap_or(orig)).collect()
 }
 
 /// Perimeters and infill of layer `i` (of `stack`, regions `layer_shapes`), by region: what the

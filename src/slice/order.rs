@@ -69,6 +69,19 @@ pub(crate) fn order_skirt(loops: Vec<Vec<DVec2>>, pos: &mut DVec2, z: f64, width
     paths
 }
 
+/// Support lines before the part: the sparse support, then its interface, each nearest-first
+/// (a closed sheath loop is a polyline whose ends meet).
+pub(crate) fn order_support(base: Vec<Vec<DVec2>>, interface: Vec<Vec<DVec2>>, pos: &mut DVec2, z: f64, width: f64) -> Vec<Path> {
+    let mut paths = Vec::with_capacity(base.len() + interface.len());
+    for (feature, lines) in [(Feature::Support, base), (Feature::SupportInterface, interface)] {
+        let lines = lines.into_iter().map(|l| (feature, l)).collect();
+        for (f, pts) in order_polylines(lines, pos) {
+            paths.push(Path::new(pts.into_iter().map(|p| DVec3::new(p.x, p.y, z)).collect(), f, width));
+        }
+    }
+    paths
+}
+
 /// Nearest-first loops, each rotated to start at its vertex nearest `pos` and closed.
 fn order_loops(loops: Vec<Vec<DVec2>>, pos: &mut DVec2) -> Vec<Vec<DVec2>> {
     let mut left: Vec<Option<Vec<DVec2>>> = loops.into_iter().filter(|l| l.len() >= 2).map(Some).collect();

@@ -71,6 +71,19 @@ pub(crate) fn intersect(a: &IntShapes<i32>, b: &IntShapes<i32>) -> IntShapes<i32
     Overlay::from_subj_and_clip(a, b).overlay(OverlayRule::Intersect, FillRule::NonZero)
 }
 
+/// Union `a ∪ b` (NonZero).
+pub(crate) fn union(a: &IntShapes<i32>, b: &IntShapes<i32>) -> IntShapes<i32> {
+    if b.is_empty() {
+        return a.clone();
+    }
+    if a.is_empty() {
+        return b.clone();
+    }
+    let mut out = Overlay::from_subj_and_clip(a, b).overlay(OverlayRule::Union, FillRule::NonZero);
+    sort_shapes(&mut out);
+    out
+}
+
 /// Difference `a − b` (NonZero).
 pub(crate) fn difference(a: &IntShapes<i32>, b: &IntShapes<i32>) -> IntShapes<i32> {
     if a.is_empty() || b.is_empty() {

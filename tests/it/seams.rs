@@ -277,3 +277,40 @@ fn overhang_perimeters_only_over_the_ledge() {
     assert!(!plain.contains(";TYPE:Overhang perimeter"));
     assert!(text.contains(";TYPE:Overhang perimeter"));
 }
+
+#[test]
+fn seam_is_read_from_a_design_and_checked() {
+    let o: Options = serde_json::from_str(r#"{"seam": "rear"}"#).unwrap();
+    assert_eq!(o.seam, Seam::Rear);
+    assert!(serde_json::from_str::<Options>(r#"{"seam": "front"}"#).is_err());
+    // The default is not written, so designs without it read and hash as before.
+    assert!(!serde_json::to_string(&Options::default()).unwrap().contains("seam"));
+    assert!(serde_json::to_string(&Options { seam: Seam::Random, ..Options::default() }).unwrap().contains(r#""seam":"random""#));
+    let row = slice::FIELDS.iter().find(|f| f.path == "seam").expect("a form row");
+    assert_eq!(row.choices, slice::SEAMS);
+    assert_eq!(row.choice_docs.len(), slice::SEAMS.len());
+    for (i, s) in [Seam::Aligned, Seam::Rear, Seam::Nearest, Seam::Random].into_iter().enumerate() {
+        assert_eq!(s.label(), slice::SEAMS[i]);
+    }
+}
+
+#[test]
+fn aligned_seams_follow_a_sphere_s_meridian() {
+    // Every layer's loop is a different size: the seam stays on one meridian (its angle about
+    // the axis), where `nearest` wanders round.
+    let sphere = moved(Shape::Sphere { radius: 10.0, segments: 48 }.mesh(), [0.0, 0.0, 10.0]);
+    let g = gcode_options();
+    let angles = |seam: Seam| -> Vec<f64> {
+        let o = Options { seam, ..Options::default() };
+        external_starts(&gcode(&sphere, &o, &g)).iter().filter(|s| s.1.length() > 3.0).map(|s| s.1.y.atan2(s.1.x).to_degrees()).collect()
+    };
+    let a = angles(Seam::Aligned);
+    assert!(a.len() > 60, "{} layers", a.len());
+    let worst = a.iter().map(|x| (x - a[0]).abs()).fold(0.0, f64::max);
+    eprintln!("sphere: aligned seams within {worst:.3}° of one meridian over {} layers", a.len());
+    assert!(worst < 2.0, "aligned seams {worst}° apart");
+    let n = angles(Seam::Nearest);
+    let worst = n.iter().map(|x| (x - n[0]).abs()).fold(0.0, f64::max);
+    eprintln!("sphere: nearest seams {worst:.1}° apart");
+    assert!(worst > 30.0);
+}

@@ -349,8 +349,12 @@ fn order_loops(loops: Vec<Loop>, fixed: Option<Vec<(usize, DVec2)>>, pos: &mut D
 /// neighbour's class.
 fn start_loop(l: Loop, k: usize, p: DVec2, width: f64) -> Vec<(bool, Vec<DVec2>)> {
     let Loop { mut pts, mut over } = l;
+    let n = pts.len();
     let mut j = k;
-    if pts[k] != p {
+    if pts[(k + 1) % n] == p {
+        // The end of the segment: that vertex (no zero-length move).
+        j = (k + 1) % n;
+    } else if pts[k] != p {
         pts.insert(k + 1, p);
         over.insert(k + 1, over[k]);
         j = k + 1;
@@ -438,5 +442,20 @@ mod tests {
         assert_eq!(paths[0].points.first(), paths[0].points.last());
         assert_eq!(paths[2].points[0].x, 3.0);
         assert_eq!(pos, DVec2::new(-3.0, 0.0));
+    }
+
+    #[test]
+    fn a_seam_on_a_segment_is_inserted_once_and_overhangs_split_the_loop() {
+        let sq = vec![DVec2::new(0.0, 0.0), DVec2::new(10.0, 0.0), DVec2::new(10.0, 10.0), DVec2::new(0.0, 10.0)];
+        let l = Loop { pts: sq.clone(), over: vec![false, true, false, false] };
+        // At the end of segment 0: vertex 1, no point added.
+        let runs = start_loop(l.clone(), 0, sq[1], 0.4);
+        assert_eq!(runs.len(), 2);
+        assert_eq!(runs[0], (true, vec![sq[1], sq[2]]));
+        assert_eq!(runs[1], (false, vec![sq[2], sq[3], sq[0], sq[1]]));
+        // Inside segment 1: the overhang is cut there and continues at the loop's end.
+        let p = DVec2::new(10.0, 4.0);
+        let runs = start_loop(l, 1, p, 0.4);
+        assert_eq!(runs, vec![(true, vec![p, sq[2]]), (false, vec![sq[2], sq[3], sq[0], sq[1]]), (true, vec![sq[1], p])]);
     }
 }

@@ -14,7 +14,8 @@
 //! - `infill`: rectilinear lines on a global grid, linked zig-zag along the area boundary.
 //! - `gyroid`, `honeycomb3d`: the other sparse infill patterns ([`InfillPattern`]), curves
 //!   over the area's bounding box clipped to it.
-//! - `order`: print order and seams.
+//! - `overhang`: the stretches of perimeter loops that hang over the layer below.
+//! - `order`: print order and seams ([`Seam`]).
 //!
 //! Layers: the first layer's top is at `first_layer_height_mm`, then every `layer_height_mm`;
 //! each layer is cut at its middle, and layers are made while that middle is below the top
@@ -27,6 +28,7 @@ pub mod gyroid_graded;
 pub mod honeycomb3d;
 mod infill;
 mod order;
+mod overhang;
 mod perimeters;
 mod plane;
 mod regions;
@@ -133,6 +135,42 @@ impl InfillPattern {
     }
 }
 
+/// Where each perimeter loop starts (and ends): the seam, a small blemish on the wall.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Seam {
+    /// The seams of successive layers line up in one vertical line, in a concave corner
+    /// where the outline has one (PrusaSlicer's "aligned").
+    #[default]
+    Aligned,
+    /// At the rear-most point of each loop (largest Y).
+    Rear,
+    /// At the loop's vertex nearest the nozzle (the shortest travel).
+    Nearest,
+    /// At a point along the loop chosen pseudo-randomly from the layer and the loop (the same
+    /// on every run).
+    Random,
+}
+
+/// Names of the seam positions as written in a design, in [`Seam`] order.
+pub const SEAMS: &[&str] = &["aligned", "rear", "nearest", "random"];
+
+impl Seam {
+    /// Name as written in a design (`"rear"`).
+    pub fn label(self) -> &'static str {
+        match self {
+            Seam::Aligned => SEAMS[0],
+            Seam::Rear => SEAMS[1],
+            Seam::Nearest => SEAMS[2],
+            Seam::Random => SEAMS[3],
+        }
+    }
+
+    fn is_default(&self) -> bool {
+        *self == Seam::default()
+    }
+}
+
 /// Slicing options (the `slice` job's settings in a Design).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -178,6 +216,9 @@ pub struct Options {
     /// design): replaces `infill_cell_mm` where present ([`gyroid_graded`]).
     #[serde(skip)]
     pub infill_cell_field: Option<std::sync::Arc<gyroid_graded::CellField>>,
+    /// Where perimeter loops start ([`Seam`]). Default aligned (not written then).
+    #[serde(skip_serializing_if = "Seam::is_default")]
+    pub seam: Seam,
 }
 
 impl Default for Options {
@@ -198,6 +239,7 @@ impl Default for Options {
             infill_pattern: InfillPattern::Rectilinear,
             infill_cell_mm: None,
             infill_cell_field: None,
+            seam: Seam::Aligned,
         }
     }
 }
@@ -324,6 +366,15 @@ pub const FIELDS: &[Field] = &[
         MAX_INFILL_CELL_MM,
         0.1,
         "Size of one repeat of the infill pattern; left out, it follows from the infill density.",
+    ),
+    choice_docs(
+        other("seam", "Slicing", "Seam position", Kind::Choice, SEAMS, "Where each perimeter loop starts and ends, leaving a small mark on the wall."),
+        &[
+            "Lined up from layer to layer in one vertical line, hidden in a concave corner where there is one.",
+            "At the back of each loop (largest Y).",
+            "Wherever the nozzle is nearest: the least travel, seams scattered over the part.",
+            "At a random point of each loop (the same every time the design is sliced): no visible line.",
+        ],
     ),
 ];
 
@@ -546,6 +597,7 @@ pub fn slice_with(mesh: &Mesh, extra: &Extra, options: &Options, progress: &mut 
     let mut toolpath = Toolpath { passes: Vec::with_capacity(n) };
     let mut pos = DVec2::ZERO;
     let mut support = support.into_iter();
+    let mut seams = order::Seams::new(o.seam);
     for (i, works) in filled.into_iter().enumerate() {
         let (z, h, slice_z) = stack[i];
         let mut paths = Vec::new();
@@ -558,7 +610,7 @@ pub fn slice_with(mesh: &Mesh, extra: &Extra, options: &Options, progress: &mut 
         if let Some(sup) = support.next() {
             paths.extend(order::order_support(sup.base, sup.interface, &mut pos, z, w));
         }
-        paths.extend(order::order_layer(works, &mut pos, z, w));
+        paths.extend(order::order_layer(works, &mut pos, z, w, &mut seams));
         toolpath.passes.push(Pass::layer(z, h, paths));
         layers.push(SlicedLayer { slice_z, z, height: h, regions: regions::to_polygons(&layer_shapes[i]) });
         tick(0.9 + 0.1 * (i + 1) as f32 / n as f32, progress);
@@ -584,8 +636,8 @@ fn trim_infill(o: &Options, filled: Vec<Vec<order::RegionWork>>, support: &[supp
         let mut below: Vec<Vec<DVec2>> = Vec::new();
         for r in &filled[i - 1] {
             for l in r.perimeters.iter().flatten() {
-                let mut c = l.clone();
-                if let Some(&p) = l.first() {
+                let mut c = l.pts.clone();
+                if let Some(&p) = l.pts.first() {
                     c.push(p);
                 }
                 below.push(c);
@@ -634,13 +686,20 @@ fn fill_layer(o: &Options, layer_shapes: &[IntShapes<i32>], stack: &[(f64, f64, 
     // Infill area of the whole layer (regions are disjoint, so are their insets).
     let mut works: Vec<order::RegionWork> = Vec::with_capacity(shapes.len());
     let mut area: IntShapes<i32> = Vec::new();
+    // Perimeters above the layer below's outline hang over air (none on the first layer).
+    let lower = if i > 0 && o.perimeters > 0 { Some(overhang::Lower::new(&layer_shapes[i - 1])) } else { None };
+    let w = w_um as f64 / UNITS_PER_MM;
+    let mk_loop = |pts: Vec<DVec2>| match &lower {
+        Some(lower) => overhang::classify(pts, lower, w),
+        None => order::Loop::plain(pts),
+    };
     for region in shapes {
         let levels = perimeters::perimeter_levels(region, o.perimeters, w_um);
         let (min, max) = bbox_mm(region);
         works.push(order::RegionWork {
             min,
             max,
-            perimeters: levels.iter().map(|l| l.iter().flat_map(|sh| sh.iter()).map(|c| to_mm_loop(c)).collect()).collect(),
+            perimeters: levels.iter().map(|l| l.iter().flat_map(|sh| sh.iter()).map(|c| mk_loop(to_mm_loop(c))).collect()).collect(),
             infill: Vec::new(),
         });
         area.extend(perimeters::inset(std::slice::from_ref(region), infill_inset));

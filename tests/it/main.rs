@@ -56,6 +56,7 @@ mod pore_fraction;
 mod postman_exact;
 mod ranges;
 mod scaffold_model;
+mod seams;
 mod slice;
 mod threads;
 mod volume_import;

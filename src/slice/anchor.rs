@@ -152,6 +152,11 @@ impl Near {
 
     /// Whether a segment passes within `reach` of `p`.
     pub(crate) fn holds(&self, p: DVec2) -> bool {
+        self.within(p, self.reach)
+    }
+
+    /// Whether a segment passes within `r` (at most the reach it was built for) of `p`.
+    pub(crate) fn within(&self, p: DVec2, r: f64) -> bool {
         if self.nx == 0 {
             return false;
         }
@@ -161,7 +166,7 @@ impl Near {
             return false;
         }
         let c = fy as usize * self.nx + fx as usize;
-        let r2 = self.reach * self.reach;
+        let r2 = r.min(self.reach) * r.min(self.reach);
         self.segs[self.start[c] as usize..self.start[c + 1] as usize].iter().any(|&(a, b)| {
             let d = b - a;
             let len2 = d.length_squared();

@@ -433,6 +433,11 @@ fn contains(shape: &IntShape<i32>, p: DVec2) -> bool {
     inside
 }
 
+/// Whether `p` (mm) lies in any of `shapes` (µm).
+pub(crate) fn contains_any(shapes: &IntShapes<i32>, p: DVec2) -> bool {
+    shapes.iter().any(|s| contains(s, p))
+}
+
 fn bbox_mm(shape: &IntShape<i32>) -> (DVec2, DVec2) {
     let mut min = DVec2::splat(f64::INFINITY);
     let mut max = DVec2::splat(f64::NEG_INFINITY);

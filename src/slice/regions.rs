@@ -84,6 +84,17 @@ pub(crate) fn union(a: &IntShapes<i32>, b: &IntShapes<i32>) -> IntShapes<i32> {
     out
 }
 
+/// Union of many shapes (NonZero).
+pub(crate) fn union_all(shapes: &IntShapes<i32>) -> IntShapes<i32> {
+    let contours: Vec<IntContour<i32>> = shapes.iter().flat_map(|s| s.iter().cloned()).collect();
+    if contours.is_empty() {
+        return Vec::new();
+    }
+    let mut out = Overlay::from_subj(&contours).overlay(OverlayRule::Subject, FillRule::NonZero);
+    sort_shapes(&mut out);
+    out
+}
+
 /// Difference `a − b` (NonZero).
 pub(crate) fn difference(a: &IntShapes<i32>, b: &IntShapes<i32>) -> IntShapes<i32> {
     if a.is_empty() || b.is_empty() {

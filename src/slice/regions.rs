@@ -79,6 +79,17 @@ pub(crate) fn difference(a: &IntShapes<i32>, b: &IntShapes<i32>) -> IntShapes<i3
     Overlay::from_subj_and_clip(a, b).overlay(OverlayRule::Difference, FillRule::NonZero)
 }
 
+/// Union of two shape sets (NonZero; either may be empty, and overlapping shapes within one
+/// set merge too).
+pub(crate) fn union(a: &IntShapes<i32>, b: &IntShapes<i32>) -> IntShapes<i32> {
+    if a.is_empty() && b.is_empty() {
+        return Vec::new();
+    }
+    let mut out = Overlay::from_subj_and_clip(a, b).overlay(OverlayRule::Union, FillRule::NonZero);
+    sort_shapes(&mut out);
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -406,7 +406,17 @@ pub struct Speeds {
 
 impl Default for Speeds {
     fn default() -> Self {
-        Speeds { external_perimeter_mm_s: 30.0, perimeter_mm_s: 45.0, infill_mm_s: 60.0, solid_infill_mm_s: 45.0, lattice_mm_s: 20.0, first_layer_mm_s: 20.0, support_mm_s: 50.0, bridge_mm_s: 25.0, overhang_mm_s: 15.0 }
+        Speeds {
+            external_perimeter_mm_s: 30.0,
+            perimeter_mm_s: 45.0,
+            infill_mm_s: 60.0,
+            solid_infill_mm_s: 45.0,
+            lattice_mm_s: 20.0,
+            first_layer_mm_s: 20.0,
+            support_mm_s: 50.0,
+            bridge_mm_s: 25.0,
+            overhang_mm_s: 15.0,
+        }
     }
 }
 
@@ -774,8 +784,26 @@ pub const MATERIAL_FIELDS: &[Field] = &[
     num("fan_percent", "Material", "Fan", "%", 0.0, 100.0, 1.0, ""),
     int("fan_start_layer", "Material", "Fan from layer", 0.0, 1000.0, "0-based layer index."),
     num("extrusion_multiplier", "Material", "Extrusion multiplier EM", "", 0.1, 3.0, 0.01, "EM in GIPPO equation 4."),
-    num("bridge_fan_percent", "Material", "Fan on bridges and overhangs", "%", 0.0, 100.0, 1.0, "Cools lines printed over air so they set before they sag; 0: the usual fan."),
-    num("bridge_flow", "Material", "Bridge flow", "", 0.5, 2.0, 0.01, "Multiplies the filament of a bridge, which is laid as a round strand of the line width."),
+    num(
+        "bridge_fan_percent",
+        "Material",
+        "Fan on bridges and overhangs",
+        "%",
+        0.0,
+        100.0,
+        1.0,
+        "Cools lines printed over air so they set before they sag; 0: the usual fan.",
+    ),
+    num(
+        "bridge_flow",
+        "Material",
+        "Bridge flow",
+        "",
+        0.5,
+        2.0,
+        0.01,
+        "Multiplies the filament of a bridge, which is laid as a round strand of the line width.",
+    ),
     num("density_g_cm3", "Material", "Density", "g/cm³", 0.1, 25.0, 0.01, "For the filament weight print hosts show (PLA 1.24, PETG 1.27, ABS 1.04)."),
     num("k", "Material", "Cross-section correction k", "", 0.1, 3.0, 0.01, "k in GIPPO equation 4 (elliptical rather than rectangular strands)."),
     num(

@@ -43,9 +43,7 @@ pub(crate) fn segment_e(options: &Options, path: &Path, height: f64, j: usize, l
     let fd = options.printer.filament_diameter_mm;
     match path.data.as_deref().and_then(|d| d.flow.as_ref()) {
         // A bridge is a round strand of the line's width (nothing under it to flatten it).
-        None if path.feature == Feature::Bridge => {
-            m.k * m.extrusion_multiplier * m.bridge_flow * len * path.width * path.width / (fd * fd)
-        }
+        None if path.feature == Feature::Bridge => m.k * m.extrusion_multiplier * m.bridge_flow * len * path.width * path.width / (fd * fd),
         None if m.compensate_swell => equation4_e(len, height, m.swollen_width(path.width), m.extrusion_multiplier, m.k, fd),
         None => equation4_e(len, height, path.width, m.extrusion_multiplier, m.k, fd),
         Some(PointFlow::AreaMm2(a)) => m.k * m.extrusion_multiplier * len * a[j] / (std::f64::consts::PI * fd * fd / 4.0),
@@ -479,7 +477,13 @@ pub(crate) fn write(toolpath: &Toolpath, options: &Options) -> Result<Gcode, Err
             }
             out.flush_axes();
             let boost = matches!(path.feature, Feature::Bridge | Feature::OverhangPerimeter) && boost_pwm > 0;
-            let want = if boost { boost_pwm.max(if fan_on { pwm } else { 0 }) } else if fan_on { pwm } else { 0 };
+            let want = if boost {
+                boost_pwm.max(if fan_on { pwm } else { 0 })
+            } else if fan_on {
+                pwm
+            } else {
+                0
+            };
             if want != fan_now {
                 out.line(&if want == 0 { "M107".to_string() } else { format!("M106 S{want}") });
                 fan_now = want;

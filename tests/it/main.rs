@@ -15,6 +15,7 @@ mod analyze_hostile;
 mod architecture;
 mod axisym_job;
 mod axisym_tour;
+mod bridges;
 mod cli;
 mod curved_struts;
 mod design_fuzz;

@@ -12,7 +12,9 @@
 //! longest edges that border material below), lines one width apart are cut by the piece and
 //! by the piece grown by [`ANCHOR_REACH`] widths (clipped to the solid area). A line is
 //! anchored when the grown piece continues at least [`MIN_ANCHOR`] widths beyond the air at
-//! both of its ends: there it lies on the layer below. The direction that anchors the most
+//! both of its ends (there it lies on the layer below), or at least a quarter width when the
+//! solid area itself ends there (a lid on thin walls: the lines reach the layer's perimeters,
+//! which lie on the walls). The direction that anchors the most
 //! air wins; among directions within [`COVERAGE_SLACK`] of it, the one whose longest span is
 //! shortest (as PrusaSlicer's bridge detector), then the one whose mean span (weighted by
 //! length: long spans weigh most) is shortest, then the first candidate. (The mean alone
@@ -32,7 +34,8 @@ use i_overlay::i_shape::int::shape::{IntShape, IntShapes};
 /// How far (in line widths) a bridge's area reaches beyond its air onto the material below:
 /// the lines' anchors.
 pub(crate) const ANCHOR_REACH: f64 = 2.0;
-/// Shortest anchor (in line widths) at each end of a line for it to count as anchored.
+/// Shortest anchor (in line widths) at each end of a line for it to count as anchored (a
+/// quarter width where the solid area ends on material).
 pub(crate) const MIN_ANCHOR: f64 = 1.0;
 /// Directions anchoring at least this fraction of the best one's air compete on span.
 pub(crate) const COVERAGE_SLACK: f64 = 0.97;
@@ -228,6 +231,7 @@ fn evaluate(piece: &[IntShape<i32>], grown: &[IntShape<i32>], angle: f64, w: f64
     let air_rows = scan(piece, sn, cs, w);
     let grown_rows = scan(grown, sn, cs, w);
     let min_anchor = MIN_ANCHOR * w;
+    let reach_um = ANCHOR_REACH * w;
     let (mut coverage, mut s1, mut s2, mut max_span) = (0.0, 0.0, 0.0, 0.0f64);
     let mut anchored = Vec::new();
     for (k, air) in &air_rows {
@@ -246,7 +250,10 @@ fn evaluate(piece: &[IntShape<i32>], grown: &[IntShape<i32>], angle: f64, w: f64
                     len += p1 - p0;
                 }
             }
-            if len <= 0.0 || lo - a < min_anchor || b - hi < min_anchor {
+            // An end is anchored by MIN_ANCHOR widths on material, or by a quarter width when
+            // the solid area ends there (a wall below: the layer's perimeters lie beside it).
+            let held = |run: f64| run >= min_anchor || (run >= w / 4.0 && run < reach_um - 1.0);
+            if len <= 0.0 || !held(lo - a) || !held(b - hi) {
                 continue;
             }
             let s = hi - lo;
@@ -460,6 +467,21 @@ mod tests {
         let b = detect(&vec![rect_um(-19_000, -19_000, 19_000, 19_000)], &vec![plate], 400);
         assert_eq!(b.len(), 1);
         assert!(between(b[0].angle, 0.0) < 1.0, "{}", deg(b[0].angle));
+    }
+
+    #[test]
+    fn lid_on_thin_walls_is_a_bridge() {
+        // A 20 mm box with 1.2 mm walls below; the lid's solid area stops 1 mm inside its
+        // outline (two perimeters and a half width), 0.2 mm onto the walls.
+        let mut walls = rect_um(-10_000, -10_000, 10_000, 10_000);
+        walls.push(vec![IntPoint::new(-8_800, -8_800), IntPoint::new(-8_800, 8_800), IntPoint::new(8_800, 8_800), IntPoint::new(8_800, -8_800)]);
+        let solid = vec![rect_um(-9_000, -9_000, 9_000, 9_000)];
+        let b = detect(&solid, &vec![walls.clone()], 400);
+        assert_eq!(b.len(), 1);
+        assert!((b[0].span_mm - 17.6).abs() < 0.3, "{}", b[0].span_mm);
+        // Walls too far out to be reached: not a bridge (the lines would end over air).
+        let solid = vec![rect_um(-8_700, -8_700, 8_700, 8_700)];
+        assert!(detect(&solid, &vec![walls], 400).is_empty());
     }
 
     #[test]

@@ -169,3 +169,30 @@ fn a_cantilever_and_a_cube_get_no_bridges() {
     assert!(!moves.is_empty());
     assert!(bridge_moves(&moves).is_empty(), "a cube has nothing to bridge");
 }
+
+#[test]
+fn a_box_lid_on_thin_walls_is_bridged_wall_to_wall() {
+    // A 20 mm box with 1.2 mm walls (thinner than two perimeters and the infill's inset) and
+    // a 1 mm floor, closed by a 2 mm lid at Z 10.
+    let mut m = cube_at([19.4, 19.4, 1.0], [0.0, 0.0, 0.0]);
+    for s in [-1.0, 1.0] {
+        m.append(&cube_at([20.0, 1.2, 10.0], [0.0, s * 9.4, 0.0]));
+        m.append(&cube_at([1.2, 19.0, 10.0], [s * 9.4, 0.0, 0.0]));
+    }
+    m.append(&cube_at([20.0, 20.0, 2.0], [0.0, 0.0, 10.0]));
+    let (text, _) = gcode_of(&m);
+    let moves = extrusions(&text);
+    let bridges = bridge_moves(&moves);
+    assert!(bridges.iter().all(|m| (m.z - 10.2).abs() < 1e-6), "bridges only on the lid's first layer");
+    let mut across = 0;
+    for m in bridges.iter().filter(|m| m.from.distance(m.to) > 1.0) {
+        // Along X or Y, from one wall (|coordinate| ≥ 8.8) to the opposite one.
+        let d = m.to - m.from;
+        let off = d.y.atan2(d.x).to_degrees().rem_euclid(90.0);
+        assert!(off.min(90.0 - off) < 1.0, "{:?} → {:?}", m.from, m.to);
+        let (a, b) = if d.x.abs() > d.y.abs() { (m.from.x, m.to.x) } else { (m.from.y, m.to.y) };
+        assert!(a.abs() >= 8.8 && a.abs() <= 10.0 && b.abs() >= 8.8 && b.abs() <= 10.0 && a * b < 0.0, "{:?} → {:?}", m.from, m.to);
+        across += 1;
+    }
+    assert!(across >= 40, "{across} lines across the box");
+}

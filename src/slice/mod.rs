@@ -22,7 +22,7 @@
 //! each layer is cut at its middle, and layers are made while that middle is below the top
 //! of the mesh.
 
-mod bridge;
+pub(crate) mod bridge;
 mod estimate;
 pub mod gyroid;
 pub mod gyroid_graded;

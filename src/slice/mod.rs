@@ -12,6 +12,8 @@
 //! - `regions`: loops → polygons with holes by a NonZero union (overlapping shells merge).
 //! - `perimeters`: inward offsets for the perimeter loops and the infill area.
 //! - `infill`: rectilinear lines on a global grid, linked zig-zag along the area boundary.
+//! - `bridge`: the solid area's pieces over air, crossed by straight lines anchored on the
+//!   layer below at both ends (`Feature::Bridge`); cantilevers are left as they are.
 //! - `gyroid`, `honeycomb3d`: the other sparse infill patterns ([`InfillPattern`]), curves
 //!   over the area's bounding box clipped to it.
 //! - `overhang`: the stretches of perimeter loops that hang over the layer below.
@@ -22,6 +24,7 @@
 //! of the mesh.
 
 mod anchor;
+pub(crate) mod bridge;
 mod estimate;
 pub mod gyroid;
 pub mod gyroid_graded;
@@ -582,7 +585,23 @@ pub fn slice_with(mesh: &Mesh, extra: &Extra, options: &Options, progress: &mut 
         let input = support::Input {
             part: &layer_shapes,
             heights: stack.iter().map(|l| l.1).collect(),
-            bridged: Vec::new(),
+            // What a bridge will span is not supported (unless asked): found on the whole
+            // layer, as fill_layer finds it on the solid area.
+            bridged: if o.support.support_bridges {
+                Vec::new()
+            } else {
+                crate::par::map(n, &mut |_| {}, |i| {
+                    if i == 0 {
+                        return Vec::new();
+                    }
+                    let found = bridge::detect(&layer_shapes[i], &layer_shapes[i - 1], w_um);
+                    let mut all: IntShapes<i32> = Vec::new();
+                    for b in found {
+                        all = regions::union(&all, &b.over_air);
+                    }
+                    all
+                })
+            },
             enforcers: cut(extra.support_enforcers),
             blockers: cut(extra.support_blockers),
             w_um,
@@ -709,6 +728,8 @@ fn fill_layer(o: &Options, layer_shapes: &[IntShapes<i32>], stack: &[(f64, f64, 
         });
         area.extend(perimeters::inset(std::slice::from_ref(region), infill_inset));
     }
+    // The whole infill area, where bridges may reach for their anchors.
+    let infill_area = if i > 0 { area.clone() } else { Vec::new() };
     let (solid, sparse) = if area.is_empty() {
         (Vec::new(), Vec::new())
     } else if o.infill_density >= 1.0 {
@@ -749,8 +770,36 @@ fn fill_layer(o: &Options, layer_shapes: &[IntShapes<i32>], stack: &[(f64, f64, 
             (solid, sparse)
         }
     };
+    // Bridges: the solid area over air (layer i − 1's outlines are the material below, sparse
+    // infill included), grown into the infill area around it for the lines' anchors. The
+    // solid and sparse areas then keep a line width away from the bridges.
+    let mut bridge_lines: Vec<Vec<DVec2>> = Vec::new();
+    let (solid, sparse) = if i == 0 || solid.is_empty() {
+        (solid, sparse)
+    } else {
+        let below = &layer_shapes[i - 1];
+        let air = regions::difference(&solid, below);
+        if air.is_empty() {
+            (solid, sparse)
+        } else {
+            let reach = (bridge::ANCHOR_REACH + 1.0) * w_um as f64;
+            let room = regions::intersect(&perimeters::outset(&air, reach as i32), &infill_area);
+            let bridges = bridge::detect(&regions::union(&solid, &room), below, w_um);
+            if bridges.is_empty() {
+                (solid, sparse)
+            } else {
+                let mut taken: IntShapes<i32> = Vec::new();
+                for b in &bridges {
+                    bridge_lines.extend(bridge::lines(&b.area, below, b.angle, w_um, min_len_um));
+                    taken.extend(b.area.iter().cloned());
+                }
+                let keep_off = perimeters::outset(&taken, w_um);
+                (regions::difference(&solid, &keep_off), regions::difference(&sparse, &keep_off))
+            }
+        }
+    };
     let angle = if i % 2 == 0 { base_angle } else { base_angle + std::f64::consts::FRAC_PI_2 };
-    let mut lines: Vec<(Feature, Vec<DVec2>)> = Vec::new();
+    let mut lines: Vec<(Feature, Vec<DVec2>)> = bridge_lines.into_iter().map(|l| (Feature::Bridge, l)).collect();
     for l in infill::rectilinear(&solid, w_um as f64, angle, min_len_um) {
         lines.push((Feature::SolidInfill, l));
     }

@@ -6,8 +6,8 @@
 //! segment held at both ends (a bridge); any other is cut out of the line.
 
 use super::{Input, LayerSupport};
-use crate::slice::anchor::held_pieces;
 use crate::geom::DVec2;
+use crate::slice::anchor::held_pieces;
 use i_overlay::i_shape::int::shape::IntShapes;
 
 /// A bit raster over a rectangle, cells of `px` mm.

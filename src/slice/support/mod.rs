@@ -54,7 +54,7 @@ pub struct Options {
     pub threshold_deg: f64,
     /// Only support that stands on the plate (none on top of the part). Default false.
     pub on_plate_only: bool,
-    /// Distance between the support's lines, mm. Default 2.5.
+    /// Distance between the support's lines, mm. Default 5 (a loop around each island holds the interface's ends, so the lines between can be sparse).
     pub spacing_mm: f64,
     /// Dense layers at the top of the support, under the part. Default 2.
     pub interface_layers: u32,
@@ -76,7 +76,7 @@ impl Default for Options {
             style: Style::Grid,
             threshold_deg: 55.0,
             on_plate_only: false,
-            spacing_mm: 2.5,
+            spacing_mm: 5.0,
             interface_layers: 2,
             interface_spacing_mm: 0.2,
             z_gap_mm: 0.2,
@@ -94,19 +94,78 @@ pub const FIELDS: &[Field] = &[
     when(
         choice_docs(
             other("support.style", "Support", "Support style", Kind::Choice, STYLES, "How the support is built."),
-            &["Straight lines inside a loop under the whole overhang: sturdy, easy to predict.", "Branches that merge on their way down: less material, smaller marks on the part."],
+            &[
+                "Straight lines inside a loop under the whole overhang: sturdy, easy to predict.",
+                "Branches that merge on their way down: less material, smaller marks on the part.",
+            ],
         ),
         ON,
         "true",
     ),
-    when(num("support.threshold_deg", "Support", "Overhang threshold", "°", 0.0, 90.0, 1.0, "Overhangs steeper than this from vertical get support (0: every overhang; 90: none but enforced)."), ON, "true"),
-    when(other("support.on_plate_only", "Support", "On the plate only", Kind::Bool, &[], "Only support that stands on the plate: none is built on top of the part."), ON, "true"),
-    when(num("support.spacing_mm", "Support", "Support line spacing", "mm", 0.5, 20.0, 0.1, "Distance between the support's lines: wider uses less material."), ON, "true"),
-    when(int("support.interface_layers", "Support", "Interface layers", 0.0, 20.0, "Dense layers at the top of the support that the part rests on."), ON, "true"),
+    when(
+        num(
+            "support.threshold_deg",
+            "Support",
+            "Overhang threshold",
+            "°",
+            0.0,
+            90.0,
+            1.0,
+            "Overhangs steeper than this from vertical get support (0: every overhang; 90: none but enforced).",
+        ),
+        ON,
+        "true",
+    ),
+    when(
+        other(
+            "support.on_plate_only",
+            "Support",
+            "On the plate only",
+            Kind::Bool,
+            &[],
+            "Only support that stands on the plate: none is built on top of the part.",
+        ),
+        ON,
+        "true",
+    ),
+    when(
+        num("support.spacing_mm", "Support", "Support line spacing", "mm", 0.5, 20.0, 0.1, "Distance between the support's lines: wider uses less material."),
+        ON,
+        "true",
+    ),
+    when(
+        int("support.interface_layers", "Support", "Interface layers", 0.0, 20.0, "Dense layers at the top of the support that the part rests on."),
+        ON,
+        "true",
+    ),
     when(num("support.interface_spacing_mm", "Support", "Interface gap", "mm", 0.0, 2.0, 0.05, "Gap between the interface's lines: 0 is solid."), ON, "true"),
-    when(num("support.z_gap_mm", "Support", "Top gap (Z)", "mm", 0.0, 2.0, 0.05, "Air between the support's top and the part, so it comes off (rounded down to whole layers)."), ON, "true"),
+    when(
+        num(
+            "support.z_gap_mm",
+            "Support",
+            "Top gap (Z)",
+            "mm",
+            0.0,
+            2.0,
+            0.05,
+            "Air between the support's top and the part, so it comes off (rounded down to whole layers).",
+        ),
+        ON,
+        "true",
+    ),
     when(num("support.xy_gap_mm", "Support", "Side gap (XY)", "mm", 0.0, 5.0, 0.05, "Air between the support and the part's sides."), ON, "true"),
-    when(other("support.support_bridges", "Support", "Support bridges", Kind::Bool, &[], "Also support overhangs held on two sides, which print as bridges without it."), ON, "true"),
+    when(
+        other(
+            "support.support_bridges",
+            "Support",
+            "Support bridges",
+            Kind::Bool,
+            &[],
+            "Also support overhangs held on two sides, which print as bridges without it.",
+        ),
+        ON,
+        "true",
+    ),
 ];
 
 /// The support of one layer, mm polylines in print order within each kind.

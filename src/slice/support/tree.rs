@@ -2,7 +2,7 @@
 //!
 //! Under each contact come its interface layers (as in the grid style); under the lowest of
 //! them, *tips* (circles of 1.5 line widths) on a grid of the support spacing inside the
-//! contact and every spacing along its edge, unless a branch already passes there. Layer by
+//! contact and along its edge, close enough that every interface line crosses one, unless a branch already passes there. Layer by
 //! layer downwards every branch leans towards its nearest neighbour (at most `h · tan 40°` a
 //! layer, so each circle still rests on the one below), two that meet merge into one a
 //! little thicker, and all keep the side gap from the part: a branch that would touch the
@@ -267,9 +267,11 @@ pub(crate) fn paths(o: &Options, input: &Input, areas: &Areas) -> Vec<LayerSuppo
             nodes.sort_by(|a, b| a.p.x.total_cmp(&b.p.x).then(a.p.y.total_cmp(&b.p.y)));
             let old = nodes.len();
             let window = MAX_RADIUS_MM + 0.4 * spacing;
-            for p in tip_points(top, spacing, 0.5 * r0) {
+            // Tips close enough that every interface line above crosses one.
+            let tips = 2.0 * (r0 + w);
+            for p in tip_points(top, tips, 0.5 * r0) {
                 let from = nodes[..old].partition_point(|q| q.p.x < p.x - window);
-                let covered = nodes[from..old].iter().take_while(|q| q.p.x <= p.x + window).any(|q| q.p.distance(p) < q.r + 0.4 * spacing);
+                let covered = nodes[from..old].iter().take_while(|q| q.p.x <= p.x + window).any(|q| q.p.distance(p) < q.r + 0.4 * tips);
                 if covered || obstacle.hits(p, r0 + xy) {
                     continue;
                 }

@@ -168,10 +168,6 @@ impl Seam {
             Seam::Random => SEAMS[3],
         }
     }
-
-    fn is_default(&self) -> bool {
-        *self == Seam::default()
-    }
 }
 
 /// Slicing options (the `slice` job's settings in a Design).
@@ -219,8 +215,7 @@ pub struct Options {
     /// design): replaces `infill_cell_mm` where present ([`gyroid_graded`]).
     #[serde(skip)]
     pub infill_cell_field: Option<std::sync::Arc<gyroid_graded::CellField>>,
-    /// Where perimeter loops start ([`Seam`]). Default aligned (not written then).
-    #[serde(skip_serializing_if = "Seam::is_default")]
+    /// Where perimeter loops start ([`Seam`]). Default aligned.
     pub seam: Seam,
 }
 

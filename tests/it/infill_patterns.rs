@@ -275,6 +275,8 @@ fn default_options_json_has_no_new_keys() {
         "skirt_loops",
         "skirt_distance_mm",
         "brim_width_mm",
+        "support",
+        "seam",
     ];
     old.sort();
     let mut keys_sorted = keys.clone();

@@ -283,8 +283,8 @@ fn seam_is_read_from_a_design_and_checked() {
     let o: Options = serde_json::from_str(r#"{"seam": "rear"}"#).unwrap();
     assert_eq!(o.seam, Seam::Rear);
     assert!(serde_json::from_str::<Options>(r#"{"seam": "front"}"#).is_err());
-    // The default is not written, so designs without it read and hash as before.
-    assert!(!serde_json::to_string(&Options::default()).unwrap().contains("seam"));
+    // Written like every setting, so `weft new` shows it.
+    assert!(serde_json::to_string(&Options::default()).unwrap().contains(r#""seam":"aligned""#));
     assert!(serde_json::to_string(&Options { seam: Seam::Random, ..Options::default() }).unwrap().contains(r#""seam":"random""#));
     let row = slice::FIELDS.iter().find(|f| f.path == "seam").expect("a form row");
     assert_eq!(row.choices, slice::SEAMS);

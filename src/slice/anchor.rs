@@ -117,8 +117,8 @@ impl Near {
             return Near { reach, cell, min: DVec2::ZERO, nx: 0, ny: 0, start: vec![0], segs: Vec::new() };
         }
         let min = lo - DVec2::splat(reach);
-        let nx = (((hi.x - lo.x + 2.0 * reach) / cell).ceil() as usize).clamp(1, 4096);
-        let ny = (((hi.y - lo.y + 2.0 * reach) / cell).ceil() as usize).clamp(1, 4096);
+        let nx = (((hi.x - lo.x + 2.0 * reach) / cell).ceil() as usize).clamp(1, 2048);
+        let ny = (((hi.y - lo.y + 2.0 * reach) / cell).ceil() as usize).clamp(1, 2048);
         let cell_of = |v: f64, m: f64, n: usize| (((v - m) / cell).floor().max(0.0) as usize).min(n - 1);
         // Counting sort of (cell, segment) pairs.
         let mut pairs: Vec<(u32, (DVec2, DVec2))> = Vec::new();

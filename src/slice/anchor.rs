@@ -121,17 +121,28 @@ impl Near {
         let ny = (((hi.y - lo.y + 2.0 * reach) / cell).ceil() as usize).clamp(1, 2048);
         let cell_of = |v: f64, m: f64, n: usize| (((v - m) / cell).floor().max(0.0) as usize).min(n - 1);
         // Counting sort of (cell, segment) pairs.
+        // Each segment goes into the cells within `reach` of it: walked in steps of half a
+        // cell, each step's cell and its neighbours (a reach is a quarter cell), so a long
+        // diagonal line costs its length, not its bounding box.
         let mut pairs: Vec<(u32, (DVec2, DVec2))> = Vec::new();
+        let mut cells: Vec<u32> = Vec::new();
         for l in lines {
             for w in l.windows(2) {
                 let (a, b) = (w[0], w[1]);
-                let (x0, x1) = (cell_of(a.x.min(b.x) - reach, min.x, nx), cell_of(a.x.max(b.x) + reach, min.x, nx));
-                let (y0, y1) = (cell_of(a.y.min(b.y) - reach, min.y, ny), cell_of(a.y.max(b.y) + reach, min.y, ny));
-                for y in y0..=y1 {
-                    for x in x0..=x1 {
-                        pairs.push(((y * nx + x) as u32, (a, b)));
+                let steps = ((a.distance(b) / (0.5 * cell)).ceil() as usize).clamp(1, 1 << 20);
+                cells.clear();
+                for k in 0..=steps {
+                    let p = a.lerp(b, k as f64 / steps as f64);
+                    let (cx, cy) = (cell_of(p.x, min.x, nx), cell_of(p.y, min.y, ny));
+                    for y in cy.saturating_sub(1)..=(cy + 1).min(ny - 1) {
+                        for x in cx.saturating_sub(1)..=(cx + 1).min(nx - 1) {
+                            cells.push((y * nx + x) as u32);
+                        }
                     }
                 }
+                cells.sort_unstable();
+                cells.dedup();
+                pairs.extend(cells.iter().map(|&c| (c, (a, b))));
             }
         }
         let mut start = vec![0u32; nx * ny + 1];

@@ -309,7 +309,8 @@ pub enum Error {
 
 /// Checks every option against [`FIELDS`], the ranges the design's form shows.
 fn validate(o: &Options) -> Result<(), Error> {
-    let problems = crate::settings::check(o, FIELDS, "");
+    let mut problems = crate::settings::check(o, FIELDS, "");
+    problems.extend(crate::settings::check(o, support::FIELDS, ""));
     if problems.is_empty() {
         Ok(())
     } else {

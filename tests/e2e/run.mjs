@@ -27,6 +27,7 @@ import { newcomerChecks } from "./newcomer-checks.mjs";
 import { previewChecks } from "./preview-checks.mjs";
 import { threadsChecks } from "./threads-checks.mjs";
 import { hostsFromEnv, sendChecks } from "./send-checks.mjs";
+import { supportChecks } from "./support-checks.mjs";
 import {
   boxStl, checker, collectErrors, colouredPixels, confirmBigJobs, downloadGcode, launchChromium, stageMarks, waitReady, waitResult as waitResultWithin, watchAfterCancel,
 } from "./page-helpers.mjs";
@@ -610,6 +611,9 @@ await check(53, "an open part (a box without one wall) is capped out loud: the f
 
 // Send to real print hosts (tests/hosts/hosts.py, started by scripts/test.sh: WEFT_HOSTS).
 await sendChecks({ browser, baseUrl: base, hosts: hostsFromEnv(), check, outDir: OUT, first: 54 });
+
+// Supports switched on in the form for a dropped part (issue 44).
+await supportChecks({ newPage, weftBin: existsSync(WEFT_BIN) ? WEFT_BIN : null, check, outDir: OUT, base, first: 60, timeoutMs: JOB_TIMEOUT });
 
 if (main.errors.length) console.log(`note: console errors in the main page:\n  ${main.errors.join("\n  ")}`);
 if (offOrigin.length) console.log(`note: blocked requests leaving the origin:\n  ${[...new Set(offOrigin)].join("\n  ")}`);

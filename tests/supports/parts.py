@@ -2,7 +2,8 @@
 """Parts that need support, written as binary STL into the folder given (standard library only):
 t-bracket (a 10 x 10 x 20 mm stem, a 40 x 10 x 5 mm bar: 15 mm overhangs), ledge-90 (a 20 mm
 90-degree ledge), bridge-20 (two pillars, a 20 mm gap), sphere-on-stem (radius 10 mm on a
-2.5 mm stem). Used by compare.sh and BENCHMARKS.md section 20."""
+2.5 mm stem). Used by compare.sh and BENCHMARKS.md section 20. `parts.py DIR sphere-1m` writes
+the 998 000-triangle sphere (radius 50 mm) of that section's speed figure instead."""
 import math, os, struct, sys
 def write_stl(path, tris):
     with open(path,'wb') as f:
@@ -69,6 +70,28 @@ def sphere_on_stem(R=10.0, stem_r=2.5, stem_h=4.0, n=96, m=48):
         prof.append((R*math.sin(t), zc-R*math.cos(t)))
     prof[-1]=(0,zc+R)
     return revolve(prof,n)
+def uv_sphere(path, R=50.0, S=1000, rings=500):
+    """A closed UV sphere resting on the plate: 2 S (rings - 1) triangles (998 000 by default)."""
+    def pt(i, j):
+        th = math.pi * i / rings; ph = 2 * math.pi * j / S
+        return (R * math.sin(th) * math.cos(ph), R * math.sin(th) * math.sin(ph), R - R * math.cos(th))
+    n = 2 * S * (rings - 1)
+    with open(path, 'wb') as f:
+        f.write(b'weft uv sphere'.ljust(80, b' ')); f.write(struct.pack('<I', n))
+        rec = struct.Struct('<12fH')
+        prev = [pt(1, j) for j in range(S)]
+        bottom, top = (0.0, 0.0, 0.0), (0.0, 0.0, 2 * R)
+        for j in range(S):
+            f.write(rec.pack(0, 0, 0, *bottom, *prev[(j + 1) % S], *prev[j], 0))
+        for i in range(1, rings - 1):
+            cur = [pt(i + 1, j) for j in range(S)]
+            for j in range(S):
+                a, b, c, d = prev[j], prev[(j + 1) % S], cur[(j + 1) % S], cur[j]
+                f.write(rec.pack(0, 0, 0, *a, *b, *c, 0)); f.write(rec.pack(0, 0, 0, *a, *c, *d, 0))
+            prev = cur
+        for j in range(S):
+            f.write(rec.pack(0, 0, 0, *top, *prev[j], *prev[(j + 1) % S], 0))
+
 def main(out):
     parts = {
         't-bracket': extrude_xz([(15,0),(25,0),(25,20),(40,20),(40,25),(0,25),(0,20),(15,20)],0,10),
@@ -81,4 +104,8 @@ def main(out):
         write_stl(os.path.join(out, k + '.stl'), t)
 
 if __name__ == '__main__':
-    main(sys.argv[1] if len(sys.argv) > 1 else '.')
+    if len(sys.argv) > 2 and sys.argv[2] == 'sphere-1m':
+        os.makedirs(sys.argv[1], exist_ok=True)
+        uv_sphere(os.path.join(sys.argv[1], 'sphere-1m.stl'))
+    else:
+        main(sys.argv[1] if len(sys.argv) > 1 else '.')

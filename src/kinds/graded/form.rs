@@ -183,5 +183,6 @@ pub(super) fn rows() -> Vec<Row> {
     rows.extend(mount("job.surface", isosurface::FIELDS));
     rows.extend(mount("job.density", DENSITY_FIELDS));
     rows.extend(mount("job.slice", slice::FIELDS));
+    rows.extend(mount("job.slice", slice::support::FIELDS));
     rows
 }

@@ -79,6 +79,7 @@ impl Kind for SliceKind {
 
     fn fields() -> Vec<Row> {
         let mut rows = mount("job.slice", slice::FIELDS);
+        rows.extend(mount("job.slice", slice::support::FIELDS));
         rows.extend(mount("job.input", shapes::FIELDS));
         rows
     }

@@ -117,6 +117,10 @@ pub(crate) fn anchor(input: &Input, raw: Vec<LayerSupport>) -> Vec<LayerSupport>
             hi = hi.max(*p);
         }
         let (lo, hi) = (lo - DVec2::splat(2.0 * w), hi + DVec2::splat(2.0 * w));
+        // At most about 50 M cells (6 MiB) and a million rows, whatever the part's size: a
+        // coarser raster only errs on the generous side.
+        let span = hi - lo;
+        let px = px.max((span.x * span.y / 5e7).sqrt()).max(span.x.max(span.y) / 1e6);
         let mut r = Raster::new(lo, hi, px);
         // The part below holds a bead whose centre is within half a line of its outline.
         let part = crate::slice::perimeters::outset(&input.part[j - 1], (input.w_um / 2).max(1));

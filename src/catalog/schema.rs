@@ -7,7 +7,7 @@ use crate::design::share::MAX_EMBEDDED_CHARS;
 use crate::design::{Design, Input, Problem, MAX_DESCRIPTION_BYTES, MAX_FILE_NAME_BYTES, MAX_INPUT_FILES, MAX_NAME_BYTES};
 use crate::geom::shapes::Shape;
 use crate::geom::Feature;
-use crate::kinds::{Registry, Slot, StageInfo, ViewInfo};
+use crate::kinds::{Registry, Slot, StageInfo, StepInfo, ViewInfo};
 use crate::settings::{self, int, max_len, mount, other, Field, Kind, Row, MAX_TEXT_BYTES};
 use serde::Serialize;
 use serde_json::Value;
@@ -71,6 +71,8 @@ pub struct JobInfo {
     pub slots: Vec<SlotInfo>,
     /// Extra views.
     pub views: &'static [ViewInfo],
+    /// The method's steps ("How it works"), each drawn by one of `views`.
+    pub steps: &'static [StepInfo],
 }
 
 /// A slot as the page shows it.
@@ -141,6 +143,7 @@ pub fn schema(registry: &Registry) -> Schema {
             stages: k.stages().iter().chain(WRITER_STAGES).copied().collect(),
             slots: k.slots().iter().map(|s| SlotInfo { slot: *s, accept: s.kind.accept(), multiple: s.kind.multiple() }).collect(),
             views: k.views(),
+            steps: k.steps(),
         })
         .collect();
     let builtin_shapes = Shape::defaults()

@@ -140,6 +140,24 @@ pub struct ViewInfo {
     pub doc: &'static str,
 }
 
+/// One step of a kind's "How it works" walk through its method: a view of the kind at an
+/// index, with one or two plain sentences citing the paper's section or figure.
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct StepInfo {
+    /// Title of the step ("Pairing").
+    pub title: &'static str,
+    /// The kind's view drawn ([`ViewInfo::id`]).
+    pub view: &'static str,
+    /// The view's index shown (the first one when the step scrubs).
+    pub index: usize,
+    /// The step iterates: a scrubber and Play walk the view's indices (frames).
+    pub scrub: bool,
+    /// One or two plain sentences on what the step does.
+    pub text: &'static str,
+    /// Where the paper says it ("GIPPO §2.2, Fig. 3").
+    pub cite: &'static str,
+}
+
 /// The answer to an `inspect(view, index)` request.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Inspection {
@@ -191,6 +209,8 @@ pub trait JobKind: Sync {
     fn stages(&self) -> &'static [StageInfo];
     /// Extra views.
     fn views(&self) -> &'static [ViewInfo];
+    /// The method's steps, in order, each drawn by one of [`JobKind::views`].
+    fn steps(&self) -> &'static [StepInfo];
     /// The default `job` object (with `kind`).
     fn default_job(&self) -> Value;
     /// The `job` object parsed and written back with every default filled in, or serde's
@@ -231,6 +251,8 @@ pub trait Kind: Sync {
     const STAGES: &'static [StageInfo];
     /// Extra views.
     const VIEWS: &'static [ViewInfo] = &[];
+    /// The method's steps ("How it works"), each naming one of [`Kind::VIEWS`].
+    const STEPS: &'static [StepInfo] = &[];
     /// Form rows (mounted at design paths, e.g. with [`crate::settings::mount`]).
     fn fields() -> Vec<Row>;
     /// Cross-field rules.
@@ -283,6 +305,9 @@ impl<K: Kind> JobKind for K {
     }
     fn views(&self) -> &'static [ViewInfo] {
         K::VIEWS
+    }
+    fn steps(&self) -> &'static [StepInfo] {
+        K::STEPS
     }
     fn default_job(&self) -> Value {
         with_kind(K::NAME, &K::Settings::default()).unwrap_or(Value::Null)

@@ -59,6 +59,7 @@ mod ranges;
 mod scaffold_model;
 mod seams;
 mod slice;
+mod steps;
 mod supports;
 mod threads;
 mod volume_import;

@@ -1,0 +1,49 @@
+//! "How it works": every kind's steps name one of its views, say what they do and where the
+//! paper says it, and each step draws something on the kind's example (data, not a title).
+
+use crate::common::example;
+use weft::kinds::Registry;
+use weft::pipeline::{self, Cache, Files};
+
+/// The example each kind opens on in the step-through checks.
+const EXAMPLES: &[(&str, &str)] = &[
+    ("lattice", "honeycomb-10mm"),
+    ("axisymmetric", "hourglass-omega3"),
+    ("graded", "graded-phantom"),
+    ("foam", "foam-dogbone-linear"),
+    ("freeform", "freeform-bridge"),
+];
+
+#[test]
+fn every_step_names_a_view_and_cites_the_paper() {
+    let reg = Registry::builtin();
+    for (kind, _) in EXAMPLES {
+        let k = reg.get(kind).unwrap_or_else(|| panic!("no kind {kind}"));
+        assert!(k.steps().len() >= 3, "{kind}: {} steps", k.steps().len());
+        for s in k.steps() {
+            assert!(k.views().iter().any(|v| v.id == s.view), "{kind}: step {:?} names no view of the kind ({})", s.title, s.view);
+            assert!(!s.title.is_empty() && s.text.len() >= 40 && s.text.ends_with('.'), "{kind}: step {:?} needs a sentence", s.title);
+            assert!(!s.cite.is_empty(), "{kind}: step {:?} cites nothing", s.title);
+        }
+    }
+}
+
+#[test]
+fn every_step_draws_something_on_its_example() {
+    let reg = Registry::builtin();
+    for (kind, file) in EXAMPLES {
+        let design = example(file);
+        let k = reg.get(kind).unwrap();
+        let mut cache = Cache::new();
+        for s in k.steps() {
+            let a = pipeline::inspect(&reg, &mut cache, &design, &Files::new(), s.view, s.index).unwrap_or_else(|e| panic!("{kind}: step {:?}: {e}", s.title));
+            assert!(!a.data.is_empty(), "{kind}: step {:?} ({} at {}) draws nothing", s.title, s.view, s.index);
+            assert!(a.data.iter().all(|x| x.is_finite()), "{kind}: step {:?} has a non-finite value", s.title);
+            if s.scrub {
+                assert!(a.count >= 2, "{kind}: step {:?} scrubs over {} frame(s)", s.title, a.count);
+                let last = pipeline::inspect(&reg, &mut cache, &design, &Files::new(), s.view, a.count - 1).unwrap();
+                assert!(!last.data.is_empty(), "{kind}: step {:?}'s last frame draws nothing", s.title);
+            }
+        }
+    }
+}

@@ -230,22 +230,27 @@ async function openFile(file) {
   showError(`${file.name}: this job opens ${[...takes, "G-code (.gcode)", "designs (.json)"].join(", ")}.`);
 }
 
-export async function share() {
+/** The design's share link ({fragment, embedded, missing, note}), or null after saying why not. */
+async function shareLink() {
   // Every loaded file with its slot; Rust keeps the ones the design names, small ones inside.
   let files;
   try {
     files = await Promise.all([...state.files.values()].map(async (f) => ({ slot: f.slot, name: f.name, bytes: new Uint8Array(await f.blob.arrayBuffer()) })));
   } catch (err) {
     showError(`Could not read a loaded file for the link (${messageOf(err)}); load it again.`);
-    return;
+    return null;
   }
-  let res;
   try {
-    res = plain(state.weft.encodeShare(state.json, files));
+    return plain(state.weft.encodeShare(state.json, files));
   } catch (err) {
     showError(`Could not make a share link: ${messageOf(err)}`);
-    return;
+    return null;
   }
+}
+
+export async function share() {
+  const res = await shareLink();
+  if (!res) return;
   history.replaceState(null, "", `${location.pathname}${location.search}${res.fragment}`);
   const url = location.href;
   let copied = false;
@@ -259,6 +264,50 @@ export async function share() {
   const size = `${url.length.toLocaleString("en-US")} characters${embedded.length ? `, ${embedded.join(", ")} included` : ""}`;
   const left = missing.length ? ` Not in the link (too large): ${missing.join(", ")}; whoever opens it is asked to load ${missing.length > 1 ? "them" : "it"}.` : "";
   showNotice(`${head} (${size}).${left}${res.note ? ` Note: ${res.note}.` : ""}`, url);
+}
+
+/**
+ * Copies an <iframe> that embeds this design (embed.html with the share link) for a course
+ * page, naming the job's fields that differ from the kind's defaults (at most four) so they
+ * show beside the preview; the notice says how to name others.
+ */
+export async function copyEmbed() {
+  const res = await shareLink();
+  if (!res) return;
+  const fields = changedJobFields().slice(0, 4);
+  const dir = `${location.origin}${location.pathname.replace(/[^/]*$/, "")}`;
+  const src = `${dir}embed.html${res.fragment}${fields.length ? `&fields=${fields.join(",")}` : ""}`;
+  const title = String(state.design?.name ?? "design").replace(/[<>&"]/g, "");
+  const code = `<iframe src="${src}" width="900" height="640" style="border:0;max-width:100%" title="weft: ${title}" loading="lazy"></iframe>`;
+  let copied = false;
+  try {
+    await navigator.clipboard.writeText(code);
+    copied = true;
+  } catch { /* no clipboard permission: the notice's field holds it */ }
+  const left = (res.missing ?? []).length ? ` Not in it (too large): ${res.missing.join(", ")}.` : "";
+  showNotice(`${copied ? "Embed code copied" : "Embed code below"} (${code.length.toLocaleString("en-US")} characters): ` +
+    `the preview, "How it works" and ${fields.length ? fields.join(", ") : "no fields"}; list others after &fields= (comma-separated design paths). ` +
+    `A course page can set fields, run and step through it with postMessage (README, "Embedding").${left}`, code);
+}
+
+/** Design paths under `job` whose values differ from the job kind's defaults, in form order. */
+export function changedJobFields() {
+  const kind = state.design?.job?.kind;
+  let defaults;
+  try {
+    defaults = JSON.parse(state.weft.setField(state.weft.defaultDesign(), "job.kind", JSON.stringify(kind))).job;
+  } catch {
+    return [];
+  }
+  const out = [];
+  for (const f of state.schema.fields ?? []) {
+    if (!f.path?.startsWith("job.") || f.kind === "section" || (f.job && f.job !== kind)) continue;
+    const rel = f.path.slice(4).split(".");
+    const get = (o) => rel.reduce((x, k) => (x == null ? undefined : x[k]), o);
+    const now = get(state.design.job);
+    if (now !== undefined && JSON.stringify(now) !== JSON.stringify(get(defaults))) out.push(f.path);
+  }
+  return out;
 }
 
 export async function openExample(chosen) {

@@ -26,13 +26,14 @@ export function loadInitialDesign() {
   }
   // A first visit shows a part at once (the default design is light) and what to do next.
   if (!stored) {
-    showNotice("Welcome to weft. This is the default part, a 20 mm cube: drop your own STL, OBJ or 3MF on the page " +
+    if (!state.embedded) showNotice("Welcome to weft. This is the default part, a 20 mm cube: drop your own STL, OBJ or 3MF on the page " +
       "to slice it, change its settings, or pick one of the examples (the Examples menu, or the gallery under the results).");
     runDesign({ auto: true });
   }
 }
 
 function storedDesign() {
+  if (state.embedded) return null;
   let text = null;
   try {
     text = localStorage.getItem(STORAGE_KEY);
@@ -91,9 +92,12 @@ export function setDesign(json, { record = true } = {}) {
   }
   state.json = json;
   state.design = JSON.parse(json);
-  try {
-    localStorage.setItem(STORAGE_KEY, json);
-  } catch { /* quota or disabled: the design stays in memory */ }
+  // The embedded weft keeps its design to itself: a full page opened here keeps its own.
+  if (!state.embedded) {
+    try {
+      localStorage.setItem(STORAGE_KEY, json);
+    } catch { /* quota or disabled: the design stays in memory */ }
+  }
   renderForm();
   updateButtons();
   scheduleInspect();

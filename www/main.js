@@ -11,6 +11,8 @@
 //   results.js        freshness, the estimate line, a result's numbers and stage cards
 //   actions.js        Run, Download, Share, opening files and examples
 //   send.js           Send: the G-code to a print host (send-hosts.js: what hosts answer)
+//   steps.js          "How it works": the kind's method step by step (views at indices)
+//   embed.js          the embedded weft (embed.html): its postMessage API for course pages
 //   messages.js       the error and notice bars
 //   util.js           small shared helpers
 // Nothing here knows a job kind: the form, the job selector, the input slots, the progress
@@ -25,9 +27,11 @@ import { commitField, thumbnailKinds } from "./form.js";
 import { endDrag } from "./slots.js";
 import { cancel, workers } from "./worker-client.js";
 import { AUTO_RUN_KEY, autoRunWanted, maybeAutoRun } from "./results.js";
-import { downloadResult, openExample, openFiles, runDesign, share } from "./actions.js";
+import { copyEmbed, downloadResult, openExample, openFiles, runDesign, share } from "./actions.js";
 import { featureStyles } from "./views.js";
 import { sendResult } from "./send.js";
+import { goToStep, setOpen, stepsStatus } from "./steps.js";
+import { startEmbed } from "./embed.js";
 
 const ready = start();
 ready.catch(() => {}); // reported in #error
@@ -60,6 +64,10 @@ window.weft = {
     return [...state.viewCards.values()].map((v) => ({ id: v.view.id, shape: v.last?.shape ?? v.view.shape, index: v.last?.index ?? null, count: v.count, answers: v.answers, items: v.items }));
   },
   get thumbnails() { return thumbnailKinds(); },
+  /** The step-through: {open, count, index, title, view, frame, frames, answers, items, shape, caption}. */
+  get steps() { return stepsStatus(); },
+  step: (i) => goToStep(i),
+  openSteps: (open = true) => setOpen(open),
 };
 
 async function start() {
@@ -91,6 +99,7 @@ async function start() {
   }
   workers.start();
   loadInitialDesign();
+  startEmbed();
   fillExamples();
   if ("serviceWorker" in navigator && window.isSecureContext) {
     navigator.serviceWorker.register("sw.js").then(isolateThroughServiceWorker, () => {});
@@ -108,7 +117,8 @@ async function start() {
  * the address, so a reload keeps it; a result is made again by Run.
  */
 function isolateThroughServiceWorker() {
-  if (self.crossOriginIsolated) return;
+  // A framed page is isolated only when its embedding page is too: a reload would not help.
+  if (self.crossOriginIsolated || window.parent !== window) return;
   const KEY = "weft.isolationReload";
   const tryReload = () => {
     if (self.crossOriginIsolated || !navigator.serviceWorker.controller) return;
@@ -142,6 +152,7 @@ function wireUi() {
   });
   $("download-design").addEventListener("click", () => download(`${state.json}\n`, `${designName()}.json`, "application/json"));
   $("share").addEventListener("click", share);
+  $("copy-embed").addEventListener("click", copyEmbed);
   $("file").addEventListener("change", async (e) => {
     const files = [...e.target.files];
     e.target.value = "";

@@ -5,6 +5,7 @@ import { state } from "./state.js";
 import { $, setMessage } from "./util.js";
 
 export function showError(message) {
+  tellParent({ type: "weft:error", message: String(message) });
   setMessage($("error-text"), message);
   $("error").hidden = false;
   if (/^The worker (stopped|keeps)/.test(message)) state.crashShownAt = Date.now();
@@ -44,4 +45,12 @@ export function showNotice(message, link, action) {
     text.append(" ", input);
   }
   $("notice").hidden = false;
+}
+
+/** Posts to the page that embeds this one (embed.js's API); nothing when not embedded. */
+export function tellParent(message) {
+  if (!state.embedded || window.parent === window) return;
+  try {
+    window.parent.postMessage(message, "*");
+  } catch { /* the embedding page went away */ }
 }

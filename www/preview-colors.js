@@ -12,6 +12,7 @@ const RAMP_MODES = {
   flow: { key: "flow", label: "flow", unit: "mm³/s", title: "volumetric flow, mm³/s" },
   e_per_mm: { key: "ePerMm", label: "ΔE/mm", unit: "mm/mm", title: "filament fed per mm of travel (ΔE ÷ length), mm/mm" },
   speed: { key: "speed", label: "speed", unit: "mm/s", title: "feed rate, mm/s (for a VTP foam: V* × the thread's speed)" },
+  width: { key: "width", label: "bead width", unit: "mm", title: "bead (line) width, mm (for a graded scaffold: its density)" },
 };
 
 /** 256-entry "turbo"-like ramp (blue → green → yellow → red), sRGB bytes. */

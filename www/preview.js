@@ -32,6 +32,8 @@ const DEFAULT_BED = [200, 200, 200];
 const TRAVEL_COLOR = 0x5aa0ff;
 const START_COLOR = 0xffffff;
 const AXIS_COLOR = 0xf2f2f2;
+/** The backdrop's lines (a platform under its path): a muted blue-grey. */
+const BACKDROP_COLOR = 0x8a9bb0;
 /** Size of a path-start marker, CSS pixels. */
 const START_SIZE_PX = 7;
 
@@ -128,7 +130,14 @@ export class Preview {
     );
     this.axis.frustumCulled = false;
     this.axis.visible = Boolean(ui.showAxis?.checked);
-    this.scene.add(this.tubes, this.lines, this.travel, this.starts, this.axis);
+    // A backdrop: a kind's surface drawn faintly behind its toolpath (the platform an
+    // axisymmetric path is printed on), set by steps.js from the kind's `teach.backdrop` view.
+    this.backdrop = new THREE.LineSegments(
+      new THREE.BufferGeometry(),
+      new THREE.LineBasicMaterial({ color: BACKDROP_COLOR, transparent: true, opacity: 0.4 }),
+    );
+    this.backdrop.frustumCulled = false;
+    this.scene.add(this.tubes, this.lines, this.travel, this.starts, this.axis, this.backdrop);
     /** segment index of every path-start marker (increasing) */
     this.startSegment = new Uint32Array(0);
     /** layers shown, and the last G-code move shown (Infinity: all) */
@@ -306,6 +315,23 @@ export class Preview {
     this.setLayerRange(0, this.layers - 1);
     this.fit();
     this.requestRender();
+  }
+
+  /**
+   * Draws `lines` (a lines3d view's data: x0 y0 z0 x1 y1 z1 code per segment, mm, in the
+   * toolpath's frame) faintly behind the toolpath; null or empty removes it. Returns the
+   * segments drawn.
+   */
+  setBackdrop(lines) {
+    this.backdrop.geometry.dispose();
+    const n = lines ? Math.floor(lines.length / 7) : 0;
+    const pos = new Float32Array(6 * n);
+    for (let i = 0; i < n; i++) for (let k = 0; k < 6; k++) pos[6 * i + k] = lines[7 * i + k];
+    this.backdrop.geometry = new THREE.BufferGeometry();
+    this.backdrop.geometry.setAttribute("position", new THREE.BufferAttribute(pos, 3));
+    this.backdropSegments = n;
+    this.requestRender();
+    return n;
   }
 
   /**

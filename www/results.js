@@ -5,10 +5,11 @@
 import { state } from "./state.js";
 import { MSG } from "./protocol.js";
 import { $, formatBytes, formatDuration, humanBytes, messageOf } from "./util.js";
-import { hideErrorUnlessCrash } from "./messages.js";
+import { hideErrorUnlessCrash, tellParent } from "./messages.js";
 import { missingFiles } from "./design.js";
 import { invalidFields } from "./form.js";
 import { scheduleInspect } from "./view-cards.js";
+import { showBackdrop } from "./steps.js";
 import { threadsWhy, workers } from "./worker-client.js";
 import { runDesign } from "./actions.js";
 import { metricList, renderReport } from "./report.js";
@@ -160,9 +161,22 @@ export function showResult(res, fileName, json = null, files = state.filesVersio
   renderStats(report, gcode, res.ms);
   renderReport($("report"), report, state);
   performance.mark("weft:shown");
-  if (res.request === "run") scheduleInspect(0); // views of a loaded solid know their count now
+  if (res.request === "run") {
+    scheduleInspect(0); // views of a loaded solid know their count now
+    showBackdrop();
+  } else {
+    state.preview?.setBackdrop(null); // a dropped G-code: no kind's surface behind it
+  }
   hideErrorUnlessCrash();
   refreshFreshness();
+  tellParent({ type: "weft:result", stats: statsOf(report), design: json ?? state.json });
+}
+
+/** A run's statistics as numbers, keyed as `weft analyze --json` keys them (the embed's weft:result). */
+export function statsOf(report) {
+  const out = {};
+  for (const [k, v] of Object.entries(report?.analysis ?? {})) if (typeof v === "number" && Number.isFinite(v)) out[k] = v;
+  return out;
 }
 
 function renderStats(report, gcode, ms) {

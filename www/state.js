@@ -19,6 +19,8 @@ export const state = {
   defaults: null,
   /** the 3D preview (preview.js's Preview), null when it could not start */
   preview: null,
+  /** Opened as the embedded weft (embed.html → index.html?embed, see embed.js). */
+  embedded: new URLSearchParams(globalThis.location?.search ?? "").has("embed"),
 
   // --- the design (design.js) -----------------------------------------------------------
   /** current design, normalized JSON (the source of truth) and its parse */
@@ -80,6 +82,8 @@ export const state = {
   viewCards: new Map(),
   /** The job kind the view cards were built for (view-cards.js). */
   viewsKey: null,
+  /** The "How it works" card: its steps, the one shown, open or closed, the last answer (steps.js). */
+  steps: null,
 
   // --- the worker client (worker-client.js) ---------------------------------------------
   client: {

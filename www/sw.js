@@ -8,14 +8,14 @@
 // same-origin and COEP require-corp, so the worker may share memory with its thread pool
 // (main.js reloads once when this worker first takes control). Everything the page loads is
 // same-origin, so require-corp blocks nothing.
-const CACHE = "weft-v5";
+const CACHE = "weft-v6";
 const SHELL = [
   "./", "index.html", "style.css", "main.js", "worker.js", "pool-worker.js", "protocol.js",
   // main.js's modules (see its header)
   "state.js", "util.js", "messages.js", "design.js", "form.js", "slots.js", "view-cards.js",
   "worker-client.js", "results.js", "actions.js", "send.js", "send-hosts.js",
   "preview.js", "preview-gl.js", "preview-colors.js", "preview-camera.js",
-  "plot.js", "report.js", "views.js",
+  "plot.js", "report.js", "views.js", "steps.js", "embed.js", "embed.html", "embed-open.js",
   "vendor/three.module.js", "vendor/three.core.js", "vendor/OrbitControls.js",
   "examples/index.json", "../pkg/weft.js", "../pkg/weft_bg.wasm",
   "../pkg/threads/weft.js", "../pkg/threads/weft_bg.wasm",

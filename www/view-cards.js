@@ -6,8 +6,8 @@ import { MSG } from "./protocol.js";
 import { $, button, download, fileStem, messageOf, setMessage } from "./util.js";
 import { jobKind, missingFiles, setFields } from "./design.js";
 import { workers } from "./worker-client.js";
-import { drawView } from "./views.js";
-import { formatNumber } from "./plot.js";
+import { drawView, fillLegend } from "./views.js";
+import { buildSteps, refreshSteps } from "./steps.js";
 
 const INSPECT_DEBOUNCE_MS = 200;
 
@@ -130,6 +130,7 @@ export function buildViews() {
     state.viewCards.set(view.id, v);
   }
   host.hidden = state.viewCards.size === 0;
+  buildSteps();
 }
 
 /** Time between the steps of a playing view, ms (or longer: the next step waits for its answer). */
@@ -160,6 +161,7 @@ function playNext(v) {
 
 /** Asks the worker for each view (or one) after `delay` ms without further edits. */
 export function scheduleInspect(delay = INSPECT_DEBOUNCE_MS, only = null) {
+  if (!only) refreshSteps(delay);
   for (const v of only ? [only] : state.viewCards.values()) {
     clearTimeout(v.timer);
     v.timer = setTimeout(() => requestInspect(v), delay);
@@ -265,29 +267,5 @@ function redrawView(v) {
     ctx.restore();
   }
   v.items = r.items;
-  // A view may name its own entries (meta.legend: feature code → words), e.g. "seed points"
-  // drawn in the lattice colour; otherwise the feature's name.
-  const named = v.last?.meta?.legend ?? {};
-  // An image's overlay names its own lines and colours (meta.overlay_legend).
-  const overlayLegend = new Map((v.last?.meta?.overlay_legend ?? []).map((e) => [String(e.code), e]));
-  const entries = Object.keys(r.counts).map((code) => overlayLegend.has(code)
-    ? [overlayLegend.get(code).color ?? "#e0b84d", String(overlayLegend.get(code).label ?? code)]
-    : [state.styles.get(Number(code))?.color ?? "#e0b84d",
-      typeof named[code] === "string" ? named[code] : state.styles.get(Number(code))?.label ?? `feature ${code}`]);
-  if (r.range) entries.push([null, `${formatNumber(r.range[0], 4)} … ${formatNumber(r.range[1], 4)}${v.last?.meta?.unit ? ` ${v.last.meta.unit}` : ""}`]);
-  v.legend.replaceChildren(...entries.map(([color, text]) => {
-    const el = document.createElement("span");
-    if (color) {
-      const sw = document.createElement("span");
-      sw.className = "swatch";
-      sw.style.background = color;
-      el.append(sw, " ");
-    } else {
-      const ramp = document.createElement("span");
-      ramp.className = "ramp grey";
-      el.append(ramp, " ");
-    }
-    el.append(text);
-    return el;
-  }));
+  fillLegend(v.legend, v.last, r, state.styles);
 }

@@ -5,6 +5,8 @@
 //   mesh     stride 9: one triangle              (orthographic, flat shaded)
 // Pure drawing on a <canvas>: main.js owns the state and the worker.
 
+import { formatNumber } from "./plot.js";
+
 export const BACKGROUND = "#1f232a";
 const OTHER_COLOR = "#e0b84d";
 const TEXT = "#e6e9ee";
@@ -333,4 +335,32 @@ export function drawView(canvas, answer, styles) {
       return r;
     }
   }
+}
+
+/**
+ * Fills a view's legend under its canvas from an answer and what drawView drew (`r`): a view
+ * may name its own entries (meta.legend: feature code → words, e.g. "seed points" drawn in the
+ * lattice colour), an image's overlay names its lines (meta.overlay_legend), otherwise the
+ * feature's name; an image adds its value range.
+ */
+export function fillLegend(el, answer, r, styles) {
+  const named = answer?.meta?.legend ?? {};
+  const overlayLegend = new Map((answer?.meta?.overlay_legend ?? []).map((e) => [String(e.code), e]));
+  const entries = Object.keys(r.counts ?? {}).map((code) => overlayLegend.has(code)
+    ? [overlayLegend.get(code).color ?? OTHER_COLOR, String(overlayLegend.get(code).label ?? code)]
+    : [styles.get(Number(code))?.color ?? OTHER_COLOR,
+      typeof named[code] === "string" ? named[code] : styles.get(Number(code))?.label ?? `feature ${code}`]);
+  if (r.range) entries.push([null, `${formatNumber(r.range[0], 4)} … ${formatNumber(r.range[1], 4)}${answer?.meta?.unit ? ` ${answer.meta.unit}` : ""}`]);
+  el.replaceChildren(...entries.map(([color, text]) => {
+    const item = document.createElement("span");
+    const mark = document.createElement("span");
+    if (color) {
+      mark.className = "swatch";
+      mark.style.background = color;
+    } else {
+      mark.className = "ramp grey";
+    }
+    item.append(mark, " ", text);
+    return item;
+  }));
 }

@@ -236,7 +236,8 @@ function threadsToAsk(poolBroken = "") {
   const wanted = param !== null && /^\d+$/.test(param) ? Math.min(64, Math.max(1, Number(param))) : Math.min(cores, 16);
   if (!isolated) {
     const note = self.crossOriginIsolated === true ? "this browser has no SharedArrayBuffer"
-      : "the page is not cross-origin isolated (its host sends no COOP/COEP headers and no service worker added them)";
+      : window.parent !== window ? "weft is embedded in another page, and browsers share no memory inside a frame unless that page is cross-origin isolated too"
+        : "the page is not cross-origin isolated (its host sends no COOP/COEP headers and no service worker added them)";
     return { asked: 1, cores, isolated: false, note };
   }
   return { asked: wanted, cores, isolated: true, note: wanted === 1 && param !== null ? "?threads=1 in the address" : "" };

@@ -7,7 +7,7 @@ use crate::design::share::MAX_EMBEDDED_CHARS;
 use crate::design::{Design, Input, Problem, MAX_DESCRIPTION_BYTES, MAX_FILE_NAME_BYTES, MAX_INPUT_FILES, MAX_NAME_BYTES};
 use crate::geom::shapes::Shape;
 use crate::geom::Feature;
-use crate::kinds::{Registry, Slot, StageInfo, StepInfo, ViewInfo};
+use crate::kinds::{Registry, Slot, StageInfo, StepInfo, Teach, ViewInfo};
 use crate::settings::{self, int, max_len, mount, other, Field, Kind, Row, MAX_TEXT_BYTES};
 use serde::Serialize;
 use serde_json::Value;
@@ -73,6 +73,8 @@ pub struct JobInfo {
     pub views: &'static [ViewInfo],
     /// The method's steps ("How it works"), each drawn by one of `views`.
     pub steps: &'static [StepInfo],
+    /// How the page first shows a result (colouring, backdrop view).
+    pub teach: Teach,
 }
 
 /// A slot as the page shows it.
@@ -144,6 +146,7 @@ pub fn schema(registry: &Registry) -> Schema {
             slots: k.slots().iter().map(|s| SlotInfo { slot: *s, accept: s.kind.accept(), multiple: s.kind.multiple() }).collect(),
             views: k.views(),
             steps: k.steps(),
+            teach: k.teach(),
         })
         .collect();
     let builtin_shapes = Shape::defaults()

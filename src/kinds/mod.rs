@@ -21,7 +21,7 @@ pub mod slice;
 use crate::design::Design;
 use crate::settings::Problem;
 use crate::stage::Error;
-pub use crate::stage::{settings, with_kind, Inspection, JobKind, Kind, Product, Shape, Slot, SlotKind, StageInfo, StepInfo, ViewInfo, FILE_HEAD_BYTES};
+pub use crate::stage::{settings, with_kind, Inspection, JobKind, Kind, Product, Shape, Slot, SlotKind, StageInfo, StepInfo, Teach, ViewInfo, FILE_HEAD_BYTES};
 
 /// The slice stage's report as the page shows it: the repairs made while cutting layers, each
 /// only when it happened (the layer count is in the run's overall statistics).

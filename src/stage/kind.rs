@@ -158,6 +158,18 @@ pub struct StepInfo {
     pub cite: &'static str,
 }
 
+/// How the page first shows a kind's result, so it shows the method: the preview's colouring
+/// (`feature`, `path`, `flow`, `e_per_mm`, `speed`, `width`) and a view drawn behind the
+/// toolpath (a platform the path is printed on).
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct Teach {
+    /// The preview's colour mode on opening a result of this kind.
+    pub color_by: &'static str,
+    /// A `lines3d` view of the kind (at index 0) drawn faintly behind the toolpath, in the
+    /// toolpath's frame (mm); none by default.
+    pub backdrop: Option<&'static str>,
+}
+
 /// The answer to an `inspect(view, index)` request.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Inspection {
@@ -211,6 +223,8 @@ pub trait JobKind: Sync {
     fn views(&self) -> &'static [ViewInfo];
     /// The method's steps, in order, each drawn by one of [`JobKind::views`].
     fn steps(&self) -> &'static [StepInfo];
+    /// How the page first shows a result of this kind ([`Teach`]).
+    fn teach(&self) -> Teach;
     /// The default `job` object (with `kind`).
     fn default_job(&self) -> Value;
     /// The `job` object parsed and written back with every default filled in, or serde's
@@ -253,6 +267,8 @@ pub trait Kind: Sync {
     const VIEWS: &'static [ViewInfo] = &[];
     /// The method's steps ("How it works"), each naming one of [`Kind::VIEWS`].
     const STEPS: &'static [StepInfo] = &[];
+    /// How the page first shows a result: the colouring and backdrop that show the method.
+    const TEACH: Teach = Teach { color_by: "feature", backdrop: None };
     /// Form rows (mounted at design paths, e.g. with [`crate::settings::mount`]).
     fn fields() -> Vec<Row>;
     /// Cross-field rules.
@@ -308,6 +324,9 @@ impl<K: Kind> JobKind for K {
     }
     fn steps(&self) -> &'static [StepInfo] {
         K::STEPS
+    }
+    fn teach(&self) -> Teach {
+        K::TEACH
     }
     fn default_job(&self) -> Value {
         with_kind(K::NAME, &K::Settings::default()).unwrap_or(Value::Null)

@@ -17,7 +17,7 @@ pub use ctx::{send_nowhere, writer_options, Ahead, Ctx, Sender, StageTime};
 pub use error::Error;
 pub use files::{FileSource, Files};
 pub use key::Key;
-pub use kind::{settings, with_kind, Inspection, JobKind, Kind, Product, Shape, Slot, SlotKind, StageInfo, StepInfo, ViewInfo, FILE_HEAD_BYTES};
+pub use kind::{settings, with_kind, Inspection, JobKind, Kind, Product, Shape, Slot, SlotKind, StageInfo, StepInfo, Teach, ViewInfo, FILE_HEAD_BYTES};
 pub use load::{meshes_of_zip, NamedFiles};
 
 // Shared among the runtime's files (each file takes what it needs of these with `use super::*`).

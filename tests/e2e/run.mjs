@@ -28,6 +28,7 @@ import { previewChecks } from "./preview-checks.mjs";
 import { threadsChecks } from "./threads-checks.mjs";
 import { hostsFromEnv, sendChecks } from "./send-checks.mjs";
 import { supportChecks } from "./support-checks.mjs";
+import { stepsChecks } from "./steps-checks.mjs";
 import {
   boxStl, checker, collectErrors, colouredPixels, confirmBigJobs, downloadGcode, launchChromium, stageMarks, waitReady, waitResult as waitResultWithin, watchAfterCancel,
 } from "./page-helpers.mjs";
@@ -614,6 +615,9 @@ await sendChecks({ browser, baseUrl: base, hosts: hostsFromEnv(), check, outDir:
 
 // Supports switched on in the form for a dropped part (issue 44).
 await supportChecks({ newPage, weftBin: existsSync(WEFT_BIN) ? WEFT_BIN : null, check, outDir: OUT, base, first: 60, timeoutMs: JOB_TIMEOUT });
+
+// Teaching: "How it works" for every kind, the embedded weft driven by postMessage (issue 45).
+await stepsChecks({ browser, newPage, weftBin: WEFT_BIN, check, outDir: OUT, base, first: 61, timeoutMs: JOB_TIMEOUT });
 
 if (main.errors.length) console.log(`note: console errors in the main page:\n  ${main.errors.join("\n  ")}`);
 if (offOrigin.length) console.log(`note: blocked requests leaving the origin:\n  ${[...new Set(offOrigin)].join("\n  ")}`);

@@ -47,3 +47,21 @@ fn every_step_draws_something_on_its_example() {
         }
     }
 }
+
+#[test]
+fn each_kind_opens_on_a_colouring_the_page_has_and_a_backdrop_it_declares() {
+    let reg = Registry::builtin();
+    let modes = ["feature", "path", "flow", "e_per_mm", "speed", "width"];
+    for k in reg.kinds() {
+        let t = k.teach();
+        assert!(modes.contains(&t.color_by), "{}: colour by {}", k.name(), t.color_by);
+        if let Some(b) = t.backdrop {
+            let v = k.views().iter().find(|v| v.id == b).unwrap_or_else(|| panic!("{}: backdrop {b} is not a view", k.name()));
+            assert_eq!(v.shape, weft::kinds::Shape::Lines3d, "{}: backdrop {b} is not lines3d", k.name());
+        }
+    }
+    // The graded scaffold opens coloured by bead width (its density), a foam by speed (V*).
+    assert_eq!(reg.get("graded").unwrap().teach().color_by, "width");
+    assert_eq!(reg.get("foam").unwrap().teach().color_by, "speed");
+    assert!(reg.get("axisymmetric").unwrap().teach().backdrop.is_some());
+}

@@ -11,6 +11,8 @@
 //   results.js        freshness, the estimate line, a result's numbers and stage cards
 //   actions.js        Run, Download, Share, opening files and examples
 //   send.js           Send: the G-code to a print host (send-hosts.js: what hosts answer)
+//   pictures.js       Picture…: a view, plot or the preview as a captioned PNG/SVG for slides
+//   compare.js        Pin for comparison: two results side by side, linked cameras, one table
 //   messages.js       the error and notice bars
 //   util.js           small shared helpers
 // Nothing here knows a job kind: the form, the job selector, the input slots, the progress
@@ -28,6 +30,8 @@ import { AUTO_RUN_KEY, autoRunWanted, maybeAutoRun } from "./results.js";
 import { downloadResult, openExample, openFiles, runDesign, share } from "./actions.js";
 import { featureStyles } from "./views.js";
 import { sendResult } from "./send.js";
+import { installPictures } from "./pictures.js";
+import { comparisonShown, openCompareLink } from "./compare.js";
 
 const ready = start();
 ready.catch(() => {}); // reported in #error
@@ -60,6 +64,8 @@ window.weft = {
     return [...state.viewCards.values()].map((v) => ({ id: v.view.id, shape: v.last?.shape ?? v.view.shape, index: v.last?.index ?? null, count: v.count, answers: v.answers, items: v.items }));
   },
   get thumbnails() { return thumbnailKinds(); },
+  /** The comparison shown: {a, b} cameras (position, target) and the table's rows, or null. */
+  get comparison() { return comparisonShown(); },
 };
 
 async function start() {
@@ -89,13 +95,16 @@ async function start() {
   } catch (err) {
     showError(`The 3D preview could not start (${messageOf(err)}); slicing and downloads still work.`);
   }
+  installPictures();
   workers.start();
+  openCompareLink(); // #d=B&vs=A: A runs first, #d=B is then opened as any share link
   loadInitialDesign();
   fillExamples();
   if ("serviceWorker" in navigator && window.isSecureContext) {
     navigator.serviceWorker.register("sw.js").then(isolateThroughServiceWorker, () => {});
   }
   window.addEventListener("hashchange", () => {
+    openCompareLink();
     if (location.hash.startsWith("#d=")) openShare(location.hash);
   });
 }

@@ -12,6 +12,7 @@ import { scheduleInspect } from "./view-cards.js";
 import { threadsWhy, workers } from "./worker-client.js";
 import { runDesign } from "./actions.js";
 import { metricList, renderReport } from "./report.js";
+import { compareFreshness, showComparison } from "./compare.js";
 
 /** Wait after an edit before estimating the next run, ms. */
 const ESTIMATE_DEBOUNCE_MS = 250;
@@ -51,6 +52,7 @@ export function refreshFreshness() {
   const download = $("download");
   download.title = reason ? "Runs the changed design first, then saves its G-code" : "Save the G-code of the last result";
   download.dataset.stale = String(Boolean(reason));
+  compareFreshness();
 }
 
 /** Estimates the current design in the worker (debounced), shows it, then maybe re-runs. */
@@ -163,6 +165,7 @@ export function showResult(res, fileName, json = null, files = state.filesVersio
   if (res.request === "run") scheduleInspect(0); // views of a loaded solid know their count now
   hideErrorUnlessCrash();
   refreshFreshness();
+  showComparison();
 }
 
 function renderStats(report, gcode, ms) {

@@ -15,7 +15,7 @@ const SHELL = [
   "state.js", "util.js", "messages.js", "design.js", "form.js", "slots.js", "view-cards.js",
   "worker-client.js", "results.js", "actions.js", "send.js", "send-hosts.js",
   "preview.js", "preview-gl.js", "preview-colors.js", "preview-camera.js",
-  "plot.js", "report.js", "views.js",
+  "plot.js", "report.js", "views.js", "pictures.js", "picture-caption.js", "picture-draw.js", "compare.js",
   "vendor/three.module.js", "vendor/three.core.js", "vendor/OrbitControls.js",
   "examples/index.json", "../pkg/weft.js", "../pkg/weft_bg.wasm",
   "../pkg/threads/weft.js", "../pkg/threads/weft_bg.wasm",

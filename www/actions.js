@@ -2,6 +2,7 @@
 // Download, Share, opening files (designs, G-code, slot inputs, asking what a file is for)
 // and examples. Undo and redo are in design.js.
 import { state } from "./state.js";
+import { defaultsFor, settingsDiff } from "./picture-caption.js";
 import { MSG, plain } from "./protocol.js";
 import { $, download, extOf, getPath, humanBytes, messageOf } from "./util.js";
 import { hideError, showError, showNotice } from "./messages.js";
@@ -290,24 +291,9 @@ export async function copyEmbed() {
     `A course page can set fields, run and step through it with postMessage (README, "Embedding").${left}`, code);
 }
 
-/** Design paths under `job` whose values differ from the job kind's defaults, in form order. */
-export function changedJobFields() {
-  const kind = state.design?.job?.kind;
-  let defaults;
-  try {
-    defaults = JSON.parse(state.weft.setField(state.weft.defaultDesign(), "job.kind", JSON.stringify(kind))).job;
-  } catch {
-    return [];
-  }
-  const out = [];
-  for (const f of state.schema.fields ?? []) {
-    if (!f.path?.startsWith("job.") || f.kind === "section" || (f.job && f.job !== kind)) continue;
-    const rel = f.path.slice(4).split(".");
-    const get = (o) => rel.reduce((x, k) => (x == null ? undefined : x[k]), o);
-    const now = get(state.design.job);
-    if (now !== undefined && JSON.stringify(now) !== JSON.stringify(get(defaults))) out.push(f.path);
-  }
-  return out;
+/** Form fields under `job` whose values differ from the job kind's defaults, in the design's order. */
+function changedJobFields() {
+  return settingsDiff(defaultsFor(state.design), state.design).map((d) => d.path).filter((p) => p.startsWith("job.") && state.fieldViews.has(p));
 }
 
 export async function openExample(chosen) {

@@ -13,6 +13,8 @@
 //   send.js           Send: the G-code to a print host (send-hosts.js: what hosts answer)
 //   steps.js          "How it works": the kind's method step by step (views at indices)
 //   embed.js          the embedded weft (embed.html): its postMessage API for course pages
+//   pictures.js       Picture…: a view, plot or the preview as a captioned PNG/SVG for slides
+//   compare.js        Pin for comparison: two results side by side, linked cameras, one table
 //   messages.js       the error and notice bars
 //   util.js           small shared helpers
 // Nothing here knows a job kind: the form, the job selector, the input slots, the progress
@@ -32,6 +34,8 @@ import { featureStyles } from "./views.js";
 import { sendResult } from "./send.js";
 import { goToStep, setOpen, stepsStatus } from "./steps.js";
 import { startEmbed } from "./embed.js";
+import { installPictures } from "./pictures.js";
+import { comparisonShown, openCompareLink } from "./compare.js";
 
 const ready = start();
 ready.catch(() => {}); // reported in #error
@@ -68,6 +72,8 @@ window.weft = {
   get steps() { return stepsStatus(); },
   step: (i) => goToStep(i),
   openSteps: (open = true) => setOpen(open),
+  /** The comparison shown: {a, b} cameras (position, target) and the table's rows, or null. */
+  get comparison() { return comparisonShown(); },
 };
 
 async function start() {
@@ -97,7 +103,9 @@ async function start() {
   } catch (err) {
     showError(`The 3D preview could not start (${messageOf(err)}); slicing and downloads still work.`);
   }
+  installPictures();
   workers.start();
+  openCompareLink(); // #d=B&vs=A: A runs first, #d=B is then opened as any share link
   loadInitialDesign();
   startEmbed();
   fillExamples();
@@ -105,6 +113,7 @@ async function start() {
     navigator.serviceWorker.register("sw.js").then(isolateThroughServiceWorker, () => {});
   }
   window.addEventListener("hashchange", () => {
+    openCompareLink();
     if (location.hash.startsWith("#d=")) openShare(location.hash);
   });
 }

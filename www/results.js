@@ -13,6 +13,7 @@ import { showBackdrop } from "./steps.js";
 import { threadsWhy, workers } from "./worker-client.js";
 import { runDesign } from "./actions.js";
 import { metricList, renderReport } from "./report.js";
+import { compareFreshness, showComparison } from "./compare.js";
 
 /** Wait after an edit before estimating the next run, ms. */
 const ESTIMATE_DEBOUNCE_MS = 250;
@@ -52,6 +53,7 @@ export function refreshFreshness() {
   const download = $("download");
   download.title = reason ? "Runs the changed design first, then saves its G-code" : "Save the G-code of the last result";
   download.dataset.stale = String(Boolean(reason));
+  compareFreshness();
 }
 
 /** Estimates the current design in the worker (debounced), shows it, then maybe re-runs. */
@@ -169,6 +171,7 @@ export function showResult(res, fileName, json = null, files = state.filesVersio
   }
   hideErrorUnlessCrash();
   refreshFreshness();
+  showComparison();
   tellParent({ type: "weft:result", stats: statsOf(report), design: json ?? state.json });
 }
 

@@ -57,6 +57,11 @@ export const state = {
    * is), so an edit marks it out of date.
    */
   result: null,
+  /**
+   * The result pinned for comparison (compare.js): {result, data (its preview buffers), origin,
+   * json, design, name, at, stale, from: "pinned"|"link"}, or null.
+   */
+  pinned: null,
   /** Results shown since the page opened (a test hook). */
   resultCount: 0,
   /** the estimate of the current design: {json, files, plan} or {json, files, error} */

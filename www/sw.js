@@ -16,6 +16,7 @@ const SHELL = [
   "worker-client.js", "results.js", "actions.js", "send.js", "send-hosts.js",
   "preview.js", "preview-gl.js", "preview-colors.js", "preview-camera.js",
   "plot.js", "report.js", "views.js", "steps.js", "embed.js", "embed.html", "embed-open.js",
+  "pictures.js", "picture-caption.js", "picture-draw.js", "compare.js",
   "vendor/three.module.js", "vendor/three.core.js", "vendor/OrbitControls.js",
   "examples/index.json", "../pkg/weft.js", "../pkg/weft_bg.wasm",
   "../pkg/threads/weft.js", "../pkg/threads/weft_bg.wasm",

@@ -8,8 +8,8 @@
 import { formatNumber } from "./plot.js";
 
 export const BACKGROUND = "#1f232a";
-const OTHER_COLOR = "#e0b84d";
-const TEXT = "#e6e9ee";
+export const OTHER_COLOR = "#e0b84d";
+export const TEXT = "#e6e9ee";
 
 /**
  * Feature styles from the schema: code → {label, color}.
@@ -24,9 +24,11 @@ export function featureStyles(features) {
 
 /** Sizes the canvas' backing store to its CSS box; returns the 2D context and size. */
 function setup(canvas, background = BACKGROUND) {
-  const dpr = Math.min(window.devicePixelRatio || 1, 2);
-  const w = Math.max(1, Math.round((canvas.clientWidth || canvas.width) * dpr));
-  const h = Math.max(1, Math.round((canvas.clientHeight || canvas.height) * dpr));
+  // A picture (pictures.js) is drawn at its own size and scale: canvas.picture = {width, height, scale}.
+  const pic = canvas.picture;
+  const dpr = pic?.scale ?? Math.min(window.devicePixelRatio || 1, 2);
+  const w = pic?.width ?? Math.max(1, Math.round((canvas.clientWidth || canvas.width) * dpr));
+  const h = pic?.height ?? Math.max(1, Math.round((canvas.clientHeight || canvas.height) * dpr));
   if (canvas.width !== w) canvas.width = w;
   if (canvas.height !== h) canvas.height = h;
   const ctx = canvas.getContext("2d");

@@ -29,6 +29,7 @@ import { threadsChecks } from "./threads-checks.mjs";
 import { hostsFromEnv, sendChecks } from "./send-checks.mjs";
 import { supportChecks } from "./support-checks.mjs";
 import { stepsChecks } from "./steps-checks.mjs";
+import { picturesChecks } from "./pictures-checks.mjs";
 import {
   boxStl, checker, collectErrors, colouredPixels, confirmBigJobs, downloadGcode, launchChromium, stageMarks, waitReady, waitResult as waitResultWithin, watchAfterCancel,
 } from "./page-helpers.mjs";
@@ -618,6 +619,8 @@ await supportChecks({ newPage, weftBin: existsSync(WEFT_BIN) ? WEFT_BIN : null, 
 
 // Teaching: "How it works" for every kind, the embedded weft driven by postMessage (issue 45).
 await stepsChecks({ browser, newPage, weftBin: WEFT_BIN, check, outDir: OUT, base, first: 61, timeoutMs: JOB_TIMEOUT });
+// Pictures for slides (PNG/SVG of every view, plot and the preview) and comparing two results.
+await picturesChecks({ newPage, weftBin: WEFT_BIN, check, outDir: OUT, base, first: 63, timeoutMs: JOB_TIMEOUT });
 
 if (main.errors.length) console.log(`note: console errors in the main page:\n  ${main.errors.join("\n  ")}`);
 if (offOrigin.length) console.log(`note: blocked requests leaving the origin:\n  ${[...new Set(offOrigin)].join("\n  ")}`);

@@ -87,10 +87,10 @@ pub(super) fn repulsion_view(j: &AxisymJob, ctx: &mut Ctx, platform: &Out<Platfo
     let change = 100.0 * (f.energy - 1.0);
     let sign = if change < 0.0 { "−" } else { "+" };
     let caption = format!(
-        "repulsion iteration {} of {}: energy E/E₀ {:.3e} ({sign}{:.1} %), {} points",
+        "repulsion iteration {} of {}: energy E/E₀ {} ({sign}{:.1} %), {} points",
         f.iteration,
         frames.iterations,
-        f.energy,
+        if f.energy >= 0.01 { format!("{:.3}", f.energy) } else { format!("{:.2e}", f.energy) },
         change.abs(),
         f.points.len()
     );

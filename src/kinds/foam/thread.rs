@@ -89,7 +89,8 @@ pub(super) fn thread_view(j: &FoamJob, ctx: &mut Ctx, view: &str, index: usize) 
     let caption = if pieces.is_empty() {
         format!("layer {} of {count} at z = {z:.2} mm: no path", index + 1)
     } else {
-        format!("layer {} of {count} at z = {z:.2} mm: {name} {v_lo:.3}–{v_hi:.3} along {} pieces of ≤ {} mm", index + 1, pieces.len(), j.foam.piece_mm)
+        let values = if v_hi > v_lo { format!("{v_lo:.3}–{v_hi:.3}") } else { format!("{v_lo:.3} throughout") };
+        format!("layer {} of {count} at z = {z:.2} mm: {name} {values} along {} pieces of ≤ {} mm", index + 1, pieces.len(), j.foam.piece_mm)
     };
     let meta = serde_json::json!({
         "caption": caption, "legend": legend, "bins": edges, "z_mm": z,

@@ -904,7 +904,12 @@ fn reference_force(nodes: &[Node], forces: &[[f64; 2]]) -> f64 {
 /// all on the paper's platforms); from a pool thread they cost no wake-up of the caller.
 const ITERATIONS_PER_HOP: usize = 8;
 
-/// Repulsion descent: returns (points, iterations, stop).
+/// What a recorded descent is shown after the seed (iteration 0, E/E₀ = 1) and after each
+/// accepted step: (iteration, E/E₀, the points).
+type Observer<'a> = dyn FnMut(usize, f64, &[[f64; 2]]) + Send + 'a;
+
+/// Repulsion descent: returns (points, iterations, stop); `observe`, when given, sees the
+/// start and every accepted step.
 ///
 /// Energy is reported as E/E₀ and forces as |F|/F₀ (the paper's non-dimensionalisation by
 /// the initial values). The step moves point i along its force by τ·s·min(|F_i|/F_ref, 1)
@@ -925,11 +930,15 @@ fn descend(
     disp_tol_mm: f64,
     spacing: f64,
     progress: &mut dyn FnMut(f32),
+    mut observe: Option<&mut Observer<'_>>,
 ) -> (Vec<[f64; 2]>, Vec<Iteration>, StopReason) {
     if start.len() < 2 {
         return (start, Vec::new(), StopReason::Trivial);
     }
     let mut run = crate::par::on_pool(|| Descent::start(eng, start, e_tol, disp_tol_mm, spacing));
+    if let Some(o) = observe.as_deref_mut() {
+        o(0, 1.0, &run.pts);
+    }
     let mut it = 0;
     while it < iterations && run.stop.is_none() {
         let hop = ITERATIONS_PER_HOP.min(iterations - it);
@@ -938,7 +947,12 @@ fn descend(
                 if run.stop.is_some() {
                     break;
                 }
+                let before = run.log.len();
                 run.iterate(eng, d);
+                // Only a recorded run looks at each accepted step (a normal run passes None).
+                if let (Some(o), Some(last)) = (observe.as_deref_mut(), run.log.last().filter(|_| run.log.len() > before)) {
+                    o(run.log.len(), last.energy, &run.pts);
+                }
             }
         });
         it += hop;
@@ -1031,6 +1045,77 @@ impl Descent {
 /// at local spacing s(q) = n·e/ρ(q)) and reports the seed, the result and their metrics.
 /// `seed` drives every random choice; `progress` gets the GRE fraction done.
 pub fn distribute(p: &dyn Profile, domain: &Domain, o: &Options, line_width_mm: f64, seed: u64, progress: &mut dyn FnMut(f32)) -> Result<Distribution, Error> {
+    distribute_observed(p, domain, o, line_width_mm, seed, progress, None)
+}
+
+/// One kept frame of a recorded repulsion ([`record`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Frame {
+    /// Accepted GRE iterations done (0: the seed).
+    pub iteration: usize,
+    /// E/E₀ after them (1 for the seed).
+    pub energy: f64,
+    /// The points then, (u, θ).
+    pub points: Vec<[f64; 2]>,
+}
+
+/// A repulsion replayed with its frames kept ([`record`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Recording {
+    /// At most the cap asked for, in iteration order: the seed, evenly spaced iterations
+    /// (every `stride`-th) and the last one.
+    pub frames: Vec<Frame>,
+    /// Accepted iterations of the whole run.
+    pub iterations: usize,
+    /// Iterations between two kept frames (a power of two; the last frame may be closer).
+    pub stride: usize,
+    /// The run's result: exactly what [`distribute`] gives for the same inputs.
+    pub distribution: Distribution,
+}
+
+impl Recording {
+    /// Bytes the frames' points take.
+    pub fn bytes(&self) -> usize {
+        self.frames.iter().map(|f| f.points.len() * std::mem::size_of::<[f64; 2]>() + std::mem::size_of::<Frame>()).sum()
+    }
+}
+
+/// Replays [`distribute`] (the same deterministic run) keeping at most `max_frames` (≥ 2)
+/// frames of the geodesic repulsion: the seed, every `stride`-th iteration (the stride doubles
+/// whenever the frames would pass the cap, so memory stays within `max_frames` point sets)
+/// and the last iteration, whose points are the result's. A normal run records nothing.
+pub fn record(p: &dyn Profile, domain: &Domain, o: &Options, line_width_mm: f64, seed: u64, max_frames: usize) -> Result<Recording, Error> {
+    let max_frames = max_frames.max(2);
+    let (mut frames, mut stride): (Vec<Frame>, usize) = (Vec::new(), 1);
+    let mut keep = |iteration: usize, energy: f64, points: &[[f64; 2]]| {
+        if iteration % stride != 0 {
+            return;
+        }
+        frames.push(Frame { iteration, energy, points: points.to_vec() });
+        // One slot is kept for the last frame.
+        while frames.len() > max_frames - 1 {
+            stride *= 2;
+            frames.retain(|f| f.iteration % stride == 0);
+        }
+    };
+    let distribution = distribute_observed(p, domain, o, line_width_mm, seed, &mut |_| {}, Some(&mut keep))?;
+    let iterations = distribution.iterations.len();
+    if frames.last().is_none_or(|f| f.iteration != iterations) {
+        let energy = distribution.iterations.last().map_or(1.0, |i| i.energy);
+        frames.push(Frame { iteration: iterations, energy, points: distribution.points.clone() });
+    }
+    Ok(Recording { frames, iterations, stride, distribution })
+}
+
+fn distribute_observed(
+    p: &dyn Profile,
+    domain: &Domain,
+    o: &Options,
+    line_width_mm: f64,
+    seed: u64,
+    progress: &mut dyn FnMut(f32),
+    observe: Option<&mut Observer<'_>>,
+) -> Result<Distribution, Error> {
     check_options(o, line_width_mm)?;
     check_centre(p, o)?;
     let problems = domain.problems(p);
@@ -1057,11 +1142,12 @@ pub fn distribute(p: &dyn Profile, domain: &Domain, o: &Options, line_width_mm: 
                 start.push(draw(&sampler, &s, field.as_ref(), &mut rng, domain).ok_or(Error::SeedFailed { wanted: n, placed: start.len() })?);
             }
             let eng = Engine { s: &s, m: o.exponent, rc, geodesic: false, field: field.as_ref(), cutoff_spacings: cut, pairs_per_point: Default::default() };
-            descend(&eng, domain, start, ERE_ITERATIONS, o.energy_tolerance, o.displacement_tolerance * sp, sp, &mut |_| {}).0
+            descend(&eng, domain, start, ERE_ITERATIONS, o.energy_tolerance, o.displacement_tolerance * sp, sp, &mut |_| {}, None).0
         }
     };
     let eng = Engine { s: &s, m: o.exponent, rc, geodesic: true, field: field.as_ref(), cutoff_spacings: cut, pairs_per_point: Default::default() };
-    let (points, iterations, stop) = descend(&eng, domain, seed_points.clone(), o.iterations, o.energy_tolerance, o.displacement_tolerance * sp, sp, progress);
+    let (points, iterations, stop) =
+        descend(&eng, domain, seed_points.clone(), o.iterations, o.energy_tolerance, o.displacement_tolerance * sp, sp, progress, observe);
     let (seed_metrics, m, graded) = match &field {
         None => (metrics(&s, &seed_points, o.rasters, o.density, line_width_mm), metrics(&s, &points, o.rasters, o.density, line_width_mm), None),
         Some(f) => {
@@ -1123,6 +1209,25 @@ mod tests {
             let n = estimate(&p, &d, &o, 0.4).get("points");
             println!("{name}: N = {n} (paper {paper}), area {:.1} mm²", d.area_mm2(&Surface::new(&p)));
             assert!((n - paper).abs() <= 0.04 * paper, "{name}: N = {n}, paper {paper}");
+        }
+    }
+
+    #[test]
+    fn record_replays_the_run_within_its_frame_cap() {
+        let (p, d, o) = omega("hourglass-omega3");
+        let plain = distribute(&p, &d, &o, 0.4, 1, &mut |_| {}).unwrap();
+        for cap in [2, 5, 64] {
+            let r = record(&p, &d, &o, 0.4, 1, cap).unwrap();
+            assert_eq!(r.distribution, plain, "cap {cap}: the recorded run differs");
+            assert!(r.frames.len() <= cap && r.frames.len() >= 2, "cap {cap}: {} frames", r.frames.len());
+            let (first, last) = (&r.frames[0], &r.frames[r.frames.len() - 1]);
+            assert_eq!((first.iteration, first.energy), (0, 1.0));
+            assert_eq!(first.points, plain.seed_points);
+            assert_eq!(last.iteration, plain.iterations.len());
+            assert_eq!(last.points, plain.points, "cap {cap}: the last frame is not the result");
+            assert!(r.frames.windows(2).all(|w| w[0].iteration < w[1].iteration && w[1].energy <= w[0].energy + o.energy_tolerance));
+            // Evenly spaced but for the last.
+            assert!(r.frames[..r.frames.len() - 1].iter().all(|f| f.iteration % r.stride == 0));
         }
     }
 

@@ -20,18 +20,22 @@
 
 mod checks;
 mod form;
+mod frames;
 mod report;
 mod settings;
 mod stages;
+mod steps;
 mod views;
 use checks::*;
 use form::*;
+use frames::*;
+pub use frames::{repulsion_cap, AXES_PER_LAYER, AXIS_STROKE_MM, REPULSION_BYTES, REPULSION_FRAMES};
 pub use report::*;
 pub use settings::*;
 pub use stages::*;
 use views::*;
 
-use super::{Inspection, Kind, Product, Shape, Slot, SlotKind, StageInfo, ViewInfo};
+use super::{Inspection, Kind, Product, Shape, Slot, SlotKind, StageInfo, StepInfo, ViewInfo};
 use crate::axisym::contour;
 use crate::axisym::domain::Domain;
 use crate::axisym::offset::Offset;
@@ -81,6 +85,30 @@ const VIEWS: &[ViewInfo] = &[
         index_label: "View",
         doc: "The revolved platform (meridians and parallels) with the printed path on it, mm.",
     },
+    ViewInfo {
+        id: "omega",
+        stage: "domain",
+        label: "Ω on the map",
+        shape: Shape::Lines2d,
+        index_label: "Layer",
+        doc: "The domain Ω alone in the (θ, u) plane (x: θ in rad, y: u), with its area on the layer's surface.",
+    },
+    ViewInfo {
+        id: "repulsion",
+        stage: "points",
+        label: "Geodesic repulsion",
+        shape: Shape::Lines2d,
+        index_label: "Frame",
+        doc: "Layer 0's points during the geodesic repulsion, frame by frame (the seed, evenly spaced iterations, the result) with the energy E/E₀; recorded when shown.",
+    },
+    ViewInfo {
+        id: "axes3d",
+        stage: "axes",
+        label: "Platform and tool axes",
+        shape: Shape::Lines3d,
+        index_label: "Step",
+        doc: "0: the revolved platform alone; 1: the path on it with a short tool-axis stroke at evenly spaced poses, mm.",
+    },
 ];
 
 impl Kind for AxisymKind {
@@ -92,6 +120,7 @@ impl Kind for AxisymKind {
     const SLOTS: &'static [Slot] = SLOTS;
     const STAGES: &'static [StageInfo] = STAGES;
     const VIEWS: &'static [ViewInfo] = VIEWS;
+    const STEPS: &'static [StepInfo] = steps::STEPS;
 
     fn fields() -> Vec<Row> {
         rows()

@@ -65,7 +65,7 @@ pub(super) enum LayerSurface<'a> {
 }
 
 impl LayerSurface<'_> {
-    fn profile(&self) -> &dyn Profile {
+    pub(super) fn profile(&self) -> &dyn Profile {
         match self {
             LayerSurface::Base(p) => *p,
             LayerSurface::Offset(o) => o,

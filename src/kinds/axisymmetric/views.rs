@@ -21,6 +21,9 @@ pub(super) fn inspect(j: &AxisymJob, ctx: &mut Ctx, view: &str, index: usize) ->
             let tours: Vec<&tour::Tour> = layers.iter().filter_map(|l| l.tour.as_deref()).collect();
             Ok(platform_view(&platform, &tours, j.layer_height_mm))
         }
+        "omega" => omega_view(j, ctx, &platform, index),
+        "repulsion" => repulsion_view(j, ctx, &platform, index),
+        "axes3d" => axes_view(j, ctx, &platform, index),
         _ => Err(Error::UnknownView { view: view.into(), job: AxisymKind::NAME }),
     }
 }
@@ -64,8 +67,22 @@ pub(super) fn map_view(
         }
     }
     let labels = ["seed points", "after repulsion", "path"];
-    // One layer keeps the plain caption; several name the layer.
-    let caption = if layers > 1 { format!("layer {} of {layers}: {}", layer + 1, labels[step]) } else { labels[step].to_string() };
+    // Several layers name the layer; one layer says what the frame holds, with units.
+    let caption = if layers > 1 {
+        format!("layer {} of {layers}: {}", layer + 1, labels[step])
+    } else {
+        match (step, tour) {
+            (0, _) => format!("seed points: {} (N from equation 4 over {:.0} mm²)", d.seed_points.len(), d.area_mm2),
+            (1, _) => format!(
+                "after repulsion: {} points, {} iterations, energy E/E₀ {:.3e}",
+                d.points.len(),
+                d.iterations.len(),
+                d.iterations.last().map_or(1.0, |i| i.energy)
+            ),
+            (_, Some(t)) => format!("path: {:.1} mm of geodesics through {} points", t.geodesic_length_mm, d.points.len()),
+            _ => labels[step].to_string(),
+        }
+    };
     Inspection {
         view: "map".into(),
         shape: Shape::Lines2d,

@@ -20,15 +20,19 @@ mod form;
 mod report;
 mod settings;
 mod stages;
+mod steps;
+mod thread;
 mod views;
 use checks::*;
 use form::*;
 use report::*;
 pub use settings::*;
 pub use stages::*;
+use thread::*;
+pub use thread::{value_bin, VALUE_CODES};
 use views::*;
 
-use super::{Inspection, Kind, Product, Shape, Slot, SlotKind, StageInfo, ViewInfo};
+use super::{Inspection, Kind, Product, Shape, Slot, SlotKind, StageInfo, StepInfo, ViewInfo};
 use crate::budget::Estimate;
 use crate::design::{Design, Input};
 use crate::foam::field::Field;
@@ -82,6 +86,22 @@ const VIEWS: &[ViewInfo] = &[
         index_label: "Layer",
         doc: "One layer's continuous path: scan lines, turns along the outline, and the outline (mm).",
     },
+    ViewInfo {
+        id: "v_star",
+        stage: "grade",
+        label: "V* along the thread",
+        shape: Shape::Lines2d,
+        index_label: "Layer",
+        doc: "One layer's path, each piece coloured by the V* it is printed with (binned; the legend gives each bin's range).",
+    },
+    ViewInfo {
+        id: "h_star",
+        stage: "grade",
+        label: "H* along the thread",
+        shape: Shape::Lines2d,
+        index_label: "Layer",
+        doc: "One layer's path, each piece coloured by the H* it is printed with (binned; the legend gives each bin's range).",
+    },
 ];
 
 impl Kind for FoamKind {
@@ -92,6 +112,7 @@ impl Kind for FoamKind {
     const SLOTS: &'static [Slot] = SLOTS;
     const STAGES: &'static [StageInfo] = STAGES;
     const VIEWS: &'static [ViewInfo] = VIEWS;
+    const STEPS: &'static [StepInfo] = steps::STEPS;
 
     fn fields() -> Vec<Row> {
         rows()

@@ -225,6 +225,22 @@ pub(super) fn grade(
     paths: &[LayerPath],
     progress: &mut dyn FnMut(f32),
 ) -> Result<(Toolpath, Option<StageReport>), Error> {
+    let (pairs, transitions, notes) = field_inputs(j, regions)?;
+    let field = Field::new(regions, pairs.clone(), &transitions, j.foam.junction);
+    let rasters: Vec<grade::LayerRaster> = paths.iter().zip(layers).map(|(path, layer)| grade::LayerRaster { z: layer.z, points: &path.points }).collect();
+    let g = grade::grade(&field, p, &rasters, j.foam.layer_height_mm, j.foam.piece_mm, p.die_swell * p.nozzle_mm, progress);
+    let (toolpath, pieces, queries, (v_lo, v_hi)) = (g.toolpath, g.pieces, g.queries, g.v_range);
+    let mut report = grade_report(j, p, &field, regions, &transitions, pieces, queries, (v_lo, v_hi));
+    report.notes.extend(notes);
+    Ok((toolpath, Some(report)))
+}
+
+/// The pairs, the transitions and the notes on rows left waiting ([`field_inputs`]).
+pub(super) type FieldInputs = (Vec<crate::foam::Pair>, Vec<crate::foam::Transition>, Vec<String>);
+
+/// The pairs and transitions of the regions loaded, checked: one pair per region (rows
+/// beyond them wait, said in the notes), every transition between touching regions.
+pub(super) fn field_inputs(j: &FoamJob, regions: &Regions) -> Result<FieldInputs, Error> {
     let mut pairs = pairs(j);
     let n = regions.regions.len();
     if pairs.len() < n {
@@ -258,11 +274,5 @@ pub(super) fn grade(
             )));
         }
     }
-    let field = Field::new(regions, pairs.clone(), &transitions, j.foam.junction);
-    let rasters: Vec<grade::LayerRaster> = paths.iter().zip(layers).map(|(path, layer)| grade::LayerRaster { z: layer.z, points: &path.points }).collect();
-    let g = grade::grade(&field, p, &rasters, j.foam.layer_height_mm, j.foam.piece_mm, p.die_swell * p.nozzle_mm, progress);
-    let (toolpath, pieces, queries, (v_lo, v_hi)) = (g.toolpath, g.pieces, g.queries, g.v_range);
-    let mut report = grade_report(j, p, &field, regions, &transitions, pieces, queries, (v_lo, v_hi));
-    report.notes.extend(notes);
-    Ok((toolpath, Some(report)))
+    Ok((pairs, transitions, notes))
 }

@@ -18,6 +18,7 @@ pub(super) fn inspect(j: &FoamJob, ctx: &mut Ctx, view: &str, index: usize) -> R
                     }
                 }
                 meta = serde_json::json!({
+                    "caption": format!("boundary {} of {count}: {} | {}, {:.1} mm² shared", index + 1, regions.regions[b.a].name, regions.regions[b.b].name, b.area_mm2),
                     "between": [regions.regions[b.a].name, regions.regions[b.b].name],
                     "area_mm2": b.area_mm2,
                     "legend": { "0": format!("{} | {}", regions.regions[b.a].name, regions.regions[b.b].name) },
@@ -44,9 +45,12 @@ pub(super) fn inspect(j: &FoamJob, ctx: &mut Ctx, view: &str, index: usize) -> R
                 }
             }
             let z = layers.get(index).map_or(0.0, |l| l.z);
-            let meta = serde_json::json!({ "z_mm": z, "legend": { Feature::Infill.code().to_string(): "path", Feature::ExternalPerimeter.code().to_string(): "outline" } });
+            let length: f64 = paths.get(index).map_or(0.0, |p| p.points.windows(2).map(|w| w[0].distance(w[1])).sum());
+            let caption = format!("layer {} of {count} at z = {z:.2} mm: {length:.0} mm of continuous path", index + 1);
+            let meta = serde_json::json!({ "z_mm": z, "caption": caption, "legend": { Feature::Infill.code().to_string(): "path", Feature::ExternalPerimeter.code().to_string(): "outline" } });
             Ok(Inspection { view: view.into(), shape: Shape::Lines2d, index, count, stride: Shape::Lines2d.stride(), data, overlay: Vec::new(), meta })
         }
+        "v_star" | "h_star" => thread_view(j, ctx, view, index),
         _ => Err(Error::UnknownView { view: view.into(), job: FoamKind::NAME }),
     }
 }

@@ -17,12 +17,16 @@
 //! other slicer's printed part to the surface model by their bounding boxes (the paper's
 //! equation 5: XY centres and bottoms) or by a translation the user gives.
 
+mod beads;
 mod checks;
 mod form;
 mod report;
 mod settings;
 mod stages;
+mod steps;
 mod views;
+use beads::*;
+pub use beads::{infill_widths, width_bin, UNGRADED_CODE, WIDTH_CODES};
 use checks::*;
 use form::*;
 use report::*;
@@ -30,7 +34,7 @@ pub use settings::*;
 use stages::*;
 use views::*;
 
-use super::{Inspection, Kind, Product, Shape, Slot, SlotKind, StageInfo, ViewInfo};
+use super::{Inspection, Kind, Product, Shape, Slot, SlotKind, StageInfo, StepInfo, ViewInfo};
 use crate::budget::Estimate;
 use crate::design::{Design, Input};
 use crate::gcode_edit;
@@ -120,6 +124,22 @@ const VIEWS: &[ViewInfo] = &[
         index_label: "View",
         doc: "The closed mesh marching cubes extracted at the isovalue inside the ROI (volume frame, mm).",
     },
+    ViewInfo {
+        id: "hu",
+        stage: "volume",
+        label: "HU in the region of interest",
+        shape: Shape::Image,
+        index_label: "ROI slice",
+        doc: "The axial slices the ROI spans, in HU inside the ROI (windowed to its range), with the iso-contours.",
+    },
+    ViewInfo {
+        id: "beads",
+        stage: "grade",
+        label: "Bead width along a layer",
+        shape: Shape::Lines2d,
+        index_label: "Layer",
+        doc: "One layer of the graded toolpath (native route), each infill segment coloured by its bead width's bin (mm); perimeters in grey.",
+    },
 ];
 
 impl Kind for GradedKind {
@@ -131,6 +151,7 @@ impl Kind for GradedKind {
     const SLOTS: &'static [Slot] = SLOTS;
     const STAGES: &'static [StageInfo] = STAGES;
     const VIEWS: &'static [ViewInfo] = VIEWS;
+    const STEPS: &'static [StepInfo] = steps::STEPS;
 
     fn fields() -> Vec<Row> {
         rows()

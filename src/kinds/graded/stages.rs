@@ -197,6 +197,31 @@ pub(super) fn placed(mesh: &Mesh) -> (Mesh, DVec3) {
 }
 
 pub(super) fn native(j: &GradedJob, ctx: &mut Ctx, vol: &Out<Volume>, surface: &Out<isosurface::Surface>, model: &Out<Model>) -> Result<Product, Error> {
+    let n = native_stages(j, ctx, vol, surface, model)?;
+    // The edit route cannot know a re-sized cell: compared only with one cell everywhere.
+    if j.compare_edit && !n.cells {
+        compare(j, ctx, vol, &n.sliced, model, &n.grade, n.offset)?;
+    }
+    Ok(Product::Toolpath(n.graded))
+}
+
+/// The native route's stages up to the graded toolpath.
+pub(super) struct Native {
+    /// The toolpath as sliced.
+    pub(super) sliced: Out<crate::geom::Toolpath>,
+    /// The graded toolpath.
+    pub(super) graded: Out<crate::geom::Toolpath>,
+    /// The grading options.
+    pub(super) grade: grade::Options,
+    /// The placement offset (toolpath point = volume point + offset).
+    pub(super) offset: DVec3,
+    /// The cell was re-sized (graded cell sizing).
+    pub(super) cells: bool,
+}
+
+/// Slices the placed surface model and grades its infill (the native route without the
+/// comparison with the edit route).
+pub(super) fn native_stages(j: &GradedJob, ctx: &mut Ctx, vol: &Out<Volume>, surface: &Out<isosurface::Surface>, model: &Out<Model>) -> Result<Native, Error> {
     let mut options = slice_options(j, model);
     let (mesh, offset) = placed(&surface.mesh);
     crate::kinds::part_fits(ctx.design, &mesh)?;
@@ -244,11 +269,7 @@ pub(super) fn native(j: &GradedJob, ctx: &mut Ctx, vol: &Out<Volume>, surface: &
         let report = grade_report(&out.report);
         Ok((out.toolpath, Some(report)))
     })?;
-    // The edit route cannot know a re-sized cell: compared only with one cell everywhere.
-    if j.compare_edit && cells.is_none() {
-        compare(j, ctx, vol, &sliced, model, &g, offset)?;
-    }
-    Ok(Product::Toolpath(graded))
+    Ok(Native { sliced, graded, grade: g, offset, cells: cells.is_some() })
 }
 
 pub(super) fn cells_options(j: &GradedJob, m: &Model) -> scaffold::cells::Options {

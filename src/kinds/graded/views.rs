@@ -58,6 +58,8 @@ pub(super) fn inspect(j: &GradedJob, ctx: &mut Ctx, view: &str, index: usize) ->
                 meta: serde_json::json!({ "caption": format!("{} triangles, {:.0} mm³{}", r.triangles, r.volume_mm3, if r.closed { ", closed" } else { ", NOT closed" }), "stl": true }),
             })
         }
+        "hu" => Ok(hu_view(j, &vol, &roi, index)),
+        "beads" => beads_view(j, ctx, &vol, index),
         _ => Err(Error::UnknownView { view: view.into(), job: GradedKind::NAME }),
     }
 }

@@ -35,7 +35,7 @@ pub use settings::*;
 pub use stages::*;
 use views::*;
 
-use super::{Inspection, Kind, Product, Shape, Slot, SlotKind, StageInfo, StepInfo, ViewInfo};
+use super::{Inspection, Kind, Product, Shape, Slot, SlotKind, StageInfo, StepInfo, Teach, ViewInfo};
 use crate::axisym::contour;
 use crate::axisym::domain::Domain;
 use crate::axisym::offset::Offset;
@@ -121,6 +121,8 @@ impl Kind for AxisymKind {
     const STAGES: &'static [StageInfo] = STAGES;
     const VIEWS: &'static [ViewInfo] = VIEWS;
     const STEPS: &'static [StepInfo] = steps::STEPS;
+    /// Opens with the platform drawn behind the path (`axes3d` at 0: the platform alone).
+    const TEACH: Teach = Teach { color_by: "feature", backdrop: Some("axes3d") };
 
     fn fields() -> Vec<Row> {
         rows()

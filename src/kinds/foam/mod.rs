@@ -32,7 +32,7 @@ use thread::*;
 pub use thread::{value_bin, VALUE_CODES};
 use views::*;
 
-use super::{Inspection, Kind, Product, Shape, Slot, SlotKind, StageInfo, StepInfo, ViewInfo};
+use super::{Inspection, Kind, Product, Shape, Slot, SlotKind, StageInfo, StepInfo, Teach, ViewInfo};
 use crate::budget::Estimate;
 use crate::design::{Design, Input};
 use crate::foam::field::Field;
@@ -113,6 +113,8 @@ impl Kind for FoamKind {
     const STAGES: &'static [StageInfo] = STAGES;
     const VIEWS: &'static [ViewInfo] = VIEWS;
     const STEPS: &'static [StepInfo] = steps::STEPS;
+    /// Opens coloured by speed: V* × the thread's speed, so the foam's grading shows.
+    const TEACH: Teach = Teach { color_by: "speed", backdrop: None };
 
     fn fields() -> Vec<Row> {
         rows()

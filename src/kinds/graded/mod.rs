@@ -34,7 +34,7 @@ pub use settings::*;
 use stages::*;
 use views::*;
 
-use super::{Inspection, Kind, Product, Shape, Slot, SlotKind, StageInfo, StepInfo, ViewInfo};
+use super::{Inspection, Kind, Product, Shape, Slot, SlotKind, StageInfo, StepInfo, Teach, ViewInfo};
 use crate::budget::Estimate;
 use crate::design::{Design, Input};
 use crate::gcode_edit;
@@ -152,6 +152,8 @@ impl Kind for GradedKind {
     const STAGES: &'static [StageInfo] = STAGES;
     const VIEWS: &'static [ViewInfo] = VIEWS;
     const STEPS: &'static [StepInfo] = steps::STEPS;
+    /// Opens coloured by bead width: the density the CT grades it to.
+    const TEACH: Teach = Teach { color_by: "width", backdrop: None };
 
     fn fields() -> Vec<Row> {
         rows()

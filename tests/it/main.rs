@@ -60,6 +60,7 @@ mod scaffold_model;
 mod seams;
 mod slice;
 mod steps;
+mod steps_lattice;
 mod supports;
 mod threads;
 mod volume_import;

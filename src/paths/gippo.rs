@@ -68,6 +68,144 @@ const USED: u32 = 1 << 31;
 
 /// Runs `iterations` (≥ 1) GIPPO iterations.
 pub(crate) fn run(graph: &Graph, iterations: u32, maximise: bool, rng: &mut Pcg64) -> Solution {
+    run_observed(graph, iterations, maximise, rng, &mut ())
+}
+
+/// Watches a GIPPO run: told of every new best-so-far solution (see [`Recorder`]). The unit
+/// observer watches nothing and costs nothing (its calls are compiled away).
+pub(crate) trait Observer {
+    /// A new best at `iteration` (0-based) with `score`: does the observer want its paths?
+    fn wants(&mut self, iteration: u32, score: f64) -> bool;
+    /// The paths of the best so far (longest first), when [`Observer::wants`] said so.
+    fn record(&mut self, iteration: u32, score: f64, chains: Vec<Chain>);
+}
+
+impl Observer for () {
+    #[inline(always)]
+    fn wants(&mut self, _: u32, _: f64) -> bool {
+        false
+    }
+    #[inline(always)]
+    fn record(&mut self, _: u32, _: f64, _: Vec<Chain>) {}
+}
+
+/// One recorded best-so-far solution of a GIPPO run.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Frame {
+    /// Iteration it was found at (0-based).
+    pub iteration: u32,
+    /// Its equation 1 score.
+    pub score: f64,
+    /// Its paths, longest first: edges of every path in order, one after the other.
+    pub edges: Vec<u32>,
+    /// Where each path starts in `edges`.
+    pub starts: Vec<u32>,
+    /// First node of every path.
+    pub first: Vec<u32>,
+}
+
+impl Frame {
+    /// Bytes it holds (its arrays and itself).
+    pub fn bytes(&self) -> usize {
+        std::mem::size_of::<Frame>() + 4 * (self.edges.len() + self.starts.len() + self.first.len())
+    }
+
+    /// Paths: (first node, edges).
+    pub fn paths(&self) -> impl Iterator<Item = (usize, &[u32])> + '_ {
+        self.starts.iter().enumerate().map(move |(i, &s)| {
+            let end = self.starts.get(i + 1).map_or(self.edges.len(), |&x| x as usize);
+            (self.first[i] as usize, &self.edges[s as usize..end])
+        })
+    }
+
+    fn of(iteration: u32, score: f64, chains: &[Chain]) -> Frame {
+        let mut f = Frame { iteration, score, edges: Vec::new(), starts: Vec::with_capacity(chains.len()), first: Vec::with_capacity(chains.len()) };
+        f.edges.reserve(chains.iter().map(|c| c.edges.len()).sum());
+        for c in chains {
+            f.starts.push(f.edges.len() as u32);
+            f.first.push(c.nodes.first().copied().unwrap_or(0) as u32);
+            f.edges.extend(c.edges.iter().map(|&e| e as u32));
+        }
+        f
+    }
+}
+
+/// Records the best-so-far solutions of a run, at most `cap` of them: every one when there
+/// are no more, else the first, the last and evenly spaced ones between (by improvement
+/// count). Each improvement whose number is a multiple of the stride is kept; when `cap` are
+/// kept and another comes, every other one goes and the stride doubles. The latest
+/// improvement is held aside until a later one replaces it, and closes the record (in place of
+/// the last kept one when full). Memory: at most `cap` frames plus the one aside.
+pub(crate) struct Recorder {
+    cap: usize,
+    stride: usize,
+    improvements: usize,
+    /// Kept frames, in iteration order.
+    frames: Vec<Frame>,
+    /// The latest improvement when it is not in `frames`.
+    latest: Option<Frame>,
+}
+
+impl Recorder {
+    /// A recorder of at most `cap` (≥ 2, raised to 2) frames.
+    pub fn new(cap: usize) -> Recorder {
+        Recorder { cap: cap.max(2), stride: 1, improvements: 0, frames: Vec::new(), latest: None }
+    }
+
+    /// Improvements seen.
+    pub fn improvements(&self) -> usize {
+        self.improvements
+    }
+
+    /// The frames kept, in iteration order: the first improvement, evenly spaced ones, the last.
+    pub fn finish(mut self) -> Vec<Frame> {
+        if let Some(f) = self.latest.take() {
+            // The last improvement replaces the last kept one when the record is full.
+            if self.frames.len() >= self.cap {
+                self.frames.pop();
+            }
+            self.frames.push(f);
+        }
+        self.frames
+    }
+}
+
+impl Observer for Recorder {
+    fn wants(&mut self, _: u32, _: f64) -> bool {
+        // Every improvement might be the last one.
+        true
+    }
+
+    fn record(&mut self, iteration: u32, score: f64, chains: Vec<Chain>) {
+        let k = self.improvements;
+        self.improvements += 1;
+        let frame = Frame::of(iteration, score, &chains);
+        if k % self.stride != 0 {
+            self.latest = Some(frame);
+            return;
+        }
+        self.latest = None;
+        if self.frames.len() >= self.cap {
+            // Full: keep improvements 0, 2·stride, 4·stride, … (every other frame); this one
+            // is kept too when it falls on the doubled stride, else held aside as the latest.
+            let mut i = 0;
+            self.frames.retain(|_| {
+                i += 1;
+                i % 2 == 1
+            });
+            self.stride *= 2;
+            if k % self.stride != 0 {
+                self.latest = Some(frame);
+                return;
+            }
+        }
+        self.frames.push(frame);
+    }
+}
+
+/// [`run`], telling `observer` of every new best so far. The draws, hence the result, are
+/// the same whatever the observer.
+pub(crate) fn run_observed<O: Observer>(graph: &Graph, iterations: u32, maximise: bool, rng: &mut Pcg64, observer: &mut O) -> Solution {
     let n = graph.nodes.len();
     let m = graph.edges.len();
     if m == 0 {
@@ -106,7 +244,7 @@ pub(crate) fn run(graph: &Graph, iterations: u32, maximise: bool, rng: &mut Pcg6
     best.edges.reserve(m);
     let mut best_score = f64::NEG_INFINITY;
 
-    for _ in 0..iterations {
+    for iteration in 0..iterations {
         for slot in &mut rec {
             slot.b &= !USED;
         }
@@ -217,20 +355,24 @@ pub(crate) fn run(graph: &Graph, iterations: u32, maximise: bool, rng: &mut Pcg6
         if score > best_score {
             best_score = score;
             std::mem::swap(&mut cur, &mut best);
+            if observer.wants(iteration, score) {
+                observer.record(iteration, score, chains_of(&best, &at, graph));
+            }
         }
     }
-    // First nodes back from records to node numbers (records are in node order).
-    for f in &mut best.first {
-        *f = at.partition_point(|&o| o < *f) as u32;
-    }
+    let chains = chains_of(&best, &at, graph);
+    Solution { chains, score: best_score, iteration_scores }
+}
 
-    // Best solution → chains, longest first (segments, then length; stable).
+/// A flat solution → chains, longest first (segments, then length; stable). Its first nodes
+/// are node records (`at[v]`), turned back into node numbers (records are in node order).
+fn chains_of(best: &Flat, at: &[u32], graph: &Graph) -> Vec<Chain> {
     let mut chains = Vec::with_capacity(best.starts.len());
     for (i, &s) in best.starts.iter().enumerate() {
         let end = best.starts.get(i + 1).map_or(best.edges.len(), |&x| x as usize);
         let edges: Vec<usize> = best.edges[s as usize..end].iter().map(|&e| e as usize).collect();
         let mut nodes = Vec::with_capacity(edges.len() + 1);
-        let mut v = best.first[i] as usize;
+        let mut v = at.partition_point(|&o| o < best.first[i]);
         nodes.push(v);
         for &e in &edges {
             v = graph.other(e, v);
@@ -240,7 +382,7 @@ pub(crate) fn run(graph: &Graph, iterations: u32, maximise: bool, rng: &mut Pcg6
         chains.push(Chain { nodes, edges, travel });
     }
     super::order::sort_longest_first(&mut chains, graph);
-    Solution { chains, score: best_score, iteration_scores }
+    chains
 }
 
 #[cfg(test)]
@@ -428,6 +570,75 @@ mod tests {
                 want.sort();
                 got.sort();
                 assert_eq!(got, want, "n {n}, seed {seed}");
+            }
+        }
+    }
+
+    #[test]
+    fn a_recorded_run_ends_on_the_normal_run() {
+        for (n, seed) in [(3, 1), (12, 7), (30, 3)] {
+            let g = crate::paths::build_graph(&layer(n, seed), 0.005);
+            for maximise in [true, false] {
+                for cap in [2, 3, 5, 64] {
+                    let sol = run(&g, 200, maximise, &mut Pcg64::seed_from_u64(seed));
+                    let mut rec = Recorder::new(cap);
+                    let watched = run_observed(&g, 200, maximise, &mut Pcg64::seed_from_u64(seed), &mut rec);
+                    let improvements = rec.improvements();
+                    let frames = rec.finish();
+                    // The same draws: the same scores and the same solution.
+                    assert_eq!(watched.iteration_scores, sol.iteration_scores);
+                    assert_eq!(watched.score, sol.score);
+                    let last = frames.last().expect("a frame");
+                    assert_eq!(*last, Frame::of(last.iteration, sol.score, &sol.chains), "n {n}, seed {seed}, cap {cap}");
+                    // Bounded, first and last kept, scores rising, each a real improvement.
+                    assert!(frames.len() <= cap && frames.len() <= improvements, "{} frames, cap {cap}", frames.len());
+                    assert_eq!(frames[0].iteration, 0);
+                    assert!(frames.windows(2).all(|w| w[0].iteration < w[1].iteration && w[0].score < w[1].score));
+                    let mut best = f64::NEG_INFINITY;
+                    let firsts: Vec<u32> = (0..200u32)
+                        .filter(|&i| {
+                            let s = sol.iteration_scores[i as usize];
+                            let up = s > best;
+                            best = best.max(s);
+                            up
+                        })
+                        .collect();
+                    assert_eq!(firsts.len(), improvements);
+                    assert!(frames.iter().all(|f| firsts.contains(&f.iteration) && f.score == sol.iteration_scores[f.iteration as usize]));
+                    if improvements <= cap {
+                        assert_eq!(frames.len(), improvements);
+                    }
+                    // Every frame covers every edge once.
+                    for f in &frames {
+                        let mut e: Vec<u32> = f.edges.clone();
+                        e.sort_unstable();
+                        assert_eq!(e, (0..g.edges.len() as u32).collect::<Vec<_>>());
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn the_recorder_keeps_the_first_the_last_and_evenly_spaced_ones() {
+        for cap in 2..12 {
+            for n in 1..200u32 {
+                let mut rec = Recorder::new(cap);
+                for k in 0..n {
+                    rec.record(k, k as f64, Vec::new());
+                }
+                let kept: Vec<u32> = rec.finish().iter().map(|f| f.iteration).collect();
+                assert!(kept.len() <= cap, "cap {cap}, n {n}: {kept:?}");
+                assert_eq!((kept[0], *kept.last().unwrap()), (0, n - 1), "cap {cap}, n {n}");
+                assert!(kept.windows(2).all(|w| w[0] < w[1]));
+                if n as usize <= cap {
+                    assert_eq!(kept, (0..n).collect::<Vec<_>>());
+                } else {
+                    // Evenly spaced but for the last: one stride apart.
+                    let stride = kept[1] - kept[0];
+                    assert!(kept[..kept.len() - 1].windows(2).all(|w| w[1] - w[0] == stride), "cap {cap}, n {n}: {kept:?}");
+                    assert!(kept.len() >= cap / 2, "cap {cap}, n {n}: {kept:?}");
+                }
             }
         }
     }

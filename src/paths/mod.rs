@@ -22,9 +22,12 @@ mod euler;
 mod gippo;
 mod order;
 mod postman;
+mod replay;
 
 pub use estimate::{estimate, Work, MAX_GIPPO_STEPS};
+pub use gippo::Frame as GippoFrame;
 pub use graph::{build_graph, Edge, Graph};
+pub use replay::{frame_cap, replay, Replay, REPLAY_MAX_BYTES, REPLAY_MAX_FRAMES};
 
 use crate::geom::{DVec2, DVec3, Feature, Pass, Path, StrokeLayer, Toolpath};
 use crate::settings::{choice_docs, int, num, other, Field, Kind};

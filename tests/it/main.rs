@@ -61,6 +61,7 @@ mod seams;
 mod slice;
 mod steps;
 mod steps_methods;
+mod steps_lattice;
 mod supports;
 mod threads;
 mod volume_import;

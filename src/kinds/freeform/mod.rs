@@ -16,6 +16,7 @@ mod planning;
 mod report;
 mod settings;
 mod stages;
+mod steps;
 mod views;
 use checks::*;
 use form::*;
@@ -23,9 +24,10 @@ pub use planning::*;
 pub use report::*;
 pub use settings::*;
 pub use stages::*;
+use steps::*;
 use views::*;
 
-use super::{Inspection, Kind, Product, Shape, Slot, SlotKind, StageInfo, ViewInfo};
+use super::{Inspection, Kind, Product, Shape, Slot, SlotKind, StageInfo, StepInfo, ViewInfo};
 use crate::budget::Estimate;
 use crate::design::{Design, Input};
 use crate::freeform::bands;
@@ -64,14 +66,32 @@ const STAGES: &[StageInfo] = &[
     StageInfo { name: "costs", label: "Joint errors, exact and heuristic" },
 ];
 
-const VIEWS: &[ViewInfo] = &[ViewInfo {
-    id: "sequence",
-    stage: "order",
-    label: "Print sequence",
-    shape: Shape::Lines3d,
-    index_label: "Step",
-    doc: "The wireframe after each step: printed beams, the beam being printed, the cantilevered ones, and those still to print (mm).",
-}];
+const VIEWS: &[ViewInfo] = &[
+    ViewInfo {
+        id: "sequence",
+        stage: "order",
+        label: "Print sequence",
+        shape: Shape::Lines3d,
+        index_label: "Step",
+        doc: "The wireframe after each step: printed beams, the beam being printed, the cantilevered ones, and those still to print (mm).",
+    },
+    ViewInfo {
+        id: "beams",
+        stage: "import",
+        label: "Beams",
+        shape: Shape::Lines3d,
+        index_label: "",
+        doc: "The wireframe as read and placed: its beams, those standing on the substrate, and the grounded joints marked (mm).",
+    },
+    ViewInfo {
+        id: "precedence",
+        stage: "plan",
+        label: "Precedences",
+        shape: Shape::Lines3d,
+        index_label: "",
+        doc: "Which beam must be printed before which: arrows from the middle of the earlier beam to the later one, for the nozzle's collisions and for each path from its root (mm).",
+    },
+];
 
 impl Kind for FreeformKind {
     type Settings = FreeformJob;
@@ -82,6 +102,7 @@ impl Kind for FreeformKind {
     const SLOTS: &'static [Slot] = SLOTS;
     const STAGES: &'static [StageInfo] = STAGES;
     const VIEWS: &'static [ViewInfo] = VIEWS;
+    const STEPS: &'static [StepInfo] = STEPS;
 
     fn fields() -> Vec<Row> {
         rows()

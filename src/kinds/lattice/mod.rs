@@ -8,18 +8,22 @@
 
 mod checks;
 mod form;
+mod method;
 mod report;
 mod settings;
 mod stages;
+mod steps;
 mod views;
 use checks::*;
 use form::*;
+use method::*;
 use report::*;
 pub use settings::*;
 pub use stages::*;
+use steps::*;
 use views::*;
 
-use super::{Inspection, Kind, Product, Shape, Slot, SlotKind, StageInfo, ViewInfo};
+use super::{Inspection, Kind, Product, Shape, Slot, SlotKind, StageInfo, StepInfo, ViewInfo};
 use crate::design::{Design, Input};
 use crate::geom::shapes;
 use crate::geom::StrokeLayer;
@@ -62,14 +66,64 @@ const STAGES: &[StageInfo] = &[
     StageInfo { name: "nonplanar", label: "Projecting onto the surface" },
 ];
 
-const VIEWS: &[ViewInfo] = &[ViewInfo {
-    id: "layer2d",
-    stage: "lattice",
-    label: "Lattice layer",
-    shape: Shape::Lines2d,
-    index_label: "Layer",
-    doc: "The struts of one layer as generated, before path optimisation (mm).",
-}];
+const VIEWS: &[ViewInfo] = &[
+    ViewInfo {
+        id: "layer2d",
+        stage: "lattice",
+        label: "Lattice layer",
+        shape: Shape::Lines2d,
+        index_label: "Layer",
+        doc: "The struts of one layer as generated, before path optimisation (mm).",
+    },
+    ViewInfo {
+        id: "graph",
+        stage: "paths",
+        label: "Graph",
+        shape: Shape::Lines2d,
+        index_label: "Layer",
+        doc: "One layer as a graph: its struts (edges), its nodes, the odd-degree nodes marked (mm).",
+    },
+    ViewInfo {
+        id: "pairing",
+        stage: "paths",
+        label: "Odd-node pairing",
+        shape: Shape::Lines2d,
+        index_label: "Layer",
+        doc: "The shortest straight lines pairing the odd-degree nodes of each piece, over the struts: half the odd nodes is the fewest paths possible (mm).",
+    },
+    ViewInfo {
+        id: "gippo",
+        stage: "paths",
+        label: "GIPPO search",
+        shape: Shape::Lines2d,
+        index_label: "Frame",
+        doc: "GIPPO's iterations replayed on the first layer with struts: the best paths so far each time an iteration beats them, coloured long, medium, short (mm).",
+    },
+    ViewInfo {
+        id: "trails",
+        stage: "paths",
+        label: "Kept paths",
+        shape: Shape::Lines2d,
+        index_label: "Layer",
+        doc: "The paths kept for one layer, coloured long (over 15 nodes), medium (5 to 15) and short (under 5) (mm).",
+    },
+    ViewInfo {
+        id: "order",
+        stage: "paths",
+        label: "Print order",
+        shape: Shape::Lines2d,
+        index_label: "Path",
+        doc: "The paths in the order they are printed, one more each frame, with the travel moves between them (mm).",
+    },
+    ViewInfo {
+        id: "gcode",
+        stage: "paths",
+        label: "Toolpath",
+        shape: Shape::Lines2d,
+        index_label: "Layer",
+        doc: "One layer as the G-code writer gets it: extrusions, the short paths slowed down, travel through the air and along struts (mm).",
+    },
+];
 
 impl Kind for LatticeKind {
     type Settings = LatticeJob;
@@ -79,6 +133,7 @@ impl Kind for LatticeKind {
     const SLOTS: &'static [Slot] = SLOTS;
     const STAGES: &'static [StageInfo] = STAGES;
     const VIEWS: &'static [ViewInfo] = VIEWS;
+    const STEPS: &'static [StepInfo] = STEPS;
 
     fn fields() -> Vec<Row> {
         rows()
@@ -110,18 +165,7 @@ impl Kind for LatticeKind {
 
     fn run(j: &LatticeJob, ctx: &mut Ctx) -> Result<Product, Error> {
         let strokes = strokes(j, ctx)?;
-        let design = ctx.design;
-        // The printer's retraction rule is in the key: the report counts its retractions.
-        let key = (&j.paths, line_width(design), design.seed, &design.printer.retraction, design.printer.flavor);
-        let optimised = ctx.stage("paths", "paths", &key, &[strokes.key], |progress| {
-            let mut o = paths::optimise(&strokes, &j.paths, line_width(design), design.seed, progress).map_err(|e| Error::stage("paths", e))?;
-            let counts = crate::gcode::retractions_per_pass(&o.toolpath, &design.printer);
-            for (l, n) in o.report.layers.iter_mut().zip(counts) {
-                l.retractions = n;
-            }
-            let report = paths_report(&o.report);
-            Ok((o.toolpath, Some(report)))
-        })?;
+        let optimised = paths_stage(j, ctx, &strokes)?;
         drop(strokes);
         let Some(np) = &j.nonplanar else { return Ok(Product::Toolpath(optimised)) };
         let surface = match (&np.surface, &j.surface_input) {

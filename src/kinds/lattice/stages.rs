@@ -95,3 +95,19 @@ pub(super) fn strokes(j: &LatticeJob, ctx: &mut Ctx) -> Result<Out<Vec<StrokeLay
         Ok((g.layers, Some(report)))
     })
 }
+
+/// The optimised paths of every layer (the `paths` stage), from the layers' strokes.
+pub(super) fn paths_stage(j: &LatticeJob, ctx: &mut Ctx, strokes: &Out<Vec<StrokeLayer>>) -> Result<Out<crate::geom::Toolpath>, Error> {
+    let design = ctx.design;
+    // The printer's retraction rule is in the key: the report counts its retractions.
+    let key = (&j.paths, line_width(design), design.seed, &design.printer.retraction, design.printer.flavor);
+    ctx.stage("paths", "paths", &key, &[strokes.key], |progress| {
+        let mut o = paths::optimise(strokes, &j.paths, line_width(design), design.seed, progress).map_err(|e| Error::stage("paths", e))?;
+        let counts = crate::gcode::retractions_per_pass(&o.toolpath, &design.printer);
+        for (l, n) in o.report.layers.iter_mut().zip(counts) {
+            l.retractions = n;
+        }
+        let report = paths_report(&o.report);
+        Ok((o.toolpath, Some(report)))
+    })
+}

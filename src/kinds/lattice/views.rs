@@ -4,8 +4,15 @@ use super::*;
 
 /// One of the kind's views at `index` (`Kind::inspect`).
 pub(super) fn inspect(j: &LatticeJob, ctx: &mut Ctx, view: &str, index: usize) -> Result<Inspection, Error> {
-    if view != "layer2d" {
-        return Err(Error::UnknownView { view: view.into(), job: LatticeKind::NAME });
+    match view {
+        "layer2d" => {}
+        "graph" => return graph_view(j, ctx, index),
+        "pairing" => return pairing_view(j, ctx, index),
+        "gippo" => return gippo_view(j, ctx, index),
+        "trails" => return trails_view(j, ctx, index),
+        "order" => return order_view(j, ctx, index),
+        "gcode" => return gcode_view(j, ctx, index),
+        _ => return Err(Error::UnknownView { view: view.into(), job: LatticeKind::NAME }),
     }
     let strokes = strokes(j, ctx)?;
     let count = strokes.len();
@@ -19,6 +26,8 @@ pub(super) fn inspect(j: &LatticeJob, ctx: &mut Ctx, view: &str, index: usize) -
         }
     }
     let z = strokes.get(index).map_or(0.0, |l| l.z);
+    let struts: usize = strokes.get(index).map_or(0, |l| l.strokes.iter().map(|s| s.points.len().saturating_sub(1)).sum());
+    let caption = format!("layer {} of {count} at z {z:.2} mm: {struts} strut segments", index + 1);
     Ok(Inspection {
         view: view.into(),
         shape: Shape::Lines2d,
@@ -27,6 +36,6 @@ pub(super) fn inspect(j: &LatticeJob, ctx: &mut Ctx, view: &str, index: usize) -
         stride: Shape::Lines2d.stride(),
         data,
         overlay: Vec::new(),
-        meta: serde_json::json!({ "z_mm": z }),
+        meta: serde_json::json!({ "z_mm": z, "caption": caption }),
     })
 }

@@ -22,7 +22,8 @@ export function buildViews() {
   state.viewCards.clear();
   const host = $("views");
   host.replaceChildren();
-  for (const view of jobKind().views ?? []) {
+  // A view drawn only by a step of "How it works" (card: false) gets no card of its own.
+  for (const view of (jobKind().views ?? []).filter((v) => v.card !== false)) {
     const card = document.createElement("section");
     card.className = "card view-card";
     card.dataset.view = view.id;

@@ -128,6 +128,9 @@ impl Shape {
 pub struct ViewInfo {
     /// Id used in `inspect` requests.
     pub id: &'static str,
+    /// The view has a card of its own among the results; false: it is drawn only by a step of
+    /// "How it works" (a recording that costs nothing unless the steps are open).
+    pub card: bool,
     /// The stage whose output it shows.
     pub stage: &'static str,
     /// Label of the view's card.

@@ -71,6 +71,7 @@ const STAGES: &[StageInfo] = &[
 const VIEWS: &[ViewInfo] = &[
     ViewInfo {
         id: "map",
+        card: true,
         stage: "points",
         label: "Embedded map (u, θ)",
         shape: Shape::Lines2d,
@@ -79,6 +80,7 @@ const VIEWS: &[ViewInfo] = &[
     },
     ViewInfo {
         id: "platform3d",
+        card: true,
         stage: "path",
         label: "Path on the platform",
         shape: Shape::Lines3d,
@@ -87,6 +89,7 @@ const VIEWS: &[ViewInfo] = &[
     },
     ViewInfo {
         id: "omega",
+        card: false,
         stage: "domain",
         label: "Ω on the map",
         shape: Shape::Lines2d,
@@ -95,6 +98,7 @@ const VIEWS: &[ViewInfo] = &[
     },
     ViewInfo {
         id: "repulsion",
+        card: false,
         stage: "points",
         label: "Geodesic repulsion",
         shape: Shape::Lines2d,
@@ -103,6 +107,7 @@ const VIEWS: &[ViewInfo] = &[
     },
     ViewInfo {
         id: "axes3d",
+        card: false,
         stage: "axes",
         label: "Platform and tool axes",
         shape: Shape::Lines3d,

@@ -72,6 +72,7 @@ const STAGES: &[StageInfo] = &[
 const VIEWS: &[ViewInfo] = &[
     ViewInfo {
         id: "boundaries",
+        card: true,
         stage: "regions",
         label: "Shared boundaries",
         shape: Shape::Mesh,
@@ -80,6 +81,7 @@ const VIEWS: &[ViewInfo] = &[
     },
     ViewInfo {
         id: "layer",
+        card: true,
         stage: "raster",
         label: "Layer path",
         shape: Shape::Lines2d,
@@ -88,6 +90,7 @@ const VIEWS: &[ViewInfo] = &[
     },
     ViewInfo {
         id: "v_star",
+        card: false,
         stage: "grade",
         label: "V* along the thread",
         shape: Shape::Lines2d,
@@ -96,6 +99,7 @@ const VIEWS: &[ViewInfo] = &[
     },
     ViewInfo {
         id: "h_star",
+        card: false,
         stage: "grade",
         label: "H* along the thread",
         shape: Shape::Lines2d,

@@ -69,6 +69,7 @@ const STAGES: &[StageInfo] = &[
 const VIEWS: &[ViewInfo] = &[
     ViewInfo {
         id: "sequence",
+        card: true,
         stage: "order",
         label: "Print sequence",
         shape: Shape::Lines3d,
@@ -77,6 +78,7 @@ const VIEWS: &[ViewInfo] = &[
     },
     ViewInfo {
         id: "beams",
+        card: false,
         stage: "import",
         label: "Beams",
         shape: Shape::Lines3d,
@@ -85,6 +87,7 @@ const VIEWS: &[ViewInfo] = &[
     },
     ViewInfo {
         id: "precedence",
+        card: false,
         stage: "plan",
         label: "Precedences",
         shape: Shape::Lines3d,

@@ -86,6 +86,7 @@ const STAGES: &[StageInfo] = &[
 const VIEWS: &[ViewInfo] = &[
     ViewInfo {
         id: "axial",
+        card: true,
         stage: "volume",
         label: "Axial slices",
         shape: Shape::Image,
@@ -94,6 +95,7 @@ const VIEWS: &[ViewInfo] = &[
     },
     ViewInfo {
         id: "coronal",
+        card: true,
         stage: "volume",
         label: "Coronal slices",
         shape: Shape::Image,
@@ -102,6 +104,7 @@ const VIEWS: &[ViewInfo] = &[
     },
     ViewInfo {
         id: "sagittal",
+        card: true,
         stage: "volume",
         label: "Sagittal slices",
         shape: Shape::Image,
@@ -110,6 +113,7 @@ const VIEWS: &[ViewInfo] = &[
     },
     ViewInfo {
         id: "density",
+        card: true,
         stage: "density",
         label: "Target density",
         shape: Shape::Image,
@@ -118,6 +122,7 @@ const VIEWS: &[ViewInfo] = &[
     },
     ViewInfo {
         id: "surface",
+        card: true,
         stage: "surface",
         label: "Surface model",
         shape: Shape::Mesh,
@@ -126,6 +131,7 @@ const VIEWS: &[ViewInfo] = &[
     },
     ViewInfo {
         id: "hu",
+        card: false,
         stage: "volume",
         label: "HU in the region of interest",
         shape: Shape::Image,
@@ -134,6 +140,7 @@ const VIEWS: &[ViewInfo] = &[
     },
     ViewInfo {
         id: "beads",
+        card: false,
         stage: "grade",
         label: "Bead width along a layer",
         shape: Shape::Lines2d,

@@ -69,6 +69,7 @@ const STAGES: &[StageInfo] = &[
 const VIEWS: &[ViewInfo] = &[
     ViewInfo {
         id: "layer2d",
+        card: true,
         stage: "lattice",
         label: "Lattice layer",
         shape: Shape::Lines2d,
@@ -77,6 +78,7 @@ const VIEWS: &[ViewInfo] = &[
     },
     ViewInfo {
         id: "graph",
+        card: false,
         stage: "paths",
         label: "Graph",
         shape: Shape::Lines2d,
@@ -85,6 +87,7 @@ const VIEWS: &[ViewInfo] = &[
     },
     ViewInfo {
         id: "pairing",
+        card: false,
         stage: "paths",
         label: "Odd-node pairing",
         shape: Shape::Lines2d,
@@ -93,6 +96,7 @@ const VIEWS: &[ViewInfo] = &[
     },
     ViewInfo {
         id: "gippo",
+        card: false,
         stage: "paths",
         label: "GIPPO search",
         shape: Shape::Lines2d,
@@ -101,6 +105,7 @@ const VIEWS: &[ViewInfo] = &[
     },
     ViewInfo {
         id: "trails",
+        card: false,
         stage: "paths",
         label: "Kept paths",
         shape: Shape::Lines2d,
@@ -109,6 +114,7 @@ const VIEWS: &[ViewInfo] = &[
     },
     ViewInfo {
         id: "order",
+        card: false,
         stage: "paths",
         label: "Print order",
         shape: Shape::Lines2d,
@@ -117,6 +123,7 @@ const VIEWS: &[ViewInfo] = &[
     },
     ViewInfo {
         id: "gcode",
+        card: false,
         stage: "paths",
         label: "Toolpath",
         shape: Shape::Lines2d,

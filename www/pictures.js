@@ -36,12 +36,16 @@ export function installPictures() {
       const card = head.closest(".view-card");
       head.append(pictureButton("Save this view as a picture (PNG or SVG) at a chosen size, captioned", () => ({ type: "view", card })));
     }
+    const nav = document.querySelector("#how .how-nav");
+    if (nav && !nav.querySelector(".picture-button")) {
+      nav.append(pictureButton("Save this step's view as a picture (PNG or SVG) at a chosen size, captioned", () => ({ type: "step" })));
+    }
     for (const fig of document.querySelectorAll("#report figure.plot-figure")) {
       if (fig.querySelector(":scope > .picture-button")) continue;
       fig.append(pictureButton("Save this plot as a picture (PNG or SVG) at a chosen size, captioned", () => ({ type: "plot", fig })));
     }
   };
-  for (const id of ["views", "report"]) new MutationObserver(decorate).observe($(id), { childList: true, subtree: true });
+  for (const id of ["views", "report", "how"]) new MutationObserver(decorate).observe($(id), { childList: true, subtree: true });
   decorate();
   $("camera-views")?.append(pictureButton("Save the preview as a picture (PNG, or SVG embedding the PNG) at a chosen size, captioned", () => ({ type: "preview" })));
 }
@@ -67,8 +71,11 @@ export function sourceOf(target) {
     if (!r) return null;
     return r.json ? JSON.parse(r.json) : { name: r.fileName, gcodeFile: r.fileName };
   };
-  if (target.type === "view") {
-    const v = state.viewCards.get(target.card.dataset.view);
+  if (target.type === "view" || target.type === "step") {
+    const s = state.steps;
+    const step = target.type === "step" ? s?.list[s.index] : null;
+    const v = step ? { last: s.last, legend: s.el?.legend, view: { id: `step${s.index + 1}-${step.view}`, label: `How it works ${s.index + 1}: ${step.title}${s.frames > 1 ? ` (frame ${s.frame + 1} of ${s.frames})` : ""}` } }
+      : state.viewCards.get(target.card.dataset.view);
     if (!v?.last || !v.last.data?.length) throw new Error("This view has nothing drawn yet: wait until it shows, then save its picture.");
     const answer = v.last;
     return {

@@ -46,7 +46,7 @@ export function pngInfo(bytes) {
 }
 
 /** Opens the Picture… dialog of `button` (a selector), sets size and format, saves; returns the download. */
-async function savePicture(page, button, { width, height, format }, shot = null) {
+export async function savePicture(page, button, { width, height, format }, shot = null) {
   await page.locator(button).first().scrollIntoViewIfNeeded();
   await page.locator(button).first().click();
   await page.waitForSelector("#picture-dialog[open]", { timeout: 5000 });

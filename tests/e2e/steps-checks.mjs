@@ -10,7 +10,8 @@ import { execFileSync } from "node:child_process";
 import { writeFileSync } from "node:fs";
 import { join } from "node:path";
 import { ROOT, serve } from "./server.mjs";
-import { runExample, waitReady } from "./page-helpers.mjs";
+import { runExample } from "./page-helpers.mjs";
+import { pngInfo, savePicture } from "./pictures-checks.mjs";
 
 /** The example each kind's step-through is checked on. */
 const EXAMPLES = [
@@ -53,6 +54,17 @@ export async function stepsChecks({ browser, newPage, weftBin, check, outDir, ba
         await page.setViewportSize(viewport);
         for (const [kind, file] of EXAMPLES) {
           await runExample(page, base, file, timeoutMs, { confirm: true });
+          // Each kind opens on the colouring that shows its method, an axisymmetric path on its platform.
+          const teach = await page.evaluate(() => {
+            const kind = JSON.parse(window.weft.design).job.kind;
+            const t = window.weft.schema.job_kinds.find((k) => k.name === kind)?.teach ?? {};
+            return { want: t.color_by, got: document.getElementById("color-by").value, backdrop: t.backdrop ?? null, drawn: window.weft.preview?.backdropSegments ?? 0 };
+          });
+          if (teach.want !== teach.got) throw new Error(`${kind} opens coloured by ${teach.got}, not ${teach.want}`);
+          if (teach.backdrop) {
+            await page.waitForFunction(() => (window.weft.preview?.backdropSegments ?? 0) > 0, null, { timeout: 30000 })
+              .catch(() => { throw new Error(`${kind}: the backdrop ${teach.backdrop} is not drawn in the preview`); });
+          }
           const count = await page.evaluate(() => window.weft.steps.count);
           if (count < 3) throw new Error(`${kind}: ${count} steps`);
           const drawn = [];
@@ -78,6 +90,17 @@ export async function stepsChecks({ browser, newPage, weftBin, check, outDir, ba
             drawn.push(`${s.title}${s.frames > 1 ? ` (${s.frames} frames)` : ""}`);
           }
           if (viewport.width === 1280) said.push(`${kind}: ${drawn.join(" → ")}`);
+          if (kind === "lattice" && viewport.width === 1280) {
+            // A step saves as a picture like any view: the PNG decodes at the asked size.
+            await page.evaluate(() => window.weft.step(3));
+            await page.waitForFunction(() => window.weft.steps.index === 3 && window.weft.steps.items > 0, null, { timeout: 60000 });
+            const pic = await savePicture(page, "#how .picture-button", { width: 1200, height: 700, format: "png" });
+            const info = pngInfo(pic.bytes);
+            if (info.width !== 1200 || info.height !== 700 || !/How it works 4/.test(pic.caption)) {
+              throw new Error(`the step's picture: ${info.width} × ${info.height}, caption "${pic.caption}"`);
+            }
+            said.push(`step 4's PNG ${info.width} × ${info.height} (${pic.name})`);
+          }
         }
       } finally {
         await context.close();

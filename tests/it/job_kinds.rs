@@ -37,7 +37,8 @@ impl Kind for Spiral {
     const DOC: &'static str = "A test kind.";
     const SLOTS: &'static [Slot] = &[Slot { name: "mesh", label: "Height from", kind: SlotKind::Mesh, path: "job.input", required: false, doc: "" }];
     const STAGES: &'static [StageInfo] = &[StageInfo { name: "spiral", label: "Winding" }];
-    const VIEWS: &'static [ViewInfo] = &[ViewInfo { id: "plan", card: true, stage: "spiral", label: "Plan", shape: Shape::Lines2d, index_label: "Turn", doc: "" }];
+    const VIEWS: &'static [ViewInfo] =
+        &[ViewInfo { id: "plan", card: true, stage: "spiral", label: "Plan", shape: Shape::Lines2d, index_label: "Turn", doc: "" }];
 
     fn fields() -> Vec<Row> {
         mount("job", FIELDS)

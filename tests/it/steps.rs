@@ -60,8 +60,8 @@ fn each_kind_opens_on_a_colouring_the_page_has_and_a_backdrop_it_declares() {
             assert_eq!(v.shape, weft::kinds::Shape::Lines3d, "{}: backdrop {b} is not lines3d", k.name());
         }
     }
-    // The graded scaffold opens coloured by bead width (its density), a foam by speed (V*).
-    assert_eq!(reg.get("graded").unwrap().teach().color_by, "width");
+    // The graded scaffold opens coloured by ΔE per mm (its density), a foam by speed (V*).
+    assert_eq!(reg.get("graded").unwrap().teach().color_by, "e_per_mm");
     assert_eq!(reg.get("foam").unwrap().teach().color_by, "speed");
     assert!(reg.get("axisymmetric").unwrap().teach().backdrop.is_some());
 }

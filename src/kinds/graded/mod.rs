@@ -159,8 +159,8 @@ impl Kind for GradedKind {
     const STAGES: &'static [StageInfo] = STAGES;
     const VIEWS: &'static [ViewInfo] = VIEWS;
     const STEPS: &'static [StepInfo] = steps::STEPS;
-    /// Opens coloured by bead width: the density the CT grades it to.
-    const TEACH: Teach = Teach { color_by: "width", backdrop: None };
+    /// Opens coloured by ΔE per mm: the bead's cross-section, which the CT's density scales.
+    const TEACH: Teach = Teach { color_by: "e_per_mm", backdrop: None };
 
     fn fields() -> Vec<Row> {
         rows()

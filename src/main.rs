@@ -185,6 +185,22 @@ enum Command {
         #[arg(long, short)]
         out: PathBuf,
     },
+    /// "How it works": the design's method step by step (each step's view, what it shows and
+    /// the paper's section), each drawn on the design; with --out, each step's view as JSON
+    /// (a step that iterates: its first and last frames).
+    Steps {
+        /// The design (JSON), or a share link / fragment.
+        design: String,
+        /// Input files, as for `run`.
+        #[arg(long, value_name = "[SLOT=]FILE")]
+        input: Vec<String>,
+        /// Override a design field, as for `run`.
+        #[arg(long = "set", value_name = "PATH=VALUE")]
+        set: Vec<String>,
+        /// A folder to write <design name>-step<N>-<view>[-last].json in.
+        #[arg(long, short)]
+        out: Option<PathBuf>,
+    },
     /// Write a lattice design's printed struts as an STL (a nozzle-wide prism per strut, round-capped at joints) for other slicers.
     ExportStl {
         /// The design (JSON, a lattice job).
@@ -487,6 +503,56 @@ fn cmd_inspect(design: &str, view: &str, index: usize, inputs: &[String], set: &
         }
         write(&path, serde_json::to_string(&v).map_err(|e| e.to_string())?.as_bytes())?;
         errln!("{}: {} {} of {} ({} values)", path.display(), view, found.index + 1, found.count, found.data.len());
+    }
+    Ok(())
+}
+
+/// `weft steps`: each step of the design's method with what it drew (the view's caption);
+/// with `out`, each step's view as JSON, a scrubbing step's first and last frames.
+fn cmd_steps(design: &str, inputs: &[String], set: &[String], out: Option<&Path>) -> Result<(), String> {
+    let mut files = Files::new();
+    let design = apply_changes(&load_design(design)?, inputs, set, &mut files)?;
+    let registry = Registry::builtin();
+    let kind = registry.get(design.job.kind()).ok_or_else(|| format!("job kind {} is not known (weft jobs lists them)", design.job.kind()))?;
+    if kind.steps().is_empty() {
+        return Err(format!("the {} job has no steps to show (the lattice, axisymmetric, graded, foam and freeform jobs have)", kind.name()));
+    }
+    // One cache for all steps: the stages they share run once.
+    let mut cache = weft::pipeline::Cache::new();
+    for (n, step) in kind.steps().iter().enumerate() {
+        let first = weft::pipeline::inspect(&registry, &mut cache, &design, &files, step.view, step.index)
+            .map_err(|e| format!("step {} ({}): {e}", n + 1, step.title))?;
+        let caption = first.meta.get("caption").and_then(|c| c.as_str()).unwrap_or("");
+        outln!(
+            "{}. {}  [{} {}{}]",
+            n + 1,
+            step.title,
+            step.view,
+            first.index + 1,
+            if step.scrub { format!(" of {} frames", first.count) } else { String::new() }
+        );
+        outln!("   {}", step.text);
+        outln!("   paper: {}", step.cite);
+        if !caption.is_empty() {
+            outln!("   drawn: {caption}");
+        }
+        let Some(dir) = out else { continue };
+        let mut frames = vec![("", first)];
+        if step.scrub && frames[0].1.count > 1 {
+            let last = weft::pipeline::inspect(&registry, &mut cache, &design, &files, step.view, frames[0].1.count - 1).map_err(|e| e.to_string())?;
+            frames.push(("-last", last));
+        }
+        for (suffix, found) in frames {
+            let path = dir.join(format!("{}-step{}-{}{suffix}.json", design.name, n + 1, step.view));
+            let mut v = serde_json::to_value(&found).map_err(|e| e.to_string())?;
+            v["data"] = serde_json::json!(found.data);
+            v["step"] = serde_json::json!({ "number": n + 1, "title": step.title, "text": step.text, "cite": step.cite });
+            if !found.overlay.is_empty() {
+                v["overlay"] = serde_json::json!(found.overlay);
+            }
+            write(&path, serde_json::to_string(&v).map_err(|e| e.to_string())?.as_bytes())?;
+            errln!("{}: {} {} of {} ({} values)", path.display(), step.view, found.index + 1, found.count, found.data.len());
+        }
     }
     Ok(())
 }
@@ -845,6 +911,7 @@ fn main() -> ExitCode {
         }
         bench @ Command::Bench { .. } => cmd_bench(bench),
         Command::Inspect { design, view, index, input, set, out } => cmd_inspect(&design, &view, index, &input, &set, out),
+        Command::Steps { design, input, set, out } => cmd_steps(&design, &input, &set, out.as_deref()),
         Command::ExportStl { design, out } => load_valid(&design).and_then(|d| {
             let e = weft::export::lattice_stl(&d).map_err(|e| e.to_string())?;
             let out = output_path(Some(&out), &d.name, "stl");

@@ -65,3 +65,34 @@ fn each_kind_opens_on_a_colouring_the_page_has_and_a_backdrop_it_declares() {
     assert_eq!(reg.get("foam").unwrap().teach().color_by, "speed");
     assert!(reg.get("axisymmetric").unwrap().teach().backdrop.is_some());
 }
+
+/// `weft steps`: the CLI walks the same steps, says what each drew, and writes their views.
+#[test]
+fn the_cli_prints_and_writes_the_steps() {
+    let dir = std::env::temp_dir().join(format!("weft-steps-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let design = crate::common::root().join("examples/honeycomb-10mm.json");
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_weft")).arg("steps").arg(&design).arg("--out").arg(&dir).output().unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let text = String::from_utf8_lossy(&out.stdout);
+    let steps = Registry::builtin().get("lattice").unwrap().steps();
+    for (n, s) in steps.iter().enumerate() {
+        assert!(text.contains(&format!("{}. {}", n + 1, s.title)), "step {} missing from:\n{text}", n + 1);
+        let file = dir.join(format!("honeycomb-10mm-step{}-{}.json", n + 1, s.view));
+        let v: serde_json::Value = serde_json::from_slice(&std::fs::read(&file).unwrap()).unwrap();
+        assert!(v["data"].as_array().is_some_and(|d| !d.is_empty()), "{} is empty", file.display());
+        assert_eq!(v["step"]["cite"], s.cite);
+        // A step that iterates writes its last frame too: the GIPPO replay ends on the run's score.
+        if s.scrub {
+            let last: serde_json::Value =
+                serde_json::from_slice(&std::fs::read(dir.join(format!("honeycomb-10mm-step{}-{}-last.json", n + 1, s.view))).unwrap()).unwrap();
+            assert_eq!(last["index"].as_u64().unwrap() + 1, last["count"].as_u64().unwrap());
+        }
+    }
+    assert_eq!(text.matches("   paper: ").count(), steps.len());
+    // A job without steps says which have them, in one line.
+    let cube = crate::common::root().join("examples/cube-20mm.json");
+    let bad = std::process::Command::new(env!("CARGO_BIN_EXE_weft")).arg("steps").arg(&cube).output().unwrap();
+    let err = String::from_utf8_lossy(&bad.stderr);
+    assert!(!bad.status.success() && err.contains("no steps") && err.lines().count() == 1, "{err}");
+}

@@ -436,6 +436,13 @@ impl Session {
         to_js(&Loaded { slot: slot.into(), name: name.into(), kind, summary, report })
     }
 
+    /// Drops the recordings the steps of "How it works" made (they were closed); returns how
+    /// many.
+    #[wasm_bindgen(js_name = dropRecordings)]
+    pub fn drop_recordings(&mut self) -> usize {
+        self.cache.drop_recordings()
+    }
+
     /// Forgets a file (and the stage outputs made from it at the next run).
     #[wasm_bindgen(js_name = removeFile)]
     pub fn remove_file(&mut self, name: &str) -> bool {

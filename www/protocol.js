@@ -2,7 +2,7 @@
 //
 // Every request from the page carries an `id`; the worker answers each request with exactly
 // one `loaded` / `estimated` / `result` / `inspected` / `error` message bearing the same id (plus any number
-// of `progress` messages for `run` and `analyze`, and of `ahead` messages for `run`); `unload` and `cancel` are not answered
+// of `progress` messages for `run` and `analyze`, and of `ahead` messages for `run`); `unload`, `drop-recordings` and `cancel` are not answered
 // unless they fail. Bytes travel in ArrayBuffers listed in the transfer list of postMessage,
 // so they move between threads instead of being copied.
 //
@@ -16,6 +16,8 @@ export const MSG = Object.freeze({
   LOAD: "load",
   /** Forget a loaded file. @see UnloadRequest */
   UNLOAD: "unload",
+  /** Drop what the steps of "How it works" recorded (closed): `{type}`, not answered. */
+  DROP_RECORDINGS: "drop-recordings",
   /** Run a design. @see RunRequest */
   RUN: "run",
   /** State a design's work before running it (answered by `estimated`). @see EstimateRequest */

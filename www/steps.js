@@ -139,6 +139,7 @@ export function setOpen(open) {
     clearTimeout(s.timer);
     s.seq++; // an answer on its way is dropped
     s.last = null;
+    workers.post({ type: MSG.DROP_RECORDINGS }); // the worker keeps no recorded frames
     return;
   }
   show(s);

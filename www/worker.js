@@ -90,6 +90,9 @@ function handle(msg) {
       case MSG.UNLOAD:
         session.removeFile(msg.name);
         break;
+      case MSG.DROP_RECORDINGS:
+        session.dropRecordings();
+        break;
       case MSG.RUN: {
         const t0 = performance.now();
         const report = plain(session.run(msg.design, progressReporter(msg.id), aheadReporter(msg.id)));

@@ -9,6 +9,8 @@ pub(super) struct Entry {
     /// Wall time it took, ms, while no run has counted it yet (an import the estimate made
     /// before the run that reads it): the run's timings count it once.
     pub(super) uncounted_ms: Option<f64>,
+    /// A recording for a step of "How it works" ([`Ctx::recording`]).
+    pub(super) recording: bool,
 }
 
 /// Stage outputs kept between runs: the newest output of each stage (by cache id), with the
@@ -29,6 +31,14 @@ impl Cache {
     /// only what the estimate makes and the run reads again is kept ([`Ctx::stage_kept`]).
     pub fn disabled() -> Cache {
         Cache::default()
+    }
+
+    /// Drops every recording ([`Ctx::recording`]: the steps of "How it works" were closed),
+    /// keeping the stages; returns how many were dropped.
+    pub fn drop_recordings(&mut self) -> usize {
+        let before = self.entries.len();
+        self.entries.retain(|_, e| !e.recording);
+        before - self.entries.len()
     }
 
     /// Cache ids held (for tests and diagnostics).

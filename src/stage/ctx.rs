@@ -108,7 +108,19 @@ impl<'a> Ctx<'a> {
         P: Serialize + ?Sized,
         F: FnOnce(&mut dyn FnMut(f32)) -> Result<(T, Option<StageReport>), Error>,
     {
-        self.run_stage(name, id, parts, upstream, f, false)
+        self.run_stage(name, id, parts, upstream, f, Keep::Cached)
+    }
+
+    /// [`Ctx::stage`] for a recording only a step of "How it works" shows (a method's
+    /// intermediate states): cached like a stage while the steps are open, dropped by
+    /// [`Cache::drop_recordings`] when they close, never made by a run.
+    pub fn recording<T, P, F>(&mut self, name: &str, id: &str, parts: &P, upstream: &[Key], f: F) -> Result<Out<T>, Error>
+    where
+        T: Any + Send + Sync,
+        P: Serialize + ?Sized,
+        F: FnOnce(&mut dyn FnMut(f32)) -> Result<(T, Option<StageReport>), Error>,
+    {
+        self.run_stage(name, id, parts, upstream, f, Keep::Recording)
     }
 
     /// [`Ctx::stage`] for an output the job's estimate makes and its run reads again (an
@@ -120,10 +132,10 @@ impl<'a> Ctx<'a> {
         P: Serialize + ?Sized,
         F: FnOnce(&mut dyn FnMut(f32)) -> Result<(T, Option<StageReport>), Error>,
     {
-        self.run_stage(name, id, parts, upstream, f, true)
+        self.run_stage(name, id, parts, upstream, f, Keep::Always)
     }
 
-    fn run_stage<T, P, F>(&mut self, name: &str, id: &str, parts: &P, upstream: &[Key], f: F, keep: bool) -> Result<Out<T>, Error>
+    fn run_stage<T, P, F>(&mut self, name: &str, id: &str, parts: &P, upstream: &[Key], f: F, keep: Keep) -> Result<Out<T>, Error>
     where
         T: Any + Send + Sync,
         P: Serialize + ?Sized,
@@ -165,8 +177,9 @@ impl<'a> Ctx<'a> {
             self.reports.push(r.clone());
             self.reported.push(id.to_string());
         }
-        if self.cache.enabled || keep {
-            self.cache.entries.insert(id.to_string(), Entry { key, value: value.clone(), report, uncounted_ms: (!self.counting).then_some(ms) });
+        if self.cache.enabled || keep == Keep::Always {
+            let recording = keep == Keep::Recording;
+            self.cache.entries.insert(id.to_string(), Entry { key, value: value.clone(), report, uncounted_ms: (!self.counting).then_some(ms), recording });
         }
         Ok(Out { value, key })
     }
@@ -229,7 +242,8 @@ impl<'a> Ctx<'a> {
             None => (serde_json::json!({ "input": input, "solid": solid }), Vec::new()),
         };
         let files = self.files;
-        let keep = place; // the placed mesh is what the estimate and the run both read
+        // The placed mesh is what the estimate and the run both read.
+        let keep = if place { Keep::Always } else { Keep::Cached };
         let slot_name = slot.name;
         self.run_stage(
             "import",
@@ -281,7 +295,7 @@ impl<'a> Ctx<'a> {
                     }
                     Ok((mesh, Some(stage)))
                 },
-                false,
+                Keep::Cached,
             )?;
             out.push((name.clone(), mesh));
         }
@@ -299,4 +313,15 @@ pub fn writer_options(design: &Design) -> gcode::Options {
         design_name: design.name.clone(),
         date: design.date.clone(),
     }
+}
+
+/// How long a stage's output stays in the cache.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Keep {
+    /// While the cache is enabled (the page's worker).
+    Cached,
+    /// Even by a disabled cache (made by the estimate, read again by the run).
+    Always,
+    /// While the cache is enabled, until [`Cache::drop_recordings`].
+    Recording,
 }

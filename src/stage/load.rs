@@ -100,7 +100,7 @@ impl<'a> Ctx<'a> {
         }
         let v = f()?;
         if self.cache.enabled {
-            self.cache.entries.insert(id.to_string(), Entry { key, value: Arc::new(v.clone()), report: None, uncounted_ms: None });
+            self.cache.entries.insert(id.to_string(), Entry { key, value: Arc::new(v.clone()), report: None, uncounted_ms: None, recording: false });
         }
         Ok(v)
     }

@@ -96,3 +96,21 @@ fn the_cli_prints_and_writes_the_steps() {
     let err = String::from_utf8_lossy(&bad.stderr);
     assert!(!bad.status.success() && err.contains("no steps") && err.lines().count() == 1, "{err}");
 }
+
+/// A step's recording lives in the cache only until the steps close: dropping the recordings
+/// keeps every stage (the next step or run reuses them), and a run alone records nothing.
+#[test]
+fn recordings_are_dropped_when_the_steps_close_and_a_run_makes_none() {
+    let reg = Registry::builtin();
+    for (file, view, id) in [("honeycomb-10mm", "gippo", "gippo_replay"), ("hourglass-omega3", "repulsion", "repulsion_frames")] {
+        let design = example(file);
+        let mut cache = Cache::new();
+        pipeline::run_in(&reg, &mut cache, &design, &Files::new(), &pipeline::RunOptions::default(), &mut |_, _| {}).unwrap();
+        assert!(!cache.ids().iter().any(|i| i == id), "{file}: a run recorded {id}");
+        let stages = cache.ids();
+        pipeline::inspect(&reg, &mut cache, &design, &Files::new(), view, 0).unwrap();
+        assert!(cache.ids().iter().any(|i| i == id), "{file}: {view} kept no {id} ({:?})", cache.ids());
+        assert_eq!(cache.drop_recordings(), 1, "{file}");
+        assert_eq!(cache.ids(), stages, "{file}: dropping the recordings changed the stages");
+    }
+}

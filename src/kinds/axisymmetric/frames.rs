@@ -110,7 +110,7 @@ fn repulsion_frames(j: &AxisymJob, ctx: &mut Ctx, platform: &Out<Platform>) -> R
     let l = &layers[0];
     let cap = repulsion_cap(l.points.points.len());
     let (width, seed) = (line_width(ctx.design), layer_seed(ctx.design.seed, 0));
-    ctx.stage("points", "repulsion_frames", &cap, &[l.points.key], |_| {
+    ctx.recording("points", "repulsion_frames", &cap, &[l.points.key], |_| {
         let surface = layer_offset(&platform.value, j, 0, &l.domain.value).map_err(|e| Error::stage("points", e))?;
         let r = uniform::record(surface.profile(), &l.domain.value, &j.points, width, seed, cap).map_err(|e| Error::stage("points", e))?;
         let bytes = r.bytes();

@@ -204,10 +204,11 @@ pub(super) fn gippo_view(j: &LatticeJob, ctx: &mut Ctx, index: usize) -> Result<
     let strokes = strokes(j, ctx)?;
     let li = replay_layer(&strokes);
     let seed = ctx.design.seed;
-    let replay: Out<Option<paths::Replay>> = ctx.stage("gippo_replay", "gippo_replay", &(&j.paths, seed, li), &[strokes.key], |_| match strokes.get(li) {
-        Some(layer) => Ok((Some(paths::replay(layer, &j.paths, seed, li).map_err(|e| Error::stage("paths", e))?), None)),
-        None => Ok((None, None)),
-    })?;
+    let replay: Out<Option<paths::Replay>> =
+        ctx.recording("gippo_replay", "gippo_replay", &(&j.paths, seed, li), &[strokes.key], |_| match strokes.get(li) {
+            Some(layer) => Ok((Some(paths::replay(layer, &j.paths, seed, li).map_err(|e| Error::stage("paths", e))?), None)),
+            None => Ok((None, None)),
+        })?;
     let Some(r) = replay.as_ref() else {
         return Ok(lines2d("gippo", 0, 0, Vec::new(), serde_json::json!({ "caption": "no layers", "frames": 0, "recorded_bytes": 0 })));
     };

@@ -11,7 +11,7 @@
 // Messages come only from the embedding page (window.parent). The embedded page keeps no design
 // in this browser's storage, so it never replaces the design of a full weft page opened here.
 import { state } from "./state.js";
-import { $ } from "./util.js";
+import { $, el } from "./util.js";
 import { tellParent } from "./messages.js";
 import { setFields } from "./design.js";
 import { runDesign } from "./actions.js";
@@ -29,12 +29,7 @@ export function startEmbed() {
   document.body.classList.add("embed");
   const fields = linkedFields();
   // The full page, with the same design (without the embed's field list).
-  const open = document.createElement("a");
-  open.id = "embed-open";
-  open.className = "button";
-  open.target = "_blank";
-  open.rel = "noopener";
-  open.textContent = "Open in weft ↗";
+  const open = el("a", { id: "embed-open", className: "button", target: "_blank", rel: "noopener", textContent: "Open in weft ↗" });
   const refreshLink = () => {
     const params = new URLSearchParams(location.hash.replace(/^#/, ""));
     params.delete("fields");

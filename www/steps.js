@@ -5,7 +5,7 @@
 // nothing; opened, it asks for the shown step only. Drawn by views.js like the view cards.
 import { state } from "./state.js";
 import { MSG } from "./protocol.js";
-import { $, messageOf, setMessage } from "./util.js";
+import { $, button, el, messageOf, setMessage } from "./util.js";
 import { jobKind, missingFiles } from "./design.js";
 import { workers } from "./worker-client.js";
 import { drawView, fillLegend } from "./views.js";
@@ -40,70 +40,33 @@ export function buildSteps() {
   host.hidden = s.list.length === 0;
   host.replaceChildren();
   if (!s.list.length) return;
-  const head = document.createElement("div");
-  head.className = "how-head";
-  const h2 = document.createElement("h2");
-  h2.textContent = "How it works";
-  const sub = document.createElement("span");
-  sub.className = "hint";
-  sub.textContent = `${kind.label ?? kind.name}: ${s.list.length} steps`;
-  const toggle = document.createElement("button");
-  toggle.type = "button";
-  toggle.id = "how-toggle";
-  toggle.setAttribute("aria-expanded", "false");
-  toggle.setAttribute("aria-controls", "how-body");
-  head.append(h2, sub, toggle);
-  const body = document.createElement("div");
-  body.id = "how-body";
-  body.className = "how-body";
-  const tabs = document.createElement("ol");
-  tabs.className = "how-tabs";
-  s.list.forEach((step, i) => {
-    const li = document.createElement("li");
-    const b = document.createElement("button");
-    b.type = "button";
-    b.textContent = step.title;
+  const toggle = el("button", { type: "button", id: "how-toggle", attrs: { "aria-expanded": "false", "aria-controls": "how-body" } });
+  const head = el("div", { className: "how-head" },
+    el("h2", { textContent: "How it works" }),
+    el("span", { className: "hint", textContent: `${kind.label ?? kind.name}: ${s.list.length} steps` }),
+    toggle);
+  const tabs = el("ol", { className: "how-tabs" }, ...s.list.map((step, i) => {
+    const b = el("button", { type: "button", textContent: step.title });
     b.dataset.index = String(i);
     b.addEventListener("click", () => { stopPlaying(s); goToStep(i); });
-    li.append(b);
-    tabs.append(li);
-  });
-  const title = document.createElement("h3");
-  title.className = "how-title";
-  const text = document.createElement("p");
-  text.className = "how-text";
-  const cite = document.createElement("p");
-  cite.className = "how-cite hint";
-  const box = document.createElement("div");
-  box.className = "canvas-box how-canvas";
-  const canvas = document.createElement("canvas");
-  box.append(canvas);
-  const scrub = document.createElement("div");
-  scrub.className = "how-scrub";
-  const range = document.createElement("input");
-  range.type = "range";
-  range.min = "1";
-  range.max = "1";
-  range.value = "1";
-  range.id = "how-frame";
-  const frameLabel = document.createElement("label");
-  frameLabel.htmlFor = range.id;
-  frameLabel.textContent = "frame";
-  scrub.append(frameLabel, range);
-  const caption = document.createElement("output");
-  caption.className = "how-caption hint";
+    return el("li", {}, b);
+  }));
+  const title = el("h3", { className: "how-title" });
+  const text = el("p", { className: "how-text" });
+  const cite = el("p", { className: "how-cite hint" });
+  const canvas = el("canvas");
+  const box = el("div", { className: "canvas-box how-canvas" }, canvas);
+  const range = el("input", { type: "range", min: "1", max: "1", value: "1", id: "how-frame" });
+  const scrub = el("div", { className: "how-scrub" }, el("label", { htmlFor: range.id, textContent: "frame" }), range);
+  const caption = el("output", { className: "how-caption hint" });
   caption.htmlFor = range.id;
-  const legend = document.createElement("div");
-  legend.className = "mini-legend";
-  const nav = document.createElement("div");
-  nav.className = "how-nav";
+  const legend = el("div", { className: "mini-legend" });
   const back = navButton("how-back", "◀ Back", () => { stopPlaying(s); goToStep(s.index - 1); });
   const play = navButton("how-play", "▶ Play", () => (s.playing ? stopPlaying(s) : startPlaying(s)));
   const next = navButton("how-next", "Next ▶", () => { stopPlaying(s); goToStep(s.index + 1); });
-  const count = document.createElement("span");
-  count.className = "how-count hint";
-  nav.append(back, count, play, next);
-  body.append(tabs, title, text, cite, box, scrub, caption, legend, nav);
+  const count = el("span", { className: "how-count hint" });
+  const nav = el("div", { className: "how-nav" }, back, count, play, next);
+  const body = el("div", { id: "how-body", className: "how-body" }, tabs, title, text, cite, box, scrub, caption, legend, nav);
   host.append(head, body);
   s.el = { host, toggle, body, tabs, title, text, cite, canvas, range, scrub, caption, legend, back, play, next, count };
   toggle.addEventListener("click", () => setOpen(!s.open));
@@ -117,10 +80,7 @@ export function buildSteps() {
 }
 
 function navButton(className, text, onClick) {
-  const b = document.createElement("button");
-  b.type = "button";
-  b.className = className;
-  b.textContent = text;
+  const b = button(className, text, false);
   b.addEventListener("click", onClick);
   return b;
 }

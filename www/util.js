@@ -4,6 +4,18 @@
 
 export const $ = (id) => document.getElementById(id);
 
+/**
+ * An element `tag` with `props` set on it (className, id, textContent, type, …; `attrs`: an
+ * object of attributes) and `children` appended.
+ */
+export function el(tag, props = {}, ...children) {
+  const { attrs, ...rest } = props;
+  const e = Object.assign(document.createElement(tag), rest);
+  for (const [k, v] of Object.entries(attrs ?? {})) e.setAttribute(k, v);
+  e.append(...children);
+  return e;
+}
+
 /** A `<button type="button">` of class `className` showing `text`, hidden unless `hidden` is false. */
 export function button(className, text = "", hidden = true) {
   const b = document.createElement("button");

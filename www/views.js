@@ -343,12 +343,15 @@ export function drawView(canvas, answer, styles) {
  * Fills a view's legend under its canvas from an answer and what drawView drew (`r`): a view
  * may name its own entries (meta.legend: feature code → words, e.g. "seed points" drawn in the
  * lattice colour), an image's overlay names its lines (meta.overlay_legend), otherwise the
- * feature's name; an image adds its value range.
+ * feature's name; binned values (meta.bins) come lowest first; an image adds its value range.
  */
 export function fillLegend(el, answer, r, styles) {
   const named = answer?.meta?.legend ?? {};
   const overlayLegend = new Map((answer?.meta?.overlay_legend ?? []).map((e) => [String(e.code), e]));
-  const entries = Object.keys(r.counts ?? {}).map((code) => overlayLegend.has(code)
+  // A view that bins a value into codes (meta.bins: [{code, …}] lowest first) lists them in order.
+  const order = new Map((Array.isArray(answer?.meta?.bins) ? answer.meta.bins : []).map((b, i) => [String(b?.code), i]));
+  const codes = Object.keys(r.counts ?? {}).sort((a, b) => (order.get(a) ?? order.size) - (order.get(b) ?? order.size));
+  const entries = codes.map((code) => overlayLegend.has(code)
     ? [overlayLegend.get(code).color ?? OTHER_COLOR, String(overlayLegend.get(code).label ?? code)]
     : [styles.get(Number(code))?.color ?? OTHER_COLOR,
       typeof named[code] === "string" ? named[code] : styles.get(Number(code))?.label ?? `feature ${code}`]);

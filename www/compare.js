@@ -11,7 +11,7 @@ import { MSG, plain } from "./protocol.js";
 import { $, formatBytes, formatDuration, messageOf } from "./util.js";
 import { showError, showNotice } from "./messages.js";
 import { jobs, workers } from "./worker-client.js";
-import { staleReason } from "./results.js";
+import { staleReason, statsOf } from "./results.js";
 import { formatNumber } from "./plot.js";
 import { settingsDiff } from "./picture-caption.js";
 
@@ -37,16 +37,10 @@ export function comparisonShown() {
   return { a: cam(panes.sides.a), b: cam(panes.sides.b), rows, notes: panes.note.textContent };
 }
 
-/** The statistics of a result, keyed like `weft analyze --json` (plus gcode_bytes). */
-export function statsOf(result) {
-  const a = result?.report?.analysis ?? {};
-  const g = result?.report?.gcode ?? {};
-  const out = {};
-  for (const [key] of ROWS) {
-    const v = key === "gcode_bytes" ? result?.gcode?.byteLength : a[key] ?? g[key];
-    out[key] = typeof v === "number" && Number.isFinite(v) ? v : null;
-  }
-  return out;
+/** The table's statistics of a result (results.js's, keyed like `weft analyze --json`, plus gcode_bytes). */
+function rowsOf(result) {
+  const stats = { ...statsOf(result?.report, "gcode"), ...statsOf(result?.report), gcode_bytes: result?.gcode?.byteLength };
+  return Object.fromEntries(ROWS.map(([key]) => [key, typeof stats[key] === "number" ? stats[key] : null]));
 }
 
 function build() {
@@ -191,8 +185,8 @@ export async function showComparison() {
 }
 
 function fillTable(pinned, current) {
-  const A = statsOf(pinned.result);
-  const B = statsOf(current);
+  const A = rowsOf(pinned.result);
+  const B = rowsOf(current);
   const show = (key, v, digits) => (v === null ? "–" : key === "estimated_time_s" ? formatDuration(v) : key === "gcode_bytes" ? formatBytes(v) : formatNumber(v, digits));
   const nameB = current.json ? JSON.parse(current.json).name : current.fileName;
   panes.table.tHead.querySelector(".compare-a").textContent = "A · pinned";

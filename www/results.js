@@ -175,10 +175,13 @@ export function showResult(res, fileName, json = null, files = state.filesVersio
   tellParent({ type: "weft:result", stats: statsOf(report), design: json ?? state.json });
 }
 
-/** A run's statistics as numbers, keyed as `weft analyze --json` keys them (the embed's weft:result). */
-export function statsOf(report) {
+/**
+ * A run's statistics as numbers, keyed as `weft analyze --json` keys them (the embed's
+ * weft:result, the comparison's table); `part` "gcode" reads the writer's totals instead.
+ */
+export function statsOf(report, part = "analysis") {
   const out = {};
-  for (const [k, v] of Object.entries(report?.analysis ?? {})) if (typeof v === "number" && Number.isFinite(v)) out[k] = v;
+  for (const [k, v] of Object.entries(report?.[part] ?? {})) if (typeof v === "number" && Number.isFinite(v)) out[k] = v;
   return out;
 }
 

@@ -41,8 +41,8 @@ enum Command {
         /// The design (JSON), or a share link / fragment (`#d=…`).
         design: String,
         /// Output file, or a folder to write <design name>.gcode in (.bgcode when the printer
-        /// asks for binary G-code or the file's name ends in .bgcode; .nc for the pneumatic
-        /// flavour, .csv for poses); default: that file in the current folder. The name is made
+        /// asks for binary G-code; .nc for the pneumatic flavour, .csv for poses); a name ending
+        /// in .bgcode writes binary G-code, in .gcode text. Default: that file in the current folder. The name is made
         /// safe (no folders, no hidden or device names), since a design may come from anyone.
         #[arg(long, short)]
         out: Option<PathBuf>,
@@ -57,7 +57,7 @@ enum Command {
         #[arg(long = "set", value_name = "PATH=VALUE")]
         set: Vec<String>,
         /// Use a printer profile (replaces the design's printer section, before any --set):
-        /// generic-220, prusa-mk4, klipper-220, ender-3, five-axis-head, bioprinter-pneumatic.
+        /// generic-220, prusa-mk3, prusa-mk4, prusa-mini, prusa-xl, klipper-220, ender-3, five-axis-head, bioprinter-pneumatic.
         #[arg(long, value_name = "ID")]
         printer: Option<String>,
         /// Threads to compute on (default: every core). 1 computes on one thread, as the
@@ -81,7 +81,6 @@ enum Command {
         #[command(flatten)]
         send: SendOptions,
     },
-    /// Analyse a G-code file (weft's or any other slicer's).
     /// Send a G-code file to a print host (Moonraker/Klipper or OctoPrint) and say its job state.
     Send {
         /// The G-code file (sent under its own name, byte for byte).
@@ -104,6 +103,7 @@ enum Command {
         #[arg(long, short)]
         quiet: bool,
     },
+    /// Analyse a G-code file (weft's or any other slicer's): time, filament, features, objects.
     Analyze {
         /// The G-code file.
         file: PathBuf,
@@ -305,15 +305,26 @@ fn write(path: &Path, bytes: &[u8]) -> Result<(), String> {
 }
 
 /// Where to write an output named after the design: `out` as given, inside `out` when it is a
-/// folder, else in the current folder. The file's name comes from `design::file_stem`: a
-/// design or share link is untrusted and its name must not choose the folder.
+/// folder (made when the name ends in `/` and it is not there yet), else in the current
+/// folder. The file's name comes from `design::file_stem`: a design or share link is untrusted
+/// and its name must not choose the folder.
 fn output_path(out: Option<&Path>, design_name: &str, extension: &str) -> PathBuf {
     let file = format!("{}.{extension}", weft::design::file_stem(design_name));
     match out {
         Some(dir) if dir.is_dir() => dir.join(file),
+        Some(dir) if names_a_folder(dir) => {
+            // A failure here is said by the write that follows, naming the file.
+            let _ = std::fs::create_dir_all(dir);
+            dir.join(file)
+        }
         Some(path) => path.to_path_buf(),
         None => PathBuf::from(file),
     }
+}
+
+/// Whether `path` is written as a folder: its name ends in a path separator.
+fn names_a_folder(path: &Path) -> bool {
+    path.as_os_str().to_string_lossy().ends_with(std::path::is_separator)
 }
 
 fn file_name(path: &Path) -> String {
@@ -647,8 +658,10 @@ fn cmd_run(
     if let Some(e) = ahead_failed.into_inner() {
         return Err(format!("--ahead: {e}"));
     }
-    // Binary G-code when the printer asks for it or the output's name ends in .bgcode.
-    let named_binary = out.as_deref().is_some_and(|p| !p.is_dir() && p.extension().is_some_and(|e| e.eq_ignore_ascii_case("bgcode")));
+    // Binary G-code when the output's name ends in .bgcode, text when it ends in .gcode, else
+    // what the printer asks for (printer.binary_gcode).
+    let named = |ext: &str| out.as_deref().is_some_and(|p| !p.is_dir() && !names_a_folder(p) && p.extension().is_some_and(|e| e.eq_ignore_ascii_case(ext)));
+    let (named_binary, named_text) = (named("bgcode"), named("gcode"));
     if named_binary && design.printer.flavor != weft::gcode::Flavor::Marlin {
         return Err(format!(
             "{}: binary G-code is Marlin G-code; the {} flavour writes .{}",
@@ -657,7 +670,11 @@ fn cmd_run(
             design.printer.flavor.file_extension()
         ));
     }
-    let binary = output.bgcode.clone().or_else(|| named_binary.then(|| std::sync::Arc::new(weft::gcode::binary::from_text(&output.gcode))));
+    let binary = match output.bgcode.clone() {
+        _ if named_text => None,
+        Some(b) => Some(b),
+        None => named_binary.then(|| std::sync::Arc::new(weft::gcode::binary::from_text(&output.gcode))),
+    };
     let extension = if binary.is_some() { "bgcode" } else { design.printer.flavor.file_extension() };
     let out = output_path(out.as_deref(), &design.name, extension);
     match &binary {
@@ -933,7 +950,7 @@ fn main() -> ExitCode {
 #[derive(clap::Args, Default)]
 struct SendOptions {
     /// Send the G-code to this print host after writing it: moonraker (Klipper) or octoprint.
-    #[arg(long, value_name = "KIND", requires = "send_url")]
+    #[arg(long, visible_alias = "send", value_name = "KIND", requires = "send_url")]
     send_to: Option<send::HostKind>,
     /// The print host's address, http://HOST:PORT (Moonraker usually :7125, OctoPrint :80 or :5000).
     #[arg(long, value_name = "URL", requires = "send_to")]

@@ -482,6 +482,8 @@ pub fn send(
         } else {
             match job_state(to, url, key) {
                 Ok(j) if !j.connected => format!("not connected ({})", j.state),
+                // Refused while a job was ending: the printer is idle by the time it is asked.
+                Ok(j) if is_idle(&j.state) => format!("busy when asked (it is {} now)", j.state),
                 Ok(j) => format!("busy ({})", j.state),
                 Err(_) => "busy or not connected (the host did not say which)".to_string(),
             }
@@ -489,6 +491,12 @@ pub fn send(
         return Err(SendError::NotStarted { host: base.host, name: stored, words });
     }
     Ok(Sent { name: stored, host: base.host, bytes: file_len, seconds, started })
+}
+
+/// Whether a host's job-state word means the printer is free: OctoPrint's Operational,
+/// Moonraker's standby, complete and cancelled.
+fn is_idle(state: &str) -> bool {
+    matches!(state, "Operational" | "standby" | "complete" | "cancelled")
 }
 
 /// A small GET of `path` on the host: its JSON, or the error to report.

@@ -160,7 +160,7 @@ export function showResult(res, fileName, json = null, files = state.filesVersio
   const origin = state.design?.printer?.origin;
   state.preview?.setResult(buffers, { origin: typeof origin === "string" ? origin : "corner" });
   performance.mark("weft:preview-set");
-  renderStats(report, gcode, res.ms);
+  renderStats(report, gcode, res.ms, bgcode);
   renderReport($("report"), report, state);
   performance.mark("weft:shown");
   if (res.request === "run") {
@@ -185,7 +185,7 @@ export function statsOf(report, part = "analysis") {
   return out;
 }
 
-function renderStats(report, gcode, ms) {
+function renderStats(report, gcode, ms, bgcode) {
   const a = report?.analysis ?? {};
   const g = report?.gcode ?? {};
   const num = (v, digits = 1) =>
@@ -203,6 +203,8 @@ function renderStats(report, gcode, ms) {
     ["Estimated time", formatDuration(a.estimated_time_s ?? g.estimated_time_s), "h:m:s"],
     ["G-code", gcode ? formatBytes(gcode.byteLength) : "–", ""],
   ];
+  // Prusa binary G-code is what Download saves when the printer asks for it.
+  if (bgcode) rows.push(["Binary G-code", formatBytes(bgcode.byteLength), "", "The .bgcode Download saves and Send offers first (printer.binary_gcode)."]);
   if (typeof ms === "number") rows.push(["Worker time", num(ms / 1000, 2), "s"]);
   const reused = (report?.stages ?? []).filter((s) => s.cached).length;
   if (reused) rows.push(["Stages reused", `${reused} of ${report.stages.length}`, ""]);

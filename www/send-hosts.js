@@ -126,7 +126,7 @@ export function refusal(kind, { host, status, text, hadKey, name, upload }) {
       : `${host} needs an API key (${status} ${words}): ${k.keyHelp}.`;
   }
   if (status === 409) return `${host} did not take ${name}: it is busy (${words}); wait for the print to end, or send it under another name.`;
-  if (status === 415) return `${host} does not take ${name} (${words}): send the plain G-code instead (Format: G-code).`;
+  if (status === 415) return `${host} does not take ${name} (${status} ${words}): send the plain G-code instead (Format: G-code).`;
   if (status === 404 || status === 405) {
     return `${host} does not answer as ${k.short} (${upload ? k.upload : k.hello}: ${status} ${words}): check the port and the host kind (Moonraker listens on 7125, OctoPrint on 80 or 5000).`;
   }
@@ -153,6 +153,8 @@ export function notStarted(kind, host, name, outcome, job) {
   let why;
   if (outcome.queued) why = "busy (Moonraker queued the file: it starts when the printer is free)";
   else if (job && !job.connected) why = `not connected (${job.state})`;
+  // Refused while a job was ending: the printer is idle by the time it is asked.
+  else if (job && /^(Operational|standby|complete|cancelled)$/.test(job.state)) why = `busy when asked (it is ${job.state} now)`;
   else if (job) why = `busy (${job.state})`;
   else why = "busy or not connected (the host did not say which)";
   return `${head}: it is ${why}; start it from the host's page once the printer is ready.`;

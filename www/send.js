@@ -169,6 +169,8 @@ function showFile() {
 }
 
 function resetProgress() {
+  // The job line belongs to the last upload: a new send starts without it.
+  $("send-dialog").dataset.job = "";
   $("send-progress").hidden = true;
   $("send-bar").value = 0;
   $("send-progress-text").textContent = "";
@@ -383,7 +385,6 @@ async function sendNow() {
     const outcome = uploadOutcome(k, res.text, name);
     const line = `Uploaded ${outcome.name} to ${parsed.host} (${formatBytes(bytes.byteLength)} in ${seconds.toFixed(1)} s)${outcome.started ? "; printing started" : ""}.`;
     say(line, "", "uploaded");
-    $("send-dialog").dataset.job = "";
     setBusy(false);
     watchJob(k, parsed, key, line, start && !outcome.started ? outcome : null);
   } finally {

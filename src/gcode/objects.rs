@@ -2,7 +2,9 @@
 //! one by one. Found from the toolpath itself, so every job kind and every input gets them:
 //! paths whose extrusion lies in one connected piece of the plate (seen from above, over all
 //! layers) are one object. Parts of a multi-object 3MF placed apart, a plate of copies, foam
-//! regions side by side are objects each; a stack or a lattice is one.
+//! regions side by side are objects each; a stack or a lattice is one. The skirt and brim
+//! belong to no object (as in PrusaSlicer): they are printed on the first layer whatever is
+//! cancelled, and a skirt round a single part does not make a second object.
 //!
 //! The plate is a grid of cells ([`cell_mm`]: at least 1 mm, at most [`MAX_CELLS`] cells a
 //! side); each extruding segment marks the cells it crosses, and marked cells that touch
@@ -12,7 +14,7 @@
 
 use super::format::fixed;
 use super::ObjectLabels;
-use crate::geom::Toolpath;
+use crate::geom::{Feature, Toolpath};
 use glam::DVec3;
 
 /// Most cells along a side of the grid.
@@ -51,15 +53,17 @@ pub fn cell_mm(span_mm: f64) -> f64 {
 /// from `name`.
 pub fn find(toolpath: &Toolpath, offset: DVec3, name: &str) -> Objects {
     let paths: Vec<&crate::geom::Path> = toolpath.passes.iter().flat_map(|p| &p.paths).collect();
+    // Paths that belong to an object: printed ones other than the skirt and brim.
+    let part = |p: &crate::geom::Path| p.points.len() >= 2 && p.feature != Feature::Skirt;
     let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
-    for p in paths.iter().filter(|p| p.points.len() >= 2) {
+    for p in paths.iter().filter(|p| part(p)) {
         for q in &p.points {
             lo = [lo[0].min(q.x), lo[1].min(q.y)];
             hi = [hi[0].max(q.x), hi[1].max(q.y)];
         }
     }
     let whole = |paths: &[&crate::geom::Path]| {
-        let of_path = paths.iter().map(|p| (p.points.len() >= 2).then_some(0)).collect();
+        let of_path = paths.iter().map(|p| part(p).then_some(0)).collect();
         let poly = if lo[0].is_finite() { vec![[lo[0], lo[1]], [hi[0], lo[1]], [hi[0], hi[1]], [lo[0], hi[1]]] } else { vec![] };
         let list = if lo[0].is_finite() { vec![object(stem(name), &poly, offset)] } else { vec![] };
         Objects { list, of_path }
@@ -74,7 +78,7 @@ pub fn find(toolpath: &Toolpath, offset: DVec3, name: &str) -> Objects {
     // Mark the cells every extruding segment crosses (sampled at half a cell).
     let mut grid = vec![false; nx * ny];
     let mut steps = 0usize;
-    for p in &paths {
+    for p in paths.iter().filter(|p| part(p)) {
         for w in p.points.windows(2) {
             let n = ((w[0].distance(w[1]) / (cell * 0.5)).ceil() as usize).max(1);
             steps += n;
@@ -93,7 +97,7 @@ pub fn find(toolpath: &Toolpath, offset: DVec3, name: &str) -> Objects {
     let mut of_path = Vec::with_capacity(paths.len());
     let mut stack = Vec::new();
     for p in &paths {
-        if p.points.len() < 2 {
+        if !part(p) {
             of_path.push(None);
             continue;
         }
@@ -232,7 +236,7 @@ fn hull(mut pts: Vec<[f64; 2]>) -> Vec<[f64; 2]> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::geom::{Feature, Pass, Path};
+    use crate::geom::{Pass, Path};
 
     fn square(x: f64, y: f64, s: f64, z: f64) -> Path {
         let p = [[x, y], [x + s, y], [x + s, y + s], [x, y + s], [x, y]].map(|q| DVec3::new(q[0], q[1], z));
@@ -259,6 +263,24 @@ mod tests {
         assert_eq!(o.list.len(), 1);
         assert_eq!(o.list[0].name, "part");
         assert_eq!(o.of_path, vec![Some(0), Some(0)]);
+    }
+
+    #[test]
+    fn the_skirt_and_brim_belong_to_no_object() {
+        let mut skirt = square(-5.0, -5.0, 20.0, 0.2);
+        skirt.feature = Feature::Skirt;
+        // A skirt round one part, and a skirt round two parts apart.
+        let one = Toolpath { passes: vec![Pass::layer(0.2, 0.2, vec![skirt.clone(), square(0.0, 0.0, 10.0, 0.2)])] };
+        let o = find(&one, DVec3::ZERO, "cube");
+        assert_eq!(o.list.len(), 1);
+        assert_eq!(o.of_path, vec![None, Some(0)]);
+        assert!(o.list[0].polygon.iter().all(|p| p[0] >= -0.01 && p[0] <= 10.01), "the outline is the part's: {:?}", o.list[0].polygon);
+        let mut wide = square(-5.0, -5.0, 60.0, 0.2);
+        wide.feature = Feature::Skirt;
+        let two = Toolpath { passes: vec![Pass::layer(0.2, 0.2, vec![wide, square(0.0, 0.0, 10.0, 0.2), square(40.0, 0.0, 10.0, 0.2)])] };
+        let o = find(&two, DVec3::ZERO, "pair");
+        assert_eq!(o.list.len(), 2);
+        assert_eq!(o.of_path, vec![None, Some(0), Some(1)]);
     }
 
     #[test]

@@ -6,7 +6,7 @@
 //! Bowden retraction); start and end code are kept minimal (no purge line) so the G-code holds
 //! only what the design prints.
 
-use super::{Flavor, Origin, Printer, Retraction, DEFAULT_PNEUMATIC_END_GCODE, DEFAULT_PNEUMATIC_START_GCODE};
+use super::{Flavor, HostKind, Origin, Printer, Retraction, DEFAULT_PNEUMATIC_END_GCODE, DEFAULT_PNEUMATIC_START_GCODE};
 use serde::Serialize;
 
 /// One printer profile.
@@ -32,21 +32,32 @@ pub fn presets() -> Vec<Preset> {
             printer: Printer::default(),
         },
         Preset {
+            id: "prusa-mk3",
+            label: "Prusa MK3S class",
+            doc: "250 × 210 × 210 mm, 0.4 mm nozzle, direct drive (short retraction), relative extrusion, text G-code (often behind OctoPrint).",
+            printer: prusa("Prusa MK3S class 250 × 210", "MK3S", [250.0, 210.0, 210.0], false, vec![[16, 16], [160, 120]], HostKind::Octoprint),
+        },
+        Preset {
             id: "prusa-mk4",
-            label: "Prusa MK3/MK4 class",
-            doc: "250 × 210 × 220 mm, 0.4 mm nozzle, direct drive (short retraction), relative extrusion.",
+            label: "Prusa MK4 / MK4S",
+            doc: "250 × 210 × 220 mm, 0.4 mm nozzle, direct drive, relative extrusion; Prusa binary G-code (.bgcode) with the thumbnails its screen shows.",
+            printer: prusa("Prusa MK4 250 × 210", "MK4", [250.0, 210.0, 220.0], true, PRUSA_SCREENS.to_vec(), HostKind::None),
+        },
+        Preset {
+            id: "prusa-mini",
+            label: "Prusa MINI / MINI+",
+            doc: "180 × 180 × 180 mm, 0.4 mm nozzle, Bowden extruder (longer retraction); Prusa binary G-code (.bgcode) with its screen's thumbnails.",
             printer: Printer {
-                name: "Prusa MK4 class 250 × 210".into(),
-                bed_size_mm: [250.0, 210.0, 220.0],
-                relative_e: true,
-                retraction: Retraction { length_mm: 0.7, speed_mm_s: 35.0, z_hop_mm: 0.2, min_travel_mm: 1.5 },
-                travel_speed_mm_s: 180.0,
-                z_speed_mm_s: 12.0,
-                acceleration_mm_s2: 2000.0,
-                // The sizes Prusa's screens show (the list and the preview).
-                thumbnails: vec![[16, 16], [313, 173]],
-                ..Printer::default()
+                retraction: Retraction { length_mm: 3.2, speed_mm_s: 70.0, z_hop_mm: 0.2, min_travel_mm: 1.5 },
+                acceleration_mm_s2: 1250.0,
+                ..prusa("Prusa MINI 180 × 180", "MINI", [180.0, 180.0, 180.0], true, PRUSA_SCREENS.to_vec(), HostKind::None)
             },
+        },
+        Preset {
+            id: "prusa-xl",
+            label: "Prusa XL (one tool)",
+            doc: "360 × 360 × 360 mm, 0.4 mm nozzle, direct drive, one tool; Prusa binary G-code (.bgcode) with its screen's thumbnails.",
+            printer: Printer { acceleration_mm_s2: 2500.0, ..prusa("Prusa XL 360 × 360", "XL", [360.0, 360.0, 360.0], true, PRUSA_SCREENS.to_vec(), HostKind::None) },
         },
         Preset {
             id: "klipper-220",
@@ -55,7 +66,7 @@ pub fn presets() -> Vec<Preset> {
             printer: Printer {
                 name: "Klipper 220 × 220".into(),
                 object_labels: super::ObjectLabels::ExcludeObject,
-                host: super::HostKind::Moonraker,
+                host: HostKind::Moonraker,
                 acceleration_mm_s2: 3000.0,
                 ..Printer::default()
             },
@@ -113,6 +124,28 @@ pub fn presets() -> Vec<Preset> {
             },
         },
     ]
+}
+
+/// The thumbnail sizes Prusa's xBuddy screens show: the file list's icon and the preview.
+const PRUSA_SCREENS: [[u32; 2]; 3] = [[16, 16], [313, 173], [440, 240]];
+
+/// A Prusa printer: direct-drive retraction, relative extrusion, `printer_model` written so the
+/// firmware can warn about a file sliced for another machine.
+fn prusa(name: &str, model: &str, bed_size_mm: [f64; 3], binary_gcode: bool, thumbnails: Vec<[u32; 2]>, host: HostKind) -> Printer {
+    Printer {
+        name: name.into(),
+        model: model.into(),
+        bed_size_mm,
+        relative_e: true,
+        retraction: Retraction { length_mm: 0.7, speed_mm_s: 35.0, z_hop_mm: 0.2, min_travel_mm: 1.5 },
+        travel_speed_mm_s: 180.0,
+        z_speed_mm_s: 12.0,
+        acceleration_mm_s2: 2000.0,
+        thumbnails,
+        binary_gcode,
+        host,
+        ..Printer::default()
+    }
 }
 
 /// The profile `id`, or the list of ids as the error.

@@ -612,15 +612,15 @@ await check(53, "an open part (a box without one wall) is capped out loud: the f
 });
 
 // Send to real print hosts (tests/hosts/hosts.py, started by scripts/test.sh: WEFT_HOSTS).
-await sendChecks({ browser, baseUrl: base, hosts: hostsFromEnv(), check, outDir: OUT, first: 54 });
+const afterSend = await sendChecks({ browser, baseUrl: base, hosts: hostsFromEnv(), check, outDir: OUT, first: 54, weftBin: existsSync(WEFT_BIN) ? WEFT_BIN : null });
 
 // Supports switched on in the form for a dropped part (issue 44).
-await supportChecks({ newPage, weftBin: existsSync(WEFT_BIN) ? WEFT_BIN : null, check, outDir: OUT, base, first: 60, timeoutMs: JOB_TIMEOUT });
+await supportChecks({ newPage, weftBin: existsSync(WEFT_BIN) ? WEFT_BIN : null, check, outDir: OUT, base, first: afterSend, timeoutMs: JOB_TIMEOUT });
 
 // Teaching: "How it works" for every kind, the embedded weft driven by postMessage (issue 45).
-await stepsChecks({ browser, newPage, weftBin: WEFT_BIN, check, outDir: OUT, base, first: 61, timeoutMs: JOB_TIMEOUT });
+await stepsChecks({ browser, newPage, weftBin: WEFT_BIN, check, outDir: OUT, base, first: afterSend + 1, timeoutMs: JOB_TIMEOUT });
 // Pictures for slides (PNG/SVG of every view, plot and the preview) and comparing two results.
-await picturesChecks({ newPage, weftBin: WEFT_BIN, check, outDir: OUT, base, first: 63, timeoutMs: JOB_TIMEOUT });
+await picturesChecks({ newPage, weftBin: WEFT_BIN, check, outDir: OUT, base, first: afterSend + 3, timeoutMs: JOB_TIMEOUT });
 
 if (main.errors.length) console.log(`note: console errors in the main page:\n  ${main.errors.join("\n  ")}`);
 if (offOrigin.length) console.log(`note: blocked requests leaving the origin:\n  ${[...new Set(offOrigin)].join("\n  ")}`);

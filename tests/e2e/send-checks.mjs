@@ -68,7 +68,7 @@ async function host(url, path, { key = "", method = "GET", body = null } = {}) {
  *          root?: string}} opts  root: what the page server serves (run.mjs's ROOT)
  * @returns {Promise<number>} the next check number
  */
-export async function sendChecks({ browser, baseUrl, hosts, check, outDir, first, timeoutMs, root = ROOT }) {
+export async function sendChecks({ browser, baseUrl, hosts, check, outDir, first, timeoutMs, root = ROOT, weftBin = null }) {
   const jobTimeout = timeoutMs ?? Number(process.env.E2E_TIMEOUT_S ?? 120) * 1000;
   let n = first;
   const mr = hosts?.moonraker ?? {};
@@ -97,9 +97,10 @@ export async function sendChecks({ browser, baseUrl, hosts, check, outDir, first
     return { context, page, errors: collectErrors(page) };
   };
   /** Opens the dialog, fills it and presses Send; resolves when it is done (uploaded or failed). */
-  const sendVia = async (page, { kind, url, key = "", start = false, remember = true, wait = true }) => {
+  const sendVia = async (page, { kind, url, key = "", start = false, remember = true, wait = true, format = null }) => {
     if (!(await page.isVisible("#send-dialog"))) await page.click("#send");
     await page.waitForSelector("#send-dialog[open]", { timeout: 10000 });
+    if (format) await page.selectOption("#send-format", format);
     await page.check(`input[name=send-kind][value=${kind}]`);
     await page.fill("#send-url", url);
     await page.fill("#send-key", key);
@@ -323,6 +324,64 @@ export async function sendChecks({ browser, baseUrl, hosts, check, outDir, first
       if (offOrigin.length) throw new Error(`requests left 127.0.0.1/localhost: ${offOrigin.join(", ")}`);
       return said.map((s) => `"${s}"`).join(" | ");
     });
+
+    await check(n++, "send: the Prusa MK4 profile: Download saves cube-20mm.bgcode with the CLI's bytes for the page's design; Send offers binary G-code first, Moonraker holds it byte for byte, OctoPrint refuses it in one sentence and takes the text format", async () => {
+      need();
+      const p = await open();
+      try {
+        await runExample(p.page, baseUrl, EXAMPLE, jobTimeout);
+        await p.page.click("#machine > summary");
+        const before = await p.page.evaluate(() => window.weft.resultCount);
+        await p.page.selectOption("#printer-preset", "prusa-mk4");
+        await p.page.click("#slice");
+        await waitResult(p.page, before, "run with the Prusa MK4 profile", jobTimeout);
+        const dl = await downloadGcode(p.page, join(outDir, "send-mk4.bgcode"));
+        if (dl.name !== "cube-20mm.bgcode") throw new Error(`Download saved ${dl.name}`);
+        const stats = await p.page.textContent("#stats");
+        if (!/Binary G-code\s*[\d.]+ KiB/.test(stats)) throw new Error(`the numbers do not give the .bgcode's size: ${stats.slice(0, 300)}`);
+        // The page's design (the profile picked, dated by the edit), run by the CLI.
+        const d = JSON.parse(await p.page.evaluate(() => window.weft.design));
+        if (d.printer.model !== "MK4" || d.printer.binary_gcode !== true) throw new Error(`the MK4 profile set ${JSON.stringify(d.printer).slice(0, 200)}`);
+        let cliText = null;
+        if (weftBin) {
+          const { execFileSync } = await import("node:child_process");
+          const { writeFileSync } = await import("node:fs");
+          const designPath = join(outDir, "send-mk4.json");
+          writeFileSync(designPath, JSON.stringify(d));
+          for (const [file, what] of [["cli-mk4.bgcode", "binary"], ["cli-mk4.gcode", "text"]]) {
+            execFileSync(weftBin, ["run", designPath, "-q", "-o", join(outDir, file)]);
+            if (what === "binary" && sha256(readFileSync(join(outDir, file))) !== sha256(dl.bytes)) throw new Error("the page's .bgcode differs from weft run DESIGN -o x.bgcode");
+          }
+          cliText = readFileSync(join(outDir, "cli-mk4.gcode"));
+        }
+        await p.page.click("#send");
+        await p.page.waitForSelector("#send-dialog[open]", { timeout: 10000 });
+        const offered = await p.page.evaluate(() => ({ hidden: document.getElementById("send-format-row").hidden, value: document.getElementById("send-format").value, file: document.getElementById("send-file").textContent }));
+        if (offered.hidden || offered.value !== "bgcode" || !offered.file.startsWith("cube-20mm.bgcode")) throw new Error(`the dialog offers ${JSON.stringify(offered)}`);
+        for (const [w, h, file] of [[1280, 800, "send-mk4-desktop.png"], [390, 844, "send-mk4-phone.png"]]) {
+          await p.page.setViewportSize({ width: w, height: h });
+          await p.page.waitForTimeout(200);
+          await p.page.screenshot({ path: join(outDir, file) });
+        }
+        await p.page.setViewportSize({ width: 1280, height: 800 });
+        await host(mr.url, "/server/files/gcodes/cube-20mm.bgcode", { key: mr.key, method: "DELETE" });
+        let r = await sendVia(p.page, { kind: "moonraker", url: mr.url, key: mr.key, remember: false });
+        if (r.phase !== "uploaded" || !r.status.startsWith("Uploaded cube-20mm.bgcode to ")) throw new Error(`Moonraker, .bgcode: ${JSON.stringify(r)}`);
+        const back = await host(mr.url, "/server/files/gcodes/cube-20mm.bgcode", { key: mr.key });
+        if (sha256(back.buf) !== sha256(dl.bytes)) throw new Error("the .bgcode on Moonraker is not the download's bytes");
+        r = await sendVia(p.page, { kind: "octoprint", url: op.url, key: op.key, remember: false });
+        const refused = `${new URL(op.url).host} does not take cube-20mm.bgcode (415 Could not upload file, invalid type): send the plain G-code instead (Format: G-code).`;
+        if (r.error !== refused) throw new Error(`OctoPrint, .bgcode: ${JSON.stringify(r)}`);
+        r = await sendVia(p.page, { kind: "octoprint", url: op.url, key: op.key, remember: false, format: "gcode" });
+        if (r.phase !== "uploaded" || !r.status.startsWith("Uploaded cube-20mm.gcode to ")) throw new Error(`OctoPrint, text: ${JSON.stringify(r)}`);
+        const stored = await host(op.url, "/downloads/files/local/cube-20mm.gcode", { key: op.key });
+        if (cliText && sha256(stored.buf) !== sha256(cliText)) throw new Error("the text OctoPrint holds differs from weft run DESIGN -o x.gcode");
+        if (!/^; printer_model = MK4$/m.test(stored.buf.toString("utf8"))) throw new Error("the text G-code does not name the MK4");
+        return `${dl.bytes.length} B .bgcode (the CLI's bytes: ${cliText ? "yes" : "no CLI"}) on Moonraker; OctoPrint: "${refused}", then the text (${stored.buf.length} B)`;
+      } finally {
+        await p.context.close();
+      }
+    });
   } finally {
     await main.context.close();
   }
@@ -339,7 +398,7 @@ async function freePort() {
   return port;
 }
 
-// Run by itself: `node tests/e2e/send-checks.mjs` (WEFT_HOSTS as above).
+// Run by itself: `node tests/e2e/send-checks.mjs` (WEFT_HOSTS as above; WEFT_BIN: the CLI whose bytes the page's must equal).
 if (import.meta.url === pathToFileURL(process.argv[1] ?? "").href) {
   const outDir = join(ROOT, "tests/e2e/out");
   const pkgDir = process.env.WEFT_PKG_DIR ? resolve(process.env.WEFT_PKG_DIR) : join(ROOT, "pkg");
@@ -358,7 +417,8 @@ if (import.meta.url === pathToFileURL(process.argv[1] ?? "").href) {
     console.log(`WEFT_HOSTS is not the harness's JSON: ${err.message}`);
   }
   try {
-    await sendChecks({ browser, baseUrl: server.url, hosts, check, outDir, first: 1 });
+    const weftBin = process.env.WEFT_BIN ? resolve(process.env.WEFT_BIN) : null;
+    await sendChecks({ browser, baseUrl: server.url, hosts, check, outDir, first: 1, weftBin: weftBin && existsSync(weftBin) ? weftBin : null });
   } finally {
     await browser.close();
     await server.close();

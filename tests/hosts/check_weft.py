@@ -12,6 +12,13 @@ HOSTS.json is the line `hosts.py start` printed (the hosts are running). With th
    the preview's feature colours.
 3. `weft send … --to octoprint --key KEY --start`: the virtual printer prints it to completion; OctoPrint's own
    analysis finds weft's filament length and the part's size. A wrong key fails with a plain sentence and exit 1.
+   While a longer print runs, sending the same file again is refused as busy (OctoPrint keeps the file being
+   printed), and another file is stored but not started, each in one sentence with exit 1; then it is cancelled.
+4. Object labels of two cubes apart, read by Moonraker's own upload processing (its metadata.py with
+   --check-objects, which runs preprocess_cancellation): Klipper's labels (the klipper-220 profile) arrive on
+   Moonraker byte for byte and the processing leaves them as they are; M486 labels (the default) are turned by it
+   into Klipper's, two objects whose centres are weft's, which weft's analyzer reads back with the same extrusion.
+   (Moonraker's metadata has no object list: Klipper builds it from EXCLUDE_OBJECT_DEFINE when printing.)
 Exits 1 on the first failure, with what differed.
 """
 
@@ -79,6 +86,134 @@ def check_thumbnail(png_bytes, size, colours):
         ok = any(all(abs(p[i] - round(c[i] * s / 100)) <= 1 for i in range(3)) for c in colours for s in range(45, 101))
         check(ok, f"thumbnail {size}: colour {p} ({n} px) is no shade of a feature colour")
     return top
+
+
+def two_cubes_stl(path):
+    """Two 10 mm cubes 20 mm apart, as a binary STL (outward normals)."""
+    import struct
+
+    faces = [(0, 1, 3), (0, 3, 2), (4, 7, 5), (4, 6, 7), (0, 4, 5), (0, 5, 1),
+             (2, 7, 6), (2, 3, 7), (0, 2, 6), (0, 6, 4), (1, 5, 7), (1, 7, 3)]
+    tris = []
+    for x0 in (0.0, 30.0):
+        v = [(x0 + 10 * dx, 10.0 * dy, 10.0 * dz) for dx in (0, 1) for dy in (0, 1) for dz in (0, 1)]
+        tris += [[v[i] for i in f] for f in faces]
+    with open(path, "wb") as f:
+        f.write(b"two cubes".ljust(80, b" ") + struct.pack("<I", len(tris)))
+        for t in tris:
+            f.write(struct.pack("<3f", 0, 0, 0) + b"".join(struct.pack("<3f", *p) for p in t) + b"\0\0")
+
+
+def defined_objects(text):
+    """EXCLUDE_OBJECT_DEFINE lines: name → (x, y) centre."""
+    return {m.group(1): (float(m.group(2)), float(m.group(3)))
+            for m in re.finditer(r"^EXCLUDE_OBJECT_DEFINE NAME=(\S+) CENTER=([-\d.]+),([-\d.]+)", text, re.M)}
+
+
+def moonraker_processing(path, work):
+    """Runs Moonraker's upload processing (metadata.py --check-objects, as Moonraker runs it with
+    enable_object_processing) on a copy of `path`; the copy's text after it."""
+    import shutil
+
+    python = os.path.join(sys.prefix, "moonraker-env", "bin", "python")
+    os.makedirs(work, exist_ok=True)
+    name = os.path.basename(path)
+    shutil.copyfile(path, os.path.join(work, name))
+    p = subprocess.run([python, "-m", "moonraker.components.file_manager.metadata", "-f", name, "-p", work, "-o"],
+                       stdout=subprocess.PIPE, stderr=subprocess.STDOUT, timeout=120)
+    check(p.returncode == 0, f"Moonraker's metadata.py on {name}: exit {p.returncode}: {p.stdout[-400:]!r}")
+    return open(os.path.join(work, name), encoding="utf-8").read()
+
+
+def check_objects(binary, out, mr):
+    stl = os.path.join(out, "two-cubes.stl")
+    two_cubes_stl(stl)
+    design = os.path.join(ROOT, "examples/cube-20mm.json")
+    files = {}
+    for variant, printer in (("klipper", "klipper-220"), ("m486", "generic-220")):
+        path = os.path.join(out, f"two-cubes-{variant}.gcode")
+        rc, _, err = weft(binary, "run", design, "--input", f"mesh={stl}", "--printer", printer, "--set", "name=two-cubes", "-q", "-o", path)
+        check(rc == 0, f"weft run two cubes ({printer}): {err}")
+        rc, js, err = weft(binary, "analyze", path, "--json")
+        check(rc == 0, f"weft analyze {path}: {err}")
+        files[variant] = (path, open(path, encoding="utf-8").read(), json.loads(js)["objects"])
+    k_path, k_text, k_objects = files["klipper"]
+    weft_centres = defined_objects(k_text)
+    check(sorted(weft_centres) == ["two-cubes_1", "two-cubes_2"] == sorted(o["name"] for o in k_objects),
+          f"weft's objects: defined {sorted(weft_centres)}, analyzed {[o['name'] for o in k_objects]}")
+    # Klipper's labels: byte for byte on Moonraker, and its processing sees they are there.
+    rc, _, err = weft(binary, "send", k_path, "--to", "moonraker", "--url", mr, "-q")
+    check(rc == 0, f"weft send two-cubes-klipper.gcode: {err}")
+    back = get(f"{mr}/server/files/gcodes/{os.path.basename(k_path)}")
+    check(back == k_text.encode(), f"Moonraker holds {len(back)} bytes, weft wrote {len(k_text.encode())}")
+    check(moonraker_processing(k_path, os.path.join(out, "mr-klipper")) == k_text,
+          "Moonraker's object processing changed a file that has Klipper's labels")
+    # M486 labels, turned into Klipper's by Moonraker's processing: the same two objects.
+    m_path, m_text, m_objects = files["m486"]
+    processed = moonraker_processing(m_path, os.path.join(out, "mr-m486"))
+    theirs = defined_objects(processed)
+    check(len(theirs) == 2, f"Moonraker's processing found {len(theirs)} objects in weft's M486 labels: {theirs}")
+    for i, (name, c) in enumerate(sorted(theirs.items())):
+        w = weft_centres[f"two-cubes_{i + 1}"]
+        check(abs(c[0] - w[0]) < 1.0 and abs(c[1] - w[1]) < 1.0, f"object {name}: Moonraker's centre {c}, weft's {w}")
+    processed_path = os.path.join(out, "mr-m486", "processed.gcode")
+    with open(processed_path, "w", encoding="utf-8") as f:
+        f.write(processed)
+    rc, js, err = weft(binary, "analyze", processed_path, "--json")
+    check(rc == 0, f"weft analyze of Moonraker's processed file: {err}")
+    read = json.loads(js)["objects"]
+    check([o["name"] for o in read] == sorted(theirs), f"weft's analyzer reads {[o['name'] for o in read]} from Moonraker's labels")
+    for a, b in zip(read, m_objects):
+        check(abs(a["extruded_mm"] - b["extruded_mm"]) < 1e-6 * b["extruded_mm"] + 1e-6,
+              f"object {a['name']}: {a['extruded_mm']} mm extruded under Moonraker's labels, {b['extruded_mm']} under weft's")
+    print(f"Objects: two cubes as {sorted(weft_centres)} at {sorted(weft_centres.values())}; Klipper's labels kept byte for byte "
+          f"on Moonraker; M486 turned by Moonraker's processing into {sorted(theirs)} at the same centres and extrusion")
+
+
+def post(url, body, headers):
+    req = urllib.request.Request(url, data=json.dumps(body).encode(), headers={**headers, "Content-Type": "application/json"}, method="POST")
+    with urllib.request.urlopen(req, timeout=15) as r:
+        return r.status
+
+
+def check_busy(binary, out, op, key):
+    """A print running on OctoPrint: the same name again is busy, another is stored but not started."""
+    h = {"X-Api-Key": key}
+    env = dict(os.environ, WEFT_HOST_KEY=key)
+    design = os.path.join(ROOT, "examples/sphere-30mm.json")
+    path = os.path.join(out, "busy-sphere.gcode")
+    rc, _, err = weft(binary, "run", design, "-q", "-o", path)
+    check(rc == 0, f"weft run sphere-30mm: {err}")
+    rc, _, err = weft(binary, "send", path, "--to", "octoprint", "--url", op, "--start", "-q", env=env)
+    check(rc == 0, f"weft send busy-sphere.gcode --start: {err}")
+    deadline = time.monotonic() + 60
+    state = {}
+    while time.monotonic() < deadline:
+        state = json.loads(get(f"{op}/api/job", h))
+        if state.get("state") == "Printing":
+            break
+        time.sleep(0.2)
+    check(state.get("state") == "Printing", f"OctoPrint is not printing busy-sphere.gcode: {json.dumps(state)[:300]}")
+    try:
+        # The sphere's 42k lines take the virtual printer about 12 s (longer under load).
+        rc, _, same = weft(binary, "send", path, "--to", "octoprint", "--url", op, "--start", "-q", env=env)
+        check(rc == 1 and "busy" in same and "being printed" in same and same.count("\n") == 1,
+              f"the file being printed, sent again: exit {rc}, {same!r}")
+        other = os.path.join(out, "busy-other.gcode")
+        with open(other, "wb") as f:
+            f.write(open(path, "rb").read())
+        rc, _, started = weft(binary, "send", other, "--to", "octoprint", "--url", op, "--start", "-q", env=env)
+        check(rc == 1 and "Uploaded busy-other.gcode" in started and "did not start: it is busy (Printing)" in started,
+              f"another file while printing: exit {rc}, {started!r}")
+        job = json.loads(get(f"{op}/api/job", h))
+        check(job["job"]["file"]["name"] == "busy-sphere.gcode", f"the job changed to {job['job']['file']['name']}")
+    finally:
+        post(f"{op}/api/job", {"command": "cancel"}, h)
+        while time.monotonic() < deadline + 60:
+            if json.loads(get(f"{op}/api/job", h)).get("state") == "Operational":
+                break
+            time.sleep(0.2)
+    print(f"OctoPrint busy: {same.strip()} / {started.strip()}")
 
 
 def main():
@@ -169,6 +304,8 @@ def main():
           f"OctoPrint's dimensions {dims}, want 26.4 × 26.4 × 20 (the cube and its skirt)")
     print(f"OctoPrint: printed to 100 % on the virtual printer; its analysis: {length:.1f} mm filament, "
           f"{dims.get('width', 0):.1f} × {dims.get('depth', 0):.1f} × {dims.get('height', 0):.1f} mm")
+    check_busy(args.weft, args.out, op, key)
+    check_objects(args.weft, args.out, mr)
     print(f"check_weft: OK ({time.monotonic() - t0:.1f} s)")
 
 

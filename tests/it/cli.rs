@@ -407,6 +407,19 @@ fn an_output_named_bgcode_is_binary_gcode_of_the_same_text() {
     std::fs::create_dir_all(&dir).unwrap();
     run_ok(&["run", &repo("examples/cube-20mm.json"), "-q", "--set", "printer.binary_gcode=true", "-o", dir.to_str().unwrap()]);
     assert_eq!(std::fs::read(dir.join("cube-20mm.bgcode")).unwrap(), b);
+    // A name ending in .gcode is text whatever the printer asks; the Prusa MK4 profile writes
+    // binary by default into a folder (made when the name ends in /) and text when named .gcode.
+    let named = tmp("asked.gcode");
+    run_ok(&["run", &repo("examples/cube-20mm.json"), "-q", "--set", "printer.binary_gcode=true", "-o", named.to_str().unwrap()]);
+    assert_eq!(std::fs::read_to_string(&named).unwrap(), t);
+    let mk4 = format!("{}/", tmp("mk4-new-folder").display());
+    let _ = std::fs::remove_dir_all(&mk4);
+    run_ok(&["run", &repo("examples/cube-20mm.json"), "-q", "--printer", "prusa-mk4", "-o", &mk4]);
+    let mk4_binary = std::fs::read(format!("{mk4}cube-20mm.bgcode")).unwrap();
+    run_ok(&["run", &repo("examples/cube-20mm.json"), "-q", "--printer", "prusa-mk4", "-o", &format!("{mk4}text.gcode")]);
+    let mk4_text = std::fs::read_to_string(format!("{mk4}text.gcode")).unwrap();
+    assert!(mk4_text.contains("; printer_model = MK4\n") && mk4_text.contains("; thumbnail begin 440x240 "), "MK4 header");
+    assert_eq!(mk4_binary, weft::gcode::binary::from_text(&mk4_text));
     let out = weft()
         .args(["run", &repo("examples/cube-20mm.json"), "-q", "--set", "printer.flavor=pneumatic", "-o", tmp("x.bgcode").to_str().unwrap()])
         .output()

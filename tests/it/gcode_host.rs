@@ -136,6 +136,31 @@ fn parts_apart_are_labelled_objects_the_analyzer_reads_back() {
 }
 
 #[test]
+fn a_skirt_is_no_object_to_cancel() {
+    // The 20 mm cube with its default skirt loop 3 mm out: one object, the cube; the skirt is
+    // printed outside every label (a host cancelling the cube leaves nothing of it).
+    for style in [ObjectLabels::M486, ObjectLabels::ExcludeObject] {
+        let mut d = common::example("cube-20mm");
+        d.printer.object_labels = style;
+        let out = common::run(&d, &Default::default()).unwrap();
+        let a = analyze(&out.gcode);
+        assert_eq!(a.objects.iter().map(|o| o.name.as_str()).collect::<Vec<_>>(), ["cube-20mm"], "{style:?}");
+        // One loop round 26.4 mm centre lines: 105.6 mm, nothing else outside.
+        assert!((a.unlabelled_mm - 105.6).abs() < 0.5, "{style:?}: {} mm outside objects", a.unlabelled_mm);
+        assert!((a.objects[0].extruded_mm + a.unlabelled_mm - a.extruded_mm).abs() < 1e-6);
+        if style == ObjectLabels::ExcludeObject {
+            // The outline is the cube's (centred on the 220 mm bed), not the skirt's.
+            let define = out.gcode.lines().find(|l| l.starts_with("EXCLUDE_OBJECT_DEFINE")).unwrap();
+            let poly = define.split("POLYGON=").nth(1).unwrap();
+            for n in poly.split(|c: char| !(c.is_ascii_digit() || c == '.' || c == '-')).filter(|w| !w.is_empty()) {
+                let v: f64 = n.parse().unwrap();
+                assert!((99.0..=121.0).contains(&v), "{v} in {define}");
+            }
+        }
+    }
+}
+
+#[test]
 fn arcs_stay_within_the_tolerance_and_feed_the_same_filament() {
     let mut o = options();
     let straight = write_gcode(&two_parts(), &o).unwrap();

@@ -6,7 +6,7 @@ usage: check_weft.py --weft BIN --hosts HOSTS.json --out DIR
 HOSTS.json is the line `hosts.py start` printed (the hosts are running). With the CLI:
 1. `weft run examples/cube-20mm.json` → cube-20mm.gcode (and .bgcode, checked by tests/bgcode/check_bgcode.py
    with libbgcode's reader from PyPI).
-2. `weft send … --to moonraker`: Moonraker's /server/files/metadata must name the slicer weft with its version
+2. `weft send … --to moonraker` (and `weft run … --send moonraker`, the same bytes): Moonraker's /server/files/metadata must name the slicer weft with its version
    and hold weft's estimated time, filament length and weight, layer height, first-layer temperatures and the
    thumbnails; each thumbnail, fetched from Moonraker and decoded by Pillow, is the printer's size and drawn in
    the preview's feature colours.
@@ -247,6 +247,12 @@ def main():
     mr = hosts["moonraker"]
     rc, out, err = weft(args.weft, "send", gcode_path, "--to", "moonraker", "--url", mr)
     check(rc == 0, f"weft send --to moonraker: exit {rc}: {err}")
+    # `weft run … --send`: written, then sent; Moonraker holds the bytes written.
+    run_sent = os.path.join(args.out, "run-sent.gcode")
+    rc, _, err = weft(args.weft, "run", design, "-q", "-o", run_sent, "--send", "moonraker", "--send-url", mr)
+    check(rc == 0, f"weft run --send moonraker: exit {rc}: {err}")
+    check(get(f"{mr}/server/files/gcodes/run-sent.gcode") == open(run_sent, "rb").read() == text.encode(),
+          "weft run --send: Moonraker's run-sent.gcode is not the bytes written (or not the run's G-code)")
     meta = json.loads(get(f"{mr}/server/files/metadata?filename=cube-20mm.gcode"))["result"]
     check(meta.get("slicer") == "weft", f"Moonraker names the slicer {meta.get('slicer')!r}, want 'weft'")
     version = text.splitlines()[0].split()[4]

@@ -427,3 +427,24 @@ fn an_output_named_bgcode_is_binary_gcode_of_the_same_text() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(!out.status.success() && err.contains("binary G-code is Marlin G-code"), "{err}");
 }
+
+#[test]
+fn run_then_send_writes_the_file_first_and_says_why_the_host_did_not_take_it() {
+    // A loopback port nothing listens on (bound, then freed).
+    let port = std::net::TcpListener::bind("127.0.0.1:0").unwrap().local_addr().unwrap().port();
+    let out = tmp("sent.gcode");
+    let _ = std::fs::remove_file(&out);
+    let url = format!("http://127.0.0.1:{port}");
+    let err = run_err(&["run", &repo("examples/cube-20mm.json"), "-q", "-o", out.to_str().unwrap(), "--send", "moonraker", "--send-url", &url]);
+    assert!(err.contains(&format!("Cannot reach 127.0.0.1:{port}")) && err.lines().count() == 1, "{err}");
+    // The G-code is written before sending, and is the same bytes as a run without --send.
+    let plain = tmp("plain.gcode");
+    run_ok(&["run", &repo("examples/cube-20mm.json"), "-q", "-o", plain.to_str().unwrap()]);
+    assert_eq!(std::fs::read(&out).unwrap(), std::fs::read(&plain).unwrap());
+    // --dry-run writes nothing to send; a URL without a kind is refused by the argument parser.
+    let err = run_err(&["run", &repo("examples/cube-20mm.json"), "--dry-run", "--send-to", "octoprint", "--send-url", &url]);
+    assert!(err.contains("--dry-run writes none"), "{err}");
+    let o = weft().args(["run", &repo("examples/cube-20mm.json"), "--send-url", &url]).output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.contains("--send-to <KIND>"), "{err}");
+}

@@ -14,6 +14,7 @@ import { state } from "./state.js";
 import { $, el } from "./util.js";
 import { tellParent } from "./messages.js";
 import { setFields } from "./design.js";
+import { renderForm } from "./form.js";
 import { runDesign } from "./actions.js";
 import { goToStep, setOpen, stepsStatus } from "./steps.js";
 
@@ -39,17 +40,11 @@ export function startEmbed() {
   refreshLink();
   window.addEventListener("hashchange", refreshLink);
   $("slice").after(open);
-  // Only the named fields show in the form (rebuilt by form.js on a kind change).
-  const apply = () => {
-    for (const [path, view] of state.fieldViews) view.wrap.hidden = !fields.includes(path);
-    for (const set of document.querySelectorAll("#schema-fields fieldset, #schema-fields details")) {
-      set.hidden = ![...set.querySelectorAll("[data-path]")].some((el) => !el.closest("[hidden]") || el.closest("[hidden]") === set);
-    }
-    $("schema-fields").hidden = fields.length === 0;
-    document.body.classList.toggle("embed-no-fields", fields.length === 0);
-  };
-  new MutationObserver(apply).observe($("schema-fields"), { childList: true });
-  apply();
+  // Only the named fields show in the form (form.js filters them, also after a kind change).
+  state.embedFields = fields;
+  renderForm();
+  $("schema-fields").hidden = fields.length === 0;
+  document.body.classList.toggle("embed-no-fields", fields.length === 0);
   setOpen(true);
   window.addEventListener("message", onMessage);
   const steps = (state.steps?.list ?? []).map((s) => s.title);

@@ -8,6 +8,7 @@ import { showError } from "./messages.js";
 import { currentSlots, gcodeExtension, jobKind, setDesign, setFields } from "./design.js";
 import { buildSlots, renderSlots } from "./slots.js";
 import { buildViews } from "./view-cards.js";
+import { teachKind } from "./teach.js";
 import { refreshFreshness } from "./results.js";
 import { drawSegments2d } from "./views.js";
 
@@ -46,7 +47,8 @@ function visibleFields() {
   if (state.schema.job_kinds.length > 1 && !fields.some((f) => f.path === "job.kind")) {
     fields.splice(1, 0, { path: "job.kind", section: "Design", label: "Job", kind: "choice", unit: "", doc: "What to make" });
   }
-  return fields;
+  // The embedded weft shows only the fields its link names (embed.js).
+  return state.embedFields ? fields.filter((f) => state.embedFields.includes(f.path)) : fields;
 }
 
 export function renderForm() {
@@ -59,7 +61,10 @@ export function renderForm() {
   renderPatternPickers();
   renderPresetPicker();
   $("download").textContent = `Download ${gcodeExtension() === "gcode" ? "G-code" : `.${gcodeExtension()}`}`;
-  if (state.viewsKey !== jobKind().name) buildViews();
+  if (state.viewsKey !== jobKind().name) {
+    buildViews();
+    teachKind(jobKind());
+  }
 }
 
 /**
@@ -108,6 +113,8 @@ function buildForm(fields, slots, key) {
     }
     sections.get(name).append(buildField(f));
   }
+  // Embedded, the printer section shows only when the link names one of its fields.
+  machine.hidden = Boolean(state.embedFields) && !machine.querySelector("fieldset");
   host.append(machine);
 }
 

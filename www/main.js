@@ -6,12 +6,13 @@
 //   design.js         the design, undo/redo, persistence, share links, its slots' files
 //   form.js           the form built from designSchema(), the pattern picker
 //   slots.js          the input slots: file cards, loading and removing files, drops
-//   view-cards.js     the job kind's views, fed by `inspect` requests
+//   view-cards.js     the job kind's views, fed by `inspect` requests (inspect.js: one request)
 //   worker-client.js  worker.js and its thread pool: requests (protocol.js), the progress bar
 //   results.js        freshness, the estimate line, a result's numbers and stage cards
 //   actions.js        Run, Download, Share, opening files and examples
 //   send.js           Send: the G-code to a print host (send-hosts.js: what hosts answer)
 //   steps.js          "How it works": the kind's method step by step (views at indices)
+//   teach.js          a kind's teaching defaults: its first colouring, the backdrop after a run
 //   embed.js          the embedded weft (embed.html): its postMessage API for course pages
 //   pictures.js       Picture…: a view, plot or the preview as a captioned PNG/SVG for slides
 //   compare.js        Pin for comparison: two results side by side, linked cameras, one table

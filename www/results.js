@@ -9,7 +9,7 @@ import { hideErrorUnlessCrash, tellParent } from "./messages.js";
 import { missingFiles } from "./design.js";
 import { invalidFields } from "./form.js";
 import { scheduleInspect } from "./view-cards.js";
-import { showBackdrop } from "./steps.js";
+import { showBackdrop } from "./teach.js";
 import { threadsWhy, workers } from "./worker-client.js";
 import { runDesign } from "./actions.js";
 import { metricList, renderReport } from "./report.js";

@@ -21,6 +21,8 @@ export const state = {
   preview: null,
   /** Opened as the embedded weft (embed.html → index.html?embed, see embed.js). */
   embedded: new URLSearchParams(globalThis.location?.search ?? "").has("embed"),
+  /** The embedded weft: the design paths its link names, the only fields the form shows; else null. */
+  embedFields: null,
 
   // --- the design (design.js) -----------------------------------------------------------
   /** current design, normalized JSON (the source of truth) and its parse */

@@ -5,8 +5,9 @@
 // nothing; opened, it asks for the shown step only. Drawn by views.js like the view cards.
 import { state } from "./state.js";
 import { MSG } from "./protocol.js";
-import { $, button, el, messageOf, setMessage } from "./util.js";
-import { jobKind, missingFiles } from "./design.js";
+import { $, button, el } from "./util.js";
+import { inspectView } from "./inspect.js";
+import { jobKind } from "./design.js";
 import { workers } from "./worker-client.js";
 import { drawView, fillLegend } from "./views.js";
 
@@ -27,7 +28,6 @@ export function buildSteps() {
   stopPlaying(s);
   clearTimeout(s.timer);
   const kind = jobKind();
-  teachKind(kind);
   const host = $("how");
   if (!host) return;
   s.kind = kind.name;
@@ -146,27 +146,9 @@ function schedule(delay) {
 
 async function request(s) {
   if (!s.open || !s.list.length) return;
-  const mine = ++s.seq;
   const step = s.list[s.index];
-  const missing = missingFiles();
-  if (missing.length) {
-    s.el.caption.textContent = `load ${missing.map((m) => m.name).join(", ")} to see this step`;
-    return;
-  }
-  s.el.caption.textContent = "…";
-  s.el.caption.classList.remove("field-error");
-  let res;
-  try {
-    res = await workers.request({ type: MSG.INSPECT, design: state.json, view: step.view, index: s.frame, key: "steps" });
-  } catch (err) {
-    if (mine === s.seq && !err.cancelled) {
-      setMessage(s.el.caption, messageOf(err));
-      s.el.caption.classList.add("field-error");
-      stopPlaying(s);
-    }
-    return;
-  }
-  if (mine !== s.seq || res.stale || !s.open) return;
+  const res = await inspectView(s, s.el.caption, { view: step.view, index: s.frame, key: "steps", what: "this step", onError: () => stopPlaying(s) });
+  if (!res || !s.open) return;
   s.last = res;
   s.answers++;
   s.frames = Math.max(1, res.count);
@@ -230,37 +212,4 @@ export function stepsStatus() {
     frame: s.frame, frames: s.frames, answers: s.answers, items: s.items, shape: s.last?.shape ?? null,
     caption: s.last?.meta?.caption ?? null, playing: s.playing,
   };
-}
-
-/**
- * The kind's teaching defaults (schema job_kinds[].teach), on a change of kind: the preview's
- * colouring that shows the method (a graded scaffold by bead width, its density; a foam by
- * speed, V*).
- */
-export function teachKind(kind) {
-  const mode = kind?.teach?.color_by;
-  const select = $("color-by");
-  if (!mode || !select || ![...select.options].some((o) => o.value === mode) || select.value === mode) return;
-  select.value = mode;
-  select.dispatchEvent(new Event("change"));
-}
-
-/**
- * After a run: the kind's backdrop view (teach.backdrop, a lines3d view at index 0) drawn
- * behind the toolpath in the preview, e.g. the platform an axisymmetric path lies on; removed
- * for a kind without one.
- */
-export async function showBackdrop() {
-  const view = jobKind().teach?.backdrop;
-  if (!state.preview) return;
-  if (!view || missingFiles().length) {
-    state.preview.setBackdrop(null);
-    return;
-  }
-  try {
-    const res = await workers.request({ type: MSG.INSPECT, design: state.json, view, index: 0, key: "backdrop" });
-    if (!res.stale && res.shape === "lines3d") state.preview.setBackdrop(res.data);
-  } catch {
-    state.preview.setBackdrop(null); // the view's own card says what went wrong
-  }
 }

@@ -2,10 +2,9 @@
 // to the worker (an index picker, play, drawing a points field on the view, an image's value
 // window, STL download), drawn by views.js. Cards live in state.viewCards.
 import { state } from "./state.js";
-import { MSG } from "./protocol.js";
-import { $, button, download, fileStem, messageOf, setMessage } from "./util.js";
-import { jobKind, missingFiles, setFields } from "./design.js";
-import { workers } from "./worker-client.js";
+import { $, button, download, fileStem } from "./util.js";
+import { inspectView } from "./inspect.js";
+import { jobKind, setFields } from "./design.js";
 import { drawView, fillLegend } from "./views.js";
 import { buildSteps, refreshSteps } from "./steps.js";
 
@@ -170,26 +169,9 @@ export function scheduleInspect(delay = INSPECT_DEBOUNCE_MS, only = null) {
 }
 
 async function requestInspect(v) {
-  const mine = ++v.seq;
-  const missing = missingFiles();
-  if (missing.length) {
-    v.info.textContent = `load ${missing.map((m) => m.name).join(", ")} to see this`;
-    return;
-  }
   const index = Math.max(0, Math.round(v.number.valueAsNumber || 1) - 1);
-  v.info.textContent = "…";
-  v.info.classList.remove("field-error");
-  let res;
-  try {
-    res = await workers.request({ type: MSG.INSPECT, design: state.json, view: v.view.id, index, key: `view:${v.view.id}` });
-  } catch (err) {
-    if (mine === v.seq && !err.cancelled) {
-      setMessage(v.info, messageOf(err));
-      v.info.classList.add("field-error");
-    }
-    return;
-  }
-  if (mine !== v.seq || res.stale) return; // a newer request is on its way
+  const res = await inspectView(v, v.info, { view: v.view.id, index, key: `view:${v.view.id}` });
+  if (!res) return; // missing input, replaced by a newer request, or failed (said in the card)
   v.last = res;
   v.answers++;
   v.count = res.count;

@@ -35,15 +35,26 @@
 //! The output is a pure function of the input: no clock, no randomness, no hash-map order. Encoding never
 //! panics; keys with `=` or line breaks and values with line breaks are repaired (see [`Input`]).
 
-/// One preview image, stored as a PNG thumbnail block.
+/// The image format of a thumbnail block (libbgcode's numbers).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ThumbnailFormat {
+    /// PNG (hosts and web pages show it).
+    Png = 0,
+    /// QOI (what Prusa's xBuddy screens read since firmware 5.1).
+    Qoi = 2,
+}
+
+/// One preview image, stored as a thumbnail block.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Thumbnail {
-    /// Image width in pixels (as the PNG says); a thumbnail with width 0 is skipped.
+    /// Image width in pixels (as the image says); a thumbnail with width 0 is skipped.
     pub width: u16,
     /// Image height in pixels; a thumbnail with height 0 is skipped.
     pub height: u16,
-    /// The PNG file bytes, stored as they are; an empty image is skipped.
-    pub png: Vec<u8>,
+    /// The image's format.
+    pub format: ThumbnailFormat,
+    /// The image file's bytes, stored as they are; an empty image is skipped.
+    pub image: Vec<u8>,
 }
 
 /// Everything that goes into one `.bgcode` file.
@@ -77,7 +88,7 @@ pub struct Input<'a> {
 /// Encodes `input` as a binary G-code file (the bytes of a `.bgcode` file).
 #[must_use]
 pub fn encode(input: &Input) -> Vec<u8> {
-    let thumbs: usize = input.thumbnails.iter().map(|t| t.png.len() + 24).sum();
+    let thumbs: usize = input.thumbnails.iter().map(|t| t.image.len() + 24).sum();
     let mut out = Vec::with_capacity(input.gcode.len() / 3 + thumbs + 4096);
     out.extend_from_slice(MAGIC);
     out.extend_from_slice(&VERSION.to_le_bytes());
@@ -88,14 +99,14 @@ pub fn encode(input: &Input) -> Vec<u8> {
     }
     write_metadata(&mut out, BLOCK_PRINTER_METADATA, input.printer_metadata, false);
     for t in input.thumbnails {
-        if t.width == 0 || t.height == 0 || t.png.is_empty() {
+        if t.width == 0 || t.height == 0 || t.image.is_empty() {
             continue;
         }
         let mut params = [0u8; 6];
-        params[0..2].copy_from_slice(&THUMBNAIL_PNG.to_le_bytes());
+        params[0..2].copy_from_slice(&(t.format as u16).to_le_bytes());
         params[2..4].copy_from_slice(&t.width.to_le_bytes());
         params[4..6].copy_from_slice(&t.height.to_le_bytes());
-        write_block(&mut out, BLOCK_THUMBNAIL, COMPRESSION_NONE, t.png.len(), &params, &t.png);
+        write_block(&mut out, BLOCK_THUMBNAIL, COMPRESSION_NONE, t.image.len(), &params, &t.image);
     }
     write_metadata(&mut out, BLOCK_PRINT_METADATA, input.print_metadata, false);
     write_metadata(&mut out, BLOCK_SLICER_METADATA, input.slicer_metadata, true);
@@ -136,7 +147,6 @@ const COMPRESSION_DEFLATE: u16 = 1;
 const COMPRESSION_HEATSHRINK_12_4: u16 = 3;
 
 const METADATA_INI: u16 = 0;
-const THUMBNAIL_PNG: u16 = 0;
 const GCODE_MEATPACK_COMMENTS: u16 = 2;
 
 /// zlib level of the slicer metadata (zlib's default, as libbgcode uses).
@@ -683,10 +693,10 @@ mod tests {
         let print = kv(&[("estimated printing time (normal mode)", "1m 2s")]);
         let slicer = kv(&[("layer_height", "0.2"), ("notes", "ünïcode ✓ = fine")]);
         let thumbs = [
-            Thumbnail { width: 16, height: 16, png: vec![1, 2, 3] },
-            Thumbnail { width: 0, height: 16, png: vec![4] },
-            Thumbnail { width: 8, height: 8, png: vec![] },
-            Thumbnail { width: 313, height: 173, png: vec![5; 1000] },
+            Thumbnail { width: 16, height: 16, format: ThumbnailFormat::Png, image: vec![1, 2, 3] },
+            Thumbnail { width: 0, height: 16, format: ThumbnailFormat::Png, image: vec![4] },
+            Thumbnail { width: 8, height: 8, format: ThumbnailFormat::Png, image: vec![] },
+            Thumbnail { width: 313, height: 173, format: ThumbnailFormat::Png, image: vec![5; 1000] },
         ];
         let gcode = sample_gcode(200_000);
         let input = Input {

@@ -5,7 +5,7 @@
 //! file written in PrusaSlicer's convention, weft's own included, so the page, the CLI and
 //! `weft send` give the same bytes for the same text.
 
-use super::bgcode::{encode, Input, Thumbnail};
+use super::bgcode::{encode, Input, Thumbnail, ThumbnailFormat};
 use base64::Engine;
 
 /// Keys of the printer metadata block (what a Prusa printer checks before it prints).
@@ -32,6 +32,22 @@ const PRINT_KEYS: &[&str] = &[
     "total layers count",
 ];
 
+/// The line opening a thumbnail block of `format` in text G-code (PrusaSlicer's), up to its size.
+pub fn begin_tag(format: ThumbnailFormat) -> &'static str {
+    match format {
+        ThumbnailFormat::Png => "; thumbnail begin ",
+        ThumbnailFormat::Qoi => "; thumbnail_QOI begin ",
+    }
+}
+
+/// The line closing a thumbnail block of `format`.
+pub fn end_tag(format: ThumbnailFormat) -> &'static str {
+    match format {
+        ThumbnailFormat::Png => "; thumbnail end",
+        ThumbnailFormat::Qoi => "; thumbnail_QOI end",
+    }
+}
+
 /// The `.bgcode` bytes of `text`. Only the text up to the end of its last thumbnail block is
 /// copied (the blocks left out); the rest is encoded where it lies, so a large file is not held
 /// twice.
@@ -39,7 +55,7 @@ pub fn from_text(text: &str) -> Vec<u8> {
     let mut head = String::new();
     let mut thumbnails = Vec::new();
     let mut meta: Vec<(String, String)> = Vec::new();
-    let mut thumb: Option<(u16, u16, String)> = None;
+    let mut thumb: Option<(u16, u16, ThumbnailFormat, String)> = None;
     // The head's length before the open block's preceding text was added.
     let mut open_head = 0;
     // Where the last thumbnail block ends: the text before it is rewritten into `head`.
@@ -48,10 +64,10 @@ pub fn from_text(text: &str) -> Vec<u8> {
     for line in text.split_inclusive('\n') {
         at += line.len();
         let body = line.trim_end_matches(['\n', '\r']);
-        if let Some((w, h, b64)) = &mut thumb {
-            if body.trim() == "; thumbnail end" {
-                if let Ok(png) = base64::engine::general_purpose::STANDARD.decode(b64.as_bytes()) {
-                    thumbnails.push(Thumbnail { width: *w, height: *h, png });
+        if let Some((w, h, format, b64)) = &mut thumb {
+            if body.trim() == end_tag(*format) {
+                if let Ok(image) = base64::engine::general_purpose::STANDARD.decode(b64.as_bytes()) {
+                    thumbnails.push(Thumbnail { width: *w, height: *h, format: *format, image });
                 }
                 thumb = None;
                 head_end = at;
@@ -60,14 +76,15 @@ pub fn from_text(text: &str) -> Vec<u8> {
             }
             continue;
         }
-        if let Some(rest) = body.strip_prefix("; thumbnail begin ") {
+        let begun = [ThumbnailFormat::Png, ThumbnailFormat::Qoi].into_iter().find_map(|f| Some((f, body.strip_prefix(begin_tag(f))?)));
+        if let Some((format, rest)) = begun {
             let size = rest.split_whitespace().next().unwrap_or("");
             if let Some((w, h)) = size.split_once('x') {
                 if let (Ok(w), Ok(h)) = (w.parse(), h.parse()) {
                     // The text since the last block joins the head.
                     open_head = head.len();
                     head.push_str(&text[head_end..at - line.len()]);
-                    thumb = Some((w, h, String::new()));
+                    thumb = Some((w, h, format, String::new()));
                     continue;
                 }
             }

@@ -151,6 +151,11 @@ pub struct Printer {
     /// `; thumbnail begin` blocks, which Moonraker, OctoPrint and printer screens show); none:
     /// no thumbnail. Marlin flavour only. Default 32 × 32 and 300 × 300 (Klipper screens).
     pub thumbnails: Vec<[u32; 2]>,
+    /// QOI thumbnails, width × height px each (`; thumbnail_QOI begin` blocks): the format
+    /// Prusa's xBuddy screens (MK4, XL, MINI, firmware 5.1 on) read; hosts show the PNG ones.
+    /// Marlin flavour only. Default none.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub thumbnails_qoi: Vec<[u32; 2]>,
     /// Object labels, so a failed part can be cancelled mid-print. Marlin flavour only.
     /// Default m486.
     pub object_labels: ObjectLabels,
@@ -291,6 +296,7 @@ impl Default for Printer {
             machine: Machine::default(),
             model: String::new(),
             thumbnails: DEFAULT_THUMBNAILS.to_vec(),
+            thumbnails_qoi: Vec::new(),
             object_labels: ObjectLabels::default(),
             arc_tolerance_mm: 0.0,
             binary_gcode: false,
@@ -767,6 +773,7 @@ pub const PRINTER_FIELDS: &[Field] = &[
     when(vec3("machine.travel_max_mm", "Printer", "Travel upper limits X, Y, Z", "mm", -10000.0, 10000.0, 1.0, "Machine coordinates; absent: the bed's volume."), "machine.kind", "five_axis"),
     other("model", "Printer", "Printer model", Kind::Text, &[], "As the firmware names it (MK4, XL, MINI): a Prusa printer warns about a file for another model; empty: not written."),
     points("thumbnails", "Printer", "Thumbnails", "px", 8.0, MAX_THUMBNAIL_PX as f64, MAX_THUMBNAILS, "PNG pictures of the print written into the file, width height each (hosts and printer screens show them); none: no thumbnail."),
+    points("thumbnails_qoi", "Printer", "QOI thumbnails", "px", 8.0, MAX_THUMBNAIL_PX as f64, MAX_THUMBNAILS, "QOI pictures, width height each: what Prusa MK4, XL and MINI screens show (firmware 5.1 on); none: no QOI thumbnail."),
     other("object_labels", "Printer", "Object labels", Kind::Choice, &["none", "m486", "exclude_object"], "So a failed part can be cancelled mid-print: m486 for Marlin, Prusa and RepRapFirmware; exclude_object for Klipper."),
     num("arc_tolerance_mm", "Printer", "Arc fitting tolerance", "mm", 0.0, 0.5, 0.005, "Curved paths within this distance of an arc are written as G2/G3 (smaller files); 0: off."),
     other("binary_gcode", "Printer", "Binary G-code (.bgcode)", Kind::Bool, &[], "Prusa MK4, XL and MINI read binary G-code: smaller files that carry their thumbnails and metadata."),

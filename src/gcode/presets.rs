@@ -35,29 +35,35 @@ pub fn presets() -> Vec<Preset> {
             id: "prusa-mk3",
             label: "Prusa MK3S class",
             doc: "250 × 210 × 210 mm, 0.4 mm nozzle, direct drive (short retraction), relative extrusion, text G-code (often behind OctoPrint).",
-            printer: prusa("Prusa MK3S class 250 × 210", "MK3S", [250.0, 210.0, 210.0], false, vec![[16, 16], [160, 120]], HostKind::Octoprint),
+            printer: Printer {
+                thumbnails: vec![[16, 16], [160, 120]],
+                ..prusa("Prusa MK3S class 250 × 210", "MK3S", [250.0, 210.0, 210.0], false, HostKind::Octoprint)
+            },
         },
         Preset {
             id: "prusa-mk4",
             label: "Prusa MK4 / MK4S",
-            doc: "250 × 210 × 220 mm, 0.4 mm nozzle, direct drive, relative extrusion; Prusa binary G-code (.bgcode) with the thumbnails its screen shows.",
-            printer: prusa("Prusa MK4 250 × 210", "MK4", [250.0, 210.0, 220.0], true, PRUSA_SCREENS.to_vec(), HostKind::None),
+            doc: "250 × 210 × 220 mm, 0.4 mm nozzle, direct drive, relative extrusion; Prusa binary G-code (.bgcode) with the QOI thumbnails its screen shows (firmware 5.1 on).",
+            printer: xbuddy(prusa("Prusa MK4 250 × 210", "MK4", [250.0, 210.0, 220.0], true, HostKind::None), &[[16, 16], [313, 173], [440, 240], [480, 240]]),
         },
         Preset {
             id: "prusa-mini",
             label: "Prusa MINI / MINI+",
-            doc: "180 × 180 × 180 mm, 0.4 mm nozzle, Bowden extruder (longer retraction); Prusa binary G-code (.bgcode) with its screen's thumbnails.",
+            doc: "180 × 180 × 180 mm, 0.4 mm nozzle, Bowden extruder (longer retraction); Prusa binary G-code (.bgcode) with its screen's QOI thumbnails.",
             printer: Printer {
                 retraction: Retraction { length_mm: 3.2, speed_mm_s: 70.0, z_hop_mm: 0.2, min_travel_mm: 1.5 },
                 acceleration_mm_s2: 1250.0,
-                ..prusa("Prusa MINI 180 × 180", "MINI", [180.0, 180.0, 180.0], true, PRUSA_SCREENS.to_vec(), HostKind::None)
+                ..xbuddy(prusa("Prusa MINI 180 × 180", "MINI", [180.0, 180.0, 180.0], true, HostKind::None), &[[16, 16], [480, 240]])
             },
         },
         Preset {
             id: "prusa-xl",
             label: "Prusa XL (one tool)",
-            doc: "360 × 360 × 360 mm, 0.4 mm nozzle, direct drive, one tool; Prusa binary G-code (.bgcode) with its screen's thumbnails.",
-            printer: Printer { acceleration_mm_s2: 2500.0, ..prusa("Prusa XL 360 × 360", "XL", [360.0, 360.0, 360.0], true, PRUSA_SCREENS.to_vec(), HostKind::None) },
+            doc: "360 × 360 × 360 mm, 0.4 mm nozzle, direct drive, one tool; Prusa binary G-code (.bgcode) with its screen's QOI thumbnails.",
+            printer: Printer {
+                acceleration_mm_s2: 2500.0,
+                ..xbuddy(prusa("Prusa XL 360 × 360", "XL", [360.0, 360.0, 360.0], true, HostKind::None), &[[16, 16], [313, 173], [440, 240], [480, 240]])
+            },
         },
         Preset {
             id: "klipper-220",
@@ -126,12 +132,9 @@ pub fn presets() -> Vec<Preset> {
     ]
 }
 
-/// The thumbnail sizes Prusa's xBuddy screens show: the file list's icon and the preview.
-const PRUSA_SCREENS: [[u32; 2]; 3] = [[16, 16], [313, 173], [440, 240]];
-
 /// A Prusa printer: direct-drive retraction, relative extrusion, `printer_model` written so the
 /// firmware can warn about a file sliced for another machine.
-fn prusa(name: &str, model: &str, bed_size_mm: [f64; 3], binary_gcode: bool, thumbnails: Vec<[u32; 2]>, host: HostKind) -> Printer {
+fn prusa(name: &str, model: &str, bed_size_mm: [f64; 3], binary_gcode: bool, host: HostKind) -> Printer {
     Printer {
         name: name.into(),
         model: model.into(),
@@ -141,11 +144,16 @@ fn prusa(name: &str, model: &str, bed_size_mm: [f64; 3], binary_gcode: bool, thu
         travel_speed_mm_s: 180.0,
         z_speed_mm_s: 12.0,
         acceleration_mm_s2: 2000.0,
-        thumbnails,
         binary_gcode,
         host,
         ..Printer::default()
     }
+}
+
+/// A printer with Prusa's xBuddy board (MK4, XL, MINI): its screens read QOI thumbnails of
+/// `screens` sizes (the file list's icon, the preview), PrusaLink and Prusa Connect a PNG.
+fn xbuddy(p: Printer, screens: &[[u32; 2]]) -> Printer {
+    Printer { thumbnails: vec![[380, 285]], thumbnails_qoi: screens.to_vec(), ..p }
 }
 
 /// The profile `id`, or the list of ids as the error.

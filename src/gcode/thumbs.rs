@@ -1,4 +1,4 @@
-//! PNG thumbnails of a toolpath, drawn by the core so the page and the CLI write the same bytes
+//! PNG and QOI thumbnails of a toolpath, drawn by the core so the page and the CLI write the same bytes
 //! ([`super::Printer::thumbnails`]). The view is the page's example pictures' (turned 45° about
 //! Z, tilted), each path in its feature's preview colour ([`Feature::color`]), lower layers
 //! darker (the top layer in the colour itself), on a transparent background; paths are drawn
@@ -24,6 +24,14 @@ const TILT: f64 = 0.6;
 pub fn png(toolpath: &Toolpath, width: u32, height: u32) -> Vec<u8> {
     let (w, h) = (width.clamp(1, super::MAX_THUMBNAIL_PX), height.clamp(1, super::MAX_THUMBNAIL_PX));
     encode(w, h, &rgba(toolpath, w, h))
+}
+
+/// The same picture as [`png`], as a QOI image (8-bit RGBA, the format's own encoding: what
+/// Prusa's xBuddy screens decode).
+pub fn qoi(toolpath: &Toolpath, width: u32, height: u32) -> Vec<u8> {
+    let (w, h) = (width.clamp(1, super::MAX_THUMBNAIL_PX), height.clamp(1, super::MAX_THUMBNAIL_PX));
+    // The pixels are w × h × 4 bytes by construction, the one thing the encoder checks.
+    qoi::encode_to_vec(rgba(toolpath, w, h), w, h).unwrap_or_default()
 }
 
 fn project(x: f64, y: f64, z: f64) -> (f64, f64) {

@@ -1,6 +1,7 @@
 //! The layer loop: header, start template, layers, end template. Flavour specifics live in
 //! [`super::flavor`].
 
+use super::bgcode::ThumbnailFormat;
 use super::flavor::{dialect, feed_mm_min, PathCtx};
 use super::format::{duration, fixed, push_fixed, push_u64};
 use super::objects::{self, Objects};
@@ -604,9 +605,13 @@ pub(crate) fn write(toolpath: &Toolpath, options: &Options) -> Result<Gcode, Err
 
     let volume_cm3 = meta::volume_cm3(out.e_total, printer.filament_diameter_mm);
     let mut header = meta::generated_line(&options.date);
-    if printer.flavor == Flavor::Marlin && !printer.thumbnails.is_empty() {
+    if printer.flavor == Flavor::Marlin {
+        // PNG for hosts and web pages, then QOI for Prusa's screens.
         let pngs: Vec<(u32, u32, Vec<u8>)> = printer.thumbnails.iter().take(super::MAX_THUMBNAILS).map(|&[w, h]| (w, h, thumbs::png(toolpath, w, h))).collect();
-        header.push_str(&meta::thumbnail_blocks(&pngs));
+        header.push_str(&meta::thumbnail_blocks(&pngs, ThumbnailFormat::Png));
+        let qois: Vec<(u32, u32, Vec<u8>)> =
+            printer.thumbnails_qoi.iter().take(super::MAX_THUMBNAILS).map(|&[w, h]| (w, h, thumbs::qoi(toolpath, w, h))).collect();
+        header.push_str(&meta::thumbnail_blocks(&qois, ThumbnailFormat::Qoi));
     }
     header.push_str(&format!("; design: {}\n", one_line(&options.design_name)));
     header.push_str(&format!("; printer: {}\n", one_line(&printer.name)));

@@ -13,7 +13,8 @@ usage: check_bgcode.py FILE.bgcode ORIGINAL.gcode [THUMB.png ...]
    comments kept as they are; comments after a command, blank lines and outer spaces/tabs dropped; G lines
    (G + digit) written with one space before each parameter letter (libbgcode's reader re-spaces them);
    libbgcode's converter also drops lines that are only ';' and blanks.
-4. Thumbnails are PNG with the width and height of their block; given THUMB.png files, equal byte for byte.
+4. Thumbnails are PNG or QOI, as their block says, with the width and height of their block; given image
+   files (or the text's own blocks), equal byte for byte.
 
 Prints one summary line; exits 1 on any mismatch, 2 on bad usage or a missing pybgcode.
 """
@@ -174,10 +175,18 @@ def decode(path, pngs=()):
     thumbs = pybgcode.read_thumbnails(f)
     pybgcode.close(f)
     for i, t in enumerate(thumbs):
-        png = bytes(t["bytes"])
-        if int(t["meta"].format) != int(pybgcode.EThumbnailFormat.PNG) or png[:8] != b"\x89PNG\r\n\x1a\n" or png[12:16] != b"IHDR":
-            fail("thumbnail %d is not a PNG" % i)
-        w, h = struct.unpack(">II", png[16:24])
+        img = bytes(t["bytes"])
+        fmt = int(t["meta"].format)
+        if fmt == int(pybgcode.EThumbnailFormat.PNG):
+            if img[:8] != b"\x89PNG\r\n\x1a\n" or img[12:16] != b"IHDR":
+                fail("thumbnail %d is marked PNG and is not one" % i)
+            w, h = struct.unpack(">II", img[16:24])
+        elif fmt == int(pybgcode.EThumbnailFormat.QOI):
+            if img[:4] != b"qoif":
+                fail("thumbnail %d is marked QOI and is not one" % i)
+            w, h = struct.unpack(">II", img[4:12])
+        else:
+            fail("thumbnail %d has format %d (weft writes PNG and QOI)" % (i, fmt))
         if (w, h) != (t["meta"].width, t["meta"].height):
             fail("thumbnail %d is %dx%d, its block says %dx%d" % (i, w, h, t["meta"].width, t["meta"].height))
     if pngs:
@@ -201,9 +210,10 @@ def decode(path, pngs=()):
     head += meta_lines(printer.raw_data)
     for t in thumbs:
         enc = base64.b64encode(bytes(t["bytes"])).decode("ascii")
-        head += "\n;\n; thumbnail begin %dx%d %d\n" % (t["meta"].width, t["meta"].height, len(enc))
+        tag = "thumbnail_QOI" if int(t["meta"].format) == int(pybgcode.EThumbnailFormat.QOI) else "thumbnail"
+        head += "\n;\n; %s begin %dx%d %d\n" % (tag, t["meta"].width, t["meta"].height, len(enc))
         head += "".join("; %s\n" % enc[i:i + 78] for i in range(0, len(enc), 78))
-        head += "; thumbnail end\n;\n"
+        head += "; %s end\n;\n" % tag
     head += "\n"
     tail = "\n" + meta_lines(prnt.raw_data)
     if slicer is not None:
@@ -229,18 +239,19 @@ def compare(got, want):
 
 
 def split_thumbnails(text):
-    """The text without its `; thumbnail begin WxH LEN` … `; thumbnail end` blocks, and their PNGs."""
-    out, pngs, b64 = [], [], None
+    """The text without its `; thumbnail[_QOI] begin WxH LEN` … `; thumbnail[_QOI] end` blocks, and their images."""
+    out, pngs, b64, tag = [], [], None, None
     for line in text.split("\n"):
         if b64 is not None:
-            if line.strip() == "; thumbnail end":
+            if line.strip() == "; %s end" % tag:
                 pngs.append(base64.b64decode("".join(b64)))
                 b64 = None
             else:
                 b64.append(line.lstrip(";").strip())
             continue
-        if re.match(r"^; thumbnail begin \d+x\d+ \d+$", line):
-            b64 = []
+        m = re.match(r"^; (thumbnail|thumbnail_QOI) begin \d+x\d+ \d+$", line)
+        if m:
+            b64, tag = [], m.group(1)
             continue
         out.append(line)
     return "\n".join(out), pngs

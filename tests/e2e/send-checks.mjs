@@ -377,6 +377,7 @@ export async function sendChecks({ browser, baseUrl, hosts, check, outDir, first
         const stored = await host(op.url, "/downloads/files/local/cube-20mm.gcode", { key: op.key });
         if (cliText && sha256(stored.buf) !== sha256(cliText)) throw new Error("the text OctoPrint holds differs from weft run DESIGN -o x.gcode");
         if (!/^; printer_model = MK4$/m.test(stored.buf.toString("utf8"))) throw new Error("the text G-code does not name the MK4");
+        if (!/^; thumbnail_QOI begin 480x240 \d+$/m.test(stored.buf.toString("utf8"))) throw new Error("the text G-code has no QOI thumbnail for the MK4's screen");
         return `${dl.bytes.length} B .bgcode (the CLI's bytes: ${cliText ? "yes" : "no CLI"}) on Moonraker; OctoPrint: "${refused}", then the text (${stored.buf.length} B)`;
       } finally {
         await p.context.close();

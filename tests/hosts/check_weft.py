@@ -5,7 +5,8 @@ usage: check_weft.py --weft BIN --hosts HOSTS.json --out DIR
 
 HOSTS.json is the line `hosts.py start` printed (the hosts are running). With the CLI:
 1. `weft run examples/cube-20mm.json` → cube-20mm.gcode (and .bgcode, checked by tests/bgcode/check_bgcode.py
-   with libbgcode's reader from PyPI).
+   with libbgcode's reader from PyPI); with `--printer prusa-mk4`, its QOI thumbnails decoded by Pillow and its
+   .bgcode (QOI thumbnail blocks) read back by libbgcode.
 2. `weft send … --to moonraker` (and `weft run … --send moonraker`, the same bytes): Moonraker's /server/files/metadata must name the slicer weft with its version
    and hold weft's estimated time, filament length and weight, layer height, first-layer temperatures and the
    thumbnails; each thumbnail, fetched from Moonraker and decoded by Pillow, is the printer's size and drawn in
@@ -67,10 +68,11 @@ def feature_colours():
     return [tuple(int(h[i:i + 2], 16) for i in (0, 2, 4)) for h in re.findall(r'"#([0-9a-f]{6})"', body)]
 
 
-def check_thumbnail(png_bytes, size, colours):
+def check_thumbnail(image_bytes, size, colours):
+    """A PNG or QOI thumbnail, decoded by Pillow: its size, and every pixel a shade of a feature colour."""
     from PIL import Image
 
-    im = Image.open(io.BytesIO(png_bytes)).convert("RGBA")
+    im = Image.open(io.BytesIO(image_bytes)).convert("RGBA")
     check(im.size == size, f"thumbnail is {im.size}, want {size}")
     raw = im.tobytes()
     opaque = [tuple(raw[i:i + 3]) for i in range(0, len(raw), 4) if raw[i + 3] == 255]
@@ -216,6 +218,18 @@ def check_busy(binary, out, op, key):
     print(f"OctoPrint busy: {same.strip()} / {started.strip()}")
 
 
+def thumbnail_blocks(text, tag):
+    """(width, height, image bytes) of each `; TAG begin WxH LEN` … `; TAG end` block."""
+    import base64
+
+    out = []
+    for m in re.finditer(r"^; %s begin (\d+)x(\d+) (\d+)\n((?:; .*\n)*?); %s end$" % (tag, tag), text, re.M):
+        b64 = "".join(line[2:] for line in m.group(4).splitlines())
+        check(len(b64) == int(m.group(3)), f"{tag} {m.group(1)}x{m.group(2)}: {len(b64)} base64 characters, the block says {m.group(3)}")
+        out.append((int(m.group(1)), int(m.group(2)), base64.b64decode(b64)))
+    return out
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--weft", required=True)
@@ -242,6 +256,23 @@ def main():
                        stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, timeout=120)
     check(p.returncode == 0, f"check_bgcode: {p.stdout.strip()}")
     print(p.stdout.strip())
+
+    # The Prusa MK4 profile: QOI thumbnails for its screen (Pillow decodes them: the printer's
+    # sizes, the preview's colours), one PNG for PrusaLink; its .bgcode read back by libbgcode.
+    mk4_text, mk4_bg = os.path.join(args.out, "mk4.gcode"), os.path.join(args.out, "mk4.bgcode")
+    for path in (mk4_text, mk4_bg):
+        rc, _, err = weft(args.weft, "run", design, "--printer", "prusa-mk4", "-q", "-o", path)
+        check(rc == 0, f"weft run --printer prusa-mk4 -o {os.path.basename(path)}: {err}")
+    colours = feature_colours()
+    qoi = thumbnail_blocks(open(mk4_text, encoding="utf-8").read(), "thumbnail_QOI")
+    check([(w, h) for w, h, _ in qoi] == [(16, 16), (313, 173), (440, 240), (480, 240)], f"MK4 QOI thumbnails {[(w, h) for w, h, _ in qoi]}")
+    for w, h, image in qoi:
+        check(image[:4] == b"qoif", f"QOI thumbnail {w}x{h} does not start with qoif")
+        check_thumbnail(image, (w, h), colours)
+    p = subprocess.run([sys.executable, os.path.join(ROOT, "tests/bgcode/check_bgcode.py"), mk4_bg, mk4_text],
+                       stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, timeout=120)
+    check(p.returncode == 0, f"check_bgcode (MK4): {p.stdout.strip()}")
+    print(f"MK4: {len(qoi)} QOI thumbnails decoded by Pillow in preview colours; {p.stdout.strip()}")
 
     # Moonraker.
     mr = hosts["moonraker"]
@@ -270,7 +301,6 @@ def main():
     check(abs(meta.get("object_height", -1) - 20.0) < 1e-6, f"object_height {meta.get('object_height')}, want 20")
     thumbs = sorted((t["width"], t["height"], t["relative_path"]) for t in meta.get("thumbnails", []))
     check([(w, h) for w, h, _ in thumbs] == [(32, 32), (300, 300)], f"thumbnails {thumbs}")
-    colours = feature_colours()
     for w, h, rel in thumbs:
         check_thumbnail(get(f"{mr}/server/files/gcodes/{rel}"), (w, h), colours)
     print(f"Moonraker: slicer weft {version}, {meta['estimated_time']} s, {meta['filament_total']} mm, "

@@ -418,7 +418,7 @@ fn an_output_named_bgcode_is_binary_gcode_of_the_same_text() {
     let mk4_binary = std::fs::read(format!("{mk4}cube-20mm.bgcode")).unwrap();
     run_ok(&["run", &repo("examples/cube-20mm.json"), "-q", "--printer", "prusa-mk4", "-o", &format!("{mk4}text.gcode")]);
     let mk4_text = std::fs::read_to_string(format!("{mk4}text.gcode")).unwrap();
-    assert!(mk4_text.contains("; printer_model = MK4\n") && mk4_text.contains("; thumbnail begin 440x240 "), "MK4 header");
+    assert!(mk4_text.contains("; printer_model = MK4\n") && mk4_text.contains("; thumbnail_QOI begin 440x240 "), "MK4 header");
     assert_eq!(mk4_binary, weft::gcode::binary::from_text(&mk4_text));
     let out = weft()
         .args(["run", &repo("examples/cube-20mm.json"), "-q", "--set", "printer.flavor=pneumatic", "-o", tmp("x.bgcode").to_str().unwrap()])

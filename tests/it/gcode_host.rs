@@ -68,14 +68,20 @@ fn the_footer_states_what_hosts_show() {
 
 /// The thumbnails' PNGs: (width, height, bytes).
 fn thumbnails(text: &str) -> Vec<(u32, u32, Vec<u8>)> {
+    blocks(text, "thumbnail")
+}
+
+/// The `; TAG begin WxH LEN` … `; TAG end` blocks' sizes and decoded bytes.
+fn blocks(text: &str, tag: &str) -> Vec<(u32, u32, Vec<u8>)> {
+    let (begin, end) = (format!("; {tag} begin "), format!("; {tag} end"));
     let mut out = Vec::new();
     let mut lines = text.lines();
     while let Some(l) = lines.next() {
-        let Some(rest) = l.strip_prefix("; thumbnail begin ") else { continue };
+        let Some(rest) = l.strip_prefix(begin.as_str()) else { continue };
         let mut it = rest.split(' ');
         let (w, h) = it.next().unwrap().split_once('x').unwrap();
         let len: usize = it.next().unwrap().parse().unwrap();
-        let b64: String = lines.by_ref().take_while(|l| *l != "; thumbnail end").map(|l| &l[2..]).collect();
+        let b64: String = lines.by_ref().take_while(|l| *l != end).map(|l| &l[2..]).collect();
         assert_eq!(b64.len(), len);
         out.push((w.parse().unwrap(), h.parse().unwrap(), base64::engine::general_purpose::STANDARD.decode(b64).unwrap()));
     }
@@ -185,6 +191,32 @@ fn arcs_stay_within_the_tolerance_and_feed_the_same_filament() {
             }
             pos = (x, y);
         }
+    }
+}
+
+#[test]
+fn qoi_thumbnails_for_prusa_screens_are_the_same_picture() {
+    // The MK4 profile: QOI for its screens, one PNG for PrusaLink and Connect.
+    let mut o = options();
+    o.printer = weft::gcode::presets::preset("prusa-mk4").unwrap().printer;
+    let g = write_gcode(&two_parts(), &o).unwrap();
+    let q = blocks(&g.text, "thumbnail_QOI");
+    assert_eq!(q.iter().map(|(w, h, _)| (*w, *h)).collect::<Vec<_>>(), vec![(16, 16), (313, 173), (440, 240), (480, 240)]);
+    assert_eq!(thumbnails(&g.text).iter().map(|(w, h, _)| (*w, *h)).collect::<Vec<_>>(), vec![(380, 285)]);
+    for (w, h, image) in &q {
+        assert_eq!(&image[..4], b"qoif");
+        let (header, px) = qoi::decode_to_vec(image).unwrap();
+        assert_eq!((header.width, header.height), (*w, *h));
+        assert_eq!(px, weft::gcode::thumbs::rgba(&two_parts(), *w, *h), "{w}x{h}: the QOI holds the PNG's picture");
+    }
+    // In .bgcode each is a thumbnail block of its format (libbgcode: PNG 0, QOI 2), the image as is.
+    let b = weft::gcode::binary::from_text(&g.text);
+    for (w, h, image) in &q {
+        let mut params = 2u16.to_le_bytes().to_vec();
+        params.extend((*w as u16).to_le_bytes());
+        params.extend((*h as u16).to_le_bytes());
+        let at = b.windows(image.len()).position(|x| x == image.as_slice()).expect("the QOI is stored as is");
+        assert_eq!(&b[at - 6..at], params.as_slice(), "{w}x{h}: the block's parameters say QOI and its size");
     }
 }
 

@@ -42,8 +42,9 @@ enum Command {
         design: String,
         /// Output file, or a folder to write <design name>.gcode in (.bgcode when the printer
         /// asks for binary G-code; .nc for the pneumatic flavour, .csv for poses); a name ending
-        /// in .bgcode writes binary G-code, in .gcode text. Default: that file in the current folder. The name is made
-        /// safe (no folders, no hidden or device names), since a design may come from anyone.
+        /// in .bgcode writes binary G-code, in .gcode text. Default: that file in the current
+        /// folder. The name is made safe (no folders, no hidden or device names), since a design
+        /// may come from anyone.
         #[arg(long, short)]
         out: Option<PathBuf>,
         /// Also write the run report (JSON) here (a folder: <design name>.report.json in it).

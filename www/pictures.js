@@ -13,6 +13,7 @@ import { state } from "./state.js";
 import { $, download, messageOf } from "./util.js";
 import { BACKGROUND, drawView } from "./views.js";
 import { captionOf } from "./picture-caption.js";
+import { stepAsView } from "./steps.js";
 import { layoutBand, bandSvg, drawBand, escapeXml, segmentsSvg, withPngText } from "./picture-draw.js";
 
 const PRESETS = [
@@ -72,10 +73,7 @@ export function sourceOf(target) {
     return r.json ? JSON.parse(r.json) : { name: r.fileName, gcodeFile: r.fileName };
   };
   if (target.type === "view" || target.type === "step") {
-    const s = state.steps;
-    const step = target.type === "step" ? s?.list[s.index] : null;
-    const v = step ? { last: s.last, legend: s.el?.legend, view: { id: `step${s.index + 1}-${step.view}`, label: `How it works ${s.index + 1}: ${step.title}${s.frames > 1 ? ` (frame ${s.frame + 1} of ${s.frames})` : ""}` } }
-      : state.viewCards.get(target.card.dataset.view);
+    const v = target.type === "step" ? stepAsView() : state.viewCards.get(target.card.dataset.view);
     if (!v?.last || !v.last.data?.length) throw new Error("This view has nothing drawn yet: wait until it shows, then save its picture.");
     const answer = v.last;
     return {

@@ -202,6 +202,18 @@ function playOn(s) {
   }
 }
 
+/**
+ * The step shown, shaped like a view card (`{last, legend, view: {id, label}}`), for what
+ * saves a view's picture; null while no step is shown.
+ */
+export function stepAsView() {
+  const s = state.steps;
+  const step = s?.list[s.index];
+  if (!step) return null;
+  const frame = s.frames > 1 ? ` (frame ${s.frame + 1} of ${s.frames})` : "";
+  return { last: s.last, legend: s.el?.legend, view: { id: `step${s.index + 1}-${step.view}`, label: `How it works ${s.index + 1}: ${step.title}${frame}` } };
+}
+
 /** What the browser tests and an embedding page read: the step shown and what it drew. */
 export function stepsStatus() {
   const s = state.steps;

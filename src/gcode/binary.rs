@@ -6,6 +6,7 @@
 //! `weft send` give the same bytes for the same text.
 
 use super::bgcode::{encode, Input, Thumbnail, ThumbnailFormat};
+use super::meta::{begin_tag, end_tag};
 use base64::Engine;
 
 /// Keys of the printer metadata block (what a Prusa printer checks before it prints).
@@ -31,22 +32,6 @@ const PRINT_KEYS: &[&str] = &[
     "estimated printing time (normal mode)",
     "total layers count",
 ];
-
-/// The line opening a thumbnail block of `format` in text G-code (PrusaSlicer's), up to its size.
-pub fn begin_tag(format: ThumbnailFormat) -> &'static str {
-    match format {
-        ThumbnailFormat::Png => "; thumbnail begin ",
-        ThumbnailFormat::Qoi => "; thumbnail_QOI begin ",
-    }
-}
-
-/// The line closing a thumbnail block of `format`.
-pub fn end_tag(format: ThumbnailFormat) -> &'static str {
-    match format {
-        ThumbnailFormat::Png => "; thumbnail end",
-        ThumbnailFormat::Qoi => "; thumbnail_QOI end",
-    }
-}
 
 /// The `.bgcode` bytes of `text`. Only the text up to the end of its last thumbnail block is
 /// copied (the blocks left out); the rest is encoded where it lies, so a large file is not held

@@ -597,7 +597,23 @@ fn cmd_run(
         design.0.printer = weft::gcode::presets::preset(id).map_err(|e| format!("--printer: {e}"))?.printer;
     }
     let mut files = Files::new();
-    let design = apply_changes(&design, inputs, set, &mut files)?;
+    let mut design = apply_changes(&design, inputs, set, &mut files)?;
+    // Binary G-code when the output's name ends in .bgcode, text when it ends in .gcode, else
+    // what the printer asks for (printer.binary_gcode): decided, and refused, before any work.
+    let named = |ext: &str| out.as_deref().is_some_and(|p| !p.is_dir() && !names_a_folder(p) && p.extension().is_some_and(|e| e.eq_ignore_ascii_case(ext)));
+    let (named_binary, named_text) = (named("bgcode"), named("gcode"));
+    if named_binary && design.printer.flavor != weft::gcode::Flavor::Marlin {
+        return Err(format!(
+            "{}: binary G-code is Marlin G-code; the {} flavour writes .{}",
+            out.as_deref().map(Path::display).map(|d| d.to_string()).unwrap_or_default(),
+            design.printer.flavor.name(),
+            design.printer.flavor.file_extension()
+        ));
+    }
+    if named_text {
+        // The text is the same either way; the run then makes no .bgcode only to drop it.
+        design.printer.binary_gcode = false;
+    }
     if dry_run {
         let plan = pipeline::estimate(&Registry::builtin(), &mut pipeline::Cache::disabled(), &design, &files).map_err(|e| e.to_string())?;
         out!("{}", plan_table(&plan));
@@ -659,23 +675,7 @@ fn cmd_run(
     if let Some(e) = ahead_failed.into_inner() {
         return Err(format!("--ahead: {e}"));
     }
-    // Binary G-code when the output's name ends in .bgcode, text when it ends in .gcode, else
-    // what the printer asks for (printer.binary_gcode).
-    let named = |ext: &str| out.as_deref().is_some_and(|p| !p.is_dir() && !names_a_folder(p) && p.extension().is_some_and(|e| e.eq_ignore_ascii_case(ext)));
-    let (named_binary, named_text) = (named("bgcode"), named("gcode"));
-    if named_binary && design.printer.flavor != weft::gcode::Flavor::Marlin {
-        return Err(format!(
-            "{}: binary G-code is Marlin G-code; the {} flavour writes .{}",
-            out.as_deref().map(Path::display).map(|d| d.to_string()).unwrap_or_default(),
-            design.printer.flavor.name(),
-            design.printer.flavor.file_extension()
-        ));
-    }
-    let binary = match output.bgcode.clone() {
-        _ if named_text => None,
-        Some(b) => Some(b),
-        None => named_binary.then(|| std::sync::Arc::new(weft::gcode::binary::from_text(&output.gcode))),
-    };
+    let binary = output.bgcode.clone().or_else(|| named_binary.then(|| std::sync::Arc::new(weft::gcode::binary::from_text(&output.gcode))));
     let extension = if binary.is_some() { "bgcode" } else { design.printer.flavor.file_extension() };
     let out = output_path(out.as_deref(), &design.name, extension);
     match &binary {
